@@ -1,0 +1,185 @@
+//! Backends: the implementations under test.
+//!
+//! A backend executes one instruction on one memory image and answers with the words it wrote
+//! and the error it signalled, or says it does not implement what was asked. It knows nothing of
+//! YAML or reporting; everything vendor-specific it needs comes in the [`Request`] from the
+//! profile.
+
+pub mod iqr;
+pub mod text;
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::sync::Arc;
+
+use serde::Serialize;
+
+use crate::device::Device;
+use crate::memory::Image;
+use crate::model::{ErrorSignal, Operand};
+use crate::profile::{Profile, Profiles, SignalKind, Variant};
+
+/// Everything a backend needs to execute one case.
+#[derive(Debug, Clone, Copy)]
+pub struct Request<'a> {
+    pub profile: &'a Profile,
+    pub variant: &'a Variant,
+    pub instruction: &'a str,
+    /// The case id, for backends that log or correlate.
+    pub case_id: &'a str,
+    /// The flags the case sets; [`Request::flag`] applies defaults and the variant.
+    pub flags: &'a BTreeMap<String, bool>,
+    pub operands: &'a BTreeMap<String, Operand>,
+    pub memory: &'a Image,
+}
+
+impl Request<'_> {
+    /// A flag as the CPU sees it: the case's setting, or the profile default, except that a
+    /// variant which does not implement the flag always sees the default.
+    pub fn flag(&self, name: &str) -> bool {
+        let default = self.profile.flags.get(name).is_some_and(|f| f.default);
+        if self.variant.ignores_flags.iter().any(|f| f == name) {
+            return default;
+        }
+        self.flags.get(name).copied().unwrap_or(default)
+    }
+
+    /// The flags the case sets, with the profile's defaults for the rest, as the vector wrote
+    /// them (before the variant's view): what an external backend is told.
+    pub fn all_flags(&self) -> BTreeMap<String, bool> {
+        self.profile
+            .instructions
+            .get(self.instruction)
+            .map(|def| {
+                def.flags
+                    .iter()
+                    .map(|f| {
+                        let default = self.profile.flags.get(f).is_some_and(|d| d.default);
+                        (f.clone(), self.flags.get(f).copied().unwrap_or(default))
+                    })
+                    .collect()
+            })
+            .unwrap_or_default()
+    }
+
+    pub fn operand(&self, name: &str) -> Result<&Operand, Unsupported> {
+        self.operands
+            .get(name)
+            .ok_or_else(|| Unsupported(format!("{} needs operand `{name}`", self.instruction)))
+    }
+
+    /// An operand that must be a device.
+    pub fn device(&self, name: &str) -> Result<&Device, Unsupported> {
+        match self.operand(name)? {
+            Operand::Device(d) => Ok(d),
+            Operand::Constant(k) => Err(Unsupported(format!(
+                "operand `{name}` as a constant (K{k}) is not modelled"
+            ))),
+        }
+    }
+
+    /// Whether `count` words from `head` exist on this variant.
+    pub fn words_exist(&self, head: &Device, count: u32) -> bool {
+        self.profile.words_exist(self.variant, head, count)
+    }
+
+    /// The signal for an operation error with the vendor's code. For a profile that signals
+    /// with a flag only, the code is not visible and the flag is what the program sees.
+    pub fn error(&self, code: u16) -> ErrorSignal {
+        let flag = &self.profile.errors.flag;
+        match self.profile.errors.signal {
+            SignalKind::Code => ErrorSignal::Code(code),
+            SignalKind::Flag => ErrorSignal::Flag(
+                flag.parse()
+                    .unwrap_or_else(|_| Device::new(flag.clone(), 0)),
+            ),
+        }
+    }
+}
+
+/// What an instruction did.
+#[derive(Debug, Clone, PartialEq, Eq, Default, Serialize)]
+pub struct Outcome {
+    /// Every word written, with the value written (a word rewritten with its old value is
+    /// still listed; the comparer decides what changed).
+    pub writes: BTreeMap<Device, u16>,
+    pub error: Option<ErrorSignal>,
+}
+
+impl Outcome {
+    pub fn error(error: ErrorSignal) -> Self {
+        Outcome {
+            writes: BTreeMap::new(),
+            error: Some(error),
+        }
+    }
+}
+
+/// A backend's answer to a request it understood.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase", tag = "kind", content = "value")]
+pub enum Response {
+    Done(Outcome),
+    /// The backend does not implement this (instruction, variant, operand kind, ...).
+    Unsupported(String),
+}
+
+/// The reason a request is not implemented.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Unsupported(pub String);
+
+impl From<Unsupported> for Response {
+    fn from(u: Unsupported) -> Self {
+        Response::Unsupported(u.0)
+    }
+}
+
+/// Why a backend gave no answer: only external backends fail this way, and each is an outcome
+/// of the case, never a pass.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case", tag = "kind", content = "detail")]
+pub enum Fault {
+    /// The process exited or was killed.
+    Crashed(String),
+    /// No answer within the time limit.
+    Timeout(String),
+    /// An answer that does not follow the protocol.
+    Protocol(String),
+    /// The backend could not be started or reached.
+    Unreachable(String),
+}
+
+impl fmt::Display for Fault {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Fault::Crashed(s) => write!(f, "crashed: {s}"),
+            Fault::Timeout(s) => write!(f, "timeout: {s}"),
+            Fault::Protocol(s) => write!(f, "protocol error: {s}"),
+            Fault::Unreachable(s) => write!(f, "unreachable: {s}"),
+        }
+    }
+}
+
+/// An implementation of one profile family.
+pub trait Backend: Send + Sync {
+    /// The name used on the command line and in trial names.
+    fn name(&self) -> &str;
+    /// The profile id whose vectors this backend runs.
+    fn profile(&self) -> &str;
+    /// One line for `plc-conformance list`.
+    fn describe(&self) -> String;
+    /// Whether the backend claims to implement an instruction on a variant. Trials it does not
+    /// claim are listed as skipped with a reason; a claimed trial answered "unsupported" is a
+    /// difference.
+    fn claims(&self, instruction: &str, variant: &str) -> bool;
+    fn execute(&self, request: &Request<'_>) -> Result<Response, Fault>;
+}
+
+/// The reference models, one per profile that has one.
+pub fn reference_backends(profiles: &Profiles) -> Vec<Arc<dyn Backend>> {
+    let mut out: Vec<Arc<dyn Backend>> = Vec::new();
+    if let Some(p) = profiles.get(iqr::PROFILE) {
+        out.push(Arc::new(iqr::Iqr::new(p)));
+    }
+    out
+}

@@ -1,0 +1,58 @@
+//! Hex digits and character storage shared by the reference models.
+
+use crate::device::Device;
+use crate::memory::Image;
+
+/// The value of a hex digit character. Only 30H-39H and 41H-46H are digits: lowercase is
+/// invalid in every manual this project covers.
+pub fn digit_value(ch: u8) -> Option<u8> {
+    match ch {
+        b'0'..=b'9' => Some(ch - b'0'),
+        b'A'..=b'F' => Some(ch - b'A' + 10),
+        _ => None,
+    }
+}
+
+/// The uppercase hex digit character for the low nibble of `value`.
+pub fn digit_char(value: u64) -> u8 {
+    b"0123456789ABCDEF"[(value & 0xF) as usize]
+}
+
+/// The `k`-th character of text stored two characters per word, first character in the low
+/// byte (MELSEC string storage).
+pub fn packed_char(memory: &Image, head: &Device, k: u32) -> Option<u8> {
+    let word = memory.read(&head.offset(k / 2)?);
+    Some(if k % 2 == 0 {
+        word as u8
+    } else {
+        (word >> 8) as u8
+    })
+}
+
+/// Packs characters two per word, first in the low byte; an odd count leaves 00H high.
+pub fn pack_low_first(chars: &[u8]) -> Vec<u16> {
+    chars
+        .chunks(2)
+        .map(|pair| u16::from(pair[0]) | (u16::from(pair.get(1).copied().unwrap_or(0)) << 8))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn digits_are_uppercase_hex_only() {
+        let valid: Vec<u8> = (0..=255u8).filter(|b| digit_value(*b).is_some()).collect();
+        assert_eq!(valid, b"0123456789ABCDEF");
+        for n in 0..16 {
+            assert_eq!(digit_value(digit_char(n)), Some(n as u8));
+        }
+    }
+
+    #[test]
+    fn packs_low_byte_first() {
+        assert_eq!(pack_low_first(b"5A8D"), vec![0x4135, 0x4438]);
+        assert_eq!(pack_low_first(b"5A8"), vec![0x4135, 0x0038]);
+    }
+}

@@ -1,0 +1,196 @@
+//! Comparing what a backend did with what a case expects.
+//!
+//! The comparison is semantic: a word counts as changed only if its value differs from before,
+//! every change not in the expectation is a difference, and errors compare as signals (a code
+//! never equals a flag). The comparer knows nothing of vendors.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use serde::Serialize;
+
+use crate::backend::{Fault, Outcome, Response};
+use crate::device::Device;
+use crate::memory::{Fill, Image};
+use crate::model::{Basis, Case, ErrorSignal, Expectation};
+
+/// One word in a comparison: its value before, as expected after, and as found after.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct WordRow {
+    pub device: Device,
+    pub before: u16,
+    pub expected: u16,
+    pub actual: u16,
+}
+
+/// How one run (under one fill) differed from the expectation.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Mismatch {
+    pub fill: Fill,
+    /// Every word the expectation or the backend touched, in device order.
+    pub rows: Vec<WordRow>,
+    pub expected_error: Option<ErrorSignal>,
+    pub actual_error: Option<ErrorSignal>,
+}
+
+impl Mismatch {
+    pub fn words_differ(&self) -> bool {
+        self.rows.iter().any(|r| r.expected != r.actual)
+    }
+    pub fn error_differs(&self) -> bool {
+        self.expected_error != self.actual_error
+    }
+}
+
+/// What one backend did under one fill.
+#[derive(Debug, Clone, Serialize)]
+pub struct Observation {
+    pub fill: Fill,
+    pub result: Result<Response, Fault>,
+}
+
+/// The verdict of one trial.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case", tag = "verdict")]
+pub enum Verdict {
+    Conforms,
+    Differs {
+        mismatches: Vec<Mismatch>,
+    },
+    /// A backend that claimed the trial answered that it does not implement it.
+    Unsupported {
+        reason: String,
+    },
+    /// The backend gave no usable answer.
+    Fault {
+        fill: Fill,
+        fault: Fault,
+    },
+    /// An `unspecified` case: what the backend did, recorded, never a failure.
+    Recorded {
+        observed: String,
+        fill_dependent: bool,
+    },
+}
+
+impl Verdict {
+    /// Whether this verdict fails a run.
+    pub fn is_failure(&self) -> bool {
+        matches!(
+            self,
+            Verdict::Differs { .. } | Verdict::Unsupported { .. } | Verdict::Fault { .. }
+        )
+    }
+
+    /// A short label: what a matrix cell or summary line shows.
+    pub fn label(&self) -> &'static str {
+        match self {
+            Verdict::Conforms => "conforms",
+            Verdict::Differs { .. } => "differs",
+            Verdict::Unsupported { .. } => "unsupported",
+            Verdict::Fault { fault, .. } => match fault {
+                Fault::Crashed(_) => "crashed",
+                Fault::Timeout(_) => "timeout",
+                Fault::Protocol(_) => "protocol-error",
+                Fault::Unreachable(_) => "unreachable",
+            },
+            Verdict::Recorded { .. } => "recorded",
+        }
+    }
+}
+
+/// The rows of a comparison between an expectation and an outcome over the same image.
+pub fn rows(before: &Image, expect: &Expectation, outcome: &Outcome) -> Vec<WordRow> {
+    let devices: BTreeSet<&Device> = expect.after.keys().chain(outcome.writes.keys()).collect();
+    devices
+        .into_iter()
+        .map(|d| {
+            let was = before.read(d);
+            WordRow {
+                device: d.clone(),
+                before: was,
+                expected: expect.after.get(d).copied().unwrap_or(was),
+                actual: outcome.writes.get(d).copied().unwrap_or(was),
+            }
+        })
+        .collect()
+}
+
+/// Judges a case from its observations (one per fill, in [`Fill::ALL`] order).
+pub fn judge(case: &Case, observations: &[Observation]) -> Verdict {
+    let mut mismatches = Vec::new();
+    let mut outcomes = Vec::new();
+    for obs in observations {
+        let outcome = match &obs.result {
+            Err(fault) => {
+                return Verdict::Fault {
+                    fill: obs.fill,
+                    fault: fault.clone(),
+                }
+            }
+            Ok(Response::Unsupported(reason)) => {
+                return Verdict::Unsupported {
+                    reason: reason.clone(),
+                }
+            }
+            Ok(Response::Done(outcome)) => outcome,
+        };
+        let image = Image::new(case.before.clone(), obs.fill);
+        outcomes.push(changes(&image, outcome));
+        if let Some(expect) = &case.expect {
+            let rows = rows(&image, expect, outcome);
+            let m = Mismatch {
+                fill: obs.fill,
+                rows,
+                expected_error: expect.error.clone(),
+                actual_error: outcome.error.clone(),
+            };
+            if m.words_differ() || m.error_differs() {
+                mismatches.push(m);
+            }
+        }
+    }
+    if case.basis == Basis::Unspecified {
+        let observed = outcomes
+            .first()
+            .map(|(w, e)| describe(w, e.as_ref()))
+            .unwrap_or_default();
+        let fill_dependent = outcomes.windows(2).any(|p| p[0] != p[1]);
+        return Verdict::Recorded {
+            observed,
+            fill_dependent,
+        };
+    }
+    if mismatches.is_empty() {
+        Verdict::Conforms
+    } else {
+        Verdict::Differs { mismatches }
+    }
+}
+
+/// The words an outcome changed (written with a new value) and its error.
+fn changes(before: &Image, outcome: &Outcome) -> (BTreeMap<Device, u16>, Option<ErrorSignal>) {
+    let changed = outcome
+        .writes
+        .iter()
+        .filter(|(d, v)| before.read(d) != **v)
+        .map(|(d, v)| (d.clone(), *v))
+        .collect();
+    (changed, outcome.error.clone())
+}
+
+/// One line for an outcome: `error 3401H, no change` or `D200=0005H`.
+pub fn describe(changed: &BTreeMap<Device, u16>, error: Option<&ErrorSignal>) -> String {
+    let words = if changed.is_empty() {
+        "no change".to_string()
+    } else {
+        changed
+            .iter()
+            .map(|(d, v)| format!("{d}={}", crate::value::hex_word(*v)))
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    match error {
+        Some(e) => format!("error {e}, {words}"),
+        None => words,
+    }
+}

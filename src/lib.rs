@@ -1,0 +1,20 @@
+//! plc-conformance: a differential conformance harness for PLC instructions.
+//!
+//! Data flows one way: [`load`] reads vector files and vendor profiles into a validated
+//! [`model::Corpus`]; [`plan`] pairs every case with every backend variant that should run it;
+//! each [`backend::Backend`] executes a case on a [`memory::Image`]; [`compare`] judges the
+//! outcome against the expectation; [`report`] renders the verdicts.
+
+pub mod backend;
+pub mod cli;
+pub mod compare;
+pub mod device;
+pub mod load;
+pub mod memory;
+pub mod model;
+pub mod plan;
+pub mod profile;
+pub mod report;
+pub mod session;
+pub mod spec;
+pub mod value;

@@ -1,0 +1,112 @@
+//! Loading: YAML files -> validated profiles and corpus.
+//!
+//! Every problem is collected with its file, line and key, and loading fails if there is any:
+//! a corpus with a bad case is not run with that case left out, because a silently skipped
+//! vector looks exactly like a passing one.
+
+mod error;
+mod locate;
+mod profiles;
+mod vectors;
+
+use std::path::{Path, PathBuf};
+
+use serde::de::DeserializeOwned;
+
+pub use error::{LoadError, LoadErrorKind, LoadErrors};
+pub use locate::LineIndex;
+pub use profiles::{load_profiles, parse_profile};
+pub use vectors::{load_corpus, CorpusBuilder};
+
+/// The YAML files under a path: the file itself, or every `.yaml`/`.yml` below a folder, in a
+/// stable order. Other files in a corpus folder (READMEs) are not vectors.
+pub fn yaml_files(path: &Path) -> Result<Vec<PathBuf>, LoadError> {
+    let io_error = |e: std::io::Error| LoadError {
+        file: path.to_path_buf(),
+        line: None,
+        key: None,
+        kind: LoadErrorKind::Io(e.to_string()).into(),
+    };
+    let meta = std::fs::metadata(path).map_err(io_error)?;
+    if meta.is_file() {
+        return Ok(vec![path.to_path_buf()]);
+    }
+    let mut files = Vec::new();
+    let mut folders = vec![path.to_path_buf()];
+    while let Some(folder) = folders.pop() {
+        for entry in std::fs::read_dir(&folder).map_err(io_error)? {
+            let entry = entry.map_err(io_error)?;
+            let p = entry.path();
+            if entry.file_type().map_err(io_error)?.is_dir() {
+                folders.push(p);
+            } else if matches!(p.extension().and_then(|e| e.to_str()), Some("yaml" | "yml")) {
+                files.push(p);
+            }
+        }
+    }
+    files.sort();
+    Ok(files)
+}
+
+/// Per-file state while lowering: where errors go and how their lines are found.
+pub(crate) struct FileContext<'a> {
+    pub file: PathBuf,
+    pub index: LineIndex,
+    pub errors: &'a mut Vec<LoadError>,
+}
+
+impl FileContext<'_> {
+    pub fn error(&mut self, key: impl Into<String>, kind: LoadErrorKind) {
+        let key = key.into();
+        self.errors.push(LoadError {
+            file: self.file.clone(),
+            line: self.index.line(&key),
+            key: Some(key),
+            kind: kind.into(),
+        });
+    }
+
+    pub fn location(&self, key: &str) -> crate::model::Location {
+        crate::model::Location {
+            file: self.file.clone(),
+            line: self.index.line(key).unwrap_or(1),
+        }
+    }
+}
+
+/// Deserializes one YAML document, turning the deserializer's error into a [`LoadError`] with
+/// the line and key path it reports.
+pub(crate) fn parse_yaml<T: DeserializeOwned>(file: &Path, text: &str) -> Result<T, LoadError> {
+    serde_yaml::from_str(text).map_err(|e| {
+        let line = e.location().map(|l| l.line());
+        let mut message = e.to_string();
+        if let Some(l) = e.location() {
+            let suffix = format!(" at line {} column {}", l.line(), l.column());
+            if let Some(cut) = message.find(&suffix) {
+                message.replace_range(cut..cut + suffix.len(), "");
+            }
+        }
+        // The deserializer leads its message with the key path (`cases[0].flags: ...`).
+        let (key, message) = match message.split_once(": ") {
+            Some((path, rest)) if !path.is_empty() && !path.contains(' ') => {
+                (Some(path.to_string()), rest.to_string())
+            }
+            _ => (None, message),
+        };
+        LoadError {
+            file: file.to_path_buf(),
+            line,
+            key,
+            kind: LoadErrorKind::Shape(message).into(),
+        }
+    })
+}
+
+pub(crate) fn read_file(path: &Path) -> Result<String, LoadError> {
+    std::fs::read_to_string(path).map_err(|e| LoadError {
+        file: path.to_path_buf(),
+        line: None,
+        key: None,
+        kind: LoadErrorKind::Io(e.to_string()).into(),
+    })
+}

@@ -1,0 +1,175 @@
+//! Loading and checking vendor profiles.
+
+use std::collections::BTreeSet;
+use std::path::Path;
+
+use super::{
+    parse_yaml, read_file, yaml_files, FileContext, LineIndex, LoadError, LoadErrorKind, LoadErrors,
+};
+use crate::device::Device;
+use crate::profile::{Profile, Profiles, SignalKind};
+
+/// Loads every profile in a folder.
+pub fn load_profiles(dir: &Path) -> Result<Profiles, LoadErrors> {
+    let mut errors = Vec::new();
+    let mut profiles: Vec<Profile> = Vec::new();
+    let files = yaml_files(dir).map_err(|e| LoadErrors(vec![e]))?;
+    for file in files {
+        let text = match read_file(&file) {
+            Ok(t) => t,
+            Err(e) => {
+                errors.push(e);
+                continue;
+            }
+        };
+        if let Some(profile) = parse_profile(&file, &text, &mut errors) {
+            if let Some(other) = profiles.iter().find(|p| p.id == profile.id) {
+                errors.push(LoadError {
+                    file: file.clone(),
+                    line: LineIndex::new(&text).line("id"),
+                    key: Some("id".into()),
+                    kind: LoadErrorKind::Invalid(format!(
+                        "profile id `{}` is also used by another profile ({})",
+                        profile.id, other.name
+                    ))
+                    .into(),
+                });
+            }
+            profiles.push(profile);
+        }
+    }
+    if profiles.is_empty() && errors.is_empty() {
+        errors.push(LoadError {
+            file: dir.to_path_buf(),
+            line: None,
+            key: None,
+            kind: LoadErrorKind::Invalid("no vendor profile (*.yaml) found".into()).into(),
+        });
+    }
+    if errors.is_empty() {
+        Ok(Profiles::new(profiles))
+    } else {
+        Err(LoadErrors(errors))
+    }
+}
+
+/// Parses and checks one profile; problems go to `errors`.
+pub fn parse_profile(file: &Path, text: &str, errors: &mut Vec<LoadError>) -> Option<Profile> {
+    let profile: Profile = match parse_yaml(file, text) {
+        Ok(p) => p,
+        Err(e) => {
+            errors.push(e);
+            return None;
+        }
+    };
+    let before = errors.len();
+    let mut cx = FileContext {
+        file: file.to_path_buf(),
+        index: LineIndex::new(text),
+        errors,
+    };
+    check_profile(&profile, &mut cx);
+    (cx.errors.len() == before).then_some(profile)
+}
+
+fn check_profile(p: &Profile, cx: &mut FileContext<'_>) {
+    let flags: Vec<String> = p.flags.keys().cloned().collect();
+    let devices: Vec<String> = p.devices.keys().cloned().collect();
+    let instructions: Vec<String> = p.instructions.keys().cloned().collect();
+    let device_names = |key: &str, name: &str, cx: &mut FileContext<'_>| {
+        if let Err(e) = name.parse::<Device>() {
+            cx.error(key, LoadErrorKind::Device(e));
+        }
+    };
+    let e = &p.errors;
+    device_names("errors.flag", &e.flag, cx);
+    if let Some(r) = &e.register {
+        device_names("errors.register", r, cx);
+    } else if e.signal == SignalKind::Code {
+        cx.error(
+            "errors",
+            LoadErrorKind::Missing("register: `signal: code` needs the register holding the code"),
+        );
+    }
+    for (i, r) in e.also.iter().enumerate() {
+        device_names(&format!("errors.also[{i}]"), r, cx);
+    }
+    for (code, range) in &p.devices {
+        if range.first > range.last {
+            cx.error(
+                format!("devices.{code}"),
+                LoadErrorKind::Invalid(format!(
+                    "first {} is after last {}",
+                    range.first, range.last
+                )),
+            );
+        }
+    }
+    for (name, def) in &p.instructions {
+        for (i, flag) in def.flags.iter().enumerate() {
+            if !p.flags.contains_key(flag) {
+                cx.error(
+                    format!("instructions.{name}.flags[{i}]"),
+                    unknown("flag", flag, &flags),
+                );
+            }
+        }
+        for (op, def) in &def.operands {
+            for (i, code) in def.devices.iter().enumerate() {
+                if !p.devices.contains_key(code) {
+                    cx.error(
+                        format!("instructions.{name}.operands.{op}.devices[{i}]"),
+                        unknown("device", code, &devices),
+                    );
+                }
+            }
+        }
+    }
+    if p.variants.is_empty() {
+        cx.error(
+            "variants",
+            LoadErrorKind::Missing("variant: a profile needs at least one"),
+        );
+    }
+    let mut seen = BTreeSet::new();
+    for (v, variant) in p.variants.iter().enumerate() {
+        if !seen.insert(&variant.id) {
+            cx.error(
+                format!("variants[{v}].id"),
+                LoadErrorKind::Invalid(format!("variant id `{}` is used twice", variant.id)),
+            );
+        }
+        for (i, flag) in variant.ignores_flags.iter().enumerate() {
+            if !p.flags.contains_key(flag) {
+                cx.error(
+                    format!("variants[{v}].ignores_flags[{i}]"),
+                    unknown("flag", flag, &flags),
+                );
+            }
+        }
+        for code in variant.devices.keys() {
+            if !p.devices.contains_key(code) {
+                cx.error(
+                    format!("variants[{v}].devices.{code}"),
+                    unknown("device", code, &devices),
+                );
+            }
+        }
+        for (i, instr) in variant.instructions.iter().flatten().enumerate() {
+            if !p.instructions.contains_key(instr) {
+                cx.error(
+                    format!("variants[{v}].instructions[{i}]"),
+                    unknown("instruction", instr, &instructions),
+                );
+            }
+        }
+    }
+}
+
+pub(crate) fn unknown(what: &'static str, name: &str, expected: &[String]) -> LoadErrorKind {
+    LoadErrorKind::Unknown {
+        what,
+        name: name.to_string(),
+        expected: expected.to_vec(),
+    }
+}

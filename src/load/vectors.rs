@@ -1,0 +1,556 @@
+//! Lowering vector files into the validated corpus, checked against their profiles.
+
+use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use super::profiles::unknown;
+use super::{
+    parse_yaml, read_file, yaml_files, FileContext, LineIndex, LoadError, LoadErrorKind, LoadErrors,
+};
+use crate::device::Device;
+use crate::model::{Basis, Case, Citation, Corpus, ErrorSignal, Expectation, Location, Operand};
+use crate::profile::{Profile, Profiles, SignalKind};
+use crate::spec::{
+    CaseSpec, ExpectSpec, FlagSpec, ScalarSpec, SourceSpec, ValueSpec, VectorFileSpec,
+};
+use crate::value::{parse_number, parse_word, to_bits};
+
+/// Loads every vector file under the given paths (files or folders).
+pub fn load_corpus(paths: &[PathBuf], profiles: &Profiles) -> Result<Corpus, LoadErrors> {
+    let mut builder = CorpusBuilder::default();
+    for path in paths {
+        match yaml_files(path) {
+            Ok(files) if files.is_empty() => builder.errors.push(LoadError {
+                file: path.clone(),
+                line: None,
+                key: None,
+                kind: LoadErrorKind::Invalid("no vector file (*.yaml) found".into()).into(),
+            }),
+            Ok(files) => {
+                for file in files {
+                    match read_file(&file) {
+                        Ok(text) => builder.add_file(&file, &text, profiles),
+                        Err(e) => builder.errors.push(e),
+                    }
+                }
+            }
+            Err(e) => builder.errors.push(e),
+        }
+    }
+    builder.finish()
+}
+
+/// Accumulates cases from vector files, checking ids across the whole corpus.
+#[derive(Default)]
+pub struct CorpusBuilder {
+    cases: Vec<Arc<Case>>,
+    ids: HashMap<String, Location>,
+    errors: Vec<LoadError>,
+}
+
+impl CorpusBuilder {
+    /// Adds one vector file given as text; `file` is the name errors will show.
+    pub fn add_file(&mut self, file: &Path, text: &str, profiles: &Profiles) {
+        let spec: VectorFileSpec = match parse_yaml(file, text) {
+            Ok(s) => s,
+            Err(e) => {
+                self.errors.push(e);
+                return;
+            }
+        };
+        let mut cx = FileContext {
+            file: file.to_path_buf(),
+            index: LineIndex::new(text),
+            errors: &mut self.errors,
+        };
+        let Some(header) = lower_header(&spec, profiles, &mut cx) else {
+            return;
+        };
+        for (i, case) in spec.cases.iter().enumerate() {
+            let key = format!("cases[{i}]");
+            if let Some(lowered) = lower_case(&key, case, &header, &mut cx) {
+                match self.ids.get(&lowered.id) {
+                    Some(first) => cx.error(
+                        format!("{key}.id"),
+                        LoadErrorKind::DuplicateId {
+                            id: lowered.id.clone(),
+                            first: first.clone(),
+                        },
+                    ),
+                    None => {
+                        self.ids
+                            .insert(lowered.id.clone(), lowered.location.clone());
+                        self.cases.push(Arc::new(lowered));
+                    }
+                }
+            }
+        }
+    }
+
+    pub fn finish(self) -> Result<Corpus, LoadErrors> {
+        if self.errors.is_empty() {
+            Ok(Corpus { cases: self.cases })
+        } else {
+            Err(LoadErrors(self.errors))
+        }
+    }
+}
+
+/// What a file says for all its cases.
+struct Header<'p> {
+    instructions: Arc<[String]>,
+    profiles: Vec<&'p Profile>,
+    profile_ids: Arc<[String]>,
+    source: SourceSpec,
+}
+
+fn lower_header<'p>(
+    spec: &VectorFileSpec,
+    profiles: &'p Profiles,
+    cx: &mut FileContext<'_>,
+) -> Option<Header<'p>> {
+    let before = cx.errors.len();
+    if spec.profiles.is_empty() {
+        cx.error(
+            "profiles",
+            LoadErrorKind::Missing("profile: name at least one"),
+        );
+    }
+    if spec.instructions.is_empty() {
+        cx.error(
+            "instructions",
+            LoadErrorKind::Missing("instruction: name at least one"),
+        );
+    }
+    let mut found = Vec::new();
+    for (i, id) in spec.profiles.iter().enumerate() {
+        match profiles.get(id) {
+            Some(p) => found.push(p.as_ref()),
+            None => cx.error(
+                format!("profiles[{i}]"),
+                unknown("profile", id, &profiles.ids()),
+            ),
+        }
+    }
+    for p in &found {
+        for (i, instr) in spec.instructions.iter().enumerate() {
+            if !p.instructions.contains_key(instr) {
+                let known: Vec<String> = p.instructions.keys().cloned().collect();
+                cx.error(
+                    format!("instructions[{i}]"),
+                    unknown("instruction", instr, &known),
+                );
+            }
+        }
+    }
+    check_source("source", &spec.source, &found, cx);
+    (cx.errors.len() == before).then(|| Header {
+        instructions: spec.instructions.clone().into(),
+        profiles: found,
+        profile_ids: spec.profiles.clone().into(),
+        source: spec.source.clone(),
+    })
+}
+
+fn check_source(key: &str, source: &SourceSpec, profiles: &[&Profile], cx: &mut FileContext<'_>) {
+    for p in profiles {
+        if !p.manuals.contains_key(&source.manual) {
+            let known: Vec<String> = p.manuals.keys().cloned().collect();
+            cx.error(
+                format!("{key}.manual"),
+                unknown("manual", &source.manual, &known),
+            );
+        }
+    }
+}
+
+fn lower_case(
+    key: &str,
+    spec: &CaseSpec,
+    h: &Header<'_>,
+    cx: &mut FileContext<'_>,
+) -> Option<Case> {
+    let before_count = cx.errors.len();
+    let id_ok = !spec.id.is_empty()
+        && spec
+            .id
+            .chars()
+            .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-')
+        && !spec.id.starts_with('-');
+    if !id_ok {
+        cx.error(
+            format!("{key}.id"),
+            LoadErrorKind::Invalid(format!(
+                "case id `{}` must be lowercase letters, digits and `-`, like `fixed-4-digits-example`",
+                spec.id
+            )),
+        );
+    }
+    let cite = spec
+        .cite
+        .as_deref()
+        .map(str::trim)
+        .filter(|c| !c.is_empty());
+    if cite.is_none() && spec.basis != Basis::Unspecified {
+        cx.error(
+            key,
+            LoadErrorKind::Missing(match spec.basis {
+                Basis::Manual => "cite: `basis: manual` must say where the manual states it",
+                Basis::Observed => "cite: `basis: observed` must give the provenance",
+                _ => "cite: `basis: inferred` must say what the reading rests on",
+            }),
+        );
+    }
+    if let Some(source) = &spec.source {
+        check_source(&format!("{key}.source"), source, &h.profiles, cx);
+    }
+    let source = spec.source.as_ref().unwrap_or(&h.source);
+
+    let variants = spec.variants.as_ref().map(|list| {
+        let known: Vec<String> = h
+            .profiles
+            .iter()
+            .flat_map(|p| p.variants.iter().map(|v| v.id.clone()))
+            .collect();
+        for (i, v) in list.iter().enumerate() {
+            if !known.contains(v) {
+                cx.error(
+                    format!("{key}.variants[{i}]"),
+                    unknown("variant", v, &known),
+                );
+            }
+        }
+        list.iter().cloned().collect::<BTreeSet<String>>()
+    });
+
+    let flags = lower_flags(key, &spec.flags, h, cx);
+    let operands = lower_operands(key, &spec.operands, h, cx);
+    let before = lower_memory(&format!("{key}.before"), &spec.before, h, cx);
+    let expect = match &spec.expect {
+        Some(e) => Some(lower_expect(&format!("{key}.expect"), e, h, cx)),
+        None if spec.basis == Basis::Unspecified => None,
+        None => {
+            cx.error(
+                key,
+                LoadErrorKind::Missing("expect: only `basis: unspecified` may leave it out"),
+            );
+            None
+        }
+    };
+
+    (cx.errors.len() == before_count).then(|| Case {
+        id: spec.id.clone(),
+        basis: spec.basis,
+        citation: Citation {
+            manual: source.manual.clone(),
+            page: source.page.to_string(),
+            text: cite.map(str::to_string),
+        },
+        location: cx.location(key),
+        instructions: h.instructions.clone(),
+        profiles: h.profile_ids.clone(),
+        variants,
+        flags,
+        operands,
+        before,
+        expect,
+        note: spec.note.clone(),
+    })
+}
+
+fn lower_flags(
+    key: &str,
+    spec: &BTreeMap<String, FlagSpec>,
+    h: &Header<'_>,
+    cx: &mut FileContext<'_>,
+) -> BTreeMap<String, bool> {
+    let mut out = BTreeMap::new();
+    for (name, value) in spec {
+        let fkey = format!("{key}.flags.{name}");
+        for p in &h.profiles {
+            let read = h.instructions.iter().all(|i| {
+                p.instructions
+                    .get(i)
+                    .is_some_and(|def| def.flags.iter().any(|f| f == name))
+            });
+            if !read {
+                let known: BTreeSet<String> = h
+                    .instructions
+                    .iter()
+                    .filter_map(|i| p.instructions.get(i))
+                    .flat_map(|d| d.flags.iter().cloned())
+                    .collect();
+                let what = "flag for these instructions";
+                cx.error(
+                    &fkey,
+                    unknown(what, name, &known.into_iter().collect::<Vec<_>>()),
+                );
+            }
+        }
+        let on = match value {
+            FlagSpec::Bool(b) => Some(*b),
+            FlagSpec::Number(0) => Some(false),
+            FlagSpec::Number(1) => Some(true),
+            FlagSpec::Text(t) if t.eq_ignore_ascii_case("on") => Some(true),
+            FlagSpec::Text(t) if t.eq_ignore_ascii_case("off") => Some(false),
+            _ => None,
+        };
+        match on {
+            Some(on) => {
+                out.insert(name.clone(), on);
+            }
+            None => cx.error(
+                &fkey,
+                LoadErrorKind::Invalid("expected `on` or `off` (or true/false, 1/0)".into()),
+            ),
+        }
+    }
+    out
+}
+
+fn lower_operands(
+    key: &str,
+    spec: &BTreeMap<String, ScalarSpec>,
+    h: &Header<'_>,
+    cx: &mut FileContext<'_>,
+) -> BTreeMap<String, Operand> {
+    let mut out = BTreeMap::new();
+    for p in &h.profiles {
+        for instr in h.instructions.iter() {
+            let Some(def) = p.instructions.get(instr) else {
+                continue;
+            };
+            let names: Vec<String> = def.operands.keys().cloned().collect();
+            for name in spec.keys().filter(|n| !def.operands.contains_key(*n)) {
+                cx.error(
+                    format!("{key}.operands.{name}"),
+                    unknown("operand", name, &names),
+                );
+            }
+            for name in names.iter().filter(|n| !spec.contains_key(*n)) {
+                cx.error(
+                    format!("{key}.operands"),
+                    LoadErrorKind::Invalid(format!("missing operand `{name}` of {instr}")),
+                );
+            }
+        }
+    }
+    for (name, value) in spec {
+        let okey = format!("{key}.operands.{name}");
+        let operand = match value {
+            ScalarSpec::Number(n) => Operand::Constant(*n),
+            ScalarSpec::Text(t) => match parse_number(t) {
+                Ok(n) => Operand::Constant(n),
+                Err(_) => match t.parse::<Device>() {
+                    Ok(d) => Operand::Device(d),
+                    Err(e) => {
+                        cx.error(&okey, LoadErrorKind::Device(e));
+                        continue;
+                    }
+                },
+            },
+        };
+        for p in &h.profiles {
+            for instr in h.instructions.iter() {
+                let Some(def) = p.instructions.get(instr).and_then(|d| d.operands.get(name)) else {
+                    continue;
+                };
+                match &operand {
+                    Operand::Constant(_) if !def.constant => cx.error(
+                        &okey,
+                        LoadErrorKind::Invalid(format!(
+                            "{instr} operand `{name}` takes a device ({}), not a constant",
+                            def.devices.join(", ")
+                        )),
+                    ),
+                    Operand::Device(d) if !def.devices.contains(&d.code) => cx.error(
+                        &okey,
+                        unknown("device for this operand", &d.code, &def.devices),
+                    ),
+                    Operand::Device(d) if !p.word_exists_anywhere(d) => cx.error(
+                        &okey,
+                        LoadErrorKind::Invalid(format!(
+                            "{d} does not exist on any {} variant",
+                            p.id
+                        )),
+                    ),
+                    _ => {}
+                }
+            }
+        }
+        out.insert(name.clone(), operand);
+    }
+    out
+}
+
+/// Expands `device: value` entries into single words, rejecting a word set twice.
+fn lower_memory(
+    key: &str,
+    spec: &BTreeMap<String, ValueSpec>,
+    h: &Header<'_>,
+    cx: &mut FileContext<'_>,
+) -> BTreeMap<Device, u16> {
+    let mut out: BTreeMap<Device, u16> = BTreeMap::new();
+    let mut set_by: BTreeMap<Device, String> = BTreeMap::new();
+    for (name, value) in spec {
+        let mkey = format!("{key}.{name}");
+        let head = match name.parse::<Device>() {
+            Ok(d) => d,
+            Err(e) => {
+                cx.error(&mkey, LoadErrorKind::Device(e));
+                continue;
+            }
+        };
+        let Some(words) = expand(&mkey, value, cx) else {
+            continue;
+        };
+        for (offset, word) in words.into_iter().enumerate() {
+            let Some(device) = head.offset(offset as u32) else {
+                break;
+            };
+            for p in &h.profiles {
+                if !p.devices.contains_key(&device.code) {
+                    let known: Vec<String> = p.devices.keys().cloned().collect();
+                    cx.error(&mkey, unknown("device", &device.code, &known));
+                } else if !p.word_exists_anywhere(&device) {
+                    cx.error(
+                        &mkey,
+                        LoadErrorKind::Invalid(format!(
+                            "{device} does not exist on any {} variant",
+                            p.id
+                        )),
+                    );
+                }
+            }
+            if let Some(first) = set_by.get(&device) {
+                cx.error(
+                    &mkey,
+                    LoadErrorKind::Invalid(format!("{device} is set twice (also by `{first}`)")),
+                );
+            }
+            set_by.insert(device.clone(), name.clone());
+            out.insert(device, word);
+        }
+    }
+    out
+}
+
+/// The words a value spec stands for.
+fn expand(key: &str, value: &ValueSpec, cx: &mut FileContext<'_>) -> Option<Vec<u16>> {
+    let word = |s: &ScalarSpec| match s {
+        ScalarSpec::Number(n) => to_bits(&n.to_string(), *n, 16).map(|w| w as u16),
+        ScalarSpec::Text(t) => parse_word(t),
+    };
+    let bytes = |text: &str, cx: &mut FileContext<'_>| -> Option<Vec<u8>> {
+        let out: Option<Vec<u8>> = text.chars().map(|c| u8::try_from(c).ok()).collect();
+        if out.is_none() {
+            cx.error(
+                key,
+                LoadErrorKind::Invalid(format!(
+                    "`{}` has a character above FFH; ASCII text stores one byte per character",
+                    text.escape_default()
+                )),
+            );
+        }
+        out
+    };
+    let words = match value {
+        ValueSpec::Word(s) => vec![word(s)
+            .map_err(|e| cx.error(key, LoadErrorKind::Value(e)))
+            .ok()?],
+        ValueSpec::Words(list) => {
+            let mut out = Vec::new();
+            for (i, s) in list.iter().enumerate() {
+                match word(s) {
+                    Ok(w) => out.push(w),
+                    Err(e) => cx.error(format!("{key}[{i}]"), LoadErrorKind::Value(e)),
+                }
+            }
+            if out.len() != list.len() {
+                return None;
+            }
+            out
+        }
+        ValueSpec::Ascii(text) => bytes(text, cx)?
+            .chunks(2)
+            .map(|pair| u16::from(pair[0]) | (u16::from(*pair.get(1).unwrap_or(&0)) << 8))
+            .collect(),
+        ValueSpec::AsciiWords(text) => bytes(text, cx)?.into_iter().map(u16::from).collect(),
+    };
+    if words.is_empty() {
+        cx.error(
+            key,
+            LoadErrorKind::Invalid("empty text sets no word".into()),
+        );
+        return None;
+    }
+    Some(words)
+}
+
+fn lower_expect(
+    key: &str,
+    spec: &ExpectSpec,
+    h: &Header<'_>,
+    cx: &mut FileContext<'_>,
+) -> Expectation {
+    let after = lower_memory(&format!("{key}.after"), &spec.after, h, cx);
+    let ekey = format!("{key}.error");
+    let error = match &spec.error {
+        None => None,
+        Some(ScalarSpec::Text(t)) if t == "none" => None,
+        Some(value) => {
+            let mut lowered = None;
+            for p in &h.profiles {
+                lowered = lower_error(&ekey, value, p, cx);
+            }
+            lowered
+        }
+    };
+    Expectation { after, error }
+}
+
+/// Reads an error expectation the way the profile signals errors.
+fn lower_error(
+    key: &str,
+    value: &ScalarSpec,
+    p: &Profile,
+    cx: &mut FileContext<'_>,
+) -> Option<ErrorSignal> {
+    let (flag, register) = (&p.errors.flag, p.errors.register.as_deref().unwrap_or("?"));
+    match p.errors.signal {
+        SignalKind::Code => {
+            let code = match value {
+                ScalarSpec::Number(n) => to_bits(&n.to_string(), *n, 16).map(|w| w as u16),
+                ScalarSpec::Text(t) => parse_word(t),
+            };
+            match code {
+                Ok(c) => Some(ErrorSignal::Code(c)),
+                Err(_) => {
+                    cx.error(
+                        key,
+                        LoadErrorKind::Invalid(format!(
+                            "`{value}` is not an error of {}: it reports errors as a code in {register}; expected `none` or a code like `3401H`",
+                            p.id
+                        )),
+                    );
+                    None
+                }
+            }
+        }
+        SignalKind::Flag => {
+            if value.to_string() == *flag {
+                flag.parse().ok().map(ErrorSignal::Flag)
+            } else {
+                cx.error(
+                    key,
+                    LoadErrorKind::Invalid(format!(
+                        "`{value}` is not an error of {}: it signals errors with {flag} only, not with a code; expected `none` or `{flag}`",
+                        p.id
+                    )),
+                );
+                None
+            }
+        }
+    }
+}

@@ -1,0 +1,104 @@
+//! Planning and running trials: one per (backend, variant, instruction, case).
+
+use std::sync::Arc;
+
+use crate::backend::{Backend, Request};
+use crate::compare::{judge, Observation, Verdict};
+use crate::memory::{Fill, Image};
+use crate::model::{Case, Corpus};
+use crate::profile::{Profile, Profiles};
+
+/// One case as run by one backend on one variant of its profile.
+#[derive(Clone)]
+pub struct Trial {
+    pub backend: Arc<dyn Backend>,
+    pub profile: Arc<Profile>,
+    pub variant: String,
+    pub instruction: String,
+    pub case: Arc<Case>,
+    /// Why the trial is not run, when the backend does not claim it.
+    pub skip: Option<String>,
+}
+
+impl Trial {
+    /// `backend::instruction::case-id::variant`: filtering on a prefix selects a backend, an
+    /// instruction or a case across variants.
+    pub fn name(&self) -> String {
+        format!(
+            "{}::{}::{}::{}",
+            self.backend.name(),
+            self.instruction.to_lowercase(),
+            self.case.id,
+            self.variant
+        )
+    }
+
+    /// Runs the case under every fill and judges it.
+    pub fn run(&self) -> Verdict {
+        let Some(variant) = self.profile.variant(&self.variant) else {
+            return Verdict::Unsupported {
+                reason: format!(
+                    "profile {} has no variant {}",
+                    self.profile.id, self.variant
+                ),
+            };
+        };
+        let observations: Vec<Observation> = Fill::ALL
+            .iter()
+            .map(|&fill| {
+                let memory = Image::new(self.case.before.clone(), fill);
+                let request = Request {
+                    profile: &self.profile,
+                    variant,
+                    instruction: &self.instruction,
+                    case_id: &self.case.id,
+                    flags: &self.case.flags,
+                    operands: &self.case.operands,
+                    memory: &memory,
+                };
+                Observation {
+                    fill,
+                    result: self.backend.execute(&request),
+                }
+            })
+            .collect();
+        judge(&self.case, &observations)
+    }
+}
+
+/// Every trial of the corpus on the given backends, in corpus order. A case runs on a backend
+/// when the backend implements one of the case's profiles; within that, on every variant the
+/// case allows and for every instruction of its file.
+pub fn plan(corpus: &Corpus, profiles: &Profiles, backends: &[Arc<dyn Backend>]) -> Vec<Trial> {
+    let mut trials = Vec::new();
+    for backend in backends {
+        for case in &corpus.cases {
+            if !case.profiles.iter().any(|p| p == backend.profile()) {
+                continue;
+            }
+            let Some(profile) = profiles.get(backend.profile()) else {
+                continue;
+            };
+            for instruction in case.instructions.iter() {
+                for variant in profile.variants.iter().filter(|v| case.runs_on(&v.id)) {
+                    let skip = (!backend.claims(instruction, &variant.id)).then(|| {
+                        format!(
+                            "{} does not implement {instruction} on {}",
+                            backend.name(),
+                            variant.id
+                        )
+                    });
+                    trials.push(Trial {
+                        backend: backend.clone(),
+                        profile: profile.clone(),
+                        variant: variant.id.clone(),
+                        instruction: instruction.clone(),
+                        case: case.clone(),
+                        skip,
+                    });
+                }
+            }
+        }
+    }
+    trials
+}

@@ -1,0 +1,47 @@
+//! Reporting trial results: text for people, JSON for tools.
+
+pub mod json;
+pub mod text;
+
+use crate::compare::Verdict;
+use crate::plan::Trial;
+
+/// A trial and what became of it. A skipped trial has no verdict.
+pub struct TrialResult {
+    pub trial: Trial,
+    pub verdict: Option<Verdict>,
+}
+
+/// Counts for a run's closing line.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct Summary {
+    pub passed: usize,
+    pub failed: usize,
+    pub recorded: usize,
+    pub skipped: usize,
+}
+
+impl Summary {
+    pub fn of<'a>(results: impl IntoIterator<Item = &'a TrialResult>) -> Self {
+        let mut s = Summary::default();
+        for r in results {
+            match &r.verdict {
+                None => s.skipped += 1,
+                Some(Verdict::Recorded { .. }) => s.recorded += 1,
+                Some(v) if v.is_failure() => s.failed += 1,
+                Some(_) => s.passed += 1,
+            }
+        }
+        s
+    }
+}
+
+impl std::fmt::Display for Summary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} passed, {} failed, {} skipped ({} unspecified recorded)",
+            self.passed, self.failed, self.skipped, self.recorded
+        )
+    }
+}

@@ -1,0 +1,238 @@
+//! Human-readable rendering of a trial's result: where the case is, what ran, and a word-by-word
+//! diff of expected against actual memory.
+
+use std::fmt::Write;
+
+use anstyle::{AnsiColor, Style};
+use similar::{ChangeTag, TextDiff};
+
+use crate::compare::{Mismatch, Verdict, WordRow};
+use crate::model::{error_text, Case};
+use crate::plan::Trial;
+use crate::value::hex_word;
+
+/// Styles for the text report; all plain unless colour is on, so the same renderer serves a
+/// terminal, a log file and libtest's captured output.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Palette {
+    pub removed: Style,
+    pub added: Style,
+    pub heading: Style,
+    pub note: Style,
+}
+
+impl Palette {
+    pub fn plain() -> Self {
+        Palette::default()
+    }
+    pub fn coloured() -> Self {
+        Palette {
+            removed: AnsiColor::Red.on_default(),
+            added: AnsiColor::Green.on_default(),
+            heading: Style::new().bold(),
+            note: AnsiColor::Cyan.on_default(),
+        }
+    }
+}
+
+/// A word as a report line shows it: device, hex value, and its two bytes as characters in
+/// memory order (low byte first).
+pub fn word_line(device: &impl std::fmt::Display, value: u16) -> String {
+    let [lo, hi] = value.to_le_bytes();
+    format!(
+        "{device:<8} {}  \"{}{}\"",
+        hex_word(value),
+        show_byte(lo),
+        show_byte(hi)
+    )
+}
+
+fn show_byte(b: u8) -> String {
+    match b {
+        0 => "\\0".to_string(),
+        0x20..=0x7E if b != b'"' && b != b'\\' => (b as char).to_string(),
+        _ => format!("\\x{b:02X}"),
+    }
+}
+
+/// The case's setting: what ran, with which flags, operands and memory.
+pub fn describe_setting(trial: &Trial) -> String {
+    let case = &trial.case;
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "  case:        {} (basis: {}; {})",
+        case.id, case.basis, case.citation
+    );
+    let _ = writeln!(
+        out,
+        "  run:         {} on {} variant {} via backend {}",
+        trial.instruction,
+        trial.profile.id,
+        trial.variant,
+        trial.backend.name()
+    );
+    let _ = writeln!(out, "  flags:       {}", flags_text(trial));
+    let operands: Vec<String> = case
+        .operands
+        .iter()
+        .map(|(k, v)| format!("{k}={v}"))
+        .collect();
+    let _ = writeln!(out, "  operands:    {}", operands.join(" "));
+    let before: Vec<String> = case
+        .before
+        .iter()
+        .map(|(d, v)| format!("{d}={}", hex_word(*v)))
+        .collect();
+    let _ = writeln!(
+        out,
+        "  memory set:  {}",
+        if before.is_empty() {
+            "(none; all fill)".to_string()
+        } else {
+            before.join(" ")
+        }
+    );
+    out
+}
+
+fn flags_text(trial: &Trial) -> String {
+    let Some(def) = trial.profile.instructions.get(&trial.instruction) else {
+        return String::new();
+    };
+    let variant = trial.profile.variant(&trial.variant);
+    def.flags
+        .iter()
+        .map(|f| {
+            let default = trial.profile.flags.get(f).is_some_and(|d| d.default);
+            let on = trial.case.flags.get(f).copied().unwrap_or(default);
+            let ignored = variant.is_some_and(|v| v.ignores_flags.contains(f));
+            format!(
+                "{f}={}{}",
+                if on { "on" } else { "off" },
+                if ignored {
+                    " (not supported by this variant)"
+                } else {
+                    ""
+                }
+            )
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// The full report of one trial that did not conform, or of a recorded `unspecified` case.
+pub fn render(trial: &Trial, verdict: &Verdict, palette: Palette) -> String {
+    let mut out = String::new();
+    let h = palette.heading;
+    let _ = writeln!(
+        out,
+        "{h}{}: {} {}{h:#}",
+        trial.case.location,
+        trial.name(),
+        verdict.label()
+    );
+    out.push_str(&describe_setting(trial));
+    match verdict {
+        Verdict::Conforms => {}
+        Verdict::Differs { mismatches } => {
+            for m in mismatches {
+                out.push_str(&render_mismatch(m, palette));
+            }
+        }
+        Verdict::Unsupported { reason } => {
+            let _ = writeln!(
+                out,
+                "  the backend claims this trial but answered unsupported: {reason}"
+            );
+        }
+        Verdict::Fault { fill, fault } => {
+            let _ = writeln!(out, "  fill {}: {fault}", fill.name());
+        }
+        Verdict::Recorded {
+            observed,
+            fill_dependent,
+        } => {
+            let _ = writeln!(
+                out,
+                "  {}observed:{:#} {observed}",
+                palette.note, palette.note
+            );
+            if *fill_dependent {
+                let _ = writeln!(
+                    out,
+                    "  the outcome depends on the fill (it reads memory the vector does not set)"
+                );
+            }
+        }
+    }
+    out
+}
+
+fn render_mismatch(m: &Mismatch, palette: Palette) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "  with fill {} (words the vector does not set hold {}):",
+        m.fill.name(),
+        match m.fill {
+            crate::memory::Fill::A => "bytes A0H-A7H",
+            crate::memory::Fill::B => "hex digit characters",
+        }
+    );
+    if m.words_differ() {
+        let _ = writeln!(
+            out,
+            "  memory ({}- expected{:#}, {}+ actual{:#}):",
+            palette.removed, palette.removed, palette.added, palette.added
+        );
+        out.push_str(&memory_diff(&m.rows, palette));
+    }
+    if m.error_differs() {
+        let _ = writeln!(
+            out,
+            "  error: expected {}{}{:#}, actual {}{}{:#}",
+            palette.removed,
+            error_text(m.expected_error.as_ref()),
+            palette.removed,
+            palette.added,
+            error_text(m.actual_error.as_ref()),
+            palette.added
+        );
+    }
+    out
+}
+
+/// A unified diff of expected against actual words, one word per line.
+pub fn memory_diff(rows: &[WordRow], palette: Palette) -> String {
+    let expected: String = rows
+        .iter()
+        .map(|r| word_line(&r.device, r.expected) + "\n")
+        .collect();
+    let actual: String = rows
+        .iter()
+        .map(|r| word_line(&r.device, r.actual) + "\n")
+        .collect();
+    let diff = TextDiff::from_lines(&expected, &actual);
+    let mut out = String::new();
+    for change in diff.iter_all_changes() {
+        let (sign, style) = match change.tag() {
+            ChangeTag::Delete => ("-", palette.removed),
+            ChangeTag::Insert => ("+", palette.added),
+            ChangeTag::Equal => (" ", Style::new()),
+        };
+        let _ = write!(out, "    {style}{sign}{}{style:#}", change.value());
+    }
+    out
+}
+
+/// One line for a case in `list`.
+pub fn case_line(case: &Case) -> String {
+    format!(
+        "{:<44} {:<11} {}  [{}]",
+        case.id,
+        case.basis.to_string(),
+        case.location,
+        case.instructions.join(",")
+    )
+}

@@ -1,0 +1,135 @@
+//! Numbers as the manuals write them.
+//!
+//! Corpus authors copy values straight from manual pages, so every notation the pages use must
+//! read back to the same number: suffix hex (`4135H`, `0ABCH`), MELSEC constants (`K100`,
+//! `K-1`, `H0ABC`), C-style hex (`0x4135`) and plain integers.
+
+use std::fmt;
+
+/// Why a value could not be read.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ValueError {
+    Syntax(String),
+    TooWide { text: String, bits: u32 },
+}
+
+impl fmt::Display for ValueError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ValueError::Syntax(text) => write!(
+                f,
+                "`{text}` is not a value; expected hex like `4135H` or `H0ABC`, decimal like `K100` or `100`"
+            ),
+            ValueError::TooWide { text, bits } => write!(
+                f,
+                "`{text}` does not fit in {bits} bits (expected {} to {})",
+                -(1i64 << (bits - 1)),
+                (1i64 << bits) - 1
+            ),
+        }
+    }
+}
+
+impl std::error::Error for ValueError {}
+
+/// Reads a number in any of the accepted notations, without a width check.
+pub fn parse_number(text: &str) -> Result<i64, ValueError> {
+    let syntax = || ValueError::Syntax(text.to_string());
+    let t = text.trim();
+    let hex = |digits: &str| {
+        if digits.is_empty() || !digits.chars().all(|c| c.is_ascii_hexdigit()) {
+            return Err(syntax());
+        }
+        i64::from_str_radix(digits, 16).map_err(|_| syntax())
+    };
+    let dec = |digits: &str| {
+        let unsigned = digits.strip_prefix('-').unwrap_or(digits);
+        if unsigned.is_empty() || !unsigned.chars().all(|c| c.is_ascii_digit()) {
+            return Err(syntax());
+        }
+        digits.parse::<i64>().map_err(|_| syntax())
+    };
+    if let Some(rest) = t.strip_prefix('K') {
+        dec(rest)
+    } else if let Some(rest) = t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
+        hex(rest)
+    } else if let Some(rest) = t.strip_suffix('H').or_else(|| t.strip_suffix('h')) {
+        // Suffix form first: `0ABCH` is the manuals' usual spelling. A leading `H` with a
+        // trailing `H` (`H10H`) is not a notation anyone writes.
+        if rest.starts_with('H') {
+            return Err(syntax());
+        }
+        hex(rest)
+    } else if let Some(rest) = t.strip_prefix('H') {
+        hex(rest)
+    } else {
+        dec(t)
+    }
+}
+
+/// Narrows a number to a word. Negative numbers down to the signed minimum are stored as two's
+/// complement, as a PLC stores `K-1`.
+pub fn to_bits(text: &str, value: i64, bits: u32) -> Result<u64, ValueError> {
+    let min = -(1i64 << (bits - 1));
+    let max = (1i64 << bits) - 1;
+    if value < min || value > max {
+        return Err(ValueError::TooWide {
+            text: text.to_string(),
+            bits,
+        });
+    }
+    let mask = (1u64 << bits) - 1;
+    Ok((value as u64) & mask)
+}
+
+/// Reads a 16-bit word.
+pub fn parse_word(text: &str) -> Result<u16, ValueError> {
+    let value = parse_number(text)?;
+    Ok(to_bits(text, value, 16)? as u16)
+}
+
+/// Formats a word the way the manuals do: four hex digits and an `H` suffix.
+pub fn hex_word(word: u16) -> String {
+    format!("{word:04X}H")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rstest::rstest;
+
+    #[rstest]
+    #[case("4135H", 0x4135)]
+    #[case("0ABCH", 0x0ABC)]
+    #[case("H0ABC", 0x0ABC)]
+    #[case("K100", 100)]
+    #[case("K-1", 0xFFFF)]
+    #[case("K-32768", 0x8000)]
+    #[case("0x10", 0x10)]
+    #[case("65535", 0xFFFF)]
+    #[case("0", 0)]
+    fn reads_words(#[case] text: &str, #[case] word: u16) {
+        assert_eq!(parse_word(text), Ok(word));
+    }
+
+    #[rstest]
+    #[case("10000H")]
+    #[case("K65536")]
+    #[case("K-32769")]
+    #[case("70000")]
+    fn rejects_wide(#[case] text: &str) {
+        assert!(matches!(parse_word(text), Err(ValueError::TooWide { .. })));
+    }
+
+    #[rstest]
+    #[case("")]
+    #[case("H")]
+    #[case("GH")]
+    #[case("K1A")]
+    #[case("D100")]
+    #[case("H10H")]
+    #[case("4135 H")]
+    fn rejects_syntax(#[case] text: &str) {
+        assert!(matches!(parse_word(text), Err(ValueError::Syntax(_))));
+    }
+}

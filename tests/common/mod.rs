@@ -1,0 +1,94 @@
+//! Shared by the mutant tests: deliberately wrong backends built around a reference model, and
+//! a check that the corpus tells each of them apart from the manual.
+#![allow(dead_code)]
+
+use std::path::Path;
+use std::sync::Arc;
+
+use plc_conformance::backend::{Backend, Fault, Request, Response};
+use plc_conformance::plan::plan;
+use plc_conformance::session::{Paths, Session};
+
+pub fn session() -> Session {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    match Session::load(&Paths::under(root)) {
+        Ok(s) => s,
+        Err(e) => panic!("the corpus does not load:\n{e}"),
+    }
+}
+
+/// The reference backend of a profile.
+pub fn reference(session: &Session, profile: &str) -> Arc<dyn Backend> {
+    session
+        .backends
+        .iter()
+        .find(|b| b.profile() == profile)
+        .cloned()
+        .unwrap_or_else(|| panic!("no reference backend for {profile}"))
+}
+
+type Behaviour = dyn Fn(&Request<'_>, &dyn Backend) -> Result<Response, Fault> + Send + Sync;
+
+/// A wrong implementation: the reference model with one behaviour changed.
+pub struct Mutant {
+    pub name: &'static str,
+    pub base: Arc<dyn Backend>,
+    pub behave: Box<Behaviour>,
+}
+
+impl Mutant {
+    pub fn new(
+        name: &'static str,
+        base: &Arc<dyn Backend>,
+        behave: impl Fn(&Request<'_>, &dyn Backend) -> Result<Response, Fault> + Send + Sync + 'static,
+    ) -> Arc<dyn Backend> {
+        Arc::new(Mutant {
+            name,
+            base: base.clone(),
+            behave: Box::new(behave),
+        })
+    }
+}
+
+impl Backend for Mutant {
+    fn name(&self) -> &str {
+        self.name
+    }
+    fn profile(&self) -> &str {
+        self.base.profile()
+    }
+    fn describe(&self) -> String {
+        format!("mutant {}", self.name)
+    }
+    fn claims(&self, instruction: &str, variant: &str) -> bool {
+        self.base.claims(instruction, variant)
+    }
+    fn execute(&self, request: &Request<'_>) -> Result<Response, Fault> {
+        (self.behave)(request, self.base.as_ref())
+    }
+}
+
+/// The trials of the corpus that fail on a backend (recorded `unspecified` cases never do).
+pub fn failing_trials(session: &Session, backend: &Arc<dyn Backend>) -> Vec<String> {
+    plan(&session.corpus, &session.profiles, std::slice::from_ref(backend))
+        .into_iter()
+        .filter(|t| t.skip.is_none())
+        .filter(|t| t.run().is_failure())
+        .map(|t| t.name())
+        .collect()
+}
+
+/// Asserts that the reference passes and that every mutant fails at least one trial.
+pub fn assert_corpus_kills(session: &Session, reference: &Arc<dyn Backend>, mutants: &[Arc<dyn Backend>]) {
+    let failing = failing_trials(session, reference);
+    assert!(failing.is_empty(), "the reference model itself fails: {failing:?}");
+    let survivors: Vec<&str> = mutants
+        .iter()
+        .filter(|m| failing_trials(session, m).is_empty())
+        .map(|m| m.name())
+        .collect();
+    assert!(
+        survivors.is_empty(),
+        "the corpus lets these wrong backends through (a vector is missing): {survivors:?}"
+    );
+}
