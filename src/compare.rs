@@ -194,3 +194,130 @@ pub fn describe(changed: &BTreeMap<Device, u16>, error: Option<&ErrorSignal>) ->
         None => words,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use std::path::PathBuf;
+    use std::sync::Arc;
+
+    use super::*;
+    use crate::model::{Citation, Location};
+
+    fn d(i: u32) -> Device {
+        Device::new("D", i)
+    }
+
+    fn case(basis: Basis, expect: Option<Expectation>) -> Case {
+        Case {
+            id: "c".into(),
+            basis,
+            citation: Citation {
+                manual: "m".into(),
+                page: "1".into(),
+                text: None,
+            },
+            location: Location {
+                file: PathBuf::from("f.yaml"),
+                line: 1,
+            },
+            instructions: Arc::from(vec!["HABIN".to_string()]),
+            profiles: Arc::from(vec!["p".to_string()]),
+            variants: None,
+            flags: BTreeMap::new(),
+            operands: BTreeMap::new(),
+            before: BTreeMap::from([(d(100), 0x4135)]),
+            expect,
+            note: None,
+        }
+    }
+
+    fn done(writes: &[(u32, u16)], error: Option<ErrorSignal>) -> Vec<Observation> {
+        Fill::ALL
+            .iter()
+            .map(|&fill| Observation {
+                fill,
+                result: Ok(Response::Done(Outcome {
+                    writes: writes.iter().map(|(i, v)| (d(*i), *v)).collect(),
+                    error: error.clone(),
+                })),
+            })
+            .collect()
+    }
+
+    fn expect(after: &[(u32, u16)], error: Option<ErrorSignal>) -> Option<Expectation> {
+        Some(Expectation {
+            after: after.iter().map(|(i, v)| (d(*i), *v)).collect(),
+            error,
+        })
+    }
+
+    #[test]
+    fn the_expected_change_conforms() {
+        let c = case(Basis::Manual, expect(&[(200, 0x5A8D)], None));
+        assert_eq!(judge(&c, &done(&[(200, 0x5A8D)], None)), Verdict::Conforms);
+    }
+
+    #[test]
+    fn a_stray_write_differs() {
+        let c = case(Basis::Manual, expect(&[(200, 0x5A8D)], None));
+        let v = judge(&c, &done(&[(200, 0x5A8D), (201, 0)], None));
+        assert!(v.is_failure(), "{v:?}");
+    }
+
+    #[test]
+    fn rewriting_a_word_with_its_value_is_no_change() {
+        let c = case(Basis::Manual, expect(&[], None));
+        assert_eq!(judge(&c, &done(&[(100, 0x4135)], None)), Verdict::Conforms);
+    }
+
+    #[test]
+    fn a_missing_change_differs() {
+        let c = case(Basis::Manual, expect(&[(200, 0x5A8D)], None));
+        assert!(judge(&c, &done(&[], None)).is_failure());
+    }
+
+    #[test]
+    fn a_code_never_satisfies_a_flag() {
+        let flag = ErrorSignal::Flag(Device::new("M", 8004));
+        let c = case(Basis::Manual, expect(&[], Some(flag)));
+        assert!(judge(&c, &done(&[], Some(ErrorSignal::Code(0x3401)))).is_failure());
+        assert!(judge(&c, &done(&[], None)).is_failure());
+    }
+
+    #[test]
+    fn faults_and_unsupported_fail() {
+        let c = case(Basis::Manual, expect(&[], None));
+        let fault = vec![Observation {
+            fill: Fill::A,
+            result: Err(Fault::Timeout("5 s".into())),
+        }];
+        assert_eq!(judge(&c, &fault).label(), "timeout");
+        assert!(judge(&c, &fault).is_failure());
+        let unsupported = vec![Observation {
+            fill: Fill::A,
+            result: Ok(Response::Unsupported("no".into())),
+        }];
+        assert!(judge(&c, &unsupported).is_failure());
+    }
+
+    #[test]
+    fn unspecified_records_and_notes_fill_dependence() {
+        let c = case(Basis::Unspecified, None);
+        let mut obs = done(&[(200, 1)], None);
+        assert_eq!(
+            judge(&c, &obs),
+            Verdict::Recorded {
+                observed: "D200=0001H".into(),
+                fill_dependent: false
+            }
+        );
+        obs[1].result = Ok(Response::Done(Outcome::default()));
+        assert!(matches!(
+            judge(&c, &obs),
+            Verdict::Recorded {
+                fill_dependent: true,
+                ..
+            }
+        ));
+    }
+}

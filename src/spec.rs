@@ -285,8 +285,8 @@ mod schema_shapes {
     #[serde(untagged)]
     #[allow(dead_code)]
     pub enum Value {
-        Word(Scalar),
-        Words(Vec<Scalar>),
+        Word(super::ScalarSpec),
+        Words(Vec<super::ScalarSpec>),
         Ascii(Ascii),
         AsciiWords(AsciiWords),
     }

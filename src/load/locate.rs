@@ -5,6 +5,7 @@
 //! name the line, so each document is walked once more with a span-reporting parser and every
 //! key path (`cases[3].before.D100`) is mapped to the line it starts on.
 
+use std::collections::hash_map::Entry;
 use std::collections::HashMap;
 
 use saphyr_parser::{Event, Parser};
@@ -13,6 +14,7 @@ use saphyr_parser::{Event, Parser};
 #[derive(Debug, Default)]
 pub struct LineIndex {
     lines: HashMap<String, usize>,
+    duplicates: Vec<(String, usize)>,
 }
 
 enum Frame {
@@ -25,6 +27,7 @@ impl LineIndex {
     /// is reported by the deserializer, with its own line.
     pub fn new(text: &str) -> Self {
         let mut lines = HashMap::new();
+        let mut duplicates = Vec::new();
         let mut stack: Vec<Frame> = Vec::new();
         for item in Parser::new_from_str(text) {
             let Ok((event, span)) = item else { break };
@@ -50,7 +53,12 @@ impl LineIndex {
                         Some(Frame::Map { path, .. }) => join(path, &value),
                         _ => value.to_string(),
                     };
-                    lines.entry(full).or_insert(line);
+                    match lines.entry(full) {
+                        Entry::Occupied(e) => duplicates.push((e.key().clone(), line)),
+                        Entry::Vacant(e) => {
+                            e.insert(line);
+                        }
+                    }
                     if let Some(Frame::Map { key, .. }) = stack.last_mut() {
                         *key = Some(value.to_string());
                     }
@@ -72,7 +80,14 @@ impl LineIndex {
                 _ => {}
             }
         }
-        LineIndex { lines }
+        LineIndex { lines, duplicates }
+    }
+
+    /// Keys that appear twice in one mapping, with the line of the repeat. The deserializer
+    /// keeps the last value of a repeated map key without a word, which would silently drop a
+    /// memory word a vector author wrote.
+    pub fn duplicates(&self) -> &[(String, usize)] {
+        &self.duplicates
     }
 
     /// The line of a key path, or of its nearest indexed ancestor.
@@ -119,6 +134,12 @@ cases:
         assert_eq!(index.line("cases[0].before.D100"), Some(5));
         assert_eq!(index.line("cases[1]"), Some(6));
         assert_eq!(index.line("cases[1].operands.s"), Some(8));
+    }
+
+    #[test]
+    fn reports_repeated_keys() {
+        let index = LineIndex::new("a:\n  D1: 1\n  D1: 2\nb: [1]\n");
+        assert_eq!(index.duplicates(), &[("a.D1".to_string(), 3)]);
     }
 
     #[test]

@@ -55,7 +55,29 @@ pub(crate) struct FileContext<'a> {
     pub errors: &'a mut Vec<LoadError>,
 }
 
-impl FileContext<'_> {
+impl<'a> FileContext<'a> {
+    /// Starts lowering a file, reporting keys repeated within a mapping.
+    pub fn new(file: &Path, text: &str, errors: &'a mut Vec<LoadError>) -> Self {
+        let cx = FileContext {
+            file: file.to_path_buf(),
+            index: LineIndex::new(text),
+            errors,
+        };
+        let repeated: Vec<(String, usize)> = cx.index.duplicates().to_vec();
+        for (key, line) in repeated {
+            cx.errors.push(LoadError {
+                file: cx.file.clone(),
+                line: Some(line),
+                kind: LoadErrorKind::Invalid(
+                    "duplicate key: it is already given above in the same mapping".into(),
+                )
+                .into(),
+                key: Some(key),
+            });
+        }
+        cx
+    }
+
     pub fn error(&mut self, key: impl Into<String>, kind: LoadErrorKind) {
         let key = key.into();
         self.errors.push(LoadError {

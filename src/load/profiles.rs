@@ -63,11 +63,7 @@ pub fn parse_profile(file: &Path, text: &str, errors: &mut Vec<LoadError>) -> Op
         }
     };
     let before = errors.len();
-    let mut cx = FileContext {
-        file: file.to_path_buf(),
-        index: LineIndex::new(text),
-        errors,
-    };
+    let mut cx = FileContext::new(file, text, errors);
     check_profile(&profile, &mut cx);
     (cx.errors.len() == before).then_some(profile)
 }

@@ -5,9 +5,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use super::profiles::unknown;
-use super::{
-    parse_yaml, read_file, yaml_files, FileContext, LineIndex, LoadError, LoadErrorKind, LoadErrors,
-};
+use super::{parse_yaml, read_file, yaml_files, FileContext, LoadError, LoadErrorKind, LoadErrors};
 use crate::device::Device;
 use crate::model::{Basis, Case, Citation, Corpus, ErrorSignal, Expectation, Location, Operand};
 use crate::profile::{Profile, Profiles, SignalKind};
@@ -59,11 +57,7 @@ impl CorpusBuilder {
                 return;
             }
         };
-        let mut cx = FileContext {
-            file: file.to_path_buf(),
-            index: LineIndex::new(text),
-            errors: &mut self.errors,
-        };
+        let mut cx = FileContext::new(file, text, &mut self.errors);
         let Some(header) = lower_header(&spec, profiles, &mut cx) else {
             return;
         };

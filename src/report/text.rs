@@ -40,7 +40,8 @@ impl Palette {
 pub fn word_line(device: &impl std::fmt::Display, value: u16) -> String {
     let [lo, hi] = value.to_le_bytes();
     format!(
-        "{device:<8} {}  \"{}{}\"",
+        "{:<8} {}  \"{}{}\"",
+        device.to_string(),
         hex_word(value),
         show_byte(lo),
         show_byte(hi)

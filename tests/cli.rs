@@ -1,0 +1,176 @@
+//! The command line as a user meets it: exit codes, messages with file:line, output formats.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn cli(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_plc-conformance"))
+        .args(["--root", root().to_str().unwrap_or(".")])
+        .args(args)
+        .env("NO_COLOR", "1")
+        .output()
+        .expect("the binary runs")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// A scratch folder holding one vector file.
+fn scratch_vectors(test: &str, yaml: &str) -> PathBuf {
+    let dir =
+        std::env::temp_dir().join(format!("plc-conformance-cli-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    std::fs::write(dir.join("case.yaml"), yaml).expect("write vector");
+    dir
+}
+
+const ONE_CASE: &str = "\
+instructions: [HABIN]
+profiles: [mitsubishi-iqr]
+source: {manual: iqr-instructions-ja, page: 478}
+cases:
+  - id: cli-example
+    basis: manual
+    cite: example on p.478
+    operands: {s: D100, d: D200}
+    before:
+      D100: {ascii: \"5A8D\"}
+    expect:
+      after: {D200: 5A8DH}
+";
+
+#[test]
+fn validate_accepts_the_corpus() {
+    let out = cli(&["validate"]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stdout).starts_with("ok: "),
+        "{}",
+        text(&out.stdout)
+    );
+}
+
+#[test]
+fn validate_rejects_a_bad_vector_with_file_and_line() {
+    let dir = scratch_vectors(
+        "validate-bad",
+        &ONE_CASE.replace("D200: 5A8DH", "D200: 15A8DH"),
+    );
+    let out = cli(&["validate", dir.to_str().unwrap_or_default()]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = text(&out.stderr);
+    assert!(
+        err.contains("case.yaml:12: cases[0].expect.after.D200: `15A8DH` does not fit in 16 bits"),
+        "{err}"
+    );
+    assert!(err.trim_end().ends_with("1 error found"), "{err}");
+}
+
+#[test]
+fn validate_reports_a_missing_path() {
+    let out = cli(&["validate", "/nonexistent/vectors"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("/nonexistent/vectors"));
+}
+
+#[test]
+fn run_exits_zero_when_everything_conforms() {
+    let out = cli(&["run"]);
+    let stdout = text(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}{}", text(&out.stderr));
+    assert!(
+        stdout
+            .lines()
+            .last()
+            .is_some_and(|l| l.contains(" passed, 0 failed")),
+        "{stdout}"
+    );
+}
+
+#[test]
+fn run_exits_one_and_shows_a_diff_on_a_difference() {
+    let dir = scratch_vectors(
+        "run-differs",
+        &ONE_CASE.replace("D200: 5A8DH", "D200: 5A8EH"),
+    );
+    let out = cli(&["run", "--vectors", dir.to_str().unwrap_or_default()]);
+    assert_eq!(out.status.code(), Some(1));
+    let stdout = text(&out.stdout);
+    assert!(
+        stdout.contains("case.yaml:5: iqr::habin::cli-example::rcpu differs"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("-D200     5A8EH  \"\\x8EZ\""), "{stdout}");
+    assert!(stdout.contains("+D200     5A8DH  \"\\x8DZ\""), "{stdout}");
+}
+
+#[test]
+fn run_json_reports_every_trial() {
+    let out = cli(&[
+        "run",
+        "--format",
+        "json",
+        "--filter",
+        "habin-fixed-4-digits-example",
+    ]);
+    assert_eq!(out.status.code(), Some(0));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON output");
+    let trials = report["trials"].as_array().expect("trials");
+    assert!(!trials.is_empty());
+    assert_eq!(
+        report["summary"]["passed"].as_u64(),
+        Some(trials.len() as u64)
+    );
+    for t in trials {
+        assert_eq!(t["verdict"]["verdict"], "conforms");
+        assert!(t["line"].as_u64().is_some_and(|l| l > 0));
+    }
+}
+
+#[test]
+fn run_rejects_an_unknown_backend_and_an_empty_selection() {
+    let out = cli(&["run", "--backend", "siemens"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("unknown backend `siemens`; expected one of: "));
+    let out = cli(&["run", "--filter", "no-such-case"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("no trial matches"));
+}
+
+#[test]
+fn list_shows_backends_variants_and_cases() {
+    let out = cli(&["list"]);
+    assert_eq!(out.status.code(), Some(0));
+    let stdout = text(&out.stdout);
+    for needle in [
+        "backends:",
+        "iqr",
+        "variant rcpu-no-sm705",
+        "habin-fixed-4-digits-example",
+    ] {
+        assert!(stdout.contains(needle), "list lacks {needle}:\n{stdout}");
+    }
+}
+
+#[test]
+fn schema_prints_json() {
+    let out = cli(&["schema"]);
+    assert_eq!(out.status.code(), Some(0));
+    let schema: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON schema");
+    assert_eq!(schema["$schema"], "http://json-schema.org/draft-07/schema#");
+}
+
+#[test]
+fn usage_errors_exit_two_with_help() {
+    let out = cli(&["frobnicate"]);
+    assert_eq!(out.status.code(), Some(2));
+    let out = cli(&["run", "--help"]);
+    assert_eq!(out.status.code(), Some(0));
+    assert!(text(&out.stdout).contains("--backend <NAME>"));
+}

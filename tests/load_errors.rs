@@ -1,0 +1,357 @@
+//! Every class of bad vector is a load error naming the file, the line and the key, and saying
+//! what was expected. Nothing panics and nothing is skipped.
+
+use std::path::Path;
+
+use plc_conformance::load::{load_profiles, CorpusBuilder, LoadError};
+use plc_conformance::profile::Profiles;
+use rstest::rstest;
+
+fn profiles() -> Profiles {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("vendors");
+    load_profiles(&dir).unwrap_or_else(|e| panic!("vendor profiles do not load:\n{e}"))
+}
+
+const HEADER: &str = "\
+instructions: [HABIN]
+profiles: [mitsubishi-iqr]
+source: {manual: iqr-instructions-ja, page: 478}
+cases:
+";
+
+/// A valid case; each row below breaks one thing in it.
+const GOOD_CASE: &str = "  - id: good
+    basis: manual
+    cite: example
+    flags: {SM705: off}
+    operands: {s: D100, d: D200}
+    before:
+      D100: 4135H
+      D101: 4438H
+    expect:
+      after: {D200: 5A8DH}
+";
+
+fn load(text: &str) -> Result<usize, Vec<LoadError>> {
+    let mut builder = CorpusBuilder::default();
+    builder.add_file(Path::new("bad.yaml"), text, &profiles());
+    builder.finish().map(|c| c.cases.len()).map_err(|e| e.0)
+}
+
+#[test]
+fn the_good_case_loads() {
+    assert_eq!(load(&format!("{HEADER}{GOOD_CASE}")), Ok(1));
+}
+
+#[rstest]
+// Shape: unknown keys at every level, wrong types, bad YAML.
+#[case::unknown_case_key(
+    "    basis: manual",
+    "    basis: manual\n    colour: red",
+    7,
+    "cases[0]",
+    "unknown field `colour`"
+)]
+#[case::unknown_expect_key(
+    "      after: {D200: 5A8DH}",
+    "      after: {D200: 5A8DH}\n      writes: {}",
+    15,
+    "cases[0].expect",
+    "unknown field `writes`"
+)]
+#[case::unknown_basis(
+    "basis: manual",
+    "basis: guessed",
+    6,
+    "cases[0].basis",
+    "unknown variant `guessed`"
+)]
+#[case::bad_text_key(
+    "D100: 4135H",
+    "D100: {text: \"5A\"}",
+    11,
+    "cases[0].before.D100",
+    "unknown field `text`, expected `ascii` or `ascii_words`"
+)]
+#[case::yaml_syntax(
+    "operands: {s: D100, d: D200}",
+    "operands: {s: D100, d: D200",
+    10,
+    "",
+    "did not find expected ',' or '}', while parsing a flow mapping at line 9"
+)]
+#[case::duplicate_key(
+    "      D101: 4438H",
+    "      D101: 4438H\n      D101: 4438H",
+    13,
+    "cases[0].before.D101",
+    "duplicate key"
+)]
+// Devices and values.
+#[case::malformed_device_operand(
+    "s: D100,",
+    "s: d100,",
+    9,
+    "cases[0].operands.s",
+    "`d100` is not a device name"
+)]
+#[case::malformed_device_key(
+    "D100: 4135H",
+    "DX: 4135H",
+    11,
+    "cases[0].before.DX",
+    "is not a device name"
+)]
+#[case::malformed_value(
+    "D100: 4135H",
+    "D100: 41G5H",
+    11,
+    "cases[0].before.D100",
+    "`41G5H` is not a value"
+)]
+#[case::value_too_wide(
+    "D100: 4135H",
+    "D100: 14135H",
+    11,
+    "cases[0].before.D100",
+    "does not fit in 16 bits"
+)]
+#[case::plain_value_too_wide(
+    "D100: 4135H",
+    "D100: 70000",
+    11,
+    "cases[0].before.D100",
+    "does not fit in 16 bits"
+)]
+#[case::list_value_too_wide(
+    "D100: 4135H",
+    "D100: [4135H, K70000]",
+    11,
+    "cases[0].before.D100[1]",
+    "does not fit in 16 bits"
+)]
+#[case::non_byte_text(
+    "D100: 4135H",
+    "D100: {ascii: \"5€\"}",
+    11,
+    "cases[0].before.D100",
+    "above FFH"
+)]
+#[case::word_set_twice(
+    "D101: 4438H",
+    "D101: {ascii: \"8D\"}\n      D100: {ascii: \"5A8D\"}",
+    12,
+    "cases[0].before.D101",
+    "D101 is set twice (also by `D100`)"
+)]
+#[case::device_out_of_range(
+    "D200: 5A8DH",
+    "D99999: 5A8DH",
+    14,
+    "cases[0].expect.after.D99999",
+    "does not exist on any mitsubishi-iqr variant"
+)]
+#[case::device_not_in_profile(
+    "D100: 4135H",
+    "W100: 4135H",
+    11,
+    "cases[0].before.W100",
+    "unknown device `W`"
+)]
+// Names the profile does not define.
+#[case::unknown_flag(
+    "SM705: off",
+    "SM8161: off",
+    8,
+    "cases[0].flags.SM8161",
+    "unknown flag for these instructions `SM8161`; expected one of: SM705"
+)]
+#[case::bad_flag_value(
+    "SM705: off",
+    "SM705: maybe",
+    8,
+    "cases[0].flags.SM705",
+    "expected `on` or `off`"
+)]
+#[case::unknown_operand(
+    "d: D200}",
+    "d: D200, n: K4}",
+    9,
+    "cases[0].operands.n",
+    "unknown operand `n`; expected one of: d, s"
+)]
+#[case::missing_operand(
+    ", d: D200}",
+    "}",
+    9,
+    "cases[0].operands",
+    "missing operand `d` of HABIN"
+)]
+#[case::constant_not_allowed(
+    "s: D100,",
+    "s: K4,",
+    9,
+    "cases[0].operands.s",
+    "takes a device (D), not a constant"
+)]
+#[case::unknown_variant(
+    "    basis: manual",
+    "    basis: manual\n    variants: [r99]",
+    7,
+    "cases[0].variants[0]",
+    "unknown variant `r99`; expected one of: rcpu, rcpu-no-sm705"
+)]
+#[case::error_as_flag(
+    "after: {D200: 5A8DH}",
+    "error: M8004",
+    14,
+    "cases[0].expect.error",
+    "reports errors as a code in SD0"
+)]
+// Rules of the format.
+#[case::manual_without_cite(
+    "    cite: example\n",
+    "",
+    5,
+    "cases[0]",
+    "missing cite: `basis: manual` must say where"
+)]
+#[case::inferred_with_empty_cite(
+    "basis: manual\n    cite: example",
+    "basis: inferred\n    cite: \"  \"",
+    5,
+    "cases[0]",
+    "missing cite: `basis: inferred`"
+)]
+#[case::expect_missing(
+    "    expect:\n      after: {D200: 5A8DH}\n",
+    "",
+    5,
+    "cases[0]",
+    "missing expect"
+)]
+#[case::bad_id(
+    "id: good",
+    "id: Good Case",
+    5,
+    "cases[0].id",
+    "must be lowercase letters"
+)]
+fn bad_case_is_reported(
+    #[case] find: &str,
+    #[case] replace: &str,
+    #[case] line: usize,
+    #[case] key: &str,
+    #[case] message: &str,
+) {
+    assert!(
+        GOOD_CASE.contains(find),
+        "the row's `find` text is not in the good case"
+    );
+    let text = format!("{HEADER}{}", GOOD_CASE.replacen(find, replace, 1));
+    let errors = load(&text).expect_err("the bad case loaded");
+    let rendered: Vec<String> = errors.iter().map(ToString::to_string).collect();
+    let hit = errors.iter().find(|e| e.to_string().contains(message));
+    let Some(e) = hit else {
+        panic!("no error says `{message}`; got {rendered:#?}");
+    };
+    assert_eq!(e.file, Path::new("bad.yaml"));
+    assert_eq!(e.line, Some(line), "wrong line in {e}");
+    assert_eq!(e.key.as_deref().unwrap_or(""), key, "wrong key in {e}");
+    assert!(
+        e.to_string().starts_with(&format!("bad.yaml:{line}: ")),
+        "{e}"
+    );
+}
+
+#[rstest]
+#[case::unknown_profile(
+    "profiles: [mitsubishi-iqr]",
+    "profiles: [siemens-s7]",
+    2,
+    "profiles[0]",
+    "unknown profile `siemens-s7`"
+)]
+#[case::unknown_instruction(
+    "instructions: [HABIN]",
+    "instructions: [HABIM]",
+    1,
+    "instructions[0]",
+    "unknown instruction `HABIM`"
+)]
+#[case::unknown_manual(
+    "manual: iqr-instructions-ja",
+    "manual: fx5-manual",
+    3,
+    "source.manual",
+    "unknown manual `fx5-manual`"
+)]
+#[case::unknown_top_key("cases:", "title: x\ncases:", 4, "", "unknown field `title`")]
+#[case::no_profiles(
+    "profiles: [mitsubishi-iqr]",
+    "profiles: []",
+    2,
+    "profiles",
+    "missing profile"
+)]
+fn bad_header_is_reported(
+    #[case] find: &str,
+    #[case] replace: &str,
+    #[case] line: usize,
+    #[case] key: &str,
+    #[case] message: &str,
+) {
+    let text = format!("{}{GOOD_CASE}", HEADER.replacen(find, replace, 1));
+    let errors = load(&text).expect_err("the bad header loaded");
+    let e = errors
+        .iter()
+        .find(|e| e.to_string().contains(message))
+        .unwrap_or_else(|| panic!("no error says `{message}`: {errors:#?}"));
+    assert_eq!(e.line, Some(line), "wrong line in {e}");
+    assert_eq!(e.key.as_deref().unwrap_or(""), key, "wrong key in {e}");
+}
+
+#[test]
+fn duplicate_ids_are_reported_within_a_file_and_across_files() {
+    let profiles = profiles();
+    let text = format!("{HEADER}{GOOD_CASE}{GOOD_CASE}");
+    let mut builder = CorpusBuilder::default();
+    builder.add_file(Path::new("one.yaml"), &text, &profiles);
+    builder.add_file(
+        Path::new("two.yaml"),
+        &format!("{HEADER}{GOOD_CASE}"),
+        &profiles,
+    );
+    let errors = builder.finish().expect_err("duplicates loaded").0;
+    let rendered: Vec<String> = errors.iter().map(ToString::to_string).collect();
+    assert_eq!(
+        rendered,
+        vec![
+            "one.yaml:15: cases[1].id: duplicate case id `good`, first used at one.yaml:5",
+            "two.yaml:5: cases[0].id: duplicate case id `good`, first used at one.yaml:5",
+        ]
+    );
+}
+
+#[test]
+fn every_problem_in_a_file_is_reported_not_just_the_first() {
+    let text = format!(
+        "{HEADER}{}",
+        GOOD_CASE.replacen("SM705: off", "SM999: off", 1).replacen(
+            "D200: 5A8DH",
+            "D200: 15A8DH",
+            1
+        )
+    );
+    let errors = load(&text).expect_err("loaded");
+    assert_eq!(errors.len(), 2, "{errors:#?}");
+}
+
+#[test]
+fn unspecified_cases_need_no_cite_or_expectation() {
+    let case = GOOD_CASE
+        .replacen("basis: manual", "basis: unspecified", 1)
+        .replacen("    cite: example\n", "", 1)
+        .replacen("    expect:\n      after: {D200: 5A8DH}\n", "", 1);
+    assert_eq!(load(&format!("{HEADER}{case}")), Ok(1));
+}
