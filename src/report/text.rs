@@ -137,8 +137,25 @@ pub fn render(trial: &Trial, verdict: &Verdict, palette: Palette) -> String {
     match verdict {
         Verdict::Conforms => {}
         Verdict::Differs { mismatches } => {
+            // Fills that went wrong the same way are shown once.
+            let mut shown: Vec<(String, Vec<&str>)> = Vec::new();
             for m in mismatches {
-                out.push_str(&render_mismatch(m, palette));
+                let body = render_mismatch(m, palette);
+                match shown.iter_mut().find(|(b, _)| *b == body) {
+                    Some((_, fills)) => fills.push(m.fill.name()),
+                    None => shown.push((body, vec![m.fill.name()])),
+                }
+            }
+            for (body, fills) in shown {
+                let fill = match fills.as_slice() {
+                    ["A"] => "with fill A (words the vector does not set hold bytes A0H-A7H)",
+                    ["B"] => {
+                        "with fill B (words the vector does not set hold hex digit characters)"
+                    }
+                    _ => "with either fill",
+                };
+                let _ = writeln!(out, "  {fill}:");
+                out.push_str(&body);
             }
         }
         Verdict::Unsupported { reason } => {
@@ -172,15 +189,6 @@ pub fn render(trial: &Trial, verdict: &Verdict, palette: Palette) -> String {
 
 fn render_mismatch(m: &Mismatch, palette: Palette) -> String {
     let mut out = String::new();
-    let _ = writeln!(
-        out,
-        "  with fill {} (words the vector does not set hold {}):",
-        m.fill.name(),
-        match m.fill {
-            crate::memory::Fill::A => "bytes A0H-A7H",
-            crate::memory::Fill::B => "hex digit characters",
-        }
-    );
     if m.words_differ() {
         let _ = writeln!(
             out,
