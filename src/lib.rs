@@ -12,6 +12,7 @@ pub mod device;
 pub mod load;
 pub mod memory;
 pub mod model;
+pub mod neutral;
 pub mod plan;
 pub mod profile;
 pub mod report;

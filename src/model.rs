@@ -127,4 +127,6 @@ impl Case {
 #[derive(Debug, Clone, Default)]
 pub struct Corpus {
     pub cases: Vec<Arc<Case>>,
+    /// Cross-vendor cases (`vectors/cross-vendor/`).
+    pub neutral: Vec<Arc<crate::neutral::NeutralCase>>,
 }

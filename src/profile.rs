@@ -38,6 +38,9 @@ pub struct Profile {
     pub instructions: BTreeMap<String, InstructionDef>,
     /// The variants; every case runs on each one unless the case restricts it.
     pub variants: Vec<Variant>,
+    /// How the profile answers the cross-vendor operations.
+    #[serde(default)]
+    pub neutral: Option<crate::neutral::NeutralSection>,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]

@@ -10,6 +10,7 @@ use std::process::ExitCode;
 
 use libtest_mimic::{Arguments, Completion, Failed, Trial};
 use plc_conformance::compare::Verdict;
+use plc_conformance::neutral::lower::{plan_neutral, NeutralVerdict};
 use plc_conformance::plan::plan;
 use plc_conformance::report::text::{render, Palette};
 use plc_conformance::session::{Paths, Session};
@@ -24,7 +25,7 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let trials = plan(&session.corpus, &session.profiles, &session.backends)
+    let mut trials: Vec<Trial> = plan(&session.corpus, &session.profiles, &session.backends)
         .into_iter()
         .map(|trial| {
             let name = trial.name();
@@ -52,5 +53,33 @@ fn main() -> ExitCode {
             .with_kind(kind)
         })
         .collect();
+    let neutral = plan_neutral(
+        &session.corpus.neutral,
+        &session.profiles,
+        &session.backends,
+    );
+    trials.extend(neutral.into_iter().map(|trial| {
+        let name = format!("cross-vendor::{}", trial.name());
+        let kind = trial.case.basis.to_string();
+        match trial.skip.clone() {
+            Some(reason) => {
+                Trial::ignorable_test(name, move || Ok(Completion::ignored_with(reason)))
+            }
+            None => Trial::ignorable_test(name, move || match trial.run() {
+                NeutralVerdict::Matches { .. } => Ok(Completion::Completed),
+                NeutralVerdict::Recorded { outcome } => Ok(Completion::ignored_with(format!(
+                    "unspecified, recorded: {outcome}"
+                ))),
+                verdict => Err(Failed::from(format!(
+                    "{}: {} {}\n  {}",
+                    trial.case.location,
+                    trial.name(),
+                    trial.lowering.description,
+                    verdict.describe()
+                ))),
+            }),
+        }
+        .with_kind(kind)
+    }));
     libtest_mimic::run(&args, trials).exit_code()
 }

@@ -44,3 +44,11 @@ fn vector_schema_is_draft_07_and_closed() {
         );
     }
 }
+
+#[test]
+fn cross_vendor_schema_is_current() {
+    assert!(
+        checked_in("cross-vendor.schema.json") == plc_conformance::neutral::spec::neutral_file_schema(),
+        "schema/cross-vendor.schema.json is stale: run `cargo run -- schema --kind cross-vendor > schema/cross-vendor.schema.json`"
+    );
+}

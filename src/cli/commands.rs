@@ -40,6 +40,7 @@ pub fn dispatch(cli: &Cli) -> u8 {
             let schema = match kind {
                 SchemaKind::Vectors => crate::spec::vector_file_schema(),
                 SchemaKind::Profile => crate::profile::profile_schema(),
+                SchemaKind::CrossVendor => crate::neutral::spec::neutral_file_schema(),
             };
             println!(
                 "{}",
@@ -68,9 +69,14 @@ fn validate(paths: &Paths) -> u8 {
         Ok(corpus) => {
             let files: std::collections::BTreeSet<&PathBuf> =
                 corpus.cases.iter().map(|c| &c.location.file).collect();
+            let files: std::collections::BTreeSet<&PathBuf> = files
+                .into_iter()
+                .chain(corpus.neutral.iter().map(|c| &c.location.file))
+                .collect();
             println!(
-                "ok: {} cases in {} files, {} profiles",
+                "ok: {} cases and {} cross-vendor cases in {} files, {} profiles",
                 corpus.cases.len(),
+                corpus.neutral.len(),
                 files.len(),
                 profiles.iter().count()
             );

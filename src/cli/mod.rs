@@ -46,7 +46,7 @@ pub enum Command {
         #[arg(long)]
         filter: Option<String>,
     },
-    /// Print the JSON Schema (draft-07) of vector files, or of vendor profiles.
+    /// Print the JSON Schema (draft-07) of vector files, vendor profiles or cross-vendor files.
     Schema {
         #[arg(long, value_enum, default_value_t = SchemaKind::Vectors)]
         kind: SchemaKind,
@@ -80,8 +80,12 @@ pub enum Format {
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum SchemaKind {
+    /// Vector files (`vectors/<family>/*.yaml`).
     Vectors,
+    /// Vendor profiles (`vendors/*.yaml`).
     Profile,
+    /// Cross-vendor vector files (`vectors/cross-vendor/*.yaml`).
+    CrossVendor,
 }
 
 /// Parses the arguments, runs the command and returns its exit status.

@@ -6,6 +6,7 @@
 
 mod error;
 mod locate;
+mod neutral;
 mod profiles;
 mod vectors;
 

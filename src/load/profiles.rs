@@ -121,6 +121,7 @@ fn check_profile(p: &Profile, cx: &mut FileContext<'_>) {
             }
         }
     }
+    super::neutral::check_section(p, cx);
     if p.variants.is_empty() {
         cx.error(
             "variants",

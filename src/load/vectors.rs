@@ -43,6 +43,7 @@ pub fn load_corpus(paths: &[PathBuf], profiles: &Profiles) -> Result<Corpus, Loa
 #[derive(Default)]
 pub struct CorpusBuilder {
     cases: Vec<Arc<Case>>,
+    neutral: Vec<Arc<crate::neutral::NeutralCase>>,
     ids: HashMap<String, Location>,
     errors: Vec<LoadError>,
 }
@@ -50,6 +51,15 @@ pub struct CorpusBuilder {
 impl CorpusBuilder {
     /// Adds one vector file given as text; `file` is the name errors will show.
     pub fn add_file(&mut self, file: &Path, text: &str, profiles: &Profiles) {
+        if super::neutral::is_neutral(&super::LineIndex::new(text)) {
+            let cases = super::neutral::add_file(file, text, profiles, &mut self.errors);
+            for (key, case) in cases {
+                if self.claim_id(&key, &case.id, &case.location) {
+                    self.neutral.push(Arc::new(case));
+                }
+            }
+            return;
+        }
         let spec: VectorFileSpec = match parse_yaml(file, text) {
             Ok(s) => s,
             Err(e) => {
@@ -61,30 +71,49 @@ impl CorpusBuilder {
         let Some(header) = lower_header(&spec, profiles, &mut cx) else {
             return;
         };
+        let mut lowered_cases = Vec::new();
         for (i, case) in spec.cases.iter().enumerate() {
             let key = format!("cases[{i}]");
             if let Some(lowered) = lower_case(&key, case, &header, &mut cx) {
-                match self.ids.get(&lowered.id) {
-                    Some(first) => cx.error(
-                        format!("{key}.id"),
-                        LoadErrorKind::DuplicateId {
-                            id: lowered.id.clone(),
-                            first: first.clone(),
-                        },
-                    ),
-                    None => {
-                        self.ids
-                            .insert(lowered.id.clone(), lowered.location.clone());
-                        self.cases.push(Arc::new(lowered));
+                lowered_cases.push((key, lowered));
+            }
+        }
+        for (key, case) in lowered_cases {
+            if self.claim_id(&key, &case.id, &case.location) {
+                self.cases.push(Arc::new(case));
+            }
+        }
+    }
+
+    /// Records an id; a repeat is an error at the repeat, naming the first use.
+    fn claim_id(&mut self, key: &str, id: &str, at: &Location) -> bool {
+        match self.ids.get(id) {
+            Some(first) => {
+                self.errors.push(LoadError {
+                    file: at.file.clone(),
+                    line: Some(at.line),
+                    key: Some(format!("{key}.id")),
+                    kind: LoadErrorKind::DuplicateId {
+                        id: id.to_string(),
+                        first: first.clone(),
                     }
-                }
+                    .into(),
+                });
+                false
+            }
+            None => {
+                self.ids.insert(id.to_string(), at.clone());
+                true
             }
         }
     }
 
     pub fn finish(self) -> Result<Corpus, LoadErrors> {
         if self.errors.is_empty() {
-            Ok(Corpus { cases: self.cases })
+            Ok(Corpus {
+                cases: self.cases,
+                neutral: self.neutral,
+            })
         } else {
             Err(LoadErrors(self.errors))
         }
@@ -166,36 +195,8 @@ fn lower_case(
     cx: &mut FileContext<'_>,
 ) -> Option<Case> {
     let before_count = cx.errors.len();
-    let id_ok = !spec.id.is_empty()
-        && spec
-            .id
-            .chars()
-            .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-')
-        && !spec.id.starts_with('-');
-    if !id_ok {
-        cx.error(
-            format!("{key}.id"),
-            LoadErrorKind::Invalid(format!(
-                "case id `{}` must be lowercase letters, digits and `-`, like `fixed-4-digits-example`",
-                spec.id
-            )),
-        );
-    }
-    let cite = spec
-        .cite
-        .as_deref()
-        .map(str::trim)
-        .filter(|c| !c.is_empty());
-    if cite.is_none() && spec.basis != Basis::Unspecified {
-        cx.error(
-            key,
-            LoadErrorKind::Missing(match spec.basis {
-                Basis::Manual => "cite: `basis: manual` must say where the manual states it",
-                Basis::Observed => "cite: `basis: observed` must give the provenance",
-                _ => "cite: `basis: inferred` must say what the reading rests on",
-            }),
-        );
-    }
+    check_id(key, &spec.id, cx);
+    let cite = check_cite(key, spec.basis, spec.cite.as_deref(), cx);
     if let Some(source) = &spec.source {
         check_source(&format!("{key}.source"), source, &h.profiles, cx);
     }
@@ -239,7 +240,7 @@ fn lower_case(
         citation: Citation {
             manual: source.manual.clone(),
             page: source.page.to_string(),
-            text: cite.map(str::to_string),
+            text: cite,
         },
         location: cx.location(key),
         instructions: h.instructions.clone(),
@@ -251,6 +252,44 @@ fn lower_case(
         expect,
         note: spec.note.clone(),
     })
+}
+
+/// Case ids: lowercase letters, digits and `-`, so that trial names stay filterable.
+pub(crate) fn check_id(key: &str, id: &str, cx: &mut FileContext<'_>) {
+    let ok = !id.is_empty()
+        && id
+            .chars()
+            .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-')
+        && !id.starts_with('-');
+    if !ok {
+        cx.error(
+            format!("{key}.id"),
+            LoadErrorKind::Invalid(format!(
+                "case id `{id}` must be lowercase letters, digits and `-`, like `fixed-4-digits-example`"
+            )),
+        );
+    }
+}
+
+/// The citation text; required unless the basis is `unspecified`.
+pub(crate) fn check_cite(
+    key: &str,
+    basis: Basis,
+    cite: Option<&str>,
+    cx: &mut FileContext<'_>,
+) -> Option<String> {
+    let cite = cite.map(str::trim).filter(|c| !c.is_empty());
+    if cite.is_none() && basis != Basis::Unspecified {
+        cx.error(
+            key,
+            LoadErrorKind::Missing(match basis {
+                Basis::Manual => "cite: `basis: manual` must say where the manual states it",
+                Basis::Observed => "cite: `basis: observed` must give the provenance",
+                _ => "cite: `basis: inferred` must say what the reading rests on",
+            }),
+        );
+    }
+    cite.map(str::to_string)
 }
 
 fn lower_flags(
