@@ -6,10 +6,12 @@
 //! outcome against the expectation; [`report`] renders the verdicts.
 
 pub mod backend;
+pub mod baseline;
 pub mod cli;
 pub mod compare;
 pub mod device;
 pub mod load;
+pub mod matrix;
 pub mod memory;
 pub mod model;
 pub mod neutral;

@@ -35,13 +35,21 @@ impl Trial {
 
     /// Runs the case under every fill and judges it.
     pub fn run(&self) -> Verdict {
+        match self.observe() {
+            Ok(observations) => judge(&self.case, &observations),
+            Err(verdict) => verdict,
+        }
+    }
+
+    /// Runs the case under every fill: what the backend did, before any judgement.
+    pub fn observe(&self) -> Result<Vec<Observation>, Verdict> {
         let Some(variant) = self.profile.variant(&self.variant) else {
-            return Verdict::Unsupported {
+            return Err(Verdict::Unsupported {
                 reason: format!(
                     "profile {} has no variant {}",
                     self.profile.id, self.variant
                 ),
-            };
+            });
         };
         let observations: Vec<Observation> = Fill::ALL
             .iter()
@@ -62,7 +70,7 @@ impl Trial {
                 }
             })
             .collect();
-        judge(&self.case, &observations)
+        Ok(observations)
     }
 }
 
