@@ -1,0 +1,376 @@
+//! Teeth for the MELSEC iQ-R corpus: each mutant below is the iQ-R reference model with one
+//! plausible implementation mistake, and the corpus must tell every one of them apart from the
+//! manual. A mutant that survives means a vector is missing, not that the mutant is unfair.
+
+mod common;
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use common::{assert_corpus_kills, failing_trials, reference, session, Mutant};
+use plc_conformance::backend::{Backend, Fault, Outcome, Request, Response};
+use plc_conformance::device::Device;
+use plc_conformance::memory::Image;
+use plc_conformance::model::{ErrorSignal, Operand};
+use plc_conformance::profile::DeviceRange;
+
+type Answer = Result<Response, Fault>;
+
+/// HABIN(P) and DHABIN(P): text in, number out.
+fn from_ascii(req: &Request<'_>) -> bool {
+    matches!(req.instruction, "HABIN" | "HABINP" | "DHABIN" | "DHABINP")
+}
+
+/// BINHA(P) and DBINHA(P): number in, text out.
+fn to_ascii(req: &Request<'_>) -> bool {
+    matches!(req.instruction, "BINHA" | "BINHAP" | "DBINHA" | "DBINHAP")
+}
+
+fn double(req: &Request<'_>) -> bool {
+    req.instruction.starts_with('D')
+}
+
+fn map_bytes(word: u16, f: &impl Fn(u8) -> u8) -> u16 {
+    let [lo, hi] = word.to_le_bytes();
+    u16::from_le_bytes([f(lo), f(hi)])
+}
+
+/// Runs the base on the vector's words with every byte rewritten: how a backend that
+/// misreads characters sees the source.
+fn with_bytes(req: &Request<'_>, base: &dyn Backend, f: impl Fn(u8) -> u8) -> Answer {
+    let words = req
+        .memory
+        .explicit()
+        .iter()
+        .map(|(d, w)| (d.clone(), map_bytes(*w, &f)))
+        .collect();
+    let image = Image::new(words, req.memory.fill());
+    base.execute(&Request {
+        memory: &image,
+        ..*req
+    })
+}
+
+/// Runs the base with a flag forced, as a backend that misreads the flag would.
+fn with_flag(req: &Request<'_>, base: &dyn Backend, name: &str, value: bool) -> Answer {
+    let mut flags = req.flags.clone();
+    flags.insert(name.to_string(), value);
+    base.execute(&Request {
+        flags: &flags,
+        ..*req
+    })
+}
+
+/// Runs the base with the last D register moved: a backend with a wrong range check.
+fn with_d_last(req: &Request<'_>, base: &dyn Backend, last: impl Fn(u32) -> u32) -> Answer {
+    let Some(range) = req.profile.range(req.variant, "D") else {
+        return base.execute(req);
+    };
+    let mut variant = req.variant.clone();
+    variant.devices.insert(
+        "D".to_string(),
+        DeviceRange {
+            first: range.first,
+            last: last(range.last),
+        },
+    );
+    base.execute(&Request {
+        variant: &variant,
+        ..*req
+    })
+}
+
+/// Rewrites a completed outcome; other answers pass through.
+fn map_done(answer: Answer, f: impl FnOnce(Outcome) -> Outcome) -> Answer {
+    answer.map(|r| match r {
+        Response::Done(o) => Response::Done(f(o)),
+        other => other,
+    })
+}
+
+fn destination(req: &Request<'_>) -> Option<Device> {
+    req.device("d").ok().cloned()
+}
+
+/// The written words from (d) on, as one number with (d) the least significant word.
+fn result_words(req: &Request<'_>, o: &Outcome) -> Option<(Vec<Device>, u64)> {
+    let d = destination(req)?;
+    let count = if double(req) { 2 } else { 1 };
+    let devices: Vec<Device> = (0..count).filter_map(|i| d.offset(i)).collect();
+    let mut value = 0u64;
+    for (i, dev) in devices.iter().enumerate() {
+        value |= u64::from(*o.writes.get(dev)?) << (16 * i);
+    }
+    Some((devices, value))
+}
+
+fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
+    let mut out = vec![
+        // --- reading characters -----------------------------------------------------------
+        Mutant::new("accepts-lowercase", base, |req, base| {
+            if !from_ascii(req) {
+                return base.execute(req);
+            }
+            with_bytes(req, base, |b| match b {
+                b'a'..=b'f' => b - 0x20,
+                _ => b,
+            })
+        }),
+        Mutant::new("masks-bit-7", base, |req, base| {
+            if !from_ascii(req) {
+                return base.execute(req);
+            }
+            with_bytes(req, base, |b| b & 0x7F)
+        }),
+        Mutant::new("fixed-mode-reads-00h-as-0", base, |req, base| {
+            if !from_ascii(req) || req.flag("SM705") {
+                return base.execute(req);
+            }
+            with_bytes(req, base, |b| if b == 0 { b'0' } else { b })
+        }),
+        Mutant::new("reads-high-byte-first", base, |req, base| {
+            if !from_ascii(req) {
+                return base.execute(req);
+            }
+            let words = req
+                .memory
+                .explicit()
+                .iter()
+                .map(|(d, w)| (d.clone(), w.swap_bytes()))
+                .collect();
+            let image = Image::new(words, req.memory.fill());
+            base.execute(&Request {
+                memory: &image,
+                ..*req
+            })
+        }),
+        Mutant::new("reads-digits-from-the-wrong-end", base, |req, base| {
+            let answer = base.execute(req);
+            if !from_ascii(req) {
+                return answer;
+            }
+            map_done(answer, |mut o| {
+                if let Some((devices, value)) = result_words(req, &o) {
+                    let nibbles = 4 * devices.len() as u32;
+                    let reversed = (0..nibbles).fold(0u64, |acc, i| {
+                        acc | ((value >> (4 * i)) & 0xF) << (4 * (nibbles - 1 - i))
+                    });
+                    for (i, dev) in devices.into_iter().enumerate() {
+                        o.writes.insert(dev, (reversed >> (16 * i)) as u16);
+                    }
+                }
+                o
+            })
+        }),
+        Mutant::new("dhabin-words-swapped", base, |req, base| {
+            let answer = base.execute(req);
+            if !(from_ascii(req) && double(req)) {
+                return answer;
+            }
+            map_done(answer, |mut o| {
+                if let Some((devices, value)) = result_words(req, &o) {
+                    o.writes.insert(devices[0].clone(), (value >> 16) as u16);
+                    o.writes.insert(devices[1].clone(), value as u16);
+                }
+                o
+            })
+        }),
+        Mutant::new("double-forms-convert-16-bits", base, |req, base| {
+            let single = match req.instruction {
+                "DHABIN" => "HABIN",
+                "DHABINP" => "HABINP",
+                "DBINHA" => "BINHA",
+                "DBINHAP" => "BINHAP",
+                _ => return base.execute(req),
+            };
+            base.execute(&Request {
+                instruction: single,
+                ..*req
+            })
+        }),
+        // --- writing characters -----------------------------------------------------------
+        Mutant::new("writes-high-byte-first", base, |req, base| {
+            let answer = base.execute(req);
+            if !to_ascii(req) {
+                return answer;
+            }
+            map_done(answer, |mut o| {
+                o.writes.values_mut().for_each(|w| *w = w.swap_bytes());
+                o
+            })
+        }),
+        Mutant::new("writes-lowercase", base, |req, base| {
+            let answer = base.execute(req);
+            if !to_ascii(req) {
+                return answer;
+            }
+            map_done(answer, |mut o| {
+                let lower = |b: u8| {
+                    if (b'A'..=b'F').contains(&b) {
+                        b + 0x20
+                    } else {
+                        b
+                    }
+                };
+                o.writes
+                    .values_mut()
+                    .for_each(|w| *w = map_bytes(*w, &lower));
+                o
+            })
+        }),
+        Mutant::new("dbinha-source-words-swapped", base, |req, base| {
+            let Ok(Operand::Device(s)) = req.operand("s") else {
+                return base.execute(req);
+            };
+            let (Some(high), true) = (s.offset(1), to_ascii(req) && double(req)) else {
+                return base.execute(req);
+            };
+            let mut words: BTreeMap<Device, u16> = req.memory.explicit().clone();
+            words.insert(s.clone(), req.memory.read(&high));
+            words.insert(high.clone(), req.memory.read(s));
+            let image = Image::new(words, req.memory.fill());
+            base.execute(&Request {
+                memory: &image,
+                ..*req
+            })
+        }),
+        Mutant::new("terminator-low-byte-keeps-high-byte", base, |req, base| {
+            let answer = base.execute(req);
+            if !(to_ascii(req) && req.flag("SM705")) {
+                return answer;
+            }
+            map_done(answer, |mut o| {
+                if let Some((dev, word)) = o.writes.iter_mut().next_back() {
+                    if *word == 0 {
+                        *word = req.memory.read(dev) & 0xFF00;
+                    }
+                }
+                o
+            })
+        }),
+        Mutant::new(
+            "short-result-unterminated-with-sm701-on",
+            base,
+            |req, base| {
+                let answer = base.execute(req);
+                if !(to_ascii(req) && req.flag("SM705") && req.flag("SM701")) {
+                    return answer;
+                }
+                map_done(answer, |mut o| {
+                    if let Some((dev, word)) = o.writes.pop_last() {
+                        let before = req.memory.read(&dev);
+                        match (word & 0xFF, word >> 8) {
+                            (0, _) => {}
+                            (low, 0) => {
+                                o.writes.insert(dev, (before & 0xFF00) | low);
+                            }
+                            _ => {
+                                o.writes.insert(dev, word);
+                            }
+                        }
+                    }
+                    o
+                })
+            },
+        ),
+        // --- flags and firmware -----------------------------------------------------------
+        Mutant::new("ignores-sm705", base, |req, base| {
+            with_flag(req, base, "SM705", false)
+        }),
+        Mutant::new("sm705-always-on", base, |req, base| {
+            with_flag(req, base, "SM705", true)
+        }),
+        Mutant::new("habin-ignores-sm705", base, |req, base| {
+            if !from_ascii(req) {
+                return base.execute(req);
+            }
+            with_flag(req, base, "SM705", false)
+        }),
+        Mutant::new("binha-keeps-leading-zeros-with-sm705", base, |req, base| {
+            if !to_ascii(req) {
+                return base.execute(req);
+            }
+            with_flag(req, base, "SM705", false)
+        }),
+        Mutant::new(
+            "honours-sm705-without-firmware-support",
+            base,
+            |req, base| {
+                let mut variant = req.variant.clone();
+                variant.ignores_flags.clear();
+                base.execute(&Request {
+                    variant: &variant,
+                    ..*req
+                })
+            },
+        ),
+        Mutant::new("terminator-despite-sm701-on", base, |req, base| {
+            with_flag(req, base, "SM701", false)
+        }),
+        Mutant::new("no-terminator-with-sm701-off", base, |req, base| {
+            with_flag(req, base, "SM701", true)
+        }),
+        // --- device range and errors ------------------------------------------------------
+        Mutant::new("no-range-check", base, |req, base| {
+            with_d_last(req, base, |_| u32::from(u16::MAX))
+        }),
+        Mutant::new("range-one-word-too-long", base, |req, base| {
+            with_d_last(req, base, |last| last + 1)
+        }),
+        Mutant::new("range-one-word-too-short", base, |req, base| {
+            with_d_last(req, base, |last| last - 1)
+        }),
+        Mutant::new("writes-destination-on-error", base, |req, base| {
+            map_done(base.execute(req), |mut o| {
+                if o.error.is_some() {
+                    if let Some(d) = destination(req) {
+                        o.writes.insert(d, 0);
+                    }
+                }
+                o
+            })
+        }),
+        Mutant::new("swaps-error-codes", base, |req, base| {
+            map_done(base.execute(req), |mut o| {
+                o.error = o.error.map(|e| match e {
+                    ErrorSignal::Code(0x3401) => ErrorSignal::Code(0x2820),
+                    ErrorSignal::Code(0x2820) => ErrorSignal::Code(0x3401),
+                    other => other,
+                });
+                o
+            })
+        }),
+    ];
+    // Each neighbour of the digit ranges accepted as if it were '0'.
+    for (name, byte) in [
+        ("accepts-2fh", 0x2F),
+        ("accepts-3ah", 0x3A),
+        ("accepts-40h", 0x40),
+        ("accepts-47h", 0x47),
+        ("accepts-60h", 0x60),
+        ("accepts-66h", 0x66),
+    ] {
+        out.push(Mutant::new(name, base, move |req, base| {
+            if !from_ascii(req) {
+                return base.execute(req);
+            }
+            with_bytes(req, base, |b| if b == byte { b'0' } else { b })
+        }));
+    }
+    out
+}
+
+#[test]
+fn the_iqr_corpus_kills_every_mutant() {
+    let session = session();
+    let reference = reference(&session, "mitsubishi-iqr");
+    let mutants = mutants(&reference);
+    for m in &mutants {
+        eprintln!(
+            "{:<45} killed by {} trials",
+            m.name(),
+            failing_trials(&session, m).len()
+        );
+    }
+    assert_corpus_kills(&session, &reference, &mutants);
+}
