@@ -53,7 +53,11 @@ pub fn load(path: &Path) -> Result<SavedRun, BaselineError> {
     };
     let text = std::fs::read_to_string(path).map_err(|e| error(e.to_string()))?;
     let run: SavedRun = serde_json::from_str(&text).map_err(|e| {
-        error(format!("not a saved run (line {}, column {}): {e}", e.line(), e.column()))
+        error(format!(
+            "not a saved run (line {}, column {}): {e}",
+            e.line(),
+            e.column()
+        ))
     })?;
     if run.format != FORMAT || run.version != VERSION {
         return Err(error(format!(
@@ -87,7 +91,9 @@ pub fn compare<'a>(before: &'a [Record], now: &'a [Record]) -> Changes<'a> {
             (false, true) => changes.new.push(r),
             (true, false) => changes.fixed.push((was.unwrap_or(r), r)),
             (true, true) => match was {
-                Some(w) if w.status == r.status && w.behaviour == r.behaviour && w.shown == r.shown => {
+                Some(w)
+                    if w.status == r.status && w.behaviour == r.behaviour && w.shown == r.shown =>
+                {
                     changes.unchanged += 1
                 }
                 Some(w) => changes.changed.push((w, r)),

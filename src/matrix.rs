@@ -95,7 +95,12 @@ pub fn native_records(trials: &[Trial]) -> Vec<Record> {
         .map(|t| {
             let base = |status: Status, behaviour: String, shown: String, detail: String| Record {
                 section: t.profile.id.clone(),
-                row: format!("{}::{}::{}", t.instruction.to_lowercase(), t.case.id, t.variant),
+                row: format!(
+                    "{}::{}::{}",
+                    t.instruction.to_lowercase(),
+                    t.case.id,
+                    t.variant
+                ),
                 column: t.backend.name().to_string(),
                 trial: t.name(),
                 file: t.case.location.file.display().to_string(),
@@ -107,7 +112,12 @@ pub fn native_records(trials: &[Trial]) -> Vec<Record> {
                 detail,
             };
             if let Some(reason) = &t.skip {
-                return base(Status::Skipped, "skipped".into(), "skipped".into(), reason.clone());
+                return base(
+                    Status::Skipped,
+                    "skipped".into(),
+                    "skipped".into(),
+                    reason.clone(),
+                );
             }
             let verdict = t.run();
             let detail = match verdict {
@@ -134,7 +144,12 @@ pub fn native_records(trials: &[Trial]) -> Vec<Record> {
                 }
                 other => (other.label().to_string(), other.label().to_string()),
             };
-            base(Status::from_label(verdict.label()), behaviour, shown, detail)
+            base(
+                Status::from_label(verdict.label()),
+                behaviour,
+                shown,
+                detail,
+            )
         })
         .collect()
 }
@@ -329,8 +344,14 @@ mod tests {
         assert_eq!(
             groups,
             vec![
-                (vec!["r1", "r2"], vec!["plain answer".into(), "invalid-digit".into()]),
-                (vec!["r3"], vec!["plain answer".into(), "plain answer".into()]),
+                (
+                    vec!["r1", "r2"],
+                    vec!["plain answer".into(), "invalid-digit".into()]
+                ),
+                (
+                    vec!["r3"],
+                    vec!["plain answer".into(), "plain answer".into()]
+                ),
                 (vec!["r4"], vec!["plain answer".into(), "n/a".into()]),
             ]
         );

@@ -59,7 +59,7 @@ fn main() -> ExitCode {
         &session.backends,
     );
     trials.extend(neutral.into_iter().map(|trial| {
-        let name = format!("cross-vendor::{}", trial.name());
+        let name = trial.name();
         let kind = trial.case.basis.to_string();
         match trial.skip.clone() {
             Some(reason) => {

@@ -36,6 +36,12 @@ pub fn dispatch(cli: &Cli) -> u8 {
             validate(&paths)
         }
         Command::List { filter } => list(&paths, filter.as_deref()),
+        Command::Diff(args) => {
+            if !args.vectors.is_empty() {
+                paths.vectors = args.vectors.clone();
+            }
+            super::diff::diff(&paths, args)
+        }
         Command::Schema { kind } => {
             let schema = match kind {
                 SchemaKind::Vectors => crate::spec::vector_file_schema(),

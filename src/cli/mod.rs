@@ -4,6 +4,7 @@
 //! from the corpus, 2 for bad input or usage.
 
 mod commands;
+mod diff;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -35,6 +36,8 @@ pub struct Cli {
 pub enum Command {
     /// Run the corpus against backends and report differences.
     Run(RunArgs),
+    /// Compare backends: matrices of cases x backends with rows grouped by behaviour.
+    Diff(diff::DiffArgs),
     /// Check vector files (and the vendor profiles) without running anything.
     Validate {
         /// Vector files or folders [default: ROOT/vectors].

@@ -99,10 +99,10 @@ impl NeutralTrial {
         variant_of(&self.profile, &self.lowering)
     }
 
-    /// `backend::lowering::case-id::variant`, like native trial names.
+    /// `cross-vendor::backend::lowering::case-id::variant`, like native trial names.
     pub fn name(&self) -> String {
         format!(
-            "{}::{}::{}::{}",
+            "cross-vendor::{}::{}::{}::{}",
             self.backend.name(),
             self.lowering.name,
             self.case.id,

@@ -1,6 +1,9 @@
 //! Reporting trial results: text for people, JSON for tools.
 
+pub mod html;
 pub mod json;
+pub mod junit;
+pub mod matrix_text;
 pub mod text;
 
 use crate::compare::Verdict;

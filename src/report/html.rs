@@ -1,0 +1,121 @@
+//! A self-contained HTML report: the matrices, the groups and each difference's explanation in
+//! one file with inline styles, no scripts and no network access, so it can be attached to a CI
+//! run and opened anywhere. The markup is well-formed XML, which keeps it checkable by a plain
+//! XML parser as well as by a browser.
+
+use std::fmt::Write;
+
+use crate::matrix::{Record, Section, Status};
+
+const STYLE: &str = "\
+body{font-family:system-ui,sans-serif;margin:2em;color:#222}\
+table.matrix{border-collapse:collapse;margin:1em 0}\
+.matrix th,.matrix td{border:1px solid #ccc;padding:.3em .6em;text-align:left;vertical-align:top}\
+.matrix th{background:#f3f3f3}\
+td.conforms{background:#e6f4ea}td.fails{background:#fce8e6}td.other{background:#e8f0fe}\
+td.count{text-align:right}\
+pre{background:#f8f8f8;padding:.6em;overflow:auto}\
+summary{cursor:pointer}";
+
+fn escape(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&#39;"),
+            c if (c as u32) < 0x20 && c != '\n' && c != '\t' => {
+                let _ = write!(out, "\\x{:02X}", c as u32);
+            }
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+fn class_of(status: Status) -> &'static str {
+    match status {
+        Status::Conforms => "conforms",
+        Status::Recorded | Status::Skipped => "other",
+        _ => "fails",
+    }
+}
+
+pub fn render(sections: &[Section<'_>], records: &[Record]) -> String {
+    let failing = records.iter().filter(|r| r.status.is_failure()).count();
+    let mut out = String::new();
+    let _ = write!(
+        out,
+        "<!DOCTYPE html>\n<html xmlns=\"http://www.w3.org/1999/xhtml\" lang=\"en\">\n<head>\n\
+         <meta charset=\"utf-8\" />\n<title>plc-conformance report</title>\n\
+         <style>{STYLE}</style>\n</head>\n<body>\n<h1>plc-conformance report</h1>\n\
+         <p id=\"summary\">{} cells in {} matrices; {failing} failing.</p>\n",
+        records.len(),
+        sections.len()
+    );
+    for (i, section) in sections.iter().enumerate() {
+        let _ = write!(
+            out,
+            "<h2>{}</h2>\n<p>{} cases, {} behaviours. Cells marked ! fail.</p>\n\
+             <table class=\"matrix\" id=\"matrix-{i}\">\n<thead><tr><th>cases</th><th>representative</th>",
+            escape(section.name),
+            section.rows,
+            section.groups.len()
+        );
+        for c in &section.columns {
+            let _ = write!(out, "<th>{}</th>", escape(c));
+        }
+        out.push_str("</tr></thead>\n<tbody>\n");
+        for g in &section.groups {
+            let _ = write!(
+                out,
+                "<tr><td class=\"count\">{}</td><td>{}</td>",
+                g.rows.len(),
+                escape(g.rows[0])
+            );
+            for cell in &g.cells {
+                match cell {
+                    Some(r) => {
+                        let mark = if r.status.is_failure() { " !" } else { "" };
+                        let _ = write!(
+                            out,
+                            "<td class=\"{}\" title=\"{}\">{}{mark}</td>",
+                            class_of(r.status),
+                            escape(r.status.label()),
+                            escape(&r.shown)
+                        );
+                    }
+                    None => out.push_str("<td>n/a</td>"),
+                }
+            }
+            out.push_str("</tr>\n");
+        }
+        out.push_str("</tbody>\n</table>\n");
+        for g in &section.groups {
+            let failing: Vec<&&Record> = g
+                .cells
+                .iter()
+                .flatten()
+                .filter(|r| r.status.is_failure())
+                .collect();
+            if failing.is_empty() && g.rows.len() == 1 {
+                continue;
+            }
+            let _ = write!(
+                out,
+                "<details><summary>{} — {} case(s)</summary>\n<p>{}</p>\n",
+                escape(g.rows[0]),
+                g.rows.len(),
+                escape(&g.rows.join(", "))
+            );
+            for r in failing {
+                let _ = writeln!(out, "<pre>{}</pre>", escape(&r.detail));
+            }
+            out.push_str("</details>\n");
+        }
+    }
+    out.push_str("</body>\n</html>\n");
+    out
+}

@@ -1,0 +1,257 @@
+//! `plc-conformance diff`: each report format parses or loads, the matrix groups rows, and a
+//! saved run makes a later run fail only on new differences.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use quick_xml::events::Event;
+use quick_xml::Reader;
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn cli(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_plc-conformance"))
+        .args(["--root", root().to_str().unwrap_or(".")])
+        .args(args)
+        .env("NO_COLOR", "1")
+        .output()
+        .expect("the binary runs")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!(
+        "plc-conformance-diff-{}-{name}",
+        std::process::id()
+    ));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
+/// Element names and the count of each, from a document that must be well-formed XML.
+fn xml_elements(text: &str) -> Vec<(String, Vec<(String, String)>)> {
+    let mut reader = Reader::from_str(text);
+    let mut out = Vec::new();
+    loop {
+        match reader.read_event() {
+            Ok(Event::Start(e)) | Ok(Event::Empty(e)) => {
+                let attrs = e
+                    .attributes()
+                    .filter_map(Result::ok)
+                    .map(|a| {
+                        (
+                            String::from_utf8_lossy(a.key.as_ref()).into_owned(),
+                            String::from_utf8_lossy(&a.value).into_owned(),
+                        )
+                    })
+                    .collect();
+                out.push((
+                    String::from_utf8_lossy(e.name().as_ref()).into_owned(),
+                    attrs,
+                ));
+            }
+            Ok(Event::Eof) => break,
+            Ok(_) => {}
+            Err(e) => panic!("not well-formed XML at {}: {e}", reader.buffer_position()),
+        }
+    }
+    out
+}
+
+#[test]
+fn text_matrix_groups_rows_by_behaviour() {
+    let out = cli(&["diff"]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let header = text
+        .lines()
+        .find(|l| l.starts_with("mitsubishi-iqr: "))
+        .expect("an iQ-R matrix");
+    // Hundreds of cases collapse into a handful of behaviours.
+    let numbers: Vec<usize> = header
+        .split(|c: char| !c.is_ascii_digit())
+        .filter_map(|n| n.parse().ok())
+        .collect();
+    assert!(numbers[0] >= 60 && numbers[1] < 20, "{header}");
+    assert!(text.contains("cross-vendor hex-to-value: "), "{text}");
+}
+
+#[test]
+fn json_report_has_matrices_and_records() {
+    let out = cli(&["diff", "--format", "json"]);
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(report["format"], "plc-conformance-results");
+    assert_eq!(report["version"], 1);
+    let records = report["records"].as_array().expect("records");
+    let sections = report["sections"].as_array().expect("sections");
+    assert!(!sections.is_empty());
+    let grouped: u64 = sections
+        .iter()
+        .flat_map(|s| s["groups"].as_array().into_iter().flatten())
+        .map(|g| g["rows"].as_array().map_or(0, |r| r.len() as u64))
+        .sum();
+    let rows: u64 = sections
+        .iter()
+        .map(|s| s["rows"].as_u64().unwrap_or(0))
+        .sum();
+    assert_eq!(grouped, rows, "every row is in exactly one group");
+    for r in records {
+        for key in [
+            "section",
+            "row",
+            "column",
+            "trial",
+            "file",
+            "line",
+            "status",
+            "behaviour",
+            "shown",
+        ] {
+            assert!(r.get(key).is_some(), "record lacks {key}: {r}");
+        }
+    }
+}
+
+#[test]
+fn junit_report_has_a_test_case_per_cell() {
+    let json = cli(&["diff", "--format", "json"]);
+    let report: serde_json::Value = serde_json::from_slice(&json.stdout).expect("JSON");
+    let records = report["records"].as_array().expect("records").len();
+    let out = cli(&["diff", "--format", "junit"]);
+    let elements = xml_elements(&String::from_utf8_lossy(&out.stdout));
+    let cases = elements.iter().filter(|(n, _)| n == "testcase").count();
+    assert_eq!(cases, records);
+    assert!(elements.iter().any(|(n, _)| n == "testsuites"));
+    assert!(
+        elements.iter().any(|(n, _)| n == "skipped"),
+        "recorded unspecified cells are skipped, not passed"
+    );
+}
+
+#[test]
+fn html_report_is_one_well_formed_file_with_the_matrices() {
+    let dir = scratch("html");
+    let file = dir.join("report.html");
+    let out = cli(&[
+        "diff",
+        "--format",
+        "html",
+        "--output",
+        file.to_str().unwrap_or_default(),
+    ]);
+    assert_eq!(out.status.code(), Some(0));
+    let html = std::fs::read_to_string(&file).expect("report written");
+    let body = html.trim_start_matches("<!DOCTYPE html>\n");
+    let elements = xml_elements(body);
+    let tables = elements
+        .iter()
+        .filter(|(n, a)| n == "table" && a.iter().any(|(k, v)| k == "class" && v == "matrix"))
+        .count();
+    assert!(tables >= 3, "one matrix per section");
+    for (name, attrs) in &elements {
+        assert!(
+            !matches!(name.as_str(), "script" | "link" | "img" | "iframe"),
+            "external or active content: {name}"
+        );
+        assert!(
+            attrs.iter().all(|(k, _)| k != "src"),
+            "a src attribute would load something"
+        );
+    }
+}
+
+#[test]
+fn a_saved_run_fails_only_on_new_differences() {
+    let dir = scratch("baseline");
+    let saved = dir.join("run.json");
+    let out = cli(&[
+        "diff",
+        "--save",
+        saved.to_str().unwrap_or_default(),
+        "--output",
+        dir.join("x.txt").to_str().unwrap_or_default(),
+    ]);
+    assert_eq!(out.status.code(), Some(0));
+    let out = cli(&[
+        "diff",
+        "--baseline",
+        saved.to_str().unwrap_or_default(),
+        "--output",
+        dir.join("y.txt").to_str().unwrap_or_default(),
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stderr).contains(": 0 new, 0 fixed, 0 changed"));
+
+    // A corpus in which one vector now disagrees with the model.
+    let vectors = dir.join("vectors");
+    std::fs::create_dir_all(vectors.join("mitsubishi-iqr")).expect("dir");
+    let habin = std::fs::read_to_string(root().join("vectors/mitsubishi-iqr/habin.yaml"))
+        .expect("habin.yaml");
+    std::fs::write(
+        vectors.join("mitsubishi-iqr/habin.yaml"),
+        habin.replacen("after: {D200: 5A8DH}", "after: {D200: 5A8EH}", 1),
+    )
+    .expect("write");
+    let out = cli(&[
+        "diff",
+        "--vectors",
+        vectors.to_str().unwrap_or_default(),
+        "--baseline",
+        saved.to_str().unwrap_or_default(),
+        "--output",
+        dir.join("z.txt").to_str().unwrap_or_default(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(
+            "  new:     iqr::habin::habin-fixed-4-digits-example::rcpu (differs: wrong words)"
+        ),
+        "{err}"
+    );
+}
+
+#[test]
+fn against_compares_two_backends_word_by_word() {
+    let out = cli(&[
+        "diff",
+        "--backend",
+        "iqr",
+        "--against",
+        "iqr",
+        "--filter",
+        "habin",
+    ]);
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.trim_end().ends_with("trials compared, 0 differ"),
+        "{text}"
+    );
+}
+
+#[test]
+fn a_bad_baseline_is_bad_input() {
+    let dir = scratch("bad-baseline");
+    let file = dir.join("run.json");
+    std::fs::write(
+        &file,
+        "{\"format\": \"something-else\", \"version\": 1, \"records\": []}",
+    )
+    .expect("write");
+    let out = cli(&["diff", "--baseline", file.to_str().unwrap_or_default()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("is not `plc-conformance-results`"));
+}
