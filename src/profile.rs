@@ -33,7 +33,7 @@ pub struct Profile {
     #[serde(default)]
     pub flags: BTreeMap<String, FlagDef>,
     /// Device codes and their ranges, for every variant unless a variant overrides them.
-    pub devices: BTreeMap<String, DeviceRange>,
+    pub devices: BTreeMap<String, DeviceDef>,
     /// The instructions the profile covers.
     pub instructions: BTreeMap<String, InstructionDef>,
     /// The variants; every case runs on each one unless the case restricts it.
@@ -100,6 +100,114 @@ impl DeviceRange {
     }
 }
 
+/// The numbers a device code has on one model: a range, plus further ranges when the numbers
+/// have a gap (IDEC FC4A slim CPUs: D0-D1299 and D2000-D7999).
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DeviceRanges {
+    pub first: u32,
+    pub last: u32,
+    /// Further ranges of the same code, past a gap.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub also: Vec<DeviceRange>,
+}
+
+impl DeviceRanges {
+    /// Every range, the first one first.
+    pub fn iter(&self) -> impl Iterator<Item = DeviceRange> + '_ {
+        std::iter::once(DeviceRange {
+            first: self.first,
+            last: self.last,
+        })
+        .chain(self.also.iter().copied())
+    }
+}
+
+/// How a device code's numbers are written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum Numbering {
+    /// Plain decimal numbers: D0, D1, ... D9, D10.
+    #[default]
+    Decimal,
+    /// The last digit is octal and the digits before it decimal, as IDEC numbers inputs,
+    /// outputs and internal relays: M0-M7, M10-M17, ..., M80-M87, ... M1270-M1277. M8 and M1278
+    /// do not exist.
+    OctalLastDigit,
+}
+
+impl Numbering {
+    /// The name profiles use.
+    pub fn name(self) -> &'static str {
+        match self {
+            Numbering::Decimal => "decimal",
+            Numbering::OctalLastDigit => "octal-last-digit",
+        }
+    }
+
+    /// The rule in words, for messages about a number that breaks it.
+    pub fn rule(self) -> &'static str {
+        match self {
+            Numbering::Decimal => "numbers are decimal",
+            Numbering::OctalLastDigit => {
+                "the last digit is octal (0-7), the digits before it decimal (M0-M7, M10-M17, ...)"
+            }
+        }
+    }
+
+    /// The position of a device number counted in points from 0, or `None` for a number the
+    /// numbering does not have. Ranges and spans are compared in points, so that the 16 points
+    /// from M1260 end at M1277 and those from M1270 run past it.
+    pub fn point(self, number: u32) -> Option<u64> {
+        match self {
+            Numbering::Decimal => Some(u64::from(number)),
+            Numbering::OctalLastDigit => {
+                (number % 10 < 8).then(|| u64::from(number / 10) * 8 + u64::from(number % 10))
+            }
+        }
+    }
+}
+
+fn one_point() -> u32 {
+    1
+}
+
+fn is_one_point(points: &u32) -> bool {
+    *points == 1
+}
+
+/// A device code of a profile: its numbers, and how a word operand of it is made up.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DeviceDef {
+    pub first: u32,
+    pub last: u32,
+    /// Further ranges of the same code, past a gap.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub also: Vec<DeviceRange>,
+    #[serde(default)]
+    pub numbering: Numbering,
+    /// How many numbers (points) one word operand takes from its head: 1 for a word device,
+    /// 16 for a bit device used as a word (IDEC: "16 points are used"). The word is addressed
+    /// by its head, and all its points must exist.
+    #[serde(default = "one_point", skip_serializing_if = "is_one_point")]
+    pub points_per_word: u32,
+    /// What a word of this code is when an instruction reads or writes it, where that is not
+    /// obvious (IDEC T/C: the preset value when written, the current value when read).
+    #[serde(default)]
+    pub meaning: Option<String>,
+}
+
+impl DeviceDef {
+    pub fn ranges(&self) -> DeviceRanges {
+        DeviceRanges {
+            first: self.first,
+            last: self.last,
+            also: self.also.clone(),
+        }
+    }
+}
+
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct InstructionDef {
@@ -128,9 +236,10 @@ pub struct OperandDef {
 pub struct Variant {
     pub id: String,
     pub description: String,
-    /// Device ranges that differ from the profile's.
+    /// Device ranges that differ from the profile's (numbering and word size stay the
+    /// profile's).
     #[serde(default)]
-    pub devices: BTreeMap<String, DeviceRange>,
+    pub devices: BTreeMap<String, DeviceRanges>,
     /// Flags this variant does not implement: it behaves as if they held their default.
     #[serde(default)]
     pub ignores_flags: Vec<String>,
@@ -144,25 +253,38 @@ impl Profile {
         self.variants.iter().find(|v| v.id == id)
     }
 
-    /// The range of a device code on a variant.
-    pub fn range(&self, variant: &Variant, code: &str) -> Option<DeviceRange> {
+    /// The ranges of a device code on a variant.
+    pub fn ranges(&self, variant: &Variant, code: &str) -> Option<DeviceRanges> {
         variant
             .devices
             .get(code)
-            .or_else(|| self.devices.get(code))
-            .copied()
+            .cloned()
+            .or_else(|| self.devices.get(code).map(DeviceDef::ranges))
     }
 
-    /// Whether `count` consecutive words from `head` all exist on the variant.
+    /// Whether `count` consecutive word operands from `head` all exist on the variant: every
+    /// point they take lies in one range (a span across a gap does not exist).
     pub fn words_exist(&self, variant: &Variant, head: &Device, count: u32) -> bool {
-        let Some(range) = self.range(variant, &head.code) else {
+        let (Some(def), Some(ranges)) = (
+            self.devices.get(&head.code),
+            self.ranges(variant, &head.code),
+        ) else {
             return false;
         };
-        count == 0
-            || head
-                .index
-                .checked_add(count - 1)
-                .is_some_and(|last| range.contains(head.index) && range.contains(last))
+        let Some(first) = def.numbering.point(head.index) else {
+            return false;
+        };
+        if count == 0 {
+            return true;
+        }
+        let last = first + u64::from(count) * u64::from(def.points_per_word.max(1)) - 1;
+        let fits = ranges.iter().any(|r| {
+            match (def.numbering.point(r.first), def.numbering.point(r.last)) {
+                (Some(lo), Some(hi)) => lo <= first && last <= hi,
+                _ => false,
+            }
+        });
+        fits
     }
 
     /// Whether any variant has this word; memory a vector sets must exist somewhere.
@@ -209,5 +331,37 @@ impl Profiles {
     }
     pub fn ids(&self) -> Vec<String> {
         self.by_id.keys().cloned().collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn octal_last_digit_counts_eight_points_per_ten() {
+        let n = Numbering::OctalLastDigit;
+        assert_eq!(n.point(0), Some(0));
+        assert_eq!(n.point(7), Some(7));
+        assert_eq!(n.point(8), None);
+        assert_eq!(n.point(10), Some(8));
+        assert_eq!(n.point(80), Some(64));
+        assert_eq!(n.point(1277), Some(1023));
+        assert_eq!(n.point(1278), None);
+        assert_eq!(Numbering::Decimal.point(1278), Some(1278));
+    }
+
+    #[test]
+    fn ranges_list_the_first_range_first() {
+        let r = DeviceRanges {
+            first: 0,
+            last: 1299,
+            also: vec![DeviceRange {
+                first: 2000,
+                last: 7999,
+            }],
+        };
+        let all: Vec<(u32, u32)> = r.iter().map(|r| (r.first, r.last)).collect();
+        assert_eq!(all, vec![(0, 1299), (2000, 7999)]);
     }
 }

@@ -12,7 +12,6 @@ use plc_conformance::backend::{Backend, Fault, Outcome, Request, Response};
 use plc_conformance::device::Device;
 use plc_conformance::memory::Image;
 use plc_conformance::model::{ErrorSignal, Operand};
-use plc_conformance::profile::DeviceRange;
 
 type Answer = Result<Response, Fault>;
 
@@ -63,17 +62,12 @@ fn with_flag(req: &Request<'_>, base: &dyn Backend, name: &str, value: bool) -> 
 
 /// Runs the base with the last D register moved: a backend with a wrong range check.
 fn with_d_last(req: &Request<'_>, base: &dyn Backend, last: impl Fn(u32) -> u32) -> Answer {
-    let Some(range) = req.profile.range(req.variant, "D") else {
+    let Some(mut ranges) = req.profile.ranges(req.variant, "D") else {
         return base.execute(req);
     };
+    ranges.last = last(ranges.last);
     let mut variant = req.variant.clone();
-    variant.devices.insert(
-        "D".to_string(),
-        DeviceRange {
-            first: range.first,
-            last: last(range.last),
-        },
-    );
+    variant.devices.insert("D".to_string(), ranges);
     base.execute(&Request {
         variant: &variant,
         ..*req

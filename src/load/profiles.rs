@@ -7,7 +7,7 @@ use super::{
     parse_yaml, read_file, yaml_files, FileContext, LineIndex, LoadError, LoadErrorKind, LoadErrors,
 };
 use crate::device::Device;
-use crate::profile::{Profile, Profiles, SignalKind};
+use crate::profile::{DeviceDef, DeviceRanges, Profile, Profiles, SignalKind};
 
 /// Loads every profile in a folder.
 pub fn load_profiles(dir: &Path) -> Result<Profiles, LoadErrors> {
@@ -90,14 +90,12 @@ fn check_profile(p: &Profile, cx: &mut FileContext<'_>) {
     for (i, r) in e.also.iter().enumerate() {
         device_names(&format!("errors.also[{i}]"), r, cx);
     }
-    for (code, range) in &p.devices {
-        if range.first > range.last {
+    for (code, def) in &p.devices {
+        check_ranges(&format!("devices.{code}"), &def.ranges(), def, cx);
+        if def.points_per_word == 0 {
             cx.error(
-                format!("devices.{code}"),
-                LoadErrorKind::Invalid(format!(
-                    "first {} is after last {}",
-                    range.first, range.last
-                )),
+                format!("devices.{code}.points_per_word"),
+                LoadErrorKind::Invalid("a word takes at least one point".into()),
             );
         }
     }
@@ -144,12 +142,11 @@ fn check_profile(p: &Profile, cx: &mut FileContext<'_>) {
                 );
             }
         }
-        for code in variant.devices.keys() {
-            if !p.devices.contains_key(code) {
-                cx.error(
-                    format!("variants[{v}].devices.{code}"),
-                    unknown("device", code, &devices),
-                );
+        for (code, ranges) in &variant.devices {
+            let key = format!("variants[{v}].devices.{code}");
+            match p.devices.get(code) {
+                Some(def) => check_ranges(&key, ranges, def, cx),
+                None => cx.error(key, unknown("device", code, &devices)),
             }
         }
         for (i, instr) in variant.instructions.iter().flatten().enumerate() {
@@ -157,6 +154,37 @@ fn check_profile(p: &Profile, cx: &mut FileContext<'_>) {
                 cx.error(
                     format!("variants[{v}].instructions[{i}]"),
                     unknown("instruction", instr, &instructions),
+                );
+            }
+        }
+    }
+}
+
+/// Each range runs forward and its ends are numbers the code's numbering has.
+fn check_ranges(key: &str, ranges: &DeviceRanges, def: &DeviceDef, cx: &mut FileContext<'_>) {
+    for (i, range) in ranges.iter().enumerate() {
+        let key = if i == 0 {
+            key.to_string()
+        } else {
+            format!("{key}.also[{}]", i - 1)
+        };
+        if range.first > range.last {
+            cx.error(
+                &key,
+                LoadErrorKind::Invalid(format!(
+                    "first {} is after last {}",
+                    range.first, range.last
+                )),
+            );
+        }
+        for end in [range.first, range.last] {
+            if def.numbering.point(end).is_none() {
+                cx.error(
+                    &key,
+                    LoadErrorKind::Invalid(format!(
+                        "{end} is not a number in {} numbering",
+                        def.numbering.name()
+                    )),
                 );
             }
         }

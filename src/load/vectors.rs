@@ -401,13 +401,9 @@ fn lower_operands(
                         &okey,
                         unknown("device for this operand", &d.code, &def.devices),
                     ),
-                    Operand::Device(d) if !p.word_exists_anywhere(d) => cx.error(
-                        &okey,
-                        LoadErrorKind::Invalid(format!(
-                            "{d} does not exist on any {} variant",
-                            p.id
-                        )),
-                    ),
+                    Operand::Device(d) if !p.word_exists_anywhere(d) => {
+                        cx.error(&okey, missing_word(p, d));
+                    }
                     _ => {}
                 }
             }
@@ -438,6 +434,21 @@ fn lower_memory(
         let Some(words) = expand(&mkey, value, cx) else {
             continue;
         };
+        // Consecutive numbers of a bit device are not consecutive words: M0 and M1 share 15
+        // of their 16 points. Such words are given one by one, by their heads.
+        if words.len() > 1 {
+            for p in &h.profiles {
+                if let Some(def) = p.devices.get(&head.code).filter(|d| d.points_per_word > 1) {
+                    cx.error(
+                        &mkey,
+                        LoadErrorKind::Invalid(format!(
+                            "a word of {} is {} points from its head; give each word by its head instead of a list or text",
+                            head.code, def.points_per_word
+                        )),
+                    );
+                }
+            }
+        }
         for (offset, word) in words.into_iter().enumerate() {
             let Some(device) = head.offset(offset as u32) else {
                 break;
@@ -447,13 +458,7 @@ fn lower_memory(
                     let known: Vec<String> = p.devices.keys().cloned().collect();
                     cx.error(&mkey, unknown("device", &device.code, &known));
                 } else if !p.word_exists_anywhere(&device) {
-                    cx.error(
-                        &mkey,
-                        LoadErrorKind::Invalid(format!(
-                            "{device} does not exist on any {} variant",
-                            p.id
-                        )),
-                    );
+                    cx.error(&mkey, missing_word(p, &device));
                 }
             }
             if let Some(first) = set_by.get(&device) {
@@ -467,6 +472,22 @@ fn lower_memory(
         }
     }
     out
+}
+
+/// Why a word a vector names does not exist, in the profile's terms.
+fn missing_word(p: &Profile, d: &Device) -> LoadErrorKind {
+    LoadErrorKind::Invalid(match p.devices.get(&d.code) {
+        Some(def) if def.numbering.point(d.index).is_none() => format!(
+            "{d} is not a valid {} number: {}",
+            d.code,
+            def.numbering.rule()
+        ),
+        Some(def) if def.points_per_word > 1 => format!(
+            "{d} does not exist on any {} variant: a word of {} is the {} points from its head, and all of them must exist",
+            p.id, d.code, def.points_per_word
+        ),
+        _ => format!("{d} does not exist on any {} variant", p.id),
+    })
 }
 
 /// The words a value spec stands for.

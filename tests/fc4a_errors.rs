@@ -1,0 +1,164 @@
+//! An IDEC error expectation is the flag M8004, and only the flag satisfies it.
+//!
+//! The FC4A shows a user program execution error as M8004 turning on; no code is relied on.
+//! A backend that answers with a Mitsubishi-style code, or with no error at all, must fail every
+//! case that expects M8004 and still pass the cases that expect none; and a vector cannot write
+//! a code for a profile that signals with a flag.
+
+mod common;
+
+use std::path::Path;
+
+use common::{reference, session, Mutant};
+use plc_conformance::backend::{Backend, Response};
+use plc_conformance::compare::Verdict;
+use plc_conformance::load::{load_profiles, CorpusBuilder};
+use plc_conformance::model::{Basis, ErrorSignal};
+use plc_conformance::plan::plan;
+use plc_conformance::session::Session;
+use std::sync::Arc;
+
+const PROFILE: &str = "idec-fc4a";
+
+/// Replaces the reference's error signal.
+fn signalling(
+    name: &'static str,
+    error: Option<ErrorSignal>,
+    base: &Arc<dyn Backend>,
+) -> Arc<dyn Backend> {
+    Mutant::new(name, base, move |req, base| {
+        base.execute(req).map(|r| match r {
+            Response::Done(mut o) => {
+                if o.error.is_some() {
+                    o.error = error.clone();
+                }
+                Response::Done(o)
+            }
+            other => other,
+        })
+    })
+}
+
+/// Runs the FC4A corpus on a backend; checks every trial that expects M8004 fails on the error
+/// alone and every other asserted trial conforms; returns the names of the failing trials.
+fn failing_on_error_only(session: &Session, backend: &Arc<dyn Backend>) -> Vec<String> {
+    let m8004 = ErrorSignal::Flag("M8004".parse().expect("a device name"));
+    let mut failing = Vec::new();
+    for trial in plan(
+        &session.corpus,
+        &session.profiles,
+        std::slice::from_ref(backend),
+    ) {
+        assert!(trial.skip.is_none(), "{} is skipped", trial.name());
+        if trial.case.basis == Basis::Unspecified {
+            continue;
+        }
+        let expects_flag = trial
+            .case
+            .expect
+            .as_ref()
+            .is_some_and(|e| e.error.as_ref() == Some(&m8004));
+        let verdict = trial.run();
+        if expects_flag {
+            assert!(verdict.is_failure(), "{} passes: {verdict:?}", trial.name());
+            let Verdict::Differs { mismatches } = &verdict else {
+                panic!("{}: expected a difference, got {verdict:?}", trial.name());
+            };
+            assert!(
+                mismatches
+                    .iter()
+                    .all(|m| m.error_differs() && !m.words_differ()),
+                "{}: the difference should be the error alone: {mismatches:?}",
+                trial.name()
+            );
+            failing.push(trial.name());
+        } else {
+            assert_eq!(verdict, Verdict::Conforms, "{}", trial.name());
+        }
+    }
+    failing
+}
+
+#[test]
+fn a_code_does_not_satisfy_m8004() {
+    let session = session();
+    let base = reference(&session, PROFILE);
+    let coded = signalling("fc4a-reports-3401h", Some(ErrorSignal::Code(0x3401)), &base);
+    let failing = failing_on_error_only(&session, &coded);
+    for name in [
+        "fc4a-reports-3401h::atoh::atoh-invalid-2fh::c10r2",
+        "fc4a-reports-3401h::atoh::atoh-s2-zero::d40k3",
+        "fc4a-reports-3401h::atoh::atoh-s1-past-d399-small::c16r2",
+        "fc4a-reports-3401h::htoa::htoa-s2-five::c24r2",
+    ] {
+        assert!(failing.iter().any(|t| t == name), "{name} does not fail");
+    }
+    assert!(failing.len() >= 100, "only {} trials fail", failing.len());
+}
+
+#[test]
+fn no_error_does_not_satisfy_m8004() {
+    let session = session();
+    let base = reference(&session, PROFILE);
+    let silent = signalling("fc4a-reports-nothing", None, &base);
+    let failing = failing_on_error_only(&session, &silent);
+    for name in [
+        "fc4a-reports-nothing::atoh::atoh-lowercase-a-61h::d20rk1",
+        "fc4a-reports-nothing::atoh::atoh-s2-from-data-register-zero::c24r2",
+        "fc4a-reports-nothing::htoa::htoa-d1-across-slim-gap::d20k3",
+    ] {
+        assert!(failing.iter().any(|t| t == name), "{name} does not fail");
+    }
+    assert!(failing.len() >= 100, "only {} trials fail", failing.len());
+}
+
+/// The flag itself, from the reference, passes: the checks above fail for the signal, not for
+/// something else about the trials.
+#[test]
+fn the_reference_signals_m8004() {
+    let session = session();
+    let base = reference(&session, PROFILE);
+    let m8004 = signalling(
+        "fc4a-reports-m8004",
+        Some(ErrorSignal::Flag("M8004".parse().expect("a device name"))),
+        &base,
+    );
+    for trial in plan(
+        &session.corpus,
+        &session.profiles,
+        std::slice::from_ref(&m8004),
+    ) {
+        assert!(!trial.run().is_failure(), "{} fails", trial.name());
+    }
+}
+
+#[test]
+fn a_vector_cannot_expect_a_code_from_fc4a() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let profiles = load_profiles(&root.join("vendors")).expect("the profiles load");
+    let text = r#"
+instructions: [ATOH]
+profiles: [idec-fc4a]
+source: {manual: fc4a-user, page: "14-5"}
+cases:
+  - id: atoh-code-instead-of-flag
+    basis: manual
+    cite: "p.14-5"
+    operands: {S1: D100, S2: 4, D1: D200}
+    before:
+      D100: {ascii_words: "123a"}
+    expect:
+      error: 3401H
+"#;
+    let mut builder = CorpusBuilder::default();
+    builder.add_file(Path::new("code.yaml"), text, &profiles);
+    let errors = builder
+        .finish()
+        .expect_err("a code is rejected")
+        .to_string();
+    assert!(
+        errors.contains("code.yaml:13: cases[0].expect.error")
+            && errors.contains("signals errors with M8004 only"),
+        "{errors}"
+    );
+}
