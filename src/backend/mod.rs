@@ -5,6 +5,7 @@
 //! YAML or reporting; everything vendor-specific it needs comes in the [`Request`] from the
 //! profile.
 
+pub mod fx5;
 pub mod iqr;
 pub mod text;
 
@@ -180,6 +181,9 @@ pub fn reference_backends(profiles: &Profiles) -> Vec<Arc<dyn Backend>> {
     let mut out: Vec<Arc<dyn Backend>> = Vec::new();
     if let Some(p) = profiles.get(iqr::PROFILE) {
         out.push(Arc::new(iqr::Iqr::new(p)));
+    }
+    if let Some(p) = profiles.get(fx5::PROFILE) {
+        out.push(Arc::new(fx5::Fx5::new(p)));
     }
     out
 }

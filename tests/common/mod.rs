@@ -70,18 +70,29 @@ impl Backend for Mutant {
 
 /// The trials of the corpus that fail on a backend (recorded `unspecified` cases never do).
 pub fn failing_trials(session: &Session, backend: &Arc<dyn Backend>) -> Vec<String> {
-    plan(&session.corpus, &session.profiles, std::slice::from_ref(backend))
-        .into_iter()
-        .filter(|t| t.skip.is_none())
-        .filter(|t| t.run().is_failure())
-        .map(|t| t.name())
-        .collect()
+    plan(
+        &session.corpus,
+        &session.profiles,
+        std::slice::from_ref(backend),
+    )
+    .into_iter()
+    .filter(|t| t.skip.is_none())
+    .filter(|t| t.run().is_failure())
+    .map(|t| t.name())
+    .collect()
 }
 
 /// Asserts that the reference passes and that every mutant fails at least one trial.
-pub fn assert_corpus_kills(session: &Session, reference: &Arc<dyn Backend>, mutants: &[Arc<dyn Backend>]) {
+pub fn assert_corpus_kills(
+    session: &Session,
+    reference: &Arc<dyn Backend>,
+    mutants: &[Arc<dyn Backend>],
+) {
     let failing = failing_trials(session, reference);
-    assert!(failing.is_empty(), "the reference model itself fails: {failing:?}");
+    assert!(
+        failing.is_empty(),
+        "the reference model itself fails: {failing:?}"
+    );
     let survivors: Vec<&str> = mutants
         .iter()
         .filter(|m| failing_trials(session, m).is_empty())
