@@ -6,6 +6,7 @@
 //! profile.
 
 pub mod fc4a;
+pub mod fx5;
 pub mod iqr;
 pub mod text;
 
@@ -181,6 +182,9 @@ pub fn reference_backends(profiles: &Profiles) -> Vec<Arc<dyn Backend>> {
     let mut out: Vec<Arc<dyn Backend>> = Vec::new();
     if let Some(p) = profiles.get(iqr::PROFILE) {
         out.push(Arc::new(iqr::Iqr::new(p)));
+    }
+    if let Some(p) = profiles.get(fx5::PROFILE) {
+        out.push(Arc::new(fx5::Fx5::new(p)));
     }
     if let Some(p) = profiles.get(fc4a::PROFILE) {
         out.push(Arc::new(fc4a::Fc4a::new(p)));

@@ -1,0 +1,455 @@
+//! Teeth for the FX5 corpus: plausible wrong implementations of ASCI(P) and HEX(P), each the
+//! reference model with one behaviour changed, and a check that some vector catches each one.
+//! A survivor means the corpus has a gap: add the vector that tells it apart from the manual.
+
+// `Mutant::new` hands back the wrapper as a trait object, ready for the corpus runner.
+#[allow(clippy::new_ret_no_self)]
+mod common;
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use common::{assert_corpus_kills, failing_trials, reference, session, Mutant};
+use plc_conformance::backend::fx5::{self, Packing};
+use plc_conformance::backend::{Backend, Fault, Outcome, Request, Response};
+use plc_conformance::device::Device;
+use plc_conformance::memory::Image;
+use plc_conformance::model::{ErrorSignal, Operand};
+use plc_conformance::profile::Variant;
+
+type Answer = Result<Response, Fault>;
+
+fn is_asci(req: &Request<'_>) -> bool {
+    req.instruction.starts_with("ASCI")
+}
+
+fn eight_bit(req: &Request<'_>) -> bool {
+    req.flag("SM8161")
+}
+
+fn device(req: &Request<'_>, name: &str) -> Option<Device> {
+    match req.operands.get(name)? {
+        Operand::Device(d) => Some(d.clone()),
+        Operand::Constant(_) => None,
+    }
+}
+
+/// n as the instruction reads it, 16-bit unsigned.
+fn n_of(req: &Request<'_>) -> Option<u32> {
+    match req.operands.get("n")? {
+        Operand::Constant(k) => Some((*k as u16).into()),
+        Operand::Device(d) => Some(req.memory.read(d).into()),
+    }
+}
+
+/// The base model's answer with its outcome changed (when it did run).
+fn reshape(
+    req: &Request<'_>,
+    base: &dyn Backend,
+    f: impl Fn(&Request<'_>, Outcome) -> Outcome,
+) -> Answer {
+    match base.execute(req)? {
+        Response::Done(outcome) => Ok(Response::Done(f(req, outcome))),
+        other => Ok(other),
+    }
+}
+
+/// The base model run with one flag forced.
+fn with_flag(req: &Request<'_>, base: &dyn Backend, flag: &str, on: bool) -> Answer {
+    let mut flags = req.flags.clone();
+    flags.insert(flag.to_string(), on);
+    base.execute(&Request {
+        flags: &flags,
+        ..*req
+    })
+}
+
+/// The base model run on a variant whose data registers end `delta` words later.
+fn with_d_range(req: &Request<'_>, base: &dyn Backend, delta: i64) -> Answer {
+    let mut variant: Variant = req.variant.clone();
+    let Some(mut ranges) = req.profile.ranges(req.variant, "D") else {
+        return base.execute(req);
+    };
+    ranges.last = (i64::from(ranges.last) + delta).max(0) as u32;
+    variant.devices.insert("D".into(), ranges);
+    base.execute(&Request {
+        variant: &variant,
+        ..*req
+    })
+}
+
+fn code(outcome: &Outcome) -> Option<u16> {
+    match outcome.error {
+        Some(ErrorSignal::Code(c)) => Some(c),
+        _ => None,
+    }
+}
+
+/// Where ASCI's i-th character goes: the word, and whether it is the high byte.
+fn slot(d: &Device, i: u32, eight: bool) -> Option<(Device, bool)> {
+    if eight {
+        Some((d.offset(i)?, false))
+    } else {
+        Some((d.offset(i / 2)?, i % 2 == 1))
+    }
+}
+
+/// ASCI's outcome with its n characters replaced by `f(characters)`.
+fn map_chars(
+    req: &Request<'_>,
+    outcome: Outcome,
+    f: impl Fn(&Request<'_>, Vec<u8>) -> Vec<u8>,
+) -> Outcome {
+    let (Some(d), Some(n)) = (device(req, "d"), n_of(req)) else {
+        return outcome;
+    };
+    if outcome.error.is_some() || !is_asci(req) {
+        return outcome;
+    }
+    let eight = eight_bit(req);
+    let mut writes = outcome.writes.clone();
+    let read = |writes: &BTreeMap<Device, u16>, dev: &Device| {
+        writes
+            .get(dev)
+            .copied()
+            .unwrap_or_else(|| req.memory.read(dev))
+    };
+    let chars: Vec<u8> = (0..n)
+        .filter_map(|i| slot(&d, i, eight))
+        .map(|(dev, high)| {
+            let w = read(&writes, &dev);
+            if high {
+                (w >> 8) as u8
+            } else {
+                w as u8
+            }
+        })
+        .collect();
+    for (i, ch) in f(req, chars).into_iter().enumerate() {
+        if let Some((dev, high)) = slot(&d, i as u32, eight) {
+            let w = read(&writes, &dev);
+            let new = if high {
+                (w & 0x00FF) | u16::from(ch) << 8
+            } else {
+                (w & 0xFF00) | u16::from(ch)
+            };
+            writes.insert(dev, new);
+        }
+    }
+    Outcome { writes, ..outcome }
+}
+
+/// The source words ASCI reads: a constant, or ceil(n/4) words from (s).
+fn asci_source(req: &Request<'_>, n: u32) -> Vec<u16> {
+    match req.operands.get("s") {
+        Some(Operand::Constant(k)) => vec![*k as u16],
+        Some(Operand::Device(s)) => (0..fx5::asci_source_words(n))
+            .filter_map(|i| s.offset(i))
+            .map(|dev| req.memory.read(&dev))
+            .collect(),
+        None => Vec::new(),
+    }
+}
+
+fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
+    vec![
+        Mutant::new("asci-digits-least-significant-first", base, |req, b| {
+            reshape(req, b, |req, o| {
+                map_chars(req, o, |_, mut c| {
+                    c.reverse();
+                    c
+                })
+            })
+        }),
+        Mutant::new("asci-digits-from-the-top-of-the-words", base, |req, b| {
+            reshape(req, b, |req, o| {
+                map_chars(req, o, |req, c| {
+                    let n = c.len() as u32;
+                    let words = asci_source(req, n);
+                    let all = fx5::asci_digits(&words, 4 * n.div_ceil(4));
+                    all[..n as usize].to_vec()
+                })
+            })
+        }),
+        Mutant::new("asci-writes-lowercase", base, |req, b| {
+            reshape(req, b, |req, o| {
+                map_chars(req, o, |_, c| c.to_ascii_lowercase())
+            })
+        }),
+        Mutant::new("asci-first-character-in-high-byte", base, |req, b| {
+            reshape(req, b, |req, mut o| {
+                if is_asci(req) && !eight_bit(req) {
+                    o.writes.values_mut().for_each(|w| *w = w.swap_bytes());
+                }
+                o
+            })
+        }),
+        Mutant::new("asci-terminator-despite-sm701-on", base, |req, b| {
+            if is_asci(req) {
+                with_flag(req, b, "SM701", false)
+            } else {
+                b.execute(req)
+            }
+        }),
+        Mutant::new("asci-no-terminator-with-sm701-off", base, |req, b| {
+            if is_asci(req) {
+                with_flag(req, b, "SM701", true)
+            } else {
+                b.execute(req)
+            }
+        }),
+        Mutant::new("asci-odd-count-clears-kept-high-byte", base, |req, b| {
+            reshape(req, b, |req, mut o| {
+                let odd = n_of(req).is_some_and(|n| n % 2 == 1);
+                if is_asci(req) && !eight_bit(req) && req.flag("SM701") && odd {
+                    if let Some(last) = o.writes.keys().next_back().cloned() {
+                        o.writes.entry(last).and_modify(|w| *w &= 0x00FF);
+                    }
+                }
+                o
+            })
+        }),
+        Mutant::new("asci-8bit-keeps-old-high-byte", base, |req, b| {
+            reshape(req, b, |req, mut o| {
+                if is_asci(req) && eight_bit(req) {
+                    for (dev, w) in o.writes.iter_mut() {
+                        *w = (req.memory.read(dev) & 0xFF00) | (*w & 0x00FF);
+                    }
+                }
+                o
+            })
+        }),
+        Mutant::new("asci-8bit-character-in-both-bytes", base, |req, b| {
+            reshape(req, b, |req, mut o| {
+                if is_asci(req) && eight_bit(req) {
+                    o.writes.values_mut().for_each(|w| *w |= *w << 8);
+                }
+                o
+            })
+        }),
+        Mutant::new("asci-ignores-sm8161", base, |req, b| {
+            if is_asci(req) {
+                with_flag(req, b, "SM8161", false)
+            } else {
+                b.execute(req)
+            }
+        }),
+        Mutant::new("hex-ignores-sm8161", base, |req, b| {
+            if is_asci(req) {
+                b.execute(req)
+            } else {
+                with_flag(req, b, "SM8161", false)
+            }
+        }),
+        Mutant::new("n-zero-accepted", base, |req, b| {
+            if n_of(req) == Some(0) {
+                Ok(Response::Done(Outcome::default()))
+            } else {
+                b.execute(req)
+            }
+        }),
+        Mutant::new("n-read-as-15-bits", base, |req, b| {
+            let Some(n) = n_of(req) else {
+                return b.execute(req);
+            };
+            let mut operands = req.operands.clone();
+            operands.insert("n".into(), Operand::Constant(i64::from(n & 0x7FFF)));
+            b.execute(&Request {
+                operands: &operands,
+                ..*req
+            })
+        }),
+        // Without the upper bound, n > 32767 can never fit D0-D7999: the range check answers.
+        Mutant::new("n-upper-bound-missing", base, |req, b| {
+            if n_of(req).is_some_and(|n| n > fx5::MAX_CHARS) {
+                Ok(Response::Done(Outcome::error(
+                    req.error(fx5::ERR_DEVICE_RANGE),
+                )))
+            } else {
+                b.execute(req)
+            }
+        }),
+        Mutant::new("range-check-allows-one-word-too-many", base, |req, b| {
+            with_d_range(req, b, 1)
+        }),
+        Mutant::new("range-check-one-word-short", base, |req, b| {
+            with_d_range(req, b, -1)
+        }),
+        Mutant::new("asci-source-range-unchecked", base, |req, b| {
+            let answer = b.execute(req)?;
+            let (Some(n), Some(d)) = (n_of(req), device(req, "d")) else {
+                return Ok(answer);
+            };
+            let packing = Packing::from_sm8161(eight_bit(req));
+            let dest = fx5::asci_destination_words(n, packing, !req.flag("SM701"));
+            match &answer {
+                Response::Done(o)
+                    if is_asci(req)
+                        && code(o) == Some(fx5::ERR_DEVICE_RANGE)
+                        && req.words_exist(&d, dest) =>
+                {
+                    with_d_range(req, b, 10_000)
+                }
+                _ => Ok(answer),
+            }
+        }),
+        Mutant::new("asci-range-check-forgets-the-terminator", base, |req, b| {
+            let answer = b.execute(req)?;
+            let (Some(n), Some(d)) = (n_of(req), device(req, "d")) else {
+                return Ok(answer);
+            };
+            let packing = Packing::from_sm8161(eight_bit(req));
+            let without = fx5::asci_destination_words(n, packing, false);
+            match &answer {
+                Response::Done(o)
+                    if is_asci(req)
+                        && code(o) == Some(fx5::ERR_DEVICE_RANGE)
+                        && req.words_exist(&d, without) =>
+                {
+                    with_d_range(req, b, 1)
+                }
+                _ => Ok(answer),
+            }
+        }),
+        Mutant::new("hex-left-justified-like-iqr", base, |req, b| {
+            reshape(req, b, |req, o| {
+                let (Some(s), Some(d), Some(n)) = (device(req, "s"), device(req, "d"), n_of(req))
+                else {
+                    return o;
+                };
+                if is_asci(req) || o.error.is_some() {
+                    return o;
+                }
+                let packing = Packing::from_sm8161(eight_bit(req));
+                let chars = fx5::hex_chars(req.memory, &s, n, packing);
+                let mut writes = BTreeMap::new();
+                for (i, group) in chars.chunks(4).enumerate() {
+                    let mut padded = group.to_vec();
+                    padded.resize(4, b'0');
+                    if let (Ok(w), Some(dev)) = (fx5::hex_words(&padded), d.offset(i as u32)) {
+                        writes.insert(dev, w[0]);
+                    }
+                }
+                Outcome { writes, ..o }
+            })
+        }),
+        Mutant::new("hex-accepts-lowercase", base, |req, b| {
+            if is_asci(req) {
+                return b.execute(req);
+            }
+            let words = req
+                .memory
+                .explicit()
+                .iter()
+                .map(|(dev, w)| {
+                    let [lo, hi] = w.to_le_bytes();
+                    let up = u16::from_le_bytes([lo.to_ascii_uppercase(), hi.to_ascii_uppercase()]);
+                    (dev.clone(), up)
+                })
+                .collect();
+            let memory = Image::new(words, req.memory.fill());
+            b.execute(&Request {
+                memory: &memory,
+                ..*req
+            })
+        }),
+        Mutant::new("hex-keeps-old-high-digits", base, |req, b| {
+            reshape(req, b, |req, mut o| {
+                let Some(n) = n_of(req) else { return o };
+                if is_asci(req) || o.error.is_some() || n % 4 == 0 {
+                    return o;
+                }
+                let mask: u16 = (1 << (4 * (n % 4))) - 1;
+                if let Some((dev, w)) = o.writes.iter_mut().next_back() {
+                    *w = (req.memory.read(dev) & !mask) | (*w & mask);
+                }
+                o
+            })
+        }),
+        Mutant::new("hex-clears-the-next-word", base, |req, b| {
+            reshape(req, b, |req, mut o| {
+                let (Some(d), Some(n)) = (device(req, "d"), n_of(req)) else {
+                    return o;
+                };
+                if !is_asci(req) && o.error.is_none() {
+                    if let Some(dev) = d.offset(fx5::hex_destination_words(n)) {
+                        o.writes.insert(dev, 0);
+                    }
+                }
+                o
+            })
+        }),
+        Mutant::new("hex-8bit-checks-the-high-byte", base, |req, b| {
+            reshape(req, b, |req, o| {
+                let (Some(s), Some(n)) = (device(req, "s"), n_of(req)) else {
+                    return o;
+                };
+                let dirty = (0..n)
+                    .filter_map(|i| s.offset(i))
+                    .any(|dev| req.memory.read(&dev) >> 8 != 0);
+                if !is_asci(req) && eight_bit(req) && o.error.is_none() && dirty {
+                    Outcome::error(req.error(fx5::ERR_INVALID_DATA))
+                } else {
+                    o
+                }
+            })
+        }),
+        Mutant::new("hex-odd-count-reads-the-whole-last-word", base, |req, b| {
+            let Some(n) = n_of(req) else {
+                return b.execute(req);
+            };
+            if is_asci(req) || eight_bit(req) || n % 2 == 0 || n >= fx5::MAX_CHARS {
+                return b.execute(req);
+            }
+            let mut operands = req.operands.clone();
+            operands.insert("n".into(), Operand::Constant(i64::from(n + 1)));
+            let wide = b.execute(&Request {
+                operands: &operands,
+                ..*req
+            })?;
+            match wide {
+                Response::Done(o) if code(&o) == Some(fx5::ERR_INVALID_DATA) => {
+                    Ok(Response::Done(o))
+                }
+                _ => b.execute(req),
+            }
+        }),
+        Mutant::new("destination-written-on-error", base, |req, b| {
+            reshape(req, b, |req, mut o| {
+                if let (Some(_), Some(d)) = (&o.error, device(req, "d")) {
+                    o.writes.insert(d, 0);
+                }
+                o
+            })
+        }),
+        Mutant::new("count-and-range-codes-swapped", base, |req, b| {
+            reshape(req, b, |req, o| match code(&o) {
+                Some(fx5::ERR_COUNT) => Outcome::error(req.error(fx5::ERR_DEVICE_RANGE)),
+                Some(fx5::ERR_DEVICE_RANGE) => Outcome::error(req.error(fx5::ERR_COUNT)),
+                _ => o,
+            })
+        }),
+        Mutant::new("hex-invalid-character-as-3405h", base, |req, b| {
+            reshape(req, b, |req, o| match code(&o) {
+                Some(fx5::ERR_INVALID_DATA) => Outcome::error(req.error(fx5::ERR_COUNT)),
+                _ => o,
+            })
+        }),
+    ]
+}
+
+#[test]
+fn the_fx5_corpus_catches_every_wrong_model() {
+    let session = session();
+    let reference = reference(&session, fx5::PROFILE);
+    let mutants = mutants(&reference);
+    assert!(mutants.len() >= 10);
+    for m in &mutants {
+        eprintln!(
+            "{:45} caught by {} trials",
+            m.name(),
+            failing_trials(&session, m).len()
+        );
+    }
+    assert_corpus_kills(&session, &reference, &mutants);
+}
