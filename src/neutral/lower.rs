@@ -178,12 +178,13 @@ impl NeutralTrial {
                 layout_words(l.text, &chars)
             }
             Operation::ValueToHex => {
+                // As many words as the value needs or the digits read, the upper ones zero, so
+                // that an instruction reading past the value reads zeros, not the fill.
                 let v = self.case.value;
-                if v > 0xFFFF {
-                    vec![v as u16, (v >> 16) as u16]
-                } else {
-                    vec![v as u16]
-                }
+                let digits = l.width.unwrap_or(self.case.digits);
+                let needed = if v > 0xFFFF { 2 } else { 1 };
+                let count = digits.div_ceil(4).clamp(needed, 4);
+                (0..count).map(|i| (v >> (16 * i)) as u16).collect()
             }
         };
         let before: BTreeMap<Device, u16> = words

@@ -18,6 +18,10 @@ pub struct NeutralFileSpec {
     pub source: String,
     #[serde(default)]
     pub description: Option<String>,
+    /// Texts several cases share, to be named with YAML anchors (`- &idec "..."`) and used as
+    /// aliases (`why: *idec`); not read otherwise.
+    #[serde(default)]
+    pub reasons: Vec<String>,
     pub cases: Vec<NeutralCaseSpec>,
 }
 
