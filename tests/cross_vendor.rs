@@ -1,0 +1,197 @@
+//! Cross-vendor cases: a wrong vendor model shows up as a difference in the neutral cases too, a
+//! different kind of error signal is never taken for the expected class, an outcome that depends
+//! on memory the lowering does not set is caught, and bad neutral files are load errors with
+//! file:line.
+
+mod common;
+
+use std::path::Path;
+use std::sync::Arc;
+
+use common::{reference, session, Mutant};
+use plc_conformance::backend::{Backend, Outcome, Response};
+use plc_conformance::device::Device;
+use plc_conformance::load::CorpusBuilder;
+use plc_conformance::model::ErrorSignal;
+use plc_conformance::neutral::lower::{plan_neutral, NeutralVerdict};
+use plc_conformance::session::Session;
+use rstest::rstest;
+
+/// The verdicts of every neutral trial on one backend, by trial name.
+fn verdicts(session: &Session, backend: &Arc<dyn Backend>) -> Vec<(String, NeutralVerdict)> {
+    plan_neutral(
+        &session.corpus.neutral,
+        &session.profiles,
+        std::slice::from_ref(backend),
+    )
+    .into_iter()
+    .filter(|t| t.skip.is_none())
+    .map(|t| (t.name(), t.run()))
+    .collect()
+}
+
+fn failing(session: &Session, backend: &Arc<dyn Backend>) -> Vec<String> {
+    verdicts(session, backend)
+        .into_iter()
+        .filter(|(_, v)| v.is_failure())
+        .map(|(n, _)| n)
+        .collect()
+}
+
+#[test]
+fn every_reference_model_answers_every_neutral_case_as_expected() {
+    let s = session();
+    assert!(
+        s.corpus.neutral.len() >= 40,
+        "the cross-vendor corpus has {} cases",
+        s.corpus.neutral.len()
+    );
+    for b in &s.backends {
+        assert_eq!(failing(&s, b), Vec::<String>::new(), "{}", b.name());
+    }
+}
+
+#[test]
+fn a_model_ignoring_sm705_fails_the_terminated_lowering() {
+    let s = session();
+    let iqr = reference(&s, "mitsubishi-iqr");
+    let mutant = Mutant::new("ignores-sm705", &iqr, |req, base| {
+        let flags = req.flags.iter().map(|(k, _)| (k.clone(), false)).collect();
+        base.execute(&plc_conformance::backend::Request {
+            flags: &flags,
+            ..*req
+        })
+    });
+    let fails = failing(&s, &mutant);
+    assert!(
+        fails.contains(
+            &"cross-vendor::ignores-sm705::habin-terminated::xv-h2v-1-digit::rcpu".to_string()
+        ),
+        "{fails:?}"
+    );
+}
+
+#[test]
+fn an_idec_model_reporting_a_code_is_not_an_idec_error() {
+    let s = session();
+    let fc4a = reference(&s, "idec-fc4a");
+    let mutant = Mutant::new("code-instead-of-m8004", &fc4a, |req, base| {
+        base.execute(req).map(|r| match r {
+            Response::Done(o) if o.error.is_some() => {
+                Response::Done(Outcome::error(ErrorSignal::Code(0x3401)))
+            }
+            other => other,
+        })
+    });
+    let v = verdicts(&s, &mutant);
+    let (_, lowercase) = v
+        .iter()
+        .find(|(n, _)| n.contains("::atoh::xv-h2v-lowercase::"))
+        .expect("the lowercase case runs on ATOH");
+    assert!(lowercase.is_failure(), "{lowercase:?}");
+    assert!(
+        lowercase.describe().contains("actual error 3401H"),
+        "{}",
+        lowercase.describe()
+    );
+}
+
+#[test]
+fn an_outcome_that_depends_on_unset_memory_is_caught() {
+    let s = session();
+    let fx5 = reference(&s, "mitsubishi-fx5");
+    // Converts, then copies a word the lowering never sets into the result.
+    let mutant = Mutant::new("reads-unset-memory", &fx5, |req, base| {
+        base.execute(req).map(|r| match r {
+            Response::Done(mut o) if o.error.is_none() => {
+                let stray = req.memory.read(&Device::new("D", 150));
+                o.writes.insert(Device::new("D", 200), stray);
+                Response::Done(o)
+            }
+            other => other,
+        })
+    });
+    let v = verdicts(&s, &mutant);
+    assert!(
+        v.iter()
+            .any(|(_, v)| matches!(v, NeutralVerdict::FillDependent { .. })),
+        "no trial noticed the fill dependence"
+    );
+}
+
+const HEADER: &str = "operation: hex-to-value\nsource: test\ncases:\n";
+const GOOD: &str = "  - id: xv-good
+    basis: inferred
+    cite: a reading
+    text: \"5A8D\"
+    digits: 4
+    expect: {value: 5A8DH}
+    except:
+      iqr/habin-fixed: {value: 5A8DH, why: same}
+";
+
+#[rstest]
+#[case::unknown_lowering(
+    "iqr/habin-fixed",
+    "iqr/habin-fast",
+    11,
+    "cases[0].except.iqr/habin-fast",
+    "unknown lowering for this operation `iqr/habin-fast`"
+)]
+#[case::value_in_text_operation(
+    "    text: \"5A8D\"\n",
+    "    value: 5A8DH\n",
+    7,
+    "cases[0].value",
+    "hex-to-value cases give `text`, not `value`"
+)]
+#[case::two_answers(
+    "expect: {value: 5A8DH}",
+    "expect: {value: 5A8DH, error: invalid-digit}",
+    9,
+    "cases[0].expect",
+    "give exactly one of `value` or `error`"
+)]
+#[case::text_answer_for_value(
+    "expect: {value: 5A8DH}",
+    "expect: {text: \"5A8D\"}",
+    9,
+    "cases[0].expect",
+    "give exactly one of `value` or `error`"
+)]
+#[case::empty_why(
+    "why: same",
+    "why: \" \"",
+    11,
+    "cases[0].except.iqr/habin-fixed",
+    "missing why"
+)]
+#[case::too_many_digits("digits: 4", "digits: 17", 8, "cases[0].digits", "at most 16 digits")]
+#[case::unknown_class(
+    "expect: {value: 5A8DH}",
+    "expect: {error: overflow}",
+    9,
+    "cases[0].expect.error",
+    "unknown variant `overflow`"
+)]
+#[case::no_cite("    cite: a reading\n", "", 4, "cases[0]", "missing cite")]
+fn bad_neutral_case_is_reported(
+    #[case] find: &str,
+    #[case] replace: &str,
+    #[case] line: usize,
+    #[case] key: &str,
+    #[case] message: &str,
+) {
+    let s = session();
+    assert!(GOOD.contains(find));
+    let text = format!("{HEADER}{}", GOOD.replacen(find, replace, 1));
+    let mut builder = CorpusBuilder::default();
+    builder.add_file(Path::new("xv.yaml"), &text, &s.profiles);
+    let errors = builder.finish().expect_err("the bad case loaded").0;
+    let e = errors
+        .iter()
+        .find(|e| e.to_string().contains(message))
+        .unwrap_or_else(|| panic!("no error says `{message}`: {errors:#?}"));
+    assert_eq!(e.line, Some(line), "{e}");
+    assert_eq!(e.key.as_deref().unwrap_or(""), key, "{e}");
+}
