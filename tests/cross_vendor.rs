@@ -56,7 +56,7 @@ fn a_model_ignoring_sm705_fails_the_terminated_lowering() {
     let s = session();
     let iqr = reference(&s, "mitsubishi-iqr");
     let mutant = Mutant::new("ignores-sm705", &iqr, |req, base| {
-        let flags = req.flags.iter().map(|(k, _)| (k.clone(), false)).collect();
+        let flags = req.flags.keys().map(|k| (k.clone(), false)).collect();
         base.execute(&plc_conformance::backend::Request {
             flags: &flags,
             ..*req
