@@ -85,14 +85,13 @@ fn render_section(out: &mut String, section: &Section<'_>, coloured: bool) {
                 .max(c.len())
         })
         .collect();
-    let _ = write!(out, "  {:>count_width$}  {:<row_width$}", "#", "case");
+    let mut line = format!("  {:>count_width$}  {:<row_width$}", "#", "case");
     for (c, w) in section.columns.iter().zip(&widths) {
-        let _ = write!(out, "  {c:<w$}");
+        let _ = write!(line, "  {c:<w$}");
     }
-    out.push('\n');
+    let _ = writeln!(out, "{}", line.trim_end());
     for (g, row) in section.groups.iter().zip(&texts) {
-        let _ = write!(
-            out,
+        let mut line = format!(
             "  {:>count_width$}  {:<row_width$}",
             g.rows.len(),
             g.rows[0]
@@ -100,9 +99,9 @@ fn render_section(out: &mut String, section: &Section<'_>, coloured: bool) {
         for ((text, status), w) in row.iter().zip(&widths) {
             let style = cell_style(*status, coloured);
             let pad = w.saturating_sub(text.chars().count());
-            let _ = write!(out, "  {style}{text}{style:#}{}", " ".repeat(pad));
+            let _ = write!(line, "  {style}{text}{style:#}{}", " ".repeat(pad));
         }
-        out.push('\n');
+        let _ = writeln!(out, "{}", line.trim_end());
     }
     // What to act on: every group with a failing cell, with its rows and the representative's
     // explanation.
