@@ -7,11 +7,11 @@
 //! on, and the destination is left unchanged. Device ranges and the error flag come from the
 //! profile, so a model with other data register ranges is an edit to `vendors/idec-fc4a.yaml`.
 
+use super::reference::{Model, Stop};
 use super::text::{digit_char, digit_value};
-use super::{Backend, Fault, Outcome, Request, Response, Unsupported};
+use super::{Outcome, Request, Unsupported};
 use crate::memory::Scratch;
 use crate::model::Operand;
-use crate::profile::Profile;
 
 /// The profile this model implements.
 pub const PROFILE: &str = "idec-fc4a";
@@ -24,71 +24,26 @@ const NO_CONFIRMED_CODE: u16 = 0;
 /// The most digits one 16-bit word holds.
 const MAX_DIGITS: u32 = 4;
 
-/// The FC4A reference backend.
-pub struct Fc4a {
-    name: String,
-    profile: Profile,
-}
-
-impl Fc4a {
-    pub fn new(profile: &Profile) -> Self {
-        Fc4a {
-            name: profile.short.clone(),
-            profile: profile.clone(),
-        }
-    }
-}
+/// The FC4A reference model.
+pub struct Fc4a;
 
 fn modelled(instruction: &str) -> bool {
     matches!(instruction, "ATOH" | "HTOA")
 }
 
-impl Backend for Fc4a {
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn profile(&self) -> &str {
-        PROFILE
-    }
-    fn describe(&self) -> String {
-        format!("reference model of {} (built in)", self.profile.name)
-    }
-    fn claims(&self, instruction: &str, variant: &str) -> bool {
+impl Model for Fc4a {
+    const PROFILE: &'static str = PROFILE;
+
+    fn models(instruction: &str) -> bool {
         modelled(instruction)
-            && self
-                .profile
-                .variant(variant)
-                .is_some_and(|v| self.profile.has_instruction(v, instruction))
     }
-    fn execute(&self, req: &Request<'_>) -> Result<Response, Fault> {
-        let result = match req.instruction {
+
+    fn run(req: &Request<'_>) -> Result<Outcome, Stop> {
+        match req.instruction {
             "ATOH" => atoh(req),
             "HTOA" => htoa(req),
-            other => Err(Stop::Unsupported(Unsupported(format!(
-                "{other} is not modelled"
-            )))),
-        };
-        Ok(match result {
-            Ok(outcome) => Response::Done(outcome),
-            Err(Stop::ExecutionError) => {
-                Response::Done(Outcome::error(req.error(NO_CONFIRMED_CODE)))
-            }
-            Err(Stop::Unsupported(u)) => u.into(),
-        })
-    }
-}
-
-/// Why an instruction stopped short.
-enum Stop {
-    /// A user program execution error: the instruction is cancelled and writes nothing.
-    ExecutionError,
-    /// The request asks for something the model does not implement.
-    Unsupported(Unsupported),
-}
-
-impl From<Unsupported> for Stop {
-    fn from(u: Unsupported) -> Self {
-        Stop::Unsupported(u)
+            other => Err(Unsupported(format!("{other} is not modelled")).into()),
+        }
     }
 }
 
@@ -102,7 +57,7 @@ fn read_word(req: &Request<'_>, name: &str) -> Result<u16, Stop> {
             )))
         }),
         Operand::Device(d) if req.words_exist(d, 1) => Ok(req.memory.read(d)),
-        Operand::Device(_) => Err(Stop::ExecutionError),
+        Operand::Device(_) => Err(Stop::Error(NO_CONFIRMED_CODE)),
     }
 }
 
@@ -112,7 +67,7 @@ fn digit_count(req: &Request<'_>) -> Result<u32, Stop> {
     if (1..=MAX_DIGITS).contains(&n) {
         Ok(n)
     } else {
-        Err(Stop::ExecutionError)
+        Err(Stop::Error(NO_CONFIRMED_CODE))
     }
 }
 
@@ -122,19 +77,19 @@ fn atoh(req: &Request<'_>) -> Result<Outcome, Stop> {
     let d1 = req.device("D1")?;
     let n = digit_count(req)?;
     if !req.words_exist(s1, n) || !req.words_exist(d1, 1) {
-        return Err(Stop::ExecutionError);
+        return Err(Stop::Error(NO_CONFIRMED_CODE));
     }
     let mut value: u16 = 0;
     for k in 0..n {
         let word = s1
             .offset(k)
             .map(|dev| req.memory.read(&dev))
-            .ok_or(Stop::ExecutionError)?;
+            .ok_or(Stop::Error(NO_CONFIRMED_CODE))?;
         // The whole word is the character: 0131H is not '1'.
         let digit = u8::try_from(word)
             .ok()
             .and_then(digit_value)
-            .ok_or(Stop::ExecutionError)?;
+            .ok_or(Stop::Error(NO_CONFIRMED_CODE))?;
         value = value << 4 | u16::from(digit);
     }
     let mut out = Scratch::new(req.memory);
@@ -152,11 +107,11 @@ fn htoa(req: &Request<'_>) -> Result<Outcome, Stop> {
     let n = digit_count(req)?;
     let d1 = req.device("D1")?;
     if !req.words_exist(d1, n) {
-        return Err(Stop::ExecutionError);
+        return Err(Stop::Error(NO_CONFIRMED_CODE));
     }
     let mut out = Scratch::new(req.memory);
     for k in 0..n {
-        let dev = d1.offset(k).ok_or(Stop::ExecutionError)?;
+        let dev = d1.offset(k).ok_or(Stop::Error(NO_CONFIRMED_CODE))?;
         let shift = 4 * (n - 1 - k);
         out.write(dev, u16::from(digit_char(u64::from(value >> shift))));
     }

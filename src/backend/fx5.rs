@@ -14,12 +14,12 @@
 //! (2820H); then, for HEX, the characters (3401H). The manual does not fix the order between
 //! the codes; vectors that break two rules at once are `unspecified`.
 
+use super::reference::{Model, Stop};
 use super::text::{digit_char, digit_value, packed_char};
-use super::{Backend, Fault, Outcome, Request, Response, Unsupported};
+use super::{Outcome, Request, Unsupported};
 use crate::device::Device;
 use crate::memory::{Image, Scratch};
 use crate::model::Operand;
-use crate::profile::Profile;
 use crate::value::to_bits;
 
 /// The profile this model implements.
@@ -173,19 +173,7 @@ pub fn hex_words(chars: &[u8]) -> Result<Vec<u16>, InvalidChar> {
 }
 
 /// The FX5 reference backend.
-pub struct Fx5 {
-    name: String,
-    profile: Profile,
-}
-
-impl Fx5 {
-    pub fn new(profile: &Profile) -> Self {
-        Fx5 {
-            name: profile.short.clone(),
-            profile: profile.clone(),
-        }
-    }
-}
+pub struct Fx5;
 
 #[derive(Debug, Clone, Copy)]
 enum Op {
@@ -201,49 +189,19 @@ fn op(instruction: &str) -> Option<Op> {
     }
 }
 
-/// Why an instruction stopped: an operation error, or something the model does not cover.
-enum Stop {
-    Error(u16),
-    Unsupported(Unsupported),
-}
+impl Model for Fx5 {
+    const PROFILE: &'static str = PROFILE;
 
-impl From<Unsupported> for Stop {
-    fn from(u: Unsupported) -> Self {
-        Stop::Unsupported(u)
-    }
-}
-
-impl Backend for Fx5 {
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn profile(&self) -> &str {
-        PROFILE
-    }
-    fn describe(&self) -> String {
-        format!("reference model of {} (built in)", self.profile.name)
-    }
-    fn claims(&self, instruction: &str, variant: &str) -> bool {
+    fn models(instruction: &str) -> bool {
         op(instruction).is_some()
-            && self
-                .profile
-                .variant(variant)
-                .is_some_and(|v| self.profile.has_instruction(v, instruction))
     }
-    fn execute(&self, req: &Request<'_>) -> Result<Response, Fault> {
-        let result = match op(req.instruction) {
+
+    fn run(req: &Request<'_>) -> Result<Outcome, Stop> {
+        match op(req.instruction) {
             Some(Op::Asci) => asci(req),
             Some(Op::Hex) => hex(req),
-            None => Err(Stop::Unsupported(Unsupported(format!(
-                "{} is not modelled",
-                req.instruction
-            )))),
-        };
-        Ok(match result {
-            Ok(outcome) => Response::Done(outcome),
-            Err(Stop::Error(code)) => Response::Done(Outcome::error(req.error(code))),
-            Err(Stop::Unsupported(u)) => u.into(),
-        })
+            None => Err(Unsupported(format!("{} is not modelled", req.instruction)).into()),
+        }
     }
 }
 
@@ -347,9 +305,12 @@ mod tests {
     use std::path::Path;
 
     use super::*;
+    use crate::backend::reference::Reference;
+    use crate::backend::{Backend, Response};
     use crate::load::load_profiles;
     use crate::memory::Fill;
     use crate::model::ErrorSignal;
+    use crate::profile::Profile;
 
     fn profile() -> Profile {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("vendors");
@@ -367,13 +328,13 @@ mod tests {
     /// Runs one instruction on fx5u with D100 (and on) as the source and D200 as (d).
     struct Rig {
         profile: Profile,
-        backend: Fx5,
+        backend: Reference<Fx5>,
     }
 
     impl Rig {
         fn new() -> Self {
             let profile = profile();
-            let backend = Fx5::new(&profile);
+            let backend = Reference::<Fx5>::new(&profile);
             Rig { profile, backend }
         }
 

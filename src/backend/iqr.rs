@@ -5,11 +5,11 @@
 //! decides whether BINHA writes a terminator word after a full-length result. Device ranges,
 //! flag support per firmware and the error signalling come from the profile.
 
+use super::reference::{Model, Stop};
 use super::text::{digit_char, digit_value, pack_low_first, packed_char};
-use super::{Backend, Fault, Outcome, Request, Response, Unsupported};
+use super::{Outcome, Request, Unsupported};
 use crate::memory::Scratch;
 use crate::model::Operand;
-use crate::profile::Profile;
 
 /// The profile this model implements.
 pub const PROFILE: &str = "mitsubishi-iqr";
@@ -19,20 +19,8 @@ pub const ERR_INVALID_DATA: u16 = 0x3401;
 /// A device past the end of its range.
 pub const ERR_DEVICE_RANGE: u16 = 0x2820;
 
-/// The iQ-R reference backend.
-pub struct Iqr {
-    name: String,
-    profile: Profile,
-}
-
-impl Iqr {
-    pub fn new(profile: &Profile) -> Self {
-        Iqr {
-            name: profile.short.clone(),
-            profile: profile.clone(),
-        }
-    }
-}
+/// The iQ-R reference model.
+pub struct Iqr;
 
 /// Result width in words: 1 for the 16-bit forms, 2 for the D-prefixed 32-bit forms.
 fn width(instruction: &str) -> Option<(Op, u32)> {
@@ -50,30 +38,19 @@ enum Op {
     ToAscii,
 }
 
-impl Backend for Iqr {
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn profile(&self) -> &str {
-        PROFILE
-    }
-    fn describe(&self) -> String {
-        format!("reference model of {} (built in)", self.profile.name)
-    }
-    fn claims(&self, instruction: &str, variant: &str) -> bool {
+impl Model for Iqr {
+    const PROFILE: &'static str = PROFILE;
+
+    fn models(instruction: &str) -> bool {
         width(instruction).is_some()
-            && self
-                .profile
-                .variant(variant)
-                .is_some_and(|v| self.profile.has_instruction(v, instruction))
     }
-    fn execute(&self, req: &Request<'_>) -> Result<Response, Fault> {
-        let result = match width(req.instruction) {
-            Some((Op::FromAscii, words)) => habin(req, words),
-            Some((Op::ToAscii, words)) => binha(req, words),
-            None => Err(Unsupported(format!("{} is not modelled", req.instruction))),
-        };
-        Ok(result.map_or_else(Response::from, Response::Done))
+
+    fn run(req: &Request<'_>) -> Result<Outcome, Stop> {
+        Ok(match width(req.instruction) {
+            Some((Op::FromAscii, words)) => habin(req, words)?,
+            Some((Op::ToAscii, words)) => binha(req, words)?,
+            None => return Err(Unsupported(format!("{} is not modelled", req.instruction)).into()),
+        })
     }
 }
 

@@ -8,6 +8,7 @@
 pub mod fc4a;
 pub mod fx5;
 pub mod iqr;
+pub mod reference;
 pub mod text;
 
 use std::collections::BTreeMap;
@@ -181,13 +182,13 @@ pub trait Backend: Send + Sync {
 pub fn reference_backends(profiles: &Profiles) -> Vec<Arc<dyn Backend>> {
     let mut out: Vec<Arc<dyn Backend>> = Vec::new();
     if let Some(p) = profiles.get(iqr::PROFILE) {
-        out.push(Arc::new(iqr::Iqr::new(p)));
+        out.push(Arc::new(reference::Reference::<iqr::Iqr>::new(p)));
     }
     if let Some(p) = profiles.get(fx5::PROFILE) {
-        out.push(Arc::new(fx5::Fx5::new(p)));
+        out.push(Arc::new(reference::Reference::<fx5::Fx5>::new(p)));
     }
     if let Some(p) = profiles.get(fc4a::PROFILE) {
-        out.push(Arc::new(fc4a::Fc4a::new(p)));
+        out.push(Arc::new(reference::Reference::<fc4a::Fc4a>::new(p)));
     }
     out
 }

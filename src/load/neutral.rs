@@ -72,7 +72,9 @@ fn lower_case(
                 );
             }
             let text = match &spec.text {
-                Some(t) => bytes(&format!("{key}.text"), t, cx).unwrap_or_default(),
+                Some(t) => {
+                    super::vectors::text_bytes(&format!("{key}.text"), t, cx).unwrap_or_default()
+                }
                 None => {
                     cx.error(
                         key,
@@ -177,7 +179,7 @@ fn outcome(
             number(&format!("{key}.value"), v, 64, cx).map(NeutralOutcome::Value)
         }
         (None, Some(t), None) if op == Operation::ValueToHex => {
-            bytes(&format!("{key}.text"), t, cx).map(NeutralOutcome::Text)
+            super::vectors::text_bytes(&format!("{key}.text"), t, cx).map(NeutralOutcome::Text)
         }
         (None, None, Some(e)) => Some(NeutralOutcome::Error(e.clone())),
         _ => {
@@ -215,19 +217,6 @@ fn number(key: &str, v: &ScalarSpec, bits: u32, cx: &mut FileContext<'_>) -> Opt
     checked
         .map_err(|e| cx.error(key, LoadErrorKind::Value(e)))
         .ok()
-}
-
-fn bytes(key: &str, text: &str, cx: &mut FileContext<'_>) -> Option<Vec<u8>> {
-    let out: Option<Vec<u8>> = text.chars().map(|c| u8::try_from(c).ok()).collect();
-    if out.is_none() {
-        cx.error(
-            key,
-            LoadErrorKind::Invalid(
-                "a character above FFH; text stores one byte per character".into(),
-            ),
-        );
-    }
-    out
 }
 
 /// Checks a profile's `neutral` section against the rest of the profile.

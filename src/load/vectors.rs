@@ -490,24 +490,26 @@ fn missing_word(p: &Profile, d: &Device) -> LoadErrorKind {
     })
 }
 
+/// Text as the bytes a PLC stores: one per character, so no character may be above FFH.
+pub(crate) fn text_bytes(key: &str, text: &str, cx: &mut FileContext<'_>) -> Option<Vec<u8>> {
+    let out: Option<Vec<u8>> = text.chars().map(|c| u8::try_from(c).ok()).collect();
+    if out.is_none() {
+        cx.error(
+            key,
+            LoadErrorKind::Invalid(format!(
+                "`{}` has a character above FFH; ASCII text stores one byte per character",
+                text.escape_default()
+            )),
+        );
+    }
+    out
+}
+
 /// The words a value spec stands for.
 fn expand(key: &str, value: &ValueSpec, cx: &mut FileContext<'_>) -> Option<Vec<u16>> {
     let word = |s: &ScalarSpec| match s {
         ScalarSpec::Number(n) => to_bits(&n.to_string(), *n, 16).map(|w| w as u16),
         ScalarSpec::Text(t) => parse_word(t),
-    };
-    let bytes = |text: &str, cx: &mut FileContext<'_>| -> Option<Vec<u8>> {
-        let out: Option<Vec<u8>> = text.chars().map(|c| u8::try_from(c).ok()).collect();
-        if out.is_none() {
-            cx.error(
-                key,
-                LoadErrorKind::Invalid(format!(
-                    "`{}` has a character above FFH; ASCII text stores one byte per character",
-                    text.escape_default()
-                )),
-            );
-        }
-        out
     };
     let words = match value {
         ValueSpec::Word(s) => vec![word(s)
@@ -526,11 +528,14 @@ fn expand(key: &str, value: &ValueSpec, cx: &mut FileContext<'_>) -> Option<Vec<
             }
             out
         }
-        ValueSpec::Ascii(text) => bytes(text, cx)?
+        ValueSpec::Ascii(text) => text_bytes(key, text, cx)?
             .chunks(2)
             .map(|pair| u16::from(pair[0]) | (u16::from(*pair.get(1).unwrap_or(&0)) << 8))
             .collect(),
-        ValueSpec::AsciiWords(text) => bytes(text, cx)?.into_iter().map(u16::from).collect(),
+        ValueSpec::AsciiWords(text) => text_bytes(key, text, cx)?
+            .into_iter()
+            .map(u16::from)
+            .collect(),
     };
     if words.is_empty() {
         cx.error(

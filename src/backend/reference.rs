@@ -1,0 +1,79 @@
+//! What the built-in reference models share: they are pure functions of the request, named after
+//! their profile, and claim exactly the instructions they model on the variants that have them.
+
+use std::marker::PhantomData;
+
+use super::{Backend, Fault, Outcome, Request, Response, Unsupported};
+use crate::profile::Profile;
+
+/// One vendor family's reference model.
+pub trait Model: Send + Sync + 'static {
+    /// The profile id the model implements.
+    const PROFILE: &'static str;
+    /// Whether the model covers an instruction.
+    fn models(instruction: &str) -> bool;
+    /// Executes one request.
+    fn run(req: &Request<'_>) -> Result<Outcome, Stop>;
+}
+
+/// Why an instruction stopped short.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Stop {
+    /// An operation error with the vendor's code: the instruction writes nothing. Profiles that
+    /// signal with a flag only see the flag (see [`Request::error`]).
+    Error(u16),
+    /// The request asks for something the model does not implement.
+    Unsupported(Unsupported),
+}
+
+impl From<Unsupported> for Stop {
+    fn from(u: Unsupported) -> Self {
+        Stop::Unsupported(u)
+    }
+}
+
+/// A reference model as a backend.
+pub struct Reference<M> {
+    name: String,
+    profile: Profile,
+    model: PhantomData<fn() -> M>,
+}
+
+impl<M: Model> Reference<M> {
+    pub fn new(profile: &Profile) -> Self {
+        Reference {
+            name: profile.short.clone(),
+            profile: profile.clone(),
+            model: PhantomData,
+        }
+    }
+}
+
+impl<M: Model> Backend for Reference<M> {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn profile(&self) -> &str {
+        M::PROFILE
+    }
+    fn describe(&self) -> String {
+        format!("reference model of {} (built in)", self.profile.name)
+    }
+    fn claims(&self, instruction: &str, variant: &str) -> bool {
+        M::models(instruction)
+            && self
+                .profile
+                .variant(variant)
+                .is_some_and(|v| self.profile.has_instruction(v, instruction))
+    }
+    fn execute(&self, req: &Request<'_>) -> Result<Response, Fault> {
+        if !M::models(req.instruction) {
+            return Ok(Unsupported(format!("{} is not modelled", req.instruction)).into());
+        }
+        Ok(match M::run(req) {
+            Ok(outcome) => Response::Done(outcome),
+            Err(Stop::Error(code)) => Response::Done(Outcome::error(req.error(code))),
+            Err(Stop::Unsupported(u)) => u.into(),
+        })
+    }
+}
