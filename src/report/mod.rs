@@ -19,6 +19,8 @@ pub struct Summary {
     pub failed: usize,
     pub recorded: usize,
     pub skipped: usize,
+    /// Differences a known-differences file lists: neither passed nor failed.
+    pub known: usize,
 }
 
 impl Summary {
@@ -28,6 +30,7 @@ impl Summary {
             match &r.verdict {
                 None => s.skipped += 1,
                 Some(Verdict::Recorded { .. }) => s.recorded += 1,
+                Some(Verdict::KnownDifference { .. }) => s.known += 1,
                 Some(v) if v.is_failure() => s.failed += 1,
                 Some(_) => s.passed += 1,
             }
@@ -40,8 +43,12 @@ impl std::fmt::Display for Summary {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "{} passed, {} failed, {} skipped ({} unspecified recorded)",
+            "{} passed, {} failed, {} skipped ({} unspecified recorded",
             self.passed, self.failed, self.skipped, self.recorded
-        )
+        )?;
+        if self.known > 0 {
+            write!(f, ", {} known differences", self.known)?;
+        }
+        f.write_str(")")
     }
 }

@@ -1,0 +1,219 @@
+//! Known differences: the cases a backend is expected to get wrong, each with its reason.
+//!
+//! An implementation under test rarely conforms everywhere on day one, and its authors need a
+//! green run that still catches regressions. A listed trial that differs passes as a "known
+//! difference"; a listed trial that conforms fails as a "stale entry", so the list shrinks as
+//! the implementation improves and can never rot; an unlisted difference fails as usual. A
+//! fault is never excused by the list: a crash is not a difference of semantics.
+//!
+//! ```yaml
+//! differences:
+//!   - case: habin-fixed-lowercase-is-invalid
+//!     instruction: HABIN        # optional: every instruction of the case when absent
+//!     variant: rcpu             # optional: every variant when absent
+//!     reason: "int(text, 16) accepts lowercase digits"
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use schemars::JsonSchema;
+use serde::Deserialize;
+
+use crate::compare::Verdict;
+use crate::load::{parse_yaml, read_file, FileContext, LoadErrorKind, LoadErrors};
+use crate::model::{Basis, Corpus};
+use crate::plan::Trial;
+use crate::profile::Profile;
+
+/// A known-differences file as written.
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct KnownFileSpec {
+    pub differences: Vec<EntrySpec>,
+}
+
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct EntrySpec {
+    /// A case id of the corpus.
+    pub case: String,
+    /// Only this instruction of the case's file.
+    #[serde(default)]
+    pub instruction: Option<String>,
+    /// Only this variant of the profile.
+    #[serde(default)]
+    pub variant: Option<String>,
+    /// Why the backend differs: shown with the trial.
+    pub reason: String,
+}
+
+/// One validated entry.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Entry {
+    pub case: String,
+    pub instruction: Option<String>,
+    pub variant: Option<String>,
+    pub reason: String,
+    /// `file:line` of the entry, to point at when it goes stale.
+    pub location: String,
+}
+
+impl Entry {
+    fn matches(&self, trial: &Trial) -> bool {
+        self.case == trial.case.id
+            && self
+                .instruction
+                .as_ref()
+                .is_none_or(|i| *i == trial.instruction)
+            && self.variant.as_ref().is_none_or(|v| *v == trial.variant)
+    }
+}
+
+/// A backend's validated known differences.
+#[derive(Debug, Clone, Default)]
+pub struct KnownDifferences {
+    pub file: PathBuf,
+    pub entries: Vec<Entry>,
+    /// Entries naming cases that are not in the corpus being run, when the corpus is not the
+    /// project's own (`--vectors`): they are ignored rather than errors.
+    pub ignored: Vec<Entry>,
+}
+
+impl KnownDifferences {
+    /// Loads and checks a file against the profile and the corpus. With `strict`, an entry for
+    /// a case the corpus does not have is an error (a typo would otherwise excuse nothing and
+    /// go unnoticed); without it, such entries are set aside.
+    pub fn load(
+        file: &Path,
+        profile: &Profile,
+        corpus: &Corpus,
+        strict: bool,
+    ) -> Result<KnownDifferences, LoadErrors> {
+        let text = read_file(file).map_err(|e| LoadErrors(vec![e]))?;
+        let spec: KnownFileSpec = parse_yaml(file, &text).map_err(|e| LoadErrors(vec![e]))?;
+        let mut errors = Vec::new();
+        let mut cx = FileContext::new(file, &text, &mut errors);
+        let mut known = KnownDifferences {
+            file: file.to_path_buf(),
+            ..KnownDifferences::default()
+        };
+        for (i, e) in spec.differences.into_iter().enumerate() {
+            let key = |k: &str| format!("differences[{i}].{k}");
+            let location = cx.location(&format!("differences[{i}]")).to_string();
+            let entry = Entry {
+                case: e.case,
+                instruction: e.instruction,
+                variant: e.variant,
+                reason: e.reason.trim().to_string(),
+                location,
+            };
+            if entry.reason.is_empty() {
+                cx.error(
+                    key("reason"),
+                    LoadErrorKind::Invalid("a known difference needs its reason".into()),
+                );
+            }
+            let Some(case) = corpus
+                .cases
+                .iter()
+                .find(|c| c.id == entry.case && c.profiles.contains(&profile.id))
+            else {
+                if strict {
+                    cx.error(
+                        key("case"),
+                        LoadErrorKind::Invalid(format!(
+                            "unknown case id `{}`: no case of profile {} has it",
+                            entry.case, profile.id
+                        )),
+                    );
+                } else {
+                    known.ignored.push(entry);
+                }
+                continue;
+            };
+            if case.basis == Basis::Unspecified {
+                cx.error(
+                    key("case"),
+                    LoadErrorKind::Invalid(format!(
+                        "case `{}` is unspecified: it is recorded and never fails, so there is no \
+                         difference to list",
+                        entry.case
+                    )),
+                );
+            }
+            if let Some(i) = &entry.instruction {
+                if !case.instructions.contains(i) {
+                    cx.error(
+                        key("instruction"),
+                        LoadErrorKind::Unknown {
+                            what: "instruction of this case",
+                            name: i.clone(),
+                            expected: case.instructions.to_vec(),
+                        },
+                    );
+                }
+            }
+            if let Some(v) = &entry.variant {
+                let runs: Vec<String> = profile
+                    .variants
+                    .iter()
+                    .filter(|pv| case.runs_on(&pv.id))
+                    .map(|pv| pv.id.clone())
+                    .collect();
+                if !runs.contains(v) {
+                    cx.error(
+                        key("variant"),
+                        LoadErrorKind::Unknown {
+                            what: "variant of this case",
+                            name: v.clone(),
+                            expected: runs,
+                        },
+                    );
+                }
+            }
+            if let Some(first) = known.entries.iter().find(|k| {
+                k.case == entry.case
+                    && k.instruction == entry.instruction
+                    && k.variant == entry.variant
+            }) {
+                cx.error(
+                    key("case"),
+                    LoadErrorKind::Invalid(format!(
+                        "the same trials are already listed at {}",
+                        first.location
+                    )),
+                );
+            }
+            known.entries.push(entry);
+        }
+        if errors.is_empty() {
+            Ok(known)
+        } else {
+            Err(LoadErrors(errors))
+        }
+    }
+
+    /// The entry covering a trial, if any (the first that matches).
+    pub fn entry(&self, trial: &Trial) -> Option<&Entry> {
+        self.entries.iter().find(|e| e.matches(trial))
+    }
+
+    /// Applies the list to a trial's verdict.
+    pub fn apply(&self, trial: &Trial, verdict: Verdict) -> Verdict {
+        let Some(entry) = self.entry(trial) else {
+            return verdict;
+        };
+        match verdict {
+            Verdict::Differs { .. } | Verdict::Unsupported { .. } => Verdict::KnownDifference {
+                reason: entry.reason.clone(),
+                entry: entry.location.clone(),
+                difference: Box::new(verdict),
+            },
+            Verdict::Conforms => Verdict::StaleEntry {
+                reason: entry.reason.clone(),
+                entry: entry.location.clone(),
+            },
+            other => other,
+        }
+    }
+}
