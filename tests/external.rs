@@ -7,7 +7,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 use std::time::Duration;
 
 use plc_conformance::backend::external::config;
@@ -27,12 +27,24 @@ fn fixtures() -> PathBuf {
 
 const BIN: &str = env!("CARGO_BIN_EXE_plc-conformance");
 
+/// The Python interpreter itself (not a launcher script in front of it, which would add a
+/// shell start to every restart), or `None` on a machine without python3.
+fn interpreter() -> Option<&'static str> {
+    static PATH: OnceLock<Option<String>> = OnceLock::new();
+    PATH.get_or_init(|| {
+        let out = Command::new("python3")
+            .args(["-c", "import sys; print(sys.executable)"])
+            .output()
+            .ok()?;
+        let path = String::from_utf8_lossy(&out.stdout).trim().to_string();
+        (out.status.success() && !path.is_empty()).then_some(path)
+    })
+    .as_deref()
+}
+
 /// Python runs the fixture adapters; a machine without it cannot run these tests.
 fn python() -> bool {
-    let ok = Command::new("python3")
-        .arg("--version")
-        .output()
-        .is_ok_and(|o| o.status.success());
+    let ok = interpreter().is_some();
     if !ok {
         eprintln!("skipped: python3 is not installed; the fixture adapters need it");
     }
@@ -52,7 +64,8 @@ fn corpus_session() -> Session {
 }
 
 fn python_backend(name: &str, script: &Path, args: &[&str]) -> ExternalSpec {
-    let mut argv = vec!["python3".to_string(), script.display().to_string()];
+    let python = interpreter().unwrap_or("python3").to_string();
+    let mut argv = vec![python, script.display().to_string()];
     argv.extend(args.iter().map(|a| a.to_string()));
     let mut spec = ExternalSpec::new(name, Launch::Exec(argv));
     spec.env = vec![(config::ENV_SELF.into(), BIN.into())];
@@ -145,6 +158,29 @@ fn a_crash_fails_the_case_shows_stderr_and_the_run_goes_on() {
         text.contains("| faulty adapter: crash on ext-target"),
         "stderr is shown with the case: {text}"
     );
+}
+
+#[test]
+fn a_backend_that_cannot_restart_leaves_the_rest_unreachable() {
+    if !python() {
+        return;
+    }
+    let marker =
+        std::env::temp_dir().join(format!("plc-conformance-marker-{}", std::process::id()));
+    let _ = std::fs::remove_file(&marker);
+    let mut spec = faulty("crash-for-good");
+    spec.env
+        .push(("FAULTY_MARKER".into(), marker.display().to_string()));
+    let mut session = fixture_session();
+    session.add_external(spec, true).expect("starts");
+    let v = verdicts(&session, "faulty", true);
+    let _ = std::fs::remove_file(&marker);
+    assert_eq!(v[0].1, Verdict::Conforms);
+    assert_eq!(v[1].1.label(), "crashed");
+    assert_eq!(v[2].1.label(), "unreachable", "{:?}", v[2].1);
+    let text = format!("{:?}", v[2].1);
+    assert!(text.contains("could not be started again"), "{text}");
+    assert!(text.contains("refusing to start after the crash"), "{text}");
 }
 
 #[test]
@@ -573,6 +609,33 @@ fn the_command_line_runs_an_external_backend_and_labels_its_crash() {
         "{stdout}"
     );
     assert!(stdout.contains("faulty: 2 passed, 1 failed"), "{stdout}");
+}
+
+#[test]
+fn the_command_line_takes_a_known_differences_file_and_fails_a_stale_entry() {
+    let file = known_file(
+        "cli-stale.yaml",
+        "differences:\n  - case: habin-fixed-text-form\n    reason: \"was wrong once\"\n",
+    );
+    let out = cli(&[
+        "run",
+        "--backend",
+        r#"external:served="$PLC_CONFORMANCE" serve --profile mitsubishi-iqr"#,
+        "--known-differences",
+        &format!("served={}", file.display()),
+        "--filter",
+        "habin-fixed-text-form",
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    assert!(
+        stdout.contains("served::habin::habin-fixed-text-form::rcpu stale-entry"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("(was wrong once), but conforms: remove the entry"),
+        "{stdout}"
+    );
 }
 
 #[test]

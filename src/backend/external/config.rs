@@ -134,6 +134,7 @@ pub fn load(file: &Path, plc_conformance: &Path) -> Result<Vec<Configured>, Load
     let mut errors = Vec::new();
     let mut cx = FileContext::new(file, &text, &mut errors);
     let mut out: Vec<Configured> = Vec::new();
+    let mut seen: Vec<(String, Location)> = Vec::new();
     for (i, b) in spec.backends.into_iter().enumerate() {
         let key = |k: &str| format!("backends[{i}].{k}");
         if !valid_name(&b.name) {
@@ -145,15 +146,17 @@ pub fn load(file: &Path, plc_conformance: &Path) -> Result<Vec<Configured>, Load
                 )),
             );
         }
-        if let Some(first) = out.iter().find(|c| c.spec.name == b.name) {
+        let location = cx.location(&format!("backends[{i}]"));
+        if let Some((_, first)) = seen.iter().find(|(n, _)| *n == b.name) {
             cx.error(
                 key("name"),
                 LoadErrorKind::Invalid(format!(
-                    "backend name `{}` is already used at {}",
-                    b.name, first.location
+                    "backend name `{}` is already used at {first}",
+                    b.name
                 )),
             );
         }
+        seen.push((b.name.clone(), location.clone()));
         let launch = match b.command {
             CommandSpec::Shell(s) if !s.trim().is_empty() => Launch::Shell(s),
             CommandSpec::Exec(v) if !v.is_empty() => Launch::Exec(v),
@@ -201,7 +204,7 @@ pub fn load(file: &Path, plc_conformance: &Path) -> Result<Vec<Configured>, Load
         out.push(Configured {
             spec,
             requires: b.requires.into_iter().map(|p| dir.join(p)).collect(),
-            location: cx.location(&format!("backends[{i}]")),
+            location,
         });
     }
     if errors.is_empty() {
@@ -230,4 +233,80 @@ pub fn known_schema() -> serde_json::Value {
     let generator = schemars::generate::SchemaSettings::draft07().into_generator();
     serde_json::to_value(generator.into_root_schema_for::<super::known::KnownFileSpec>())
         .unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(name: &str, text: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!(
+            "plc-conformance-config-{}-{name}",
+            std::process::id()
+        ));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let file = dir.join(FILE_NAME);
+        std::fs::write(&file, text).expect("write");
+        file
+    }
+
+    #[test]
+    fn reads_backends_relative_to_the_file() {
+        let file = write(
+            "ok",
+            "backends:\n  - name: emu\n    command: ./emu --serve\n    profile: mitsubishi-iqr\n    \
+             timeout: 0.5\n    known_differences: emu.known.yaml\n    requires: [emu]\n  \
+             - name: py\n    command: [python3, adapter.py]\n",
+        );
+        let dir = file.parent().expect("dir").to_path_buf();
+        let all = load(&file, Path::new("/bin/plc-conformance")).expect("loads");
+        assert_eq!(all.len(), 2);
+        let emu = &all[0].spec;
+        assert_eq!(emu.launch, Launch::Shell("./emu --serve".into()));
+        assert_eq!(emu.timeout, Duration::from_millis(500));
+        assert_eq!(emu.startup_timeout, DEFAULT_STARTUP_TIMEOUT);
+        assert_eq!(emu.known_differences, Some(dir.join("emu.known.yaml")));
+        assert_eq!(emu.cwd, Some(dir.clone()));
+        assert_eq!(
+            emu.env,
+            vec![(ENV_SELF.to_string(), "/bin/plc-conformance".to_string())]
+        );
+        assert_eq!(all[0].location.line, 2);
+        assert!(all[0].missing().is_some_and(|m| m.contains("emu")));
+        assert_eq!(
+            all[1].spec.launch,
+            Launch::Exec(vec!["python3".into(), "adapter.py".into()])
+        );
+        assert_eq!(all[1].spec.timeout, DEFAULT_TIMEOUT);
+        assert!(all[1].missing().is_none());
+    }
+
+    #[test]
+    fn errors_name_file_line_and_key() {
+        let file = write(
+            "bad",
+            "backends:\n  - name: Emu\n    command: x\n  - name: ok\n    command: []\n  \
+             - name: ok\n    command: y\n    timeout: 0\n",
+        );
+        let errors = load(&file, Path::new("p"))
+            .expect_err("invalid")
+            .to_string();
+        let at = |line: usize, rest: &str| format!("{}:{line}: {rest}", file.display());
+        for expected in [
+            at(2, "backends[0].name: `Emu` is not a backend name"),
+            at(5, "backends[1].command: empty command"),
+            at(6, "backends[2].name: backend name `ok` is already used at"),
+            at(8, "backends[2].timeout: 0 is not a time limit"),
+        ] {
+            assert!(errors.contains(&expected), "{expected}\nin:\n{errors}");
+        }
+        let file = write("shape", "backends:\n  - name: emu\n    comand: x\n");
+        let errors = load(&file, Path::new("p"))
+            .expect_err("invalid")
+            .to_string();
+        assert!(
+            errors.contains(&format!("{}:3:", file.display())) && errors.contains("comand"),
+            "{errors}"
+        );
+    }
 }

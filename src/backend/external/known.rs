@@ -217,3 +217,98 @@ impl KnownDifferences {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use std::collections::{BTreeMap, BTreeSet};
+    use std::sync::Arc;
+
+    use super::*;
+    use crate::model::{Case, Citation, Location};
+
+    fn case(id: &str, basis: Basis, variants: Option<&[&str]>) -> Arc<Case> {
+        Arc::new(Case {
+            id: id.into(),
+            basis,
+            citation: Citation {
+                manual: "m".into(),
+                page: "1".into(),
+                text: None,
+            },
+            location: Location {
+                file: PathBuf::from("v.yaml"),
+                line: 1,
+            },
+            instructions: Arc::from(vec!["HABIN".to_string(), "HABINP".to_string()]),
+            profiles: Arc::from(vec!["p".to_string()]),
+            variants: variants.map(|v| v.iter().map(|s| s.to_string()).collect::<BTreeSet<_>>()),
+            flags: BTreeMap::new(),
+            operands: BTreeMap::new(),
+            before: BTreeMap::new(),
+            expect: None,
+            note: None,
+        })
+    }
+
+    fn profile() -> Profile {
+        serde_yaml::from_str(
+            "id: p\nname: P\nshort: p\nmanuals: {}\nerrors: {signal: code, flag: SM0}\n\
+             devices: {D: {first: 0, last: 100}}\ninstructions: {}\n\
+             variants: [{id: a, description: a}, {id: b, description: b}]\n",
+        )
+        .expect("profile")
+    }
+
+    fn load(text: &str, strict: bool) -> Result<KnownDifferences, String> {
+        let dir =
+            std::env::temp_dir().join(format!("plc-conformance-known-unit-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let file = dir.join(format!("k{}.yaml", text.len()));
+        std::fs::write(&file, text).expect("write");
+        let corpus = Corpus {
+            cases: vec![
+                case("c1", Basis::Manual, None),
+                case("only-a", Basis::Manual, Some(&["a"])),
+                case("open", Basis::Unspecified, None),
+            ],
+        };
+        KnownDifferences::load(&file, &profile(), &corpus, strict).map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn entries_are_checked_against_the_corpus_and_profile() {
+        let errors = load(
+            "differences:\n\
+             - {case: c1, instruction: DHABIN, reason: r}\n\
+             - {case: only-a, variant: b, reason: r}\n\
+             - {case: open, reason: r}\n\
+             - {case: c1, reason: \"  \"}\n\
+             - {case: c1, reason: again}\n\
+             - {case: typo, reason: r}\n",
+            true,
+        )
+        .expect_err("invalid");
+        for expected in [
+            ":2: differences[0].instruction: unknown instruction of this case `DHABIN`; expected one of: HABIN, HABINP",
+            ":3: differences[1].variant: unknown variant of this case `b`; expected one of: a",
+            ":4: differences[2].case: case `open` is unspecified",
+            ":5: differences[3].reason: a known difference needs its reason",
+            ":6: differences[4].case: the same trials are already listed at",
+            ":7: differences[5].case: unknown case id `typo`",
+        ] {
+            assert!(errors.contains(expected), "{expected}\nin:\n{errors}");
+        }
+    }
+
+    #[test]
+    fn another_corpus_sets_unknown_cases_aside() {
+        let known = load(
+            "differences:\n  - {case: c1, reason: r}\n  - {case: elsewhere, reason: r}\n",
+            false,
+        )
+        .expect("loads");
+        assert_eq!(known.entries.len(), 1);
+        assert_eq!(known.ignored.len(), 1);
+        assert_eq!(known.ignored[0].case, "elsewhere");
+    }
+}

@@ -296,7 +296,7 @@ impl ExternalBackend {
                 )));
             }
         };
-        let message: BackendMessage = serde_json::from_slice(&line).map_err(|e| {
+        let message = BackendMessage::from_line(&line).map_err(|e| {
             Fault::Protocol(format!(
                 "the answer to {} is not a protocol message ({e}): {}",
                 which(),
@@ -487,7 +487,7 @@ fn handshake(
             theirs: u32::try_from(theirs).unwrap_or(u32::MAX),
         });
     }
-    match serde_json::from_slice::<BackendMessage>(&line) {
+    match BackendMessage::from_line(&line) {
         Ok(BackendMessage::Hello {
             protocol: _,
             backend,
@@ -661,7 +661,12 @@ fn run_message(cases: &[CaseRequest]) -> Vec<u8> {
         kind: &'static str,
         cases: &'a [CaseRequest],
     }
-    serde_json::to_vec(&Run { kind: "run", cases }).unwrap_or_default()
+    // Sized for the usual request, so that neither the encoding nor the newline reallocates.
+    let mut out = Vec::with_capacity(cases.len() * 1536 + 64);
+    match serde_json::to_writer(&mut out, &Run { kind: "run", cases }) {
+        Ok(()) => out,
+        Err(_) => Vec::new(),
+    }
 }
 
 fn shutdown_message() -> Vec<u8> {

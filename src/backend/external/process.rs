@@ -8,7 +8,7 @@
 //! process group, so that killing it also kills what a `sh -c` wrapper started.
 
 use std::collections::VecDeque;
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{Read, Write};
 use std::path::PathBuf;
 use std::process::{Child, ChildStdin, Command, ExitStatus, Stdio};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, SyncSender};
@@ -59,7 +59,9 @@ pub enum Next {
 pub struct Process {
     child: Child,
     to_stdin: Option<SyncSender<Vec<u8>>>,
-    lines: Receiver<Next>,
+    lines: Receiver<Vec<Next>>,
+    /// Lines received and not yet asked for.
+    pending: VecDeque<Next>,
     stderr: Arc<Mutex<StderrTail>>,
     threads: Vec<JoinHandle<()>>,
     /// Whether the child has been waited for: from then on its process group id may be reused
@@ -114,7 +116,8 @@ impl Process {
         let stdout = child.stdout.take().ok_or_else(missing)?;
         let stderr_pipe = child.stderr.take().ok_or_else(missing)?;
 
-        // Bounded: at most this many lines of at most MAX_LINE bytes are ever held.
+        // Bounded: at most this many reads (each at most one line of MAX_LINE bytes plus 64 KiB)
+        // are ever held.
         let (line_tx, lines) = mpsc::sync_channel(32);
         let (to_stdin, stdin_rx) = mpsc::sync_channel::<Vec<u8>>(16);
         let stderr = Arc::new(Mutex::new(StderrTail::default()));
@@ -130,6 +133,7 @@ impl Process {
             lines,
             stderr,
             threads,
+            pending: VecDeque::new(),
             reaped: false,
         })
     }
@@ -145,9 +149,15 @@ impl Process {
 
     /// The next line, waiting until `deadline`.
     pub fn next_line(&mut self, deadline: Instant) -> Next {
+        if let Some(next) = self.pending.pop_front() {
+            return next;
+        }
         let wait = deadline.saturating_duration_since(Instant::now());
         match self.lines.recv_timeout(wait) {
-            Ok(next) => next,
+            Ok(batch) => {
+                self.pending.extend(batch);
+                self.pending.pop_front().unwrap_or(Next::Closed(None))
+            }
             Err(RecvTimeoutError::Timeout) => Next::Timeout,
             Err(RecvTimeoutError::Disconnected) => Next::Closed(None),
         }
@@ -265,49 +275,57 @@ pub fn describe_exit(status: Option<ExitStatus>) -> String {
     }
 }
 
-fn read_lines(stdout: impl Read, tx: &SyncSender<Next>) {
-    let mut reader = BufReader::with_capacity(64 * 1024, stdout);
+/// Reads stdout into lines. Every line complete after one read goes over the channel in one
+/// message: a batch of answers costs one hand-over, not one per case.
+fn read_lines(mut stdout: impl Read, tx: &SyncSender<Vec<Next>>) {
+    let mut buf = vec![0u8; 64 * 1024];
     let mut line: Vec<u8> = Vec::new();
     let mut length = 0usize;
     loop {
-        let chunk = match reader.fill_buf() {
-            Ok([]) => {
-                let _ = tx.send(Next::Closed(None));
+        let n = match stdout.read(&mut buf) {
+            Ok(0) => {
+                let _ = tx.send(vec![Next::Closed(None)]);
                 return;
             }
-            Ok(chunk) => chunk,
+            Ok(n) => n,
             Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
             Err(e) => {
-                let _ = tx.send(Next::Closed(Some(format!("stdout could not be read: {e}"))));
+                let _ = tx.send(vec![Next::Closed(Some(format!(
+                    "stdout could not be read: {e}"
+                )))]);
                 return;
             }
         };
-        let (used, complete) = match chunk.iter().position(|&b| b == b'\n') {
-            Some(i) => (i + 1, Some(i)),
-            None => (chunk.len(), None),
-        };
-        let body = &chunk[..complete.unwrap_or(used)];
-        let room = MAX_LINE.saturating_sub(line.len());
-        line.extend_from_slice(&body[..body.len().min(room)]);
-        length += body.len();
-        reader.consume(used);
-        if complete.is_some() {
-            let message = if length > MAX_LINE {
-                line.truncate(256);
-                Next::Oversized {
-                    head: std::mem::take(&mut line),
-                    length,
-                }
-            } else {
-                if line.last() == Some(&b'\r') {
-                    line.pop();
-                }
-                Next::Line(std::mem::take(&mut line))
+        let mut batch = Vec::new();
+        let mut rest = &buf[..n];
+        while !rest.is_empty() {
+            let (body, complete, used) = match rest.iter().position(|&b| b == b'\n') {
+                Some(i) => (&rest[..i], true, i + 1),
+                None => (rest, false, rest.len()),
             };
-            length = 0;
-            if tx.send(message).is_err() {
-                return;
+            // Past the limit the line is only counted, never stored.
+            let room = MAX_LINE.saturating_sub(line.len());
+            line.extend_from_slice(&body[..body.len().min(room)]);
+            length += body.len();
+            rest = &rest[used..];
+            if complete {
+                batch.push(if length > MAX_LINE {
+                    line.truncate(256);
+                    Next::Oversized {
+                        head: std::mem::take(&mut line),
+                        length,
+                    }
+                } else {
+                    if line.last() == Some(&b'\r') {
+                        line.pop();
+                    }
+                    Next::Line(std::mem::take(&mut line))
+                });
+                length = 0;
             }
+        }
+        if !batch.is_empty() && tx.send(batch).is_err() {
+            return;
         }
     }
 }

@@ -160,6 +160,136 @@ pub enum ErrorReport {
     Flag(#[schemars(regex(pattern = r"^[A-Z]+[0-9]+$"))] String),
 }
 
+impl HarnessMessage {
+    /// Reads one line. Equivalent to deserializing the enum, but field by field: serde reads an
+    /// internally tagged enum by buffering the whole message first, which for a batch of cases
+    /// costs more than executing them.
+    pub fn from_line(line: &[u8]) -> Result<HarnessMessage, serde_json::Error> {
+        use serde::de::Error;
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Line {
+            #[serde(rename = "type")]
+            kind: String,
+            protocol: Option<u32>,
+            harness: Option<String>,
+            cases: Option<Vec<CaseRequest>>,
+        }
+        let l: Line = serde_json::from_slice(line)?;
+        let only = |allowed: &[&str]| {
+            let present = [
+                ("protocol", l.protocol.is_some()),
+                ("harness", l.harness.is_some()),
+                ("cases", l.cases.is_some()),
+            ];
+            match present.iter().find(|(k, p)| *p && !allowed.contains(k)) {
+                Some((k, _)) => Err(serde_json::Error::custom(format!(
+                    "unknown field `{k}` in a `{}` message",
+                    l.kind
+                ))),
+                None => Ok(()),
+            }
+        };
+        let missing = |k: &'static str| serde_json::Error::missing_field(k);
+        match l.kind.as_str() {
+            "hello" => {
+                only(&["protocol", "harness"])?;
+                Ok(HarnessMessage::Hello {
+                    protocol: l.protocol.ok_or_else(|| missing("protocol"))?,
+                    harness: l.harness.clone().ok_or_else(|| missing("harness"))?,
+                })
+            }
+            "run" => {
+                only(&["cases"])?;
+                Ok(HarnessMessage::Run {
+                    cases: l.cases.ok_or_else(|| missing("cases"))?,
+                })
+            }
+            "shutdown" => {
+                only(&[])?;
+                Ok(HarnessMessage::Shutdown)
+            }
+            other => Err(serde_json::Error::unknown_variant(
+                other,
+                &["hello", "run", "shutdown"],
+            )),
+        }
+    }
+}
+
+impl BackendMessage {
+    /// Reads one line, field by field (see [`HarnessMessage::from_line`]).
+    pub fn from_line(line: &[u8]) -> Result<BackendMessage, serde_json::Error> {
+        use serde::de::Error;
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Line {
+            #[serde(rename = "type")]
+            kind: String,
+            id: Option<u64>,
+            memory: Option<Vec<MemoryRange>>,
+            writes: Option<BTreeMap<String, u16>>,
+            // Present-and-null and absent both mean "no error".
+            #[serde(default)]
+            error: Option<ErrorReport>,
+            reason: Option<String>,
+            protocol: Option<u32>,
+            backend: Option<BackendInfo>,
+            capabilities: Option<Capabilities>,
+        }
+        let l: Line = serde_json::from_slice(line)?;
+        let present = [
+            ("id", l.id.is_some()),
+            ("memory", l.memory.is_some()),
+            ("writes", l.writes.is_some()),
+            ("error", l.error.is_some()),
+            ("reason", l.reason.is_some()),
+            ("protocol", l.protocol.is_some()),
+            ("backend", l.backend.is_some()),
+            ("capabilities", l.capabilities.is_some()),
+        ];
+        let only = |allowed: &[&str]| match present.iter().find(|(k, p)| *p && !allowed.contains(k))
+        {
+            Some((k, _)) => Err(serde_json::Error::custom(format!(
+                "unknown field `{k}` in a `{}` message",
+                l.kind
+            ))),
+            None => Ok(()),
+        };
+        let missing = |k: &'static str| serde_json::Error::missing_field(k);
+        match l.kind.as_str() {
+            "result" => {
+                only(&["id", "memory", "writes", "error"])?;
+                Ok(BackendMessage::Result {
+                    id: l.id.ok_or_else(|| missing("id"))?,
+                    memory: l.memory.unwrap_or_default(),
+                    writes: l.writes.unwrap_or_default(),
+                    error: l.error,
+                })
+            }
+            "unsupported" => {
+                only(&["id", "reason"])?;
+                Ok(BackendMessage::Unsupported {
+                    id: l.id.ok_or_else(|| missing("id"))?,
+                    reason: l.reason.ok_or_else(|| missing("reason"))?,
+                })
+            }
+            "hello" => {
+                only(&["protocol", "backend", "capabilities"])?;
+                Ok(BackendMessage::Hello {
+                    protocol: l.protocol.ok_or_else(|| missing("protocol"))?,
+                    backend: l.backend.ok_or_else(|| missing("backend"))?,
+                    capabilities: l.capabilities.ok_or_else(|| missing("capabilities"))?,
+                })
+            }
+            other => Err(serde_json::Error::unknown_variant(
+                other,
+                &["hello", "result", "unsupported"],
+            )),
+        }
+    }
+}
+
 /// Any message of the protocol: the root of the JSON Schema.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(untagged)]
@@ -221,6 +351,49 @@ mod tests {
             serde_json::to_string(&HarnessMessage::Shutdown).expect("json"),
             r#"{"type":"shutdown"}"#
         );
+    }
+
+    #[test]
+    fn reading_field_by_field_agrees_with_the_enums() {
+        let backend = [
+            r#"{"type":"hello","protocol":1,"backend":{"name":"x","version":"1"},"capabilities":{"profile":"p","instructions":["HABIN"],"variants":["v"],"flags":{"SM705":[false]}}}"#,
+            r#"{"type":"result","id":3,"writes":{"D200":23181},"error":{"code":13313}}"#,
+            r#"{"id":3,"type":"result","memory":[{"start":"D200","words":[1,2]}],"error":null}"#,
+            r#"{"type":"result","id":4,"error":{"flag":"M8004"}}"#,
+            r#"{"type":"unsupported","id":5,"reason":"no"}"#,
+            r#"{"type":"result","id":3,"reason":"no"}"#,
+            r#"{"type":"unsupported","id":5}"#,
+            r#"{"type":"result"}"#,
+            r#"{"type":"bye","id":5}"#,
+            r#"{"type":"result","id":3,"writes":{"D200":65536}}"#,
+            r#"{"type":"result","id":3,"write":{}}"#,
+            r#"[1,2]"#,
+        ];
+        for line in backend {
+            let enum_way = serde_json::from_str::<BackendMessage>(line).ok();
+            assert_eq!(
+                BackendMessage::from_line(line.as_bytes()).ok(),
+                enum_way,
+                "{line}"
+            );
+        }
+        let harness = [
+            r#"{"type":"hello","protocol":1,"harness":"h"}"#,
+            r#"{"type":"run","cases":[]}"#,
+            r#"{"type":"shutdown"}"#,
+            r#"{"type":"run"}"#,
+            r#"{"type":"stop"}"#,
+        ];
+        for line in harness {
+            let enum_way = serde_json::from_str::<HarnessMessage>(line).ok();
+            assert_eq!(
+                HarnessMessage::from_line(line.as_bytes()).ok(),
+                enum_way,
+                "{line}"
+            );
+        }
+        // Stricter than serde, which lets a unit variant of a tagged enum carry extra fields.
+        assert!(HarnessMessage::from_line(br#"{"type":"shutdown","cases":[]}"#).is_err());
     }
 
     #[test]

@@ -39,7 +39,7 @@ pub fn serve(
         if line.trim().is_empty() {
             continue;
         }
-        let message: HarnessMessage = serde_json::from_str(&line).map_err(|e| {
+        let message = HarnessMessage::from_line(line.as_bytes()).map_err(|e| {
             format!(
                 "not a harness message ({e}): {}",
                 line.chars().take(200).collect::<String>()
