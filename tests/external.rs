@@ -339,45 +339,49 @@ fn a_command_that_does_not_exist_cannot_be_started() {
     assert!(text.contains("`/nonexistent/emulator`"), "{text}");
 }
 
-fn served_reference() -> ExternalSpec {
+fn served(profile: &str) -> ExternalSpec {
     let mut spec = ExternalSpec::new(
-        "served",
-        Launch::Shell("\"$PLC_CONFORMANCE\" serve --profile mitsubishi-iqr".into()),
+        format!("served-{profile}"),
+        Launch::Shell(format!("\"$PLC_CONFORMANCE\" serve --profile {profile}")),
     );
     spec.env = vec![(config::ENV_SELF.into(), BIN.into())];
     spec.cwd = Some(root().to_path_buf());
     spec
 }
 
-/// The reference model through the protocol must judge exactly like the model called directly,
-/// on every trial of the corpus and both ways of running.
+fn served_reference() -> ExternalSpec {
+    served("mitsubishi-iqr")
+}
+
+/// Every built-in model through the protocol must judge exactly like the model called
+/// directly, on every trial of the corpus and both ways of running.
 #[test]
-fn the_served_reference_model_matches_the_built_in_one_everywhere() {
+fn every_served_reference_model_matches_the_built_in_one_everywhere() {
     let mut session = corpus_session();
-    session
-        .add_external(served_reference(), true)
-        .expect("serve starts");
-    let reference: Vec<Arc<dyn Backend>> = session
-        .backends
-        .iter()
-        .filter(|b| b.name() == "iqr")
-        .cloned()
-        .collect();
-    let direct: Vec<Option<Verdict>> =
-        session.run_all(&plan(&session.corpus, &session.profiles, &reference));
-    let served_trials = trials_of(&session, "served");
-    assert_eq!(direct.len(), served_trials.len());
-    assert!(!direct.is_empty());
-    let batched = session.run_all(&served_trials);
-    for ((trial, d), b) in served_trials.iter().zip(&direct).zip(&batched) {
-        assert_eq!(d, b, "{} batched", trial.name());
-        let single = trial.skip.is_none().then(|| session.verdict(trial));
-        assert_eq!(d, &single, "{} one at a time", trial.name());
-        assert!(
-            !d.as_ref().is_some_and(Verdict::is_failure),
-            "{}: {d:?}",
-            trial.name()
-        );
+    let builtin: Vec<Arc<dyn Backend>> = session.backends.clone();
+    assert!(!builtin.is_empty());
+    for model in builtin {
+        let served = session
+            .add_external(served(model.profile()), true)
+            .unwrap_or_else(|e| panic!("serve {} starts: {e}", model.profile()));
+        let direct: Vec<Option<Verdict>> = session.run_all(&plan(
+            &session.corpus,
+            &session.profiles,
+            std::slice::from_ref(&model),
+        ));
+        let served_trials = trials_of(&session, served.name());
+        assert_eq!(direct.len(), served_trials.len(), "{}", model.name());
+        let batched = session.run_all(&served_trials);
+        for ((trial, d), b) in served_trials.iter().zip(&direct).zip(&batched) {
+            assert_eq!(d, b, "{} batched", trial.name());
+            let single = trial.skip.is_none().then(|| session.verdict(trial));
+            assert_eq!(d, &single, "{} one at a time", trial.name());
+            assert!(
+                !d.as_ref().is_some_and(Verdict::is_failure),
+                "{}: {d:?}",
+                trial.name()
+            );
+        }
     }
 }
 

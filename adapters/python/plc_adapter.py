@@ -174,7 +174,10 @@ def serve(run, name, version, profile, instructions, variants=None, flags=None,
                         answer = case.answer()
                     except Unsupported as why:
                         answer = {"type": "unsupported", "id": case.id, "reason": str(why)}
+                    # Each answer goes out at once: the harness's time limit for a case runs
+                    # from the previous answer, and a buffered answer looks like a hang.
                     stdout.write(dumps(answer) + "\n")
+                    stdout.flush()
             finally:
                 # The answers before a failing case reach the harness, so that it blames the
                 # right case.

@@ -320,9 +320,17 @@ fn list(cli: &Cli, paths: &Paths, filter: Option<&str>) -> u8 {
         Err(code) => return code,
     };
     println!("backends:");
+    let width = session
+        .backends
+        .iter()
+        .map(|b| b.name().len())
+        .chain(project.configured.iter().map(|c| c.spec.name.len()))
+        .max()
+        .unwrap_or(0)
+        .max(10);
     for b in &session.backends {
         println!(
-            "  {:<10} profile {:<18} {}",
+            "  {:<width$} profile {:<18} {}",
             b.name(),
             b.profile(),
             b.describe()
@@ -330,7 +338,7 @@ fn list(cli: &Cli, paths: &Paths, filter: Option<&str>) -> u8 {
     }
     for c in &project.configured {
         println!(
-            "  {:<10} profile {:<18} external, configured at {} (`{}`)",
+            "  {:<width$} profile {:<18} external, configured at {} (`{}`)",
             c.spec.name,
             c.spec.profile.as_deref().unwrap_or("(from its handshake)"),
             c.location,

@@ -2,7 +2,8 @@
 //!
 //! Shape: `{ "summary": {passed, failed, recorded, skipped}, "trials": [ {name, backend,
 //! profile, variant, instruction, case, basis, file, line, skipped?, verdict?} ] }`, where a
-//! verdict is `{"verdict": "conforms" | "differs" | "unsupported" | "fault" | "recorded", ...}`.
+//! verdict is `{"verdict": "conforms" | "differs" | "unsupported" | "fault" | "recorded" |
+//! "known_difference" | "stale_entry", ...}`; the summary also counts `known` differences.
 
 use serde::Serialize;
 
