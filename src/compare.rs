@@ -70,6 +70,18 @@ pub enum Verdict {
         observed: String,
         fill_dependent: bool,
     },
+    /// A difference the backend's known-differences file lists: reported, not a failure.
+    KnownDifference {
+        reason: String,
+        /// `file:line` of the entry.
+        entry: String,
+        difference: Box<Verdict>,
+    },
+    /// A known-differences entry for a trial that conforms: a failure until the entry goes.
+    StaleEntry {
+        reason: String,
+        entry: String,
+    },
 }
 
 impl Verdict {
@@ -77,7 +89,10 @@ impl Verdict {
     pub fn is_failure(&self) -> bool {
         matches!(
             self,
-            Verdict::Differs { .. } | Verdict::Unsupported { .. } | Verdict::Fault { .. }
+            Verdict::Differs { .. }
+                | Verdict::Unsupported { .. }
+                | Verdict::Fault { .. }
+                | Verdict::StaleEntry { .. }
         )
     }
 
@@ -94,6 +109,8 @@ impl Verdict {
                 Fault::Unreachable(_) => "unreachable",
             },
             Verdict::Recorded { .. } => "recorded",
+            Verdict::KnownDifference { .. } => "known-difference",
+            Verdict::StaleEntry { .. } => "stale-entry",
         }
     }
 }

@@ -29,12 +29,19 @@ pub enum Status {
     Unreachable,
     Recorded,
     Skipped,
+    /// A difference the backend's known-differences file lists, with its reason.
+    KnownDifference,
+    /// A listed known difference that now conforms: the list is out of date.
+    StaleEntry,
 }
 
 impl Status {
     /// Whether this cell fails a run.
     pub fn is_failure(self) -> bool {
-        !matches!(self, Status::Conforms | Status::Recorded | Status::Skipped)
+        !matches!(
+            self,
+            Status::Conforms | Status::Recorded | Status::Skipped | Status::KnownDifference
+        )
     }
 
     pub fn label(self) -> &'static str {
@@ -48,6 +55,8 @@ impl Status {
             Status::Unreachable => "unreachable",
             Status::Recorded => "recorded",
             Status::Skipped => "skipped",
+            Status::KnownDifference => "known-difference",
+            Status::StaleEntry => "stale-entry",
         }
     }
 
@@ -60,7 +69,11 @@ impl Status {
             "timeout" => Status::Timeout,
             "protocol-error" => Status::ProtocolError,
             "recorded" => Status::Recorded,
-            _ => Status::Unreachable,
+            "known-difference" => Status::KnownDifference,
+            "stale-entry" => Status::StaleEntry,
+            "unreachable" => Status::Unreachable,
+            // Every verdict label is listed above; a new one shows as a failure until it is.
+            _ => Status::Differs,
         }
     }
 }
@@ -88,11 +101,13 @@ pub struct Record {
     pub detail: String,
 }
 
-/// Runs native trials into records.
-pub fn native_records(trials: &[Trial]) -> Vec<Record> {
+/// Native trials and their verdicts (`None` for a skipped trial, as
+/// [`crate::session::Session::run_all`] gives them) as records.
+pub fn native_records(trials: &[Trial], verdicts: Vec<Option<Verdict>>) -> Vec<Record> {
     trials
         .iter()
-        .map(|t| {
+        .zip(verdicts)
+        .map(|(t, verdict)| {
             let base = |status: Status, behaviour: String, shown: String, detail: String| Record {
                 section: t.profile.id.clone(),
                 row: format!(
@@ -111,15 +126,10 @@ pub fn native_records(trials: &[Trial]) -> Vec<Record> {
                 shown,
                 detail,
             };
-            if let Some(reason) = &t.skip {
-                return base(
-                    Status::Skipped,
-                    "skipped".into(),
-                    "skipped".into(),
-                    reason.clone(),
-                );
-            }
-            let verdict = t.run();
+            let Some(verdict) = verdict else {
+                let reason = t.skip.clone().unwrap_or_default();
+                return base(Status::Skipped, "skipped".into(), "skipped".into(), reason);
+            };
             let detail = match verdict {
                 Verdict::Conforms => String::new(),
                 ref v => render(t, v, Palette::plain()),
@@ -154,11 +164,15 @@ pub fn native_records(trials: &[Trial]) -> Vec<Record> {
         .collect()
 }
 
-/// Runs cross-vendor trials into records.
-pub fn neutral_records(trials: &[NeutralTrial]) -> Vec<Record> {
+/// Cross-vendor trials and their verdicts (`None` for a skipped trial) as records.
+pub fn neutral_records(
+    trials: &[NeutralTrial],
+    verdicts: Vec<Option<NeutralVerdict>>,
+) -> Vec<Record> {
     trials
         .iter()
-        .map(|t| {
+        .zip(verdicts)
+        .map(|(t, verdict)| {
             let column = format!("{}/{}", t.backend.name(), t.lowering.name);
             let mut record = Record {
                 section: format!("cross-vendor {}", t.case.operation),
@@ -173,10 +187,9 @@ pub fn neutral_records(trials: &[NeutralTrial]) -> Vec<Record> {
                 shown: "skipped".into(),
                 detail: t.skip.clone().unwrap_or_default(),
             };
-            if t.skip.is_some() {
+            let Some(verdict) = verdict else {
                 return record;
-            }
-            let verdict = t.run();
+            };
             record.status = match &verdict {
                 NeutralVerdict::Matches { .. } => Status::Conforms,
                 NeutralVerdict::Differs { .. } | NeutralVerdict::FillDependent { .. } => {
@@ -184,6 +197,8 @@ pub fn neutral_records(trials: &[NeutralTrial]) -> Vec<Record> {
                 }
                 NeutralVerdict::Unsupported { .. } => Status::Unsupported,
                 NeutralVerdict::Recorded { .. } => Status::Recorded,
+                NeutralVerdict::KnownDifference { .. } => Status::KnownDifference,
+                NeutralVerdict::StaleEntry { .. } => Status::StaleEntry,
                 NeutralVerdict::Fault { fault } => Status::from_label(
                     Verdict::Fault {
                         fill: crate::memory::Fill::A,

@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use crate::backend::{Backend, Request};
+use crate::backend::{Backend, Fault, Request, Response};
 use crate::compare::{judge, Observation, Verdict};
 use crate::memory::{Fill, Image};
 use crate::model::{Case, Corpus};
@@ -35,14 +35,31 @@ impl Trial {
 
     /// Runs the case under every fill and judges it.
     pub fn run(&self) -> Verdict {
-        match self.observe() {
-            Ok(observations) => judge(&self.case, &observations),
+        let images = self.images();
+        match self.requests(&images) {
+            Ok(requests) => self.judge(self.backend.execute_batch(&requests)),
             Err(verdict) => verdict,
         }
     }
 
     /// Runs the case under every fill: what the backend did, before any judgement.
     pub fn observe(&self) -> Result<Vec<Observation>, Verdict> {
+        let images = self.images();
+        let requests = self.requests(&images)?;
+        Ok(observations(self.backend.execute_batch(&requests)))
+    }
+
+    /// The memory before, once per fill (in [`Fill::ALL`] order).
+    pub fn images(&self) -> Vec<Image> {
+        Fill::ALL
+            .iter()
+            .map(|&fill| Image::new(self.case.before.clone(), fill))
+            .collect()
+    }
+
+    /// The requests that run the case on the images; callers that batch many trials collect
+    /// these. A trial whose variant the profile lacks is already judged.
+    pub fn requests<'a>(&'a self, images: &'a [Image]) -> Result<Vec<Request<'a>>, Verdict> {
         let Some(variant) = self.profile.variant(&self.variant) else {
             return Err(Verdict::Unsupported {
                 reason: format!(
@@ -51,27 +68,33 @@ impl Trial {
                 ),
             });
         };
-        let observations: Vec<Observation> = Fill::ALL
+        Ok(images
             .iter()
-            .map(|&fill| {
-                let memory = Image::new(self.case.before.clone(), fill);
-                let request = Request {
-                    profile: &self.profile,
-                    variant,
-                    instruction: &self.instruction,
-                    case_id: &self.case.id,
-                    flags: &self.case.flags,
-                    operands: &self.case.operands,
-                    memory: &memory,
-                };
-                Observation {
-                    fill,
-                    result: self.backend.execute(&request),
-                }
+            .map(|memory| Request {
+                profile: &self.profile,
+                variant,
+                instruction: &self.instruction,
+                case_id: &self.case.id,
+                flags: &self.case.flags,
+                operands: &self.case.operands,
+                memory,
             })
-            .collect();
-        Ok(observations)
+            .collect())
     }
+
+    /// Judges the answers to [`Trial::requests`], in the same order.
+    pub fn judge(&self, results: Vec<Result<Response, Fault>>) -> Verdict {
+        judge(&self.case, &observations(results))
+    }
+}
+
+/// Answers to the requests of [`Trial::requests`], paired with their fills.
+fn observations(results: Vec<Result<Response, Fault>>) -> Vec<Observation> {
+    Fill::ALL
+        .iter()
+        .zip(results)
+        .map(|(&fill, result)| Observation { fill, result })
+        .collect()
 }
 
 /// Every trial of the corpus on the given backends, in corpus order. A case runs on a backend
@@ -89,13 +112,15 @@ pub fn plan(corpus: &Corpus, profiles: &Profiles, backends: &[Arc<dyn Backend>])
             };
             for instruction in case.instructions.iter() {
                 for variant in profile.variants.iter().filter(|v| case.runs_on(&v.id)) {
-                    let skip = (!backend.claims(instruction, &variant.id)).then(|| {
-                        format!(
+                    let skip = if backend.claims(instruction, &variant.id) {
+                        backend.declines(&case.flags, instruction, variant)
+                    } else {
+                        Some(format!(
                             "{} does not implement {instruction} on {}",
                             backend.name(),
                             variant.id
-                        )
-                    });
+                        ))
+                    };
                     trials.push(Trial {
                         backend: backend.clone(),
                         profile: profile.clone(),

@@ -224,22 +224,58 @@ fn a_saved_run_fails_only_on_new_differences() {
 }
 
 #[test]
-fn against_compares_two_backends_word_by_word() {
+fn against_finds_no_difference_between_a_model_and_itself_served() {
     let out = cli(&[
         "diff",
         "--backend",
         "iqr",
         "--against",
-        "iqr",
+        "selfcheck-iqr",
         "--filter",
         "habin",
     ]);
-    assert_eq!(out.status.code(), Some(0));
     let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(
         text.trim_end().ends_with("trials compared, 0 differ"),
         "{text}"
     );
+    assert!(!text.contains(" 0 trials compared"), "{text}");
+}
+
+#[test]
+fn against_shows_the_word_diff_where_two_backends_differ() {
+    if !root().join(".venv-adapters/bin/python").exists() {
+        // CI sets PLC_CONFORMANCE_REQUIRE_BACKENDS after creating the environment.
+        assert!(
+            std::env::var_os("PLC_CONFORMANCE_REQUIRE_BACKENDS").is_none(),
+            "pymcprotocol's virtual environment is required but missing"
+        );
+        eprintln!("skipped: pymcprotocol's virtual environment is missing (.ci/run creates it)");
+        return;
+    }
+    let out = cli(&[
+        "diff",
+        "--backend",
+        "iqr",
+        "--against",
+        "pymcprotocol",
+        "--filter",
+        "habin-fixed-minus-sign",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("habin::habin-fixed-minus-sign-is-invalid::rcpu — iqr vs pymcprotocol"),
+        "{text}"
+    );
+    assert!(text.contains("+D200     FA58H  \"X\\xFA\""), "{text}");
+    assert!(text.contains("error: 3401H vs none"), "{text}");
 }
 
 #[test]

@@ -5,6 +5,7 @@
 //! YAML or reporting; everything vendor-specific it needs comes in the [`Request`] from the
 //! profile.
 
+pub mod external;
 pub mod fc4a;
 pub mod fx5;
 pub mod iqr;
@@ -175,7 +176,23 @@ pub trait Backend: Send + Sync {
     /// claim are listed as skipped with a reason; a claimed trial answered "unsupported" is a
     /// difference.
     fn claims(&self, instruction: &str, variant: &str) -> bool;
+    /// Why the backend declines to run an instruction it claims with these flags (as a case or
+    /// a cross-vendor lowering sets them), e.g. a flag setting it does not implement; the trial
+    /// is then skipped with this reason, like an unclaimed one.
+    fn declines(
+        &self,
+        _flags: &BTreeMap<String, bool>,
+        _instruction: &str,
+        _variant: &Variant,
+    ) -> Option<String> {
+        None
+    }
     fn execute(&self, request: &Request<'_>) -> Result<Response, Fault>;
+    /// Executes several requests, answers in order. A backend in another process answers a
+    /// batch in one exchange, which is what makes it fast.
+    fn execute_batch(&self, requests: &[Request<'_>]) -> Vec<Result<Response, Fault>> {
+        requests.iter().map(|r| self.execute(r)).collect()
+    }
 }
 
 /// The reference models, one per profile that has one.

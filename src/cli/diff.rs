@@ -2,11 +2,12 @@
 
 use std::path::PathBuf;
 
-use anstream::{eprintln, println};
+use anstream::{eprintln, print, println};
 use clap::ValueEnum;
 use serde::Serialize;
 
-use super::commands::{EXIT_BAD_INPUT, EXIT_DIFFERENCES, EXIT_OK};
+use super::commands::{load, project, select_backends, EXIT_BAD_INPUT, EXIT_DIFFERENCES, EXIT_OK};
+use super::{BackendArgs, Cli};
 use crate::backend::Backend;
 use crate::backend::Response;
 use crate::baseline::{self, SavedRun};
@@ -20,9 +21,8 @@ use crate::session::{Paths, Session};
 
 #[derive(Debug, clap::Args)]
 pub struct DiffArgs {
-    /// Backends to compare, by name; repeat for several [default: all].
-    #[arg(long = "backend", value_name = "NAME")]
-    pub backends: Vec<String>,
+    #[command(flatten)]
+    pub backends: BackendArgs,
     /// Compare the (first) chosen backend directly with this one, word by word.
     #[arg(long, value_name = "NAME")]
     pub against: Option<String>,
@@ -68,15 +68,27 @@ struct JsonReport<'a> {
     records: &'a [Record],
 }
 
-pub fn diff(paths: &Paths, args: &DiffArgs) -> u8 {
-    let session = match Session::load(paths) {
+pub fn diff(cli: &Cli, paths: &Paths, args: &DiffArgs) -> u8 {
+    let mut session = match load(paths) {
         Ok(s) => s,
-        Err(e) => {
-            eprintln!("{e}");
-            return EXIT_BAD_INPUT;
-        }
+        Err(code) => return code,
     };
-    let chosen = match choose(&session, &args.backends) {
+    let project = match project(cli) {
+        Ok(p) => p,
+        Err(code) => return code,
+    };
+    let own_corpus = args.vectors.is_empty();
+    let choose = |session: &mut Session, backends: &BackendArgs| {
+        select_backends(session, &project, backends, own_corpus).map_err(|message| {
+            let message = message
+                .strip_prefix("error: ")
+                .unwrap_or(&message)
+                .to_string();
+            eprintln!("error: {message}");
+            EXIT_BAD_INPUT
+        })
+    };
+    let chosen = match choose(&mut session, &args.backends) {
         Ok(c) => c,
         Err(code) => return code,
     };
@@ -84,7 +96,12 @@ pub fn diff(paths: &Paths, args: &DiffArgs) -> u8 {
         let Some(first) = chosen.first().cloned() else {
             return EXIT_BAD_INPUT;
         };
-        return match choose(&session, std::slice::from_ref(other)) {
+        let other = BackendArgs {
+            backends: vec![other.clone()],
+            known_differences: Vec::new(),
+            ..args.backends.clone()
+        };
+        return match choose(&mut session, &other) {
             Ok(b) => against(&session, &first, &b[0], args.filter.as_deref()),
             Err(code) => code,
         };
@@ -106,8 +123,9 @@ pub fn diff(paths: &Paths, args: &DiffArgs) -> u8 {
         eprintln!("error: no trial matches (check --backend and --filter)");
         return EXIT_BAD_INPUT;
     }
-    let mut records = neutral_records(&neutral);
-    records.extend(native_records(&trials));
+    let verdicts = session.run_all(&trials);
+    let mut records = neutral_records(&neutral, session.run_neutral(&neutral));
+    records.extend(native_records(&trials, verdicts));
     let matrices = sections(&records);
     let rendered = match args.format {
         DiffFormat::Text => crate::report::matrix_text::render(
@@ -193,30 +211,6 @@ fn write_out(path: Option<&PathBuf>, text: &str) -> Result<(), u8> {
     }
 }
 
-fn choose(session: &Session, names: &[String]) -> Result<Vec<std::sync::Arc<dyn Backend>>, u8> {
-    if names.is_empty() {
-        return Ok(session.backends.clone());
-    }
-    names
-        .iter()
-        .map(|name| {
-            session
-                .backends
-                .iter()
-                .find(|b| b.name() == name)
-                .cloned()
-                .ok_or_else(|| {
-                    let known: Vec<&str> = session.backends.iter().map(|b| b.name()).collect();
-                    eprintln!(
-                        "error: unknown backend `{name}`; expected one of: {}",
-                        known.join(", ")
-                    );
-                    EXIT_BAD_INPUT
-                })
-        })
-        .collect()
-}
-
 /// Two backends side by side: every case both run, and where their outcomes differ, the
 /// per-word diff of one against the other.
 fn against(
@@ -227,11 +221,12 @@ fn against(
 ) -> u8 {
     if a.profile() != b.profile() {
         // Different families share only the cross-vendor cases.
-        let records = neutral_records(&plan_neutral(
+        let trials = plan_neutral(
             &session.corpus.neutral,
             &session.profiles,
             &[a.clone(), b.clone()],
-        ));
+        );
+        let records = neutral_records(&trials, session.run_neutral(&trials));
         println!(
             "{}",
             crate::report::matrix_text::render(&sections(&records), false)

@@ -28,6 +28,10 @@ pub struct Cli {
     /// Vendor profile folder [default: ROOT/vendors].
     #[arg(long, global = true, value_name = "DIR")]
     pub vendors: Option<PathBuf>,
+    /// Project file listing external backends [default: $PLC_CONFORMANCE_CONFIG, else
+    /// ROOT/plc-conformance.yaml when it exists].
+    #[arg(long, global = true, value_name = "FILE")]
+    pub config: Option<PathBuf>,
     #[command(subcommand)]
     pub command: Command,
 }
@@ -49,18 +53,25 @@ pub enum Command {
         #[arg(long)]
         filter: Option<String>,
     },
-    /// Print the JSON Schema (draft-07) of vector files, vendor profiles or cross-vendor files.
+    /// Print the JSON Schema (draft-07) of vector files, vendor profiles, cross-vendor files,
+    /// the external-backend protocol's messages, the project file or a known-differences file.
     Schema {
         #[arg(long, value_enum, default_value_t = SchemaKind::Vectors)]
         kind: SchemaKind,
+    },
+    /// Speak the external-backend protocol on stdin/stdout with a built-in reference model:
+    /// proves the protocol path end to end, and serves as a native adapter for benchmarks.
+    Serve {
+        /// The profile whose reference model answers.
+        #[arg(long, value_name = "ID")]
+        profile: String,
     },
 }
 
 #[derive(Debug, clap::Args)]
 pub struct RunArgs {
-    /// Backends to run, by name (see `list`); repeat for several [default: all built-in].
-    #[arg(long = "backend", value_name = "NAME")]
-    pub backends: Vec<String>,
+    #[command(flatten)]
+    pub backends: BackendArgs,
     /// Only trials whose name (`backend::instruction::case::variant`) contains this text.
     #[arg(long)]
     pub filter: Option<String>,
@@ -73,6 +84,22 @@ pub struct RunArgs {
     /// Also print what each backend did on `unspecified` cases.
     #[arg(long)]
     pub show_recorded: bool,
+}
+
+/// Which backends a command runs, shared by `run` and `diff`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct BackendArgs {
+    /// Backends to run: a name (see `list`), or `external:NAME=COMMAND` to start a process that
+    /// speaks the external-backend protocol (COMMAND is run by `sh -c`); repeat for several
+    /// [default: the built-in ones and those of the project file].
+    #[arg(long = "backend", value_name = "NAME")]
+    pub backends: Vec<String>,
+    /// Seconds an `external:` backend given here may take to answer one case.
+    #[arg(long, value_name = "SECONDS", default_value_t = 5.0)]
+    pub timeout: f64,
+    /// A known-differences file for an `external:` backend given here.
+    #[arg(long = "known-differences", value_name = "NAME=FILE")]
+    pub known_differences: Vec<String>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -89,6 +116,12 @@ pub enum SchemaKind {
     Profile,
     /// Cross-vendor vector files (`vectors/cross-vendor/*.yaml`).
     CrossVendor,
+    /// The messages of the external-backend protocol.
+    Protocol,
+    /// The project file, `plc-conformance.yaml`.
+    Project,
+    /// A known-differences file.
+    Known,
 }
 
 /// Parses the arguments, runs the command and returns its exit status.

@@ -51,6 +51,17 @@ pub enum NeutralVerdict {
     Recorded {
         outcome: NeutralOutcome,
     },
+    /// A difference the backend's known-differences file lists.
+    KnownDifference {
+        reason: String,
+        entry: String,
+        difference: Box<NeutralVerdict>,
+    },
+    /// A listed known difference that now matches: the list is out of date.
+    StaleEntry {
+        reason: String,
+        entry: String,
+    },
 }
 
 impl NeutralVerdict {
@@ -68,6 +79,7 @@ impl NeutralVerdict {
                 Some(outcome)
             }
             NeutralVerdict::Differs { actual, .. } => Some(actual),
+            NeutralVerdict::KnownDifference { difference, .. } => difference.outcome(),
             _ => None,
         }
     }
@@ -85,6 +97,17 @@ impl NeutralVerdict {
             NeutralVerdict::Unsupported { reason } => format!("unsupported: {reason}"),
             NeutralVerdict::Fault { fault } => fault.to_string(),
             NeutralVerdict::Recorded { outcome } => format!("recorded: {outcome}"),
+            NeutralVerdict::KnownDifference {
+                reason,
+                entry,
+                difference,
+            } => format!(
+                "known difference ({entry}): {reason}; {}",
+                difference.describe()
+            ),
+            NeutralVerdict::StaleEntry { reason, entry } => format!(
+                "stale entry ({entry}): listed as a known difference ({reason}) but answers as expected"
+            ),
         }
     }
 }
@@ -325,13 +348,17 @@ pub fn plan_neutral(
                 .filter(|l| l.operation == case.operation)
             {
                 let variant = variant_of(profile, lowering);
-                let skip = (!backend.claims(&lowering.instruction, variant)).then(|| {
-                    format!(
+                let skip = if !backend.claims(&lowering.instruction, variant) {
+                    Some(format!(
                         "{} does not implement {} on {variant}",
                         backend.name(),
                         lowering.instruction
-                    )
-                });
+                    ))
+                } else {
+                    profile
+                        .variant(variant)
+                        .and_then(|v| backend.declines(&lowering.flags, &lowering.instruction, v))
+                };
                 trials.push(NeutralTrial {
                     backend: backend.clone(),
                     profile: profile.clone(),

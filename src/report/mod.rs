@@ -22,6 +22,8 @@ pub struct Summary {
     pub failed: usize,
     pub recorded: usize,
     pub skipped: usize,
+    /// Differences a known-differences file lists: neither passed nor failed.
+    pub known: usize,
 }
 
 impl Summary {
@@ -31,6 +33,7 @@ impl Summary {
             match &r.verdict {
                 None => s.skipped += 1,
                 Some(Verdict::Recorded { .. }) => s.recorded += 1,
+                Some(Verdict::KnownDifference { .. }) => s.known += 1,
                 Some(v) if v.is_failure() => s.failed += 1,
                 Some(_) => s.passed += 1,
             }
@@ -39,12 +42,45 @@ impl Summary {
     }
 }
 
+impl Summary {
+    /// Counts cross-vendor verdicts (`None` for a skipped trial) the same way.
+    pub fn of_neutral<'a>(
+        verdicts: impl IntoIterator<Item = Option<&'a crate::neutral::lower::NeutralVerdict>>,
+    ) -> Self {
+        use crate::neutral::lower::NeutralVerdict;
+        let mut s = Summary::default();
+        for v in verdicts {
+            match v {
+                None => s.skipped += 1,
+                Some(NeutralVerdict::Recorded { .. }) => s.recorded += 1,
+                Some(NeutralVerdict::KnownDifference { .. }) => s.known += 1,
+                Some(v) if v.is_failure() => s.failed += 1,
+                Some(_) => s.passed += 1,
+            }
+        }
+        s
+    }
+
+    /// Adds another summary's counts to this one.
+    pub fn add(&mut self, other: &Summary) {
+        self.passed += other.passed;
+        self.failed += other.failed;
+        self.recorded += other.recorded;
+        self.skipped += other.skipped;
+        self.known += other.known;
+    }
+}
+
 impl std::fmt::Display for Summary {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "{} passed, {} failed, {} skipped ({} unspecified recorded)",
+            "{} passed, {} failed, {} skipped ({} unspecified recorded",
             self.passed, self.failed, self.skipped, self.recorded
-        )
+        )?;
+        if self.known > 0 {
+            write!(f, ", {} known differences", self.known)?;
+        }
+        f.write_str(")")
     }
 }

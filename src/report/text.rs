@@ -134,8 +134,27 @@ pub fn render(trial: &Trial, verdict: &Verdict, palette: Palette) -> String {
         verdict.label()
     );
     out.push_str(&describe_setting(trial));
+    render_body(&mut out, verdict, palette);
+    out
+}
+
+fn render_body(out: &mut String, verdict: &Verdict, palette: Palette) {
     match verdict {
         Verdict::Conforms => {}
+        Verdict::KnownDifference {
+            reason,
+            entry,
+            difference,
+        } => {
+            let _ = writeln!(out, "  known difference ({entry}): {reason}");
+            render_body(out, difference, palette);
+        }
+        Verdict::StaleEntry { reason, entry } => {
+            let _ = writeln!(
+                out,
+                "  listed as a known difference at {entry} ({reason}), but conforms: remove the entry"
+            );
+        }
         Verdict::Differs { mismatches } => {
             // Fills that went wrong the same way are shown once.
             let mut shown: Vec<(String, Vec<&str>)> = Vec::new();
@@ -184,7 +203,6 @@ pub fn render(trial: &Trial, verdict: &Verdict, palette: Palette) -> String {
             }
         }
     }
-    out
 }
 
 fn render_mismatch(m: &Mismatch, palette: Palette) -> String {
@@ -230,7 +248,11 @@ pub fn memory_diff(rows: &[WordRow], palette: Palette) -> String {
             ChangeTag::Insert => ("+", palette.added),
             ChangeTag::Equal => (" ", Style::new()),
         };
-        let _ = write!(out, "    {style}{sign}{}{style:#}", change.value());
+        let _ = writeln!(
+            out,
+            "    {style}{sign}{}{style:#}",
+            change.value().trim_end_matches('\n')
+        );
     }
     out
 }

@@ -1,0 +1,312 @@
+//! The project file, `plc-conformance.yaml`: the external backends a project runs alongside the
+//! built-in ones, under `plc-conformance run` and `cargo test` alike.
+//!
+//! ```yaml
+//! backends:
+//!   - name: my-emulator
+//!     command: ./target/release/my-emulator --conformance   # run by `sh -c`
+//!     profile: mitsubishi-iqr        # the family it implements; the handshake must agree
+//!     timeout: 5                     # seconds per case
+//!     known_differences: conformance/my-emulator.known.yaml
+//!     requires: [./target/release/my-emulator]
+//! ```
+//!
+//! Paths are relative to the file's folder, which is also the backends' working directory.
+//! `$PLC_CONFORMANCE` in a command is the plc-conformance binary itself, so a project can serve
+//! a built-in model through the protocol.
+
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use schemars::JsonSchema;
+use serde::Deserialize;
+
+use super::{ExternalSpec, Launch, DEFAULT_BATCH, DEFAULT_STARTUP_TIMEOUT, DEFAULT_TIMEOUT};
+use crate::load::{parse_yaml, read_file, FileContext, LoadErrorKind, LoadErrors};
+use crate::model::Location;
+
+/// The file name looked for in the project root.
+pub const FILE_NAME: &str = "plc-conformance.yaml";
+/// The environment variable naming another project file.
+pub const ENV_CONFIG: &str = "PLC_CONFORMANCE_CONFIG";
+/// The environment variable that turns a backend whose `requires` are missing from a skip into
+/// an error: CI sets it, so that a backend it should run is never silently left out.
+pub const ENV_REQUIRE: &str = "PLC_CONFORMANCE_REQUIRE_BACKENDS";
+/// The environment variable a backend's command sees naming the plc-conformance binary.
+pub const ENV_SELF: &str = "PLC_CONFORMANCE";
+
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+#[schemars(title = "plc-conformance project file")]
+pub struct ProjectFileSpec {
+    /// External backends, run as extra trials.
+    #[serde(default)]
+    pub backends: Vec<BackendSpec>,
+}
+
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct BackendSpec {
+    /// The name in trial names: lowercase letters, digits, `-` and `_`.
+    pub name: String,
+    /// A command line run by `sh -c`, or a list of program and arguments run directly.
+    pub command: CommandSpec,
+    /// The profile family the backend implements; its handshake must claim the same.
+    #[serde(default)]
+    pub profile: Option<String>,
+    /// Seconds to wait for one case's answer.
+    #[serde(default)]
+    pub timeout: Option<f64>,
+    /// Seconds to wait for the backend to start and answer `hello`.
+    #[serde(default)]
+    pub startup_timeout: Option<f64>,
+    /// The backend's known-differences file.
+    #[serde(default)]
+    pub known_differences: Option<PathBuf>,
+    /// Files the backend needs (an interpreter in a virtual environment, a built binary). When
+    /// one is missing the backend is skipped with a message, or is an error when
+    /// `PLC_CONFORMANCE_REQUIRE_BACKENDS` is set.
+    #[serde(default)]
+    pub requires: Vec<PathBuf>,
+    /// Cases per `run` message.
+    #[serde(default)]
+    pub batch: Option<usize>,
+}
+
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(untagged)]
+pub enum CommandSpec {
+    Shell(String),
+    Exec(Vec<String>),
+}
+
+/// A backend from the project file.
+#[derive(Debug, Clone)]
+pub struct Configured {
+    pub spec: ExternalSpec,
+    pub requires: Vec<PathBuf>,
+    pub location: Location,
+}
+
+impl Configured {
+    /// What is missing for this backend to run, if anything.
+    pub fn missing(&self) -> Option<String> {
+        let missing: Vec<String> = self
+            .requires
+            .iter()
+            .filter(|p| !p.exists())
+            .map(|p| p.display().to_string())
+            .collect();
+        (!missing.is_empty()).then(|| {
+            format!(
+                "external backend `{}` ({}) needs {}, which is missing",
+                self.spec.name,
+                self.location,
+                missing.join(", ")
+            )
+        })
+    }
+}
+
+/// Where the project file is: `PLC_CONFORMANCE_CONFIG`, else `ROOT/plc-conformance.yaml`. The
+/// flag says whether it was named explicitly (then it must exist).
+pub fn locate(root: &Path) -> (PathBuf, bool) {
+    match std::env::var_os(ENV_CONFIG) {
+        Some(p) if !p.is_empty() => (PathBuf::from(p), true),
+        _ => (root.join(FILE_NAME), false),
+    }
+}
+
+/// Whether missing requirements are errors (`PLC_CONFORMANCE_REQUIRE_BACKENDS` set and not `0`).
+pub fn requirements_enforced() -> bool {
+    std::env::var(ENV_REQUIRE).is_ok_and(|v| !v.is_empty() && v != "0")
+}
+
+/// Reads the project file. `plc_conformance` is the binary backends see as `$PLC_CONFORMANCE`.
+pub fn load(file: &Path, plc_conformance: &Path) -> Result<Vec<Configured>, LoadErrors> {
+    let text = read_file(file).map_err(|e| LoadErrors(vec![e]))?;
+    let spec: ProjectFileSpec = parse_yaml(file, &text).map_err(|e| LoadErrors(vec![e]))?;
+    let dir = file
+        .parent()
+        .map(Path::to_path_buf)
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or_else(|| PathBuf::from("."));
+    let mut errors = Vec::new();
+    let mut cx = FileContext::new(file, &text, &mut errors);
+    let mut out: Vec<Configured> = Vec::new();
+    let mut seen: Vec<(String, Location)> = Vec::new();
+    for (i, b) in spec.backends.into_iter().enumerate() {
+        let key = |k: &str| format!("backends[{i}].{k}");
+        if !valid_name(&b.name) {
+            cx.error(
+                key("name"),
+                LoadErrorKind::Invalid(format!(
+                    "`{}` is not a backend name: use lowercase letters, digits, `-` and `_`",
+                    b.name
+                )),
+            );
+        }
+        let location = cx.location(&format!("backends[{i}]"));
+        if let Some((_, first)) = seen.iter().find(|(n, _)| *n == b.name) {
+            cx.error(
+                key("name"),
+                LoadErrorKind::Invalid(format!(
+                    "backend name `{}` is already used at {first}",
+                    b.name
+                )),
+            );
+        }
+        seen.push((b.name.clone(), location.clone()));
+        let launch = match b.command {
+            CommandSpec::Shell(s) if !s.trim().is_empty() => Launch::Shell(s),
+            CommandSpec::Exec(v) if !v.is_empty() => Launch::Exec(v),
+            _ => {
+                cx.error(
+                    key("command"),
+                    LoadErrorKind::Invalid("empty command".into()),
+                );
+                continue;
+            }
+        };
+        let mut seconds = |k: &str, value: Option<f64>, default: Duration| match value {
+            None => default,
+            Some(s) if s.is_finite() && s > 0.0 && s <= 86_400.0 => Duration::from_secs_f64(s),
+            Some(s) => {
+                cx.error(
+                    key(k),
+                    LoadErrorKind::Invalid(format!(
+                        "{s} is not a time limit: give seconds above 0 and at most a day"
+                    )),
+                );
+                default
+            }
+        };
+        let timeout = seconds("timeout", b.timeout, DEFAULT_TIMEOUT);
+        let startup_timeout = seconds(
+            "startup_timeout",
+            b.startup_timeout,
+            DEFAULT_STARTUP_TIMEOUT,
+        );
+        if b.batch == Some(0) {
+            cx.error(
+                key("batch"),
+                LoadErrorKind::Invalid("a batch holds at least one case".into()),
+            );
+        }
+        let mut spec = ExternalSpec::new(b.name, launch);
+        spec.profile = b.profile;
+        spec.timeout = timeout;
+        spec.startup_timeout = startup_timeout;
+        spec.known_differences = b.known_differences.map(|p| dir.join(p));
+        spec.cwd = Some(dir.clone());
+        spec.env = vec![(ENV_SELF.into(), plc_conformance.display().to_string())];
+        spec.batch = b.batch.unwrap_or(DEFAULT_BATCH).max(1);
+        out.push(Configured {
+            spec,
+            requires: b.requires.into_iter().map(|p| dir.join(p)).collect(),
+            location,
+        });
+    }
+    if errors.is_empty() {
+        Ok(out)
+    } else {
+        Err(LoadErrors(errors))
+    }
+}
+
+/// Backend names end up in trial names and on command lines.
+pub fn valid_name(name: &str) -> bool {
+    !name.is_empty()
+        && name
+            .chars()
+            .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-' || c == '_')
+}
+
+/// The JSON Schema (draft-07) of the project file.
+pub fn project_schema() -> serde_json::Value {
+    let generator = schemars::generate::SchemaSettings::draft07().into_generator();
+    serde_json::to_value(generator.into_root_schema_for::<ProjectFileSpec>()).unwrap_or_default()
+}
+
+/// The JSON Schema (draft-07) of a known-differences file.
+pub fn known_schema() -> serde_json::Value {
+    let generator = schemars::generate::SchemaSettings::draft07().into_generator();
+    serde_json::to_value(generator.into_root_schema_for::<super::known::KnownFileSpec>())
+        .unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(name: &str, text: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!(
+            "plc-conformance-config-{}-{name}",
+            std::process::id()
+        ));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let file = dir.join(FILE_NAME);
+        std::fs::write(&file, text).expect("write");
+        file
+    }
+
+    #[test]
+    fn reads_backends_relative_to_the_file() {
+        let file = write(
+            "ok",
+            "backends:\n  - name: emu\n    command: ./emu --serve\n    profile: mitsubishi-iqr\n    \
+             timeout: 0.5\n    known_differences: emu.known.yaml\n    requires: [emu]\n  \
+             - name: py\n    command: [python3, adapter.py]\n",
+        );
+        let dir = file.parent().expect("dir").to_path_buf();
+        let all = load(&file, Path::new("/bin/plc-conformance")).expect("loads");
+        assert_eq!(all.len(), 2);
+        let emu = &all[0].spec;
+        assert_eq!(emu.launch, Launch::Shell("./emu --serve".into()));
+        assert_eq!(emu.timeout, Duration::from_millis(500));
+        assert_eq!(emu.startup_timeout, DEFAULT_STARTUP_TIMEOUT);
+        assert_eq!(emu.known_differences, Some(dir.join("emu.known.yaml")));
+        assert_eq!(emu.cwd, Some(dir.clone()));
+        assert_eq!(
+            emu.env,
+            vec![(ENV_SELF.to_string(), "/bin/plc-conformance".to_string())]
+        );
+        assert_eq!(all[0].location.line, 2);
+        assert!(all[0].missing().is_some_and(|m| m.contains("emu")));
+        assert_eq!(
+            all[1].spec.launch,
+            Launch::Exec(vec!["python3".into(), "adapter.py".into()])
+        );
+        assert_eq!(all[1].spec.timeout, DEFAULT_TIMEOUT);
+        assert!(all[1].missing().is_none());
+    }
+
+    #[test]
+    fn errors_name_file_line_and_key() {
+        let file = write(
+            "bad",
+            "backends:\n  - name: Emu\n    command: x\n  - name: ok\n    command: []\n  \
+             - name: ok\n    command: y\n    timeout: 0\n",
+        );
+        let errors = load(&file, Path::new("p"))
+            .expect_err("invalid")
+            .to_string();
+        let at = |line: usize, rest: &str| format!("{}:{line}: {rest}", file.display());
+        for expected in [
+            at(2, "backends[0].name: `Emu` is not a backend name"),
+            at(5, "backends[1].command: empty command"),
+            at(6, "backends[2].name: backend name `ok` is already used at"),
+            at(8, "backends[2].timeout: 0 is not a time limit"),
+        ] {
+            assert!(errors.contains(&expected), "{expected}\nin:\n{errors}");
+        }
+        let file = write("shape", "backends:\n  - name: emu\n    comand: x\n");
+        let errors = load(&file, Path::new("p"))
+            .expect_err("invalid")
+            .to_string();
+        assert!(
+            errors.contains(&format!("{}:3:", file.display())) && errors.contains("comand"),
+            "{errors}"
+        );
+    }
+}

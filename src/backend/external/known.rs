@@ -1,0 +1,411 @@
+//! Known differences: the cases a backend is expected to get wrong, each with its reason.
+//!
+//! An implementation under test rarely conforms everywhere on day one, and its authors need a
+//! green run that still catches regressions. A listed trial that differs passes as a "known
+//! difference"; a listed trial that conforms fails as a "stale entry", so the list shrinks as
+//! the implementation improves and can never rot; an unlisted difference fails as usual. A
+//! fault is never excused by the list: a crash is not a difference of semantics.
+//!
+//! ```yaml
+//! differences:
+//!   - case: habin-fixed-lowercase-is-invalid
+//!     instruction: HABIN        # optional: every instruction of the case when absent
+//!     variant: rcpu             # optional: every variant when absent
+//!     reason: "int(text, 16) accepts lowercase digits"
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use schemars::JsonSchema;
+use serde::Deserialize;
+
+use crate::compare::Verdict;
+use crate::load::{parse_yaml, read_file, FileContext, LoadErrorKind, LoadErrors};
+use crate::model::{Basis, Corpus};
+use crate::neutral::lower::{NeutralTrial, NeutralVerdict};
+use crate::neutral::NeutralCase;
+use crate::plan::Trial;
+use crate::profile::Profile;
+
+/// A known-differences file as written.
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct KnownFileSpec {
+    pub differences: Vec<EntrySpec>,
+}
+
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct EntrySpec {
+    /// A case id of the corpus (a cross-vendor case id too).
+    pub case: String,
+    /// Only this instruction of the case's file (for a cross-vendor case: only this lowering of
+    /// the profile, e.g. `habin-fixed`).
+    #[serde(default)]
+    pub instruction: Option<String>,
+    /// Only this variant of the profile.
+    #[serde(default)]
+    pub variant: Option<String>,
+    /// Why the backend differs: shown with the trial.
+    pub reason: String,
+}
+
+/// One validated entry.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Entry {
+    pub case: String,
+    pub instruction: Option<String>,
+    pub variant: Option<String>,
+    pub reason: String,
+    /// `file:line` of the entry, to point at when it goes stale.
+    pub location: String,
+}
+
+impl Entry {
+    /// Whether the entry covers a trial of this case, instruction (or lowering) and variant.
+    fn matches(&self, case: &str, instruction: &str, variant: &str) -> bool {
+        self.case == case
+            && self.instruction.as_ref().is_none_or(|i| i == instruction)
+            && self.variant.as_ref().is_none_or(|v| v == variant)
+    }
+}
+
+/// A backend's validated known differences.
+#[derive(Debug, Clone, Default)]
+pub struct KnownDifferences {
+    pub file: PathBuf,
+    pub entries: Vec<Entry>,
+    /// Entries naming cases that are not in the corpus being run, when the corpus is not the
+    /// project's own (`--vectors`): they are ignored rather than errors.
+    pub ignored: Vec<Entry>,
+}
+
+impl KnownDifferences {
+    /// Loads and checks a file against the profile and the corpus. With `strict`, an entry for
+    /// a case the corpus does not have is an error (a typo would otherwise excuse nothing and
+    /// go unnoticed); without it, such entries are set aside.
+    pub fn load(
+        file: &Path,
+        profile: &Profile,
+        corpus: &Corpus,
+        strict: bool,
+    ) -> Result<KnownDifferences, LoadErrors> {
+        let text = read_file(file).map_err(|e| LoadErrors(vec![e]))?;
+        let spec: KnownFileSpec = parse_yaml(file, &text).map_err(|e| LoadErrors(vec![e]))?;
+        let mut errors = Vec::new();
+        let mut cx = FileContext::new(file, &text, &mut errors);
+        let mut known = KnownDifferences {
+            file: file.to_path_buf(),
+            ..KnownDifferences::default()
+        };
+        for (i, e) in spec.differences.into_iter().enumerate() {
+            let key = |k: &str| format!("differences[{i}].{k}");
+            let location = cx.location(&format!("differences[{i}]")).to_string();
+            let entry = Entry {
+                case: e.case,
+                instruction: e.instruction,
+                variant: e.variant,
+                reason: e.reason.trim().to_string(),
+                location,
+            };
+            if entry.reason.is_empty() {
+                cx.error(
+                    key("reason"),
+                    LoadErrorKind::Invalid("a known difference needs its reason".into()),
+                );
+            }
+            if let Some(neutral) = corpus.neutral.iter().find(|c| c.id == entry.case) {
+                check_neutral_entry(&entry, neutral, profile, &mut cx, &key);
+                known.entries.push(entry);
+                continue;
+            }
+            let Some(case) = corpus
+                .cases
+                .iter()
+                .find(|c| c.id == entry.case && c.profiles.contains(&profile.id))
+            else {
+                if strict {
+                    cx.error(
+                        key("case"),
+                        LoadErrorKind::Invalid(format!(
+                            "unknown case id `{}`: no case of profile {} has it",
+                            entry.case, profile.id
+                        )),
+                    );
+                } else {
+                    known.ignored.push(entry);
+                }
+                continue;
+            };
+            if case.basis == Basis::Unspecified {
+                cx.error(
+                    key("case"),
+                    LoadErrorKind::Invalid(format!(
+                        "case `{}` is unspecified: it is recorded and never fails, so there is no \
+                         difference to list",
+                        entry.case
+                    )),
+                );
+            }
+            if let Some(i) = &entry.instruction {
+                if !case.instructions.contains(i) {
+                    cx.error(
+                        key("instruction"),
+                        LoadErrorKind::Unknown {
+                            what: "instruction of this case",
+                            name: i.clone(),
+                            expected: case.instructions.to_vec(),
+                        },
+                    );
+                }
+            }
+            if let Some(v) = &entry.variant {
+                let runs: Vec<String> = profile
+                    .variants
+                    .iter()
+                    .filter(|pv| case.runs_on(&pv.id))
+                    .map(|pv| pv.id.clone())
+                    .collect();
+                if !runs.contains(v) {
+                    cx.error(
+                        key("variant"),
+                        LoadErrorKind::Unknown {
+                            what: "variant of this case",
+                            name: v.clone(),
+                            expected: runs,
+                        },
+                    );
+                }
+            }
+            if let Some(first) = known.entries.iter().find(|k| {
+                k.case == entry.case
+                    && k.instruction == entry.instruction
+                    && k.variant == entry.variant
+            }) {
+                cx.error(
+                    key("case"),
+                    LoadErrorKind::Invalid(format!(
+                        "the same trials are already listed at {}",
+                        first.location
+                    )),
+                );
+            }
+            known.entries.push(entry);
+        }
+        if errors.is_empty() {
+            Ok(known)
+        } else {
+            Err(LoadErrors(errors))
+        }
+    }
+
+    /// The entry covering a trial, if any (the first that matches).
+    pub fn entry(&self, trial: &Trial) -> Option<&Entry> {
+        self.entries
+            .iter()
+            .find(|e| e.matches(&trial.case.id, &trial.instruction, &trial.variant))
+    }
+
+    /// Applies the list to a cross-vendor trial's verdict, as [`KnownDifferences::apply`] does
+    /// to a native one.
+    pub fn apply_neutral(&self, trial: &NeutralTrial, verdict: NeutralVerdict) -> NeutralVerdict {
+        let Some(entry) = self
+            .entries
+            .iter()
+            .find(|e| e.matches(&trial.case.id, &trial.lowering.name, trial.variant()))
+        else {
+            return verdict;
+        };
+        match verdict {
+            NeutralVerdict::Differs { .. } | NeutralVerdict::Unsupported { .. } => {
+                NeutralVerdict::KnownDifference {
+                    reason: entry.reason.clone(),
+                    entry: entry.location.clone(),
+                    difference: Box::new(verdict),
+                }
+            }
+            NeutralVerdict::Matches { .. } => NeutralVerdict::StaleEntry {
+                reason: entry.reason.clone(),
+                entry: entry.location.clone(),
+            },
+            other => other,
+        }
+    }
+
+    /// Applies the list to a trial's verdict.
+    pub fn apply(&self, trial: &Trial, verdict: Verdict) -> Verdict {
+        let Some(entry) = self.entry(trial) else {
+            return verdict;
+        };
+        match verdict {
+            Verdict::Differs { .. } | Verdict::Unsupported { .. } => Verdict::KnownDifference {
+                reason: entry.reason.clone(),
+                entry: entry.location.clone(),
+                difference: Box::new(verdict),
+            },
+            Verdict::Conforms => Verdict::StaleEntry {
+                reason: entry.reason.clone(),
+                entry: entry.location.clone(),
+            },
+            other => other,
+        }
+    }
+}
+
+/// An entry for a cross-vendor case: `instruction` names one of the profile's lowerings of the
+/// case's operation.
+fn check_neutral_entry(
+    entry: &Entry,
+    case: &NeutralCase,
+    profile: &Profile,
+    cx: &mut FileContext<'_>,
+    key: &dyn Fn(&str) -> String,
+) {
+    let lowerings: Vec<String> = profile
+        .neutral
+        .iter()
+        .flat_map(|n| n.lowerings.iter())
+        .filter(|l| l.operation == case.operation)
+        .map(|l| l.name.clone())
+        .collect();
+    if lowerings.is_empty() {
+        cx.error(
+            key("case"),
+            LoadErrorKind::Invalid(format!(
+                "cross-vendor case `{}` does not run on profile {}: it lowers no {}",
+                entry.case, profile.id, case.operation
+            )),
+        );
+    }
+    if case.basis == Basis::Unspecified {
+        cx.error(
+            key("case"),
+            LoadErrorKind::Invalid(format!(
+                "case `{}` is unspecified: it is recorded and never fails, so there is no \
+                 difference to list",
+                entry.case
+            )),
+        );
+    }
+    if let Some(l) = &entry.instruction {
+        if !lowerings.contains(l) {
+            cx.error(
+                key("instruction"),
+                LoadErrorKind::Unknown {
+                    what: "lowering of this cross-vendor case",
+                    name: l.clone(),
+                    expected: lowerings,
+                },
+            );
+        }
+    }
+    if let Some(v) = &entry.variant {
+        if profile.variant(v).is_none() {
+            let known: Vec<String> = profile.variants.iter().map(|v| v.id.clone()).collect();
+            cx.error(
+                key("variant"),
+                LoadErrorKind::Unknown {
+                    what: "variant",
+                    name: v.clone(),
+                    expected: known,
+                },
+            );
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::collections::{BTreeMap, BTreeSet};
+    use std::sync::Arc;
+
+    use super::*;
+    use crate::model::{Case, Citation, Location};
+
+    fn case(id: &str, basis: Basis, variants: Option<&[&str]>) -> Arc<Case> {
+        Arc::new(Case {
+            id: id.into(),
+            basis,
+            citation: Citation {
+                manual: "m".into(),
+                page: "1".into(),
+                text: None,
+            },
+            location: Location {
+                file: PathBuf::from("v.yaml"),
+                line: 1,
+            },
+            instructions: Arc::from(vec!["HABIN".to_string(), "HABINP".to_string()]),
+            profiles: Arc::from(vec!["p".to_string()]),
+            variants: variants.map(|v| v.iter().map(|s| s.to_string()).collect::<BTreeSet<_>>()),
+            flags: BTreeMap::new(),
+            operands: BTreeMap::new(),
+            before: BTreeMap::new(),
+            expect: None,
+            note: None,
+        })
+    }
+
+    fn profile() -> Profile {
+        serde_yaml::from_str(
+            "id: p\nname: P\nshort: p\nmanuals: {}\nerrors: {signal: code, flag: SM0}\n\
+             devices: {D: {first: 0, last: 100}}\ninstructions: {}\n\
+             variants: [{id: a, description: a}, {id: b, description: b}]\n",
+        )
+        .expect("profile")
+    }
+
+    fn load(text: &str, strict: bool) -> Result<KnownDifferences, String> {
+        let dir =
+            std::env::temp_dir().join(format!("plc-conformance-known-unit-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let file = dir.join(format!("k{}.yaml", text.len()));
+        std::fs::write(&file, text).expect("write");
+        let corpus = Corpus {
+            cases: vec![
+                case("c1", Basis::Manual, None),
+                case("only-a", Basis::Manual, Some(&["a"])),
+                case("open", Basis::Unspecified, None),
+            ],
+            neutral: Vec::new(),
+        };
+        KnownDifferences::load(&file, &profile(), &corpus, strict).map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn entries_are_checked_against_the_corpus_and_profile() {
+        let errors = load(
+            "differences:\n\
+             - {case: c1, instruction: DHABIN, reason: r}\n\
+             - {case: only-a, variant: b, reason: r}\n\
+             - {case: open, reason: r}\n\
+             - {case: c1, reason: \"  \"}\n\
+             - {case: c1, reason: again}\n\
+             - {case: typo, reason: r}\n",
+            true,
+        )
+        .expect_err("invalid");
+        for expected in [
+            ":2: differences[0].instruction: unknown instruction of this case `DHABIN`; expected one of: HABIN, HABINP",
+            ":3: differences[1].variant: unknown variant of this case `b`; expected one of: a",
+            ":4: differences[2].case: case `open` is unspecified",
+            ":5: differences[3].reason: a known difference needs its reason",
+            ":6: differences[4].case: the same trials are already listed at",
+            ":7: differences[5].case: unknown case id `typo`",
+        ] {
+            assert!(errors.contains(expected), "{expected}\nin:\n{errors}");
+        }
+    }
+
+    #[test]
+    fn another_corpus_sets_unknown_cases_aside() {
+        let known = load(
+            "differences:\n  - {case: c1, reason: r}\n  - {case: elsewhere, reason: r}\n",
+            false,
+        )
+        .expect("loads");
+        assert_eq!(known.entries.len(), 1);
+        assert_eq!(known.ignored.len(), 1);
+        assert_eq!(known.ignored[0].case, "elsewhere");
+    }
+}

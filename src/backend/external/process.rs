@@ -1,0 +1,363 @@
+//! One running backend process: its pipes, read with bounds and deadlines.
+//!
+//! Nothing a backend does may hang or exhaust the harness. Stdout is read by a thread that cuts
+//! lines at [`MAX_LINE`] bytes (the rest of an oversized line is read and dropped, never
+//! stored) and hands them over a bounded channel, so that waiting for an answer can time out.
+//! Stdin is written by a thread too: a backend that stops reading cannot block the harness.
+//! Stderr is kept as a bounded tail to show with a failing case. The process runs in its own
+//! process group, so that killing it also kills what a `sh -c` wrapper started.
+
+use std::collections::VecDeque;
+use std::io::{Read, Write};
+use std::path::PathBuf;
+use std::process::{Child, ChildStdin, Command, ExitStatus, Stdio};
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError, SyncSender};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+/// The longest line read from a backend: 1 MiB.
+pub const MAX_LINE: usize = 1 << 20;
+/// How much of a backend's stderr is kept.
+const STDERR_TAIL: usize = 16 * 1024;
+/// How long a backend has to exit after `shutdown` before it is killed.
+const GRACE: Duration = Duration::from_millis(1000);
+
+/// How to start a backend.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Launch {
+    /// A command line run by the shell (`sh -c`).
+    Shell(String),
+    /// A program and its arguments, run directly.
+    Exec(Vec<String>),
+}
+
+impl std::fmt::Display for Launch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Launch::Shell(s) => f.write_str(s),
+            Launch::Exec(args) => f.write_str(&args.join(" ")),
+        }
+    }
+}
+
+/// What came out of a backend's stdout.
+#[derive(Debug)]
+pub enum Next {
+    Line(Vec<u8>),
+    /// A line longer than [`MAX_LINE`]: its first bytes and its full length.
+    Oversized {
+        head: Vec<u8>,
+        length: usize,
+    },
+    /// Nothing before the deadline.
+    Timeout,
+    /// Stdout closed (the process exited or closed it) or could not be read.
+    Closed(Option<String>),
+}
+
+pub struct Process {
+    child: Child,
+    to_stdin: Option<SyncSender<Vec<u8>>>,
+    lines: Receiver<Vec<Next>>,
+    /// Lines received and not yet asked for.
+    pending: VecDeque<Next>,
+    stderr: Arc<Mutex<StderrTail>>,
+    threads: Vec<JoinHandle<()>>,
+    /// Whether the child has been waited for: from then on its process group id may be reused
+    /// and is never signalled.
+    reaped: bool,
+}
+
+/// The tail of a backend's stderr, and how many bytes it has written in all.
+#[derive(Default)]
+struct StderrTail {
+    bytes: VecDeque<u8>,
+    total: u64,
+}
+
+impl Process {
+    pub fn spawn(
+        launch: &Launch,
+        cwd: Option<&PathBuf>,
+        env: &[(String, String)],
+    ) -> std::io::Result<Process> {
+        let mut command = match launch {
+            Launch::Shell(line) => {
+                let mut c = Command::new("sh");
+                c.arg("-c").arg(line);
+                c
+            }
+            Launch::Exec(args) => {
+                let (program, rest) = args.split_first().ok_or_else(|| {
+                    std::io::Error::new(std::io::ErrorKind::InvalidInput, "empty command")
+                })?;
+                let mut c = Command::new(program);
+                c.args(rest);
+                c
+            }
+        };
+        if let Some(dir) = cwd {
+            command.current_dir(dir);
+        }
+        command
+            .envs(env.iter().map(|(k, v)| (k, v)))
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped());
+        #[cfg(unix)]
+        {
+            use std::os::unix::process::CommandExt;
+            command.process_group(0);
+        }
+        let mut child = command.spawn()?;
+        let missing = || std::io::Error::other("a pipe of the child is missing");
+        let stdin = child.stdin.take().ok_or_else(missing)?;
+        let stdout = child.stdout.take().ok_or_else(missing)?;
+        let stderr_pipe = child.stderr.take().ok_or_else(missing)?;
+
+        // Bounded: at most this many reads (each at most one line of MAX_LINE bytes plus 64 KiB)
+        // are ever held.
+        let (line_tx, lines) = mpsc::sync_channel(32);
+        let (to_stdin, stdin_rx) = mpsc::sync_channel::<Vec<u8>>(16);
+        let stderr = Arc::new(Mutex::new(StderrTail::default()));
+        let tail = stderr.clone();
+        let threads = vec![
+            std::thread::spawn(move || read_lines(stdout, &line_tx)),
+            std::thread::spawn(move || write_messages(stdin, &stdin_rx)),
+            std::thread::spawn(move || keep_tail(stderr_pipe, &tail)),
+        ];
+        Ok(Process {
+            child,
+            to_stdin: Some(to_stdin),
+            lines,
+            stderr,
+            threads,
+            pending: VecDeque::new(),
+            reaped: false,
+        })
+    }
+
+    /// Queues one message line (the newline is added). A process that has stopped reading
+    /// shows up as a closed stdout or a timeout when its answer is awaited.
+    pub fn send(&mut self, mut message: Vec<u8>) {
+        message.push(b'\n');
+        if let Some(tx) = &self.to_stdin {
+            let _ = tx.send(message);
+        }
+    }
+
+    /// The next line, waiting until `deadline`.
+    pub fn next_line(&mut self, deadline: Instant) -> Next {
+        if let Some(next) = self.pending.pop_front() {
+            return next;
+        }
+        let wait = deadline.saturating_duration_since(Instant::now());
+        match self.lines.recv_timeout(wait) {
+            Ok(batch) => {
+                self.pending.extend(batch);
+                self.pending.pop_front().unwrap_or(Next::Closed(None))
+            }
+            Err(RecvTimeoutError::Timeout) => Next::Timeout,
+            Err(RecvTimeoutError::Disconnected) => Next::Closed(None),
+        }
+    }
+
+    /// How many bytes the process has written to stderr so far.
+    pub fn stderr_mark(&self) -> u64 {
+        self.stderr.lock().map(|t| t.total).unwrap_or(0)
+    }
+
+    /// What the process wrote to stderr since `mark` (as much as is kept), after giving the
+    /// reader a moment to catch up with a process that has just exited.
+    pub fn stderr_since(&self, mark: u64, settle: Duration) -> String {
+        let until = Instant::now() + settle;
+        let mut last = self.stderr_mark();
+        while Instant::now() < until {
+            std::thread::sleep(Duration::from_millis(5));
+            let now = self.stderr_mark();
+            if now == last && self.threads.get(2).is_none_or(|t| t.is_finished()) {
+                break;
+            }
+            last = now;
+        }
+        let Ok(tail) = self.stderr.lock() else {
+            return String::new();
+        };
+        let new = tail.total.saturating_sub(mark) as usize;
+        let kept = new.min(tail.bytes.len());
+        let start = tail.bytes.len() - kept;
+        let bytes: Vec<u8> = tail.bytes.iter().skip(start).copied().collect();
+        let mut text = String::from_utf8_lossy(&bytes).into_owned();
+        if kept < new {
+            text.insert_str(0, "[earlier output dropped]\n");
+        }
+        text
+    }
+
+    /// The exit status, waiting up to `wait` for the process to end.
+    pub fn exit_status(&mut self, wait: Duration) -> Option<ExitStatus> {
+        let until = Instant::now() + wait;
+        loop {
+            match self.child.try_wait() {
+                Ok(Some(status)) => {
+                    self.reaped = true;
+                    return Some(status);
+                }
+                Ok(None) if Instant::now() < until => std::thread::sleep(Duration::from_millis(2)),
+                _ => return None,
+            }
+        }
+    }
+
+    /// Kills the process (with its process group while the group id is still its own) and
+    /// reaps it.
+    pub fn kill(&mut self) {
+        self.to_stdin = None;
+        if self.reaped {
+            return;
+        }
+        #[cfg(unix)]
+        {
+            if let Ok(pgid) = i32::try_from(self.child.id()) {
+                // SAFETY: kill(2) takes no pointers. The child leads its own process group
+                // (spawned with process_group(0)) and has not been reaped, so the group id is
+                // still the one it created.
+                unsafe {
+                    libc::kill(-pgid, libc::SIGKILL);
+                }
+            }
+        }
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        self.reaped = true;
+    }
+
+    /// Sends `shutdown`, closes stdin and waits a moment for the process to exit; kills it if it
+    /// does not.
+    pub fn shutdown(mut self, message: Vec<u8>) {
+        self.send(message);
+        self.to_stdin = None;
+        if self.exit_status(GRACE).is_none() {
+            self.kill();
+        }
+    }
+}
+
+impl Drop for Process {
+    fn drop(&mut self) {
+        self.kill();
+    }
+}
+
+/// Describes how a process ended, for a crash report.
+pub fn describe_exit(status: Option<ExitStatus>) -> String {
+    let Some(status) = status else {
+        return "closed its stdout but did not exit".into();
+    };
+    #[cfg(unix)]
+    {
+        use std::os::unix::process::ExitStatusExt;
+        if let Some(signal) = status.signal() {
+            let name = match signal {
+                6 => " (SIGABRT)",
+                9 => " (SIGKILL)",
+                11 => " (SIGSEGV)",
+                15 => " (SIGTERM)",
+                _ => "",
+            };
+            return format!("was killed by signal {signal}{name}");
+        }
+    }
+    match status.code() {
+        Some(code) => format!("exited with status {code}"),
+        None => "exited".into(),
+    }
+}
+
+/// Reads stdout into lines. Every line complete after one read goes over the channel in one
+/// message: a batch of answers costs one hand-over, not one per case.
+fn read_lines(mut stdout: impl Read, tx: &SyncSender<Vec<Next>>) {
+    let mut buf = vec![0u8; 64 * 1024];
+    let mut line: Vec<u8> = Vec::new();
+    let mut length = 0usize;
+    loop {
+        let n = match stdout.read(&mut buf) {
+            Ok(0) => {
+                let _ = tx.send(vec![Next::Closed(None)]);
+                return;
+            }
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => {
+                let _ = tx.send(vec![Next::Closed(Some(format!(
+                    "stdout could not be read: {e}"
+                )))]);
+                return;
+            }
+        };
+        let mut batch = Vec::new();
+        let mut rest = &buf[..n];
+        while !rest.is_empty() {
+            let (body, complete, used) = match rest.iter().position(|&b| b == b'\n') {
+                Some(i) => (&rest[..i], true, i + 1),
+                None => (rest, false, rest.len()),
+            };
+            // Past the limit the line is only counted, never stored.
+            let room = MAX_LINE.saturating_sub(line.len());
+            line.extend_from_slice(&body[..body.len().min(room)]);
+            length += body.len();
+            rest = &rest[used..];
+            if complete {
+                batch.push(if length > MAX_LINE {
+                    line.truncate(256);
+                    Next::Oversized {
+                        head: std::mem::take(&mut line),
+                        length,
+                    }
+                } else {
+                    if line.last() == Some(&b'\r') {
+                        line.pop();
+                    }
+                    Next::Line(std::mem::take(&mut line))
+                });
+                length = 0;
+            }
+        }
+        if !batch.is_empty() && tx.send(batch).is_err() {
+            return;
+        }
+    }
+}
+
+fn write_messages(mut stdin: ChildStdin, rx: &Receiver<Vec<u8>>) {
+    while let Ok(message) = rx.recv() {
+        if stdin
+            .write_all(&message)
+            .and_then(|()| stdin.flush())
+            .is_err()
+        {
+            // The process stopped reading; drain so senders never block.
+            while rx.recv().is_ok() {}
+            return;
+        }
+    }
+}
+
+fn keep_tail(mut stderr: impl Read, tail: &Mutex<StderrTail>) {
+    let mut buf = [0u8; 4096];
+    loop {
+        match stderr.read(&mut buf) {
+            Ok(0) => return,
+            Ok(n) => {
+                let Ok(mut t) = tail.lock() else { return };
+                t.total += n as u64;
+                t.bytes.extend(&buf[..n]);
+                let excess = t.bytes.len().saturating_sub(STDERR_TAIL);
+                t.bytes.drain(..excess);
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(_) => return,
+        }
+    }
+}

@@ -1,0 +1,408 @@
+//! The messages of the external-backend protocol, version [`PROTOCOL_VERSION`].
+//!
+//! One JSON object per line in each direction; `docs/protocol.md` is the specification for
+//! implementers and `schema/protocol.schema.json` is generated from these types, so the document,
+//! the schema and the harness cannot drift apart. Messages from a backend are read strictly
+//! (unknown fields are errors): a misspelt `writes` must not read as "wrote nothing".
+
+use std::collections::BTreeMap;
+
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+/// The protocol version this harness speaks. A backend answering `hello` with any other version
+/// is refused before a case runs.
+pub const PROTOCOL_VERSION: u32 = 1;
+
+/// A message from the harness to a backend.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum HarnessMessage {
+    /// The first message: the backend answers with its own `hello`.
+    Hello {
+        /// The protocol version the harness speaks.
+        protocol: u32,
+        /// The harness and its version, for logs.
+        harness: String,
+    },
+    /// Cases to execute: the backend answers each with one `result` or `unsupported` line, in
+    /// the order given.
+    Run { cases: Vec<CaseRequest> },
+    /// The last message: the backend exits. The harness then closes stdin and, after a grace
+    /// period, kills a backend that is still running.
+    Shutdown,
+}
+
+/// One case to execute, with everything needed to execute it.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CaseRequest {
+    /// Unique within the session; the answer repeats it.
+    pub id: u64,
+    /// The corpus case id (the same case runs under several fills, variants and instructions).
+    pub case: String,
+    /// The instruction as the manual names it, e.g. `HABIN` or `HABINP`.
+    pub instruction: String,
+    /// The vendor profile id, e.g. `mitsubishi-iqr`.
+    pub profile: String,
+    /// The profile variant (CPU model or firmware), e.g. `rcpu`.
+    pub variant: String,
+    /// Every mode flag the instruction reads: the case's setting, or the profile default.
+    pub flags: BTreeMap<String, bool>,
+    /// Flags this variant does not implement, with the value it behaves as: such a CPU acts as
+    /// if the flag held this value whatever `flags` says.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub ignored_flags: BTreeMap<String, bool>,
+    /// Operands by the manual's names: a device as a string (`"D100"`) or a constant as an
+    /// integer (`4`, `-1`).
+    pub operands: BTreeMap<String, OperandValue>,
+    /// The fill pattern of the words the case does not set (see `docs/protocol.md` for the
+    /// formula): what a word outside `memory` holds.
+    pub fill: FillName,
+    /// The memory before execution: every word the case may touch, fill included. The backend
+    /// reports memory after for these same ranges (or lists its writes).
+    pub memory: Vec<MemoryRange>,
+}
+
+/// An operand: a device name or a constant.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(untagged)]
+pub enum OperandValue {
+    /// A word device as the manuals write it, e.g. `D100`.
+    Device(#[schemars(regex(pattern = r"^[A-Z]+[0-9]+$"))] String),
+    /// A constant (`K4` is `4`, `H0ABC` is `2748`).
+    Constant(i64),
+}
+
+/// The two fill patterns of [`crate::memory::Fill`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+pub enum FillName {
+    A,
+    B,
+}
+
+/// Consecutive words from a start device.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct MemoryRange {
+    /// The first word, e.g. `D100`.
+    #[schemars(regex(pattern = r"^[A-Z]+[0-9]+$"))]
+    pub start: String,
+    /// The words from `start` on, as unsigned 16-bit integers.
+    pub words: Vec<u16>,
+}
+
+/// A message from a backend to the harness.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum BackendMessage {
+    /// The answer to the harness's `hello`.
+    Hello {
+        /// The protocol version the backend speaks; must equal the harness's.
+        protocol: u32,
+        backend: BackendInfo,
+        capabilities: Capabilities,
+    },
+    /// What one case did. Words in neither `memory` nor `writes` are unchanged.
+    Result {
+        /// The `id` of the case answered.
+        id: u64,
+        /// Memory after execution, e.g. the ranges the request gave. A word reported with its
+        /// old value is not a change.
+        #[serde(default, skip_serializing_if = "Vec::is_empty")]
+        memory: Vec<MemoryRange>,
+        /// The words written, by device name: an alternative to `memory` for backends that
+        /// track writes. Both may be given; `writes` wins for a word in both.
+        #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+        writes: BTreeMap<String, u16>,
+        /// The operation error signalled, or null for none.
+        #[serde(default)]
+        error: Option<ErrorReport>,
+    },
+    /// The backend does not implement this case. For a case it claims in its capabilities this
+    /// counts as a difference, never as a skip.
+    Unsupported { id: u64, reason: String },
+}
+
+/// Who the backend is.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct BackendInfo {
+    pub name: String,
+    pub version: String,
+}
+
+/// What a backend implements. Trials outside it are skipped with a reason; trials inside it
+/// must be answered.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Capabilities {
+    /// The vendor profile id it implements, e.g. `mitsubishi-iqr`.
+    pub profile: String,
+    /// The instructions it implements, as the profile names them.
+    pub instructions: Vec<String>,
+    /// The variants it implements; every variant of the profile when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub variants: Option<Vec<String>>,
+    /// Flags of which it implements only some settings: flag -> the settings it implements, as
+    /// the variant sees them. Flags not listed are implemented in both settings.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub flags: BTreeMap<String, Vec<bool>>,
+}
+
+/// An operation error: the vendor's code, or the flag a vendor signals with.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "lowercase", deny_unknown_fields)]
+pub enum ErrorReport {
+    /// The error code, e.g. `13313` for 3401H.
+    Code(u16),
+    /// The error flag turned on, e.g. `"M8004"`.
+    Flag(#[schemars(regex(pattern = r"^[A-Z]+[0-9]+$"))] String),
+}
+
+impl HarnessMessage {
+    /// Reads one line. Equivalent to deserializing the enum, but field by field: serde reads an
+    /// internally tagged enum by buffering the whole message first, which for a batch of cases
+    /// costs more than executing them.
+    pub fn from_line(line: &[u8]) -> Result<HarnessMessage, serde_json::Error> {
+        use serde::de::Error;
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Line {
+            #[serde(rename = "type")]
+            kind: String,
+            protocol: Option<u32>,
+            harness: Option<String>,
+            cases: Option<Vec<CaseRequest>>,
+        }
+        let l: Line = serde_json::from_slice(line)?;
+        let only = |allowed: &[&str]| {
+            let present = [
+                ("protocol", l.protocol.is_some()),
+                ("harness", l.harness.is_some()),
+                ("cases", l.cases.is_some()),
+            ];
+            match present.iter().find(|(k, p)| *p && !allowed.contains(k)) {
+                Some((k, _)) => Err(serde_json::Error::custom(format!(
+                    "unknown field `{k}` in a `{}` message",
+                    l.kind
+                ))),
+                None => Ok(()),
+            }
+        };
+        let missing = |k: &'static str| serde_json::Error::missing_field(k);
+        match l.kind.as_str() {
+            "hello" => {
+                only(&["protocol", "harness"])?;
+                Ok(HarnessMessage::Hello {
+                    protocol: l.protocol.ok_or_else(|| missing("protocol"))?,
+                    harness: l.harness.clone().ok_or_else(|| missing("harness"))?,
+                })
+            }
+            "run" => {
+                only(&["cases"])?;
+                Ok(HarnessMessage::Run {
+                    cases: l.cases.ok_or_else(|| missing("cases"))?,
+                })
+            }
+            "shutdown" => {
+                only(&[])?;
+                Ok(HarnessMessage::Shutdown)
+            }
+            other => Err(serde_json::Error::unknown_variant(
+                other,
+                &["hello", "run", "shutdown"],
+            )),
+        }
+    }
+}
+
+impl BackendMessage {
+    /// Reads one line, field by field (see [`HarnessMessage::from_line`]).
+    pub fn from_line(line: &[u8]) -> Result<BackendMessage, serde_json::Error> {
+        use serde::de::Error;
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Line {
+            #[serde(rename = "type")]
+            kind: String,
+            id: Option<u64>,
+            memory: Option<Vec<MemoryRange>>,
+            writes: Option<BTreeMap<String, u16>>,
+            // Present-and-null and absent both mean "no error".
+            #[serde(default)]
+            error: Option<ErrorReport>,
+            reason: Option<String>,
+            protocol: Option<u32>,
+            backend: Option<BackendInfo>,
+            capabilities: Option<Capabilities>,
+        }
+        let l: Line = serde_json::from_slice(line)?;
+        let present = [
+            ("id", l.id.is_some()),
+            ("memory", l.memory.is_some()),
+            ("writes", l.writes.is_some()),
+            ("error", l.error.is_some()),
+            ("reason", l.reason.is_some()),
+            ("protocol", l.protocol.is_some()),
+            ("backend", l.backend.is_some()),
+            ("capabilities", l.capabilities.is_some()),
+        ];
+        let only = |allowed: &[&str]| match present.iter().find(|(k, p)| *p && !allowed.contains(k))
+        {
+            Some((k, _)) => Err(serde_json::Error::custom(format!(
+                "unknown field `{k}` in a `{}` message",
+                l.kind
+            ))),
+            None => Ok(()),
+        };
+        let missing = |k: &'static str| serde_json::Error::missing_field(k);
+        match l.kind.as_str() {
+            "result" => {
+                only(&["id", "memory", "writes", "error"])?;
+                Ok(BackendMessage::Result {
+                    id: l.id.ok_or_else(|| missing("id"))?,
+                    memory: l.memory.unwrap_or_default(),
+                    writes: l.writes.unwrap_or_default(),
+                    error: l.error,
+                })
+            }
+            "unsupported" => {
+                only(&["id", "reason"])?;
+                Ok(BackendMessage::Unsupported {
+                    id: l.id.ok_or_else(|| missing("id"))?,
+                    reason: l.reason.ok_or_else(|| missing("reason"))?,
+                })
+            }
+            "hello" => {
+                only(&["protocol", "backend", "capabilities"])?;
+                Ok(BackendMessage::Hello {
+                    protocol: l.protocol.ok_or_else(|| missing("protocol"))?,
+                    backend: l.backend.ok_or_else(|| missing("backend"))?,
+                    capabilities: l.capabilities.ok_or_else(|| missing("capabilities"))?,
+                })
+            }
+            other => Err(serde_json::Error::unknown_variant(
+                other,
+                &["hello", "result", "unsupported"],
+            )),
+        }
+    }
+}
+
+/// Any message of the protocol: the root of the JSON Schema.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(untagged)]
+#[schemars(
+    title = "plc-conformance external-backend protocol, version 1",
+    description = "One JSON object per line. The harness sends HarnessMessage lines on the \
+                   backend's stdin; the backend answers with BackendMessage lines on stdout."
+)]
+pub enum ProtocolMessage {
+    Harness(HarnessMessage),
+    Backend(BackendMessage),
+}
+
+/// The JSON Schema (draft-07) of the protocol's messages, as `plc-conformance schema --kind
+/// protocol` prints it.
+pub fn protocol_schema() -> serde_json::Value {
+    let generator = schemars::generate::SchemaSettings::draft07().into_generator();
+    serde_json::to_value(generator.into_root_schema_for::<ProtocolMessage>()).unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn messages_read_as_documented() {
+        let hello: BackendMessage = serde_json::from_str(
+            r#"{"type":"hello","protocol":1,"backend":{"name":"x","version":"1"},
+                "capabilities":{"profile":"mitsubishi-iqr","instructions":["HABIN"],
+                "flags":{"SM705":[false]}}}"#,
+        )
+        .expect("hello");
+        assert!(matches!(hello, BackendMessage::Hello { protocol: 1, .. }));
+        let result: BackendMessage = serde_json::from_str(
+            r#"{"type":"result","id":3,"writes":{"D200":23181},"error":{"code":13313}}"#,
+        )
+        .expect("result");
+        assert_eq!(
+            result,
+            BackendMessage::Result {
+                id: 3,
+                memory: vec![],
+                writes: BTreeMap::from([("D200".into(), 0x5A8D)]),
+                error: Some(ErrorReport::Code(0x3401)),
+            }
+        );
+        let run: HarnessMessage = serde_json::from_str(
+            r#"{"type":"run","cases":[{"id":1,"case":"c","instruction":"HABIN",
+                "profile":"p","variant":"v","flags":{"SM705":true},"operands":{"s":"D100","n":4},
+                "fill":"A","memory":[{"start":"D100","words":[16693,17464]}]}]}"#,
+        )
+        .expect("run");
+        let HarnessMessage::Run { cases } = run else {
+            panic!("not a run message")
+        };
+        assert_eq!(cases[0].operands["n"], OperandValue::Constant(4));
+        assert_eq!(cases[0].operands["s"], OperandValue::Device("D100".into()));
+        assert_eq!(
+            serde_json::to_string(&HarnessMessage::Shutdown).expect("json"),
+            r#"{"type":"shutdown"}"#
+        );
+    }
+
+    #[test]
+    fn reading_field_by_field_agrees_with_the_enums() {
+        let backend = [
+            r#"{"type":"hello","protocol":1,"backend":{"name":"x","version":"1"},"capabilities":{"profile":"p","instructions":["HABIN"],"variants":["v"],"flags":{"SM705":[false]}}}"#,
+            r#"{"type":"result","id":3,"writes":{"D200":23181},"error":{"code":13313}}"#,
+            r#"{"id":3,"type":"result","memory":[{"start":"D200","words":[1,2]}],"error":null}"#,
+            r#"{"type":"result","id":4,"error":{"flag":"M8004"}}"#,
+            r#"{"type":"unsupported","id":5,"reason":"no"}"#,
+            r#"{"type":"result","id":3,"reason":"no"}"#,
+            r#"{"type":"unsupported","id":5}"#,
+            r#"{"type":"result"}"#,
+            r#"{"type":"bye","id":5}"#,
+            r#"{"type":"result","id":3,"writes":{"D200":65536}}"#,
+            r#"{"type":"result","id":3,"write":{}}"#,
+            r#"[1,2]"#,
+        ];
+        for line in backend {
+            let enum_way = serde_json::from_str::<BackendMessage>(line).ok();
+            assert_eq!(
+                BackendMessage::from_line(line.as_bytes()).ok(),
+                enum_way,
+                "{line}"
+            );
+        }
+        let harness = [
+            r#"{"type":"hello","protocol":1,"harness":"h"}"#,
+            r#"{"type":"run","cases":[]}"#,
+            r#"{"type":"shutdown"}"#,
+            r#"{"type":"run"}"#,
+            r#"{"type":"stop"}"#,
+        ];
+        for line in harness {
+            let enum_way = serde_json::from_str::<HarnessMessage>(line).ok();
+            assert_eq!(
+                HarnessMessage::from_line(line.as_bytes()).ok(),
+                enum_way,
+                "{line}"
+            );
+        }
+        // Stricter than serde, which lets a unit variant of a tagged enum carry extra fields.
+        assert!(HarnessMessage::from_line(br#"{"type":"shutdown","cases":[]}"#).is_err());
+    }
+
+    #[test]
+    fn a_misspelt_field_is_refused() {
+        let e = serde_json::from_str::<BackendMessage>(r#"{"type":"result","id":3,"write":{}}"#);
+        assert!(e.is_err());
+        let e = serde_json::from_str::<BackendMessage>(
+            r#"{"type":"result","id":3,"writes":{"D200":65536}}"#,
+        );
+        assert!(e.is_err(), "a word wider than 16 bits");
+    }
+}

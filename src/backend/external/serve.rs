@@ -1,0 +1,168 @@
+//! The other side of the protocol: a built-in backend served over stdin/stdout.
+//!
+//! `plc-conformance serve --profile ID` answers the protocol with the profile's reference model.
+//! Run as an external backend against the corpus it must conform everywhere the model does: that
+//! proves the whole protocol path (window, flags, fill, answers) end to end, and it is the
+//! native adapter the protocol benchmarks measure.
+
+use std::collections::BTreeMap;
+use std::io::{BufRead, Write};
+
+use super::protocol::{
+    BackendInfo, BackendMessage, Capabilities, CaseRequest, ErrorReport, FillName, HarnessMessage,
+    OperandValue, PROTOCOL_VERSION,
+};
+use crate::backend::{Backend, Request, Response};
+use crate::device::Device;
+use crate::memory::{Fill, Image};
+use crate::model::{ErrorSignal, Operand};
+use crate::profile::Profile;
+
+/// Serves one backend until `shutdown` or the end of input. Errors are I/O errors and messages
+/// that are not the harness's; both end the session.
+pub fn serve(
+    backend: &dyn Backend,
+    profile: &Profile,
+    input: impl BufRead,
+    mut output: impl Write,
+) -> Result<(), String> {
+    let mut input = input;
+    let mut line = String::new();
+    loop {
+        line.clear();
+        let read = input
+            .read_line(&mut line)
+            .map_err(|e| format!("stdin could not be read: {e}"))?;
+        if read == 0 {
+            return Ok(());
+        }
+        if line.trim().is_empty() {
+            continue;
+        }
+        let message = HarnessMessage::from_line(line.as_bytes()).map_err(|e| {
+            format!(
+                "not a harness message ({e}): {}",
+                line.chars().take(200).collect::<String>()
+            )
+        })?;
+        match message {
+            HarnessMessage::Hello { .. } => {
+                write_message(&mut output, &hello(backend, profile))?;
+            }
+            HarnessMessage::Run { cases } => {
+                for case in &cases {
+                    write_message(&mut output, &answer(backend, profile, case))?;
+                }
+            }
+            HarnessMessage::Shutdown => return Ok(()),
+        }
+        output
+            .flush()
+            .map_err(|e| format!("stdout could not be written: {e}"))?;
+    }
+}
+
+fn write_message(output: &mut impl Write, message: &BackendMessage) -> Result<(), String> {
+    serde_json::to_writer(&mut *output, message)
+        .and_then(|()| output.write_all(b"\n").map_err(serde_json::Error::io))
+        .map_err(|e| format!("stdout could not be written: {e}"))
+}
+
+/// The capabilities of a built-in backend: every instruction it claims on some variant.
+fn hello(backend: &dyn Backend, profile: &Profile) -> BackendMessage {
+    let instructions = profile
+        .instructions
+        .keys()
+        .filter(|i| profile.variants.iter().any(|v| backend.claims(i, &v.id)))
+        .cloned()
+        .collect();
+    BackendMessage::Hello {
+        protocol: PROTOCOL_VERSION,
+        backend: BackendInfo {
+            name: format!("plc-conformance serve ({})", backend.name()),
+            version: env!("CARGO_PKG_VERSION").to_string(),
+        },
+        capabilities: Capabilities {
+            profile: profile.id.clone(),
+            instructions,
+            variants: None,
+            flags: BTreeMap::new(),
+        },
+    }
+}
+
+fn answer(backend: &dyn Backend, profile: &Profile, case: &CaseRequest) -> BackendMessage {
+    let unsupported = |reason: String| BackendMessage::Unsupported {
+        id: case.id,
+        reason,
+    };
+    if case.profile != profile.id {
+        return unsupported(format!("this server implements {}", profile.id));
+    }
+    let Some(variant) = profile.variant(&case.variant) else {
+        return unsupported(format!("no variant {} in {}", case.variant, profile.id));
+    };
+    let mut operands = BTreeMap::new();
+    for (name, value) in &case.operands {
+        let operand = match value {
+            OperandValue::Device(d) => match d.parse::<Device>() {
+                Ok(d) => Operand::Device(d),
+                Err(e) => return unsupported(e.to_string()),
+            },
+            OperandValue::Constant(k) => Operand::Constant(*k),
+        };
+        operands.insert(name.clone(), operand);
+    }
+    let fill = match case.fill {
+        FillName::A => Fill::A,
+        FillName::B => Fill::B,
+    };
+    // Only words that differ from the fill need to be explicit: the image reads the fill for
+    // the rest, inside the window and past it alike.
+    let mut words = BTreeMap::new();
+    for range in &case.memory {
+        let Ok(mut device) = range.start.parse::<Device>() else {
+            return unsupported(format!("bad device `{}` in memory", range.start));
+        };
+        let first = device.index;
+        for (i, word) in range.words.iter().enumerate() {
+            let Some(index) = first.checked_add(i as u32) else {
+                return unsupported(format!(
+                    "memory from {} runs past the last device number",
+                    range.start
+                ));
+            };
+            device.index = index;
+            if fill.word(&device) != *word {
+                words.insert(device.clone(), *word);
+            }
+        }
+    }
+    let memory = Image::new(words, fill);
+    let request = Request {
+        profile,
+        variant,
+        instruction: &case.instruction,
+        case_id: &case.case,
+        flags: &case.flags,
+        operands: &operands,
+        memory: &memory,
+    };
+    match backend.execute(&request) {
+        Ok(Response::Done(outcome)) => BackendMessage::Result {
+            id: case.id,
+            memory: Vec::new(),
+            writes: outcome
+                .writes
+                .iter()
+                .map(|(d, v)| (d.to_string(), *v))
+                .collect(),
+            error: outcome.error.map(|e| match e {
+                ErrorSignal::Code(c) => ErrorReport::Code(c),
+                ErrorSignal::Flag(d) => ErrorReport::Flag(d.to_string()),
+            }),
+        },
+        Ok(Response::Unsupported(reason)) => unsupported(reason),
+        Err(fault) => unsupported(format!("the built-in backend failed: {fault}")),
+    }
+}

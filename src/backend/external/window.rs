@@ -1,0 +1,186 @@
+//! Which words a request sends: the "window" of memory a case may touch.
+//!
+//! A reference model reads any word through [`crate::memory::Image`], which knows the fill; a
+//! process on the other side of a pipe gets only what the request carries. The window is
+//! generous so that a backend never has to compute the fill: from every device operand on, at
+//! least [`OPERAND_SPAN`] words (more when a constant operand asks for a longer run, as FX5
+//! character counts do), and around every word the case sets. Ranges are clipped to the words
+//! that exist on the variant and merged. A backend that still reads past the window can compute
+//! the word from the fill formula in `docs/protocol.md`.
+
+use std::collections::BTreeMap;
+
+use super::protocol::MemoryRange;
+use crate::backend::Request;
+use crate::device::Device;
+use crate::model::Operand;
+
+/// Words sent from each device operand on.
+pub const OPERAND_SPAN: u32 = 64;
+/// Words sent from each word the case sets on.
+pub const SET_SPAN: u32 = 16;
+/// The most words a constant operand can add to a span.
+const CONSTANT_LIMIT: u32 = 4096;
+/// Ranges closer than this are sent as one.
+const MERGE_GAP: u32 = 8;
+
+/// The ranges of a request's window, per device code in ascending order: `(code, first, last)`.
+pub fn ranges(req: &Request<'_>) -> Vec<(String, u32, u32)> {
+    let longest_constant = req
+        .operands
+        .values()
+        .filter_map(|o| match o {
+            Operand::Constant(k) => u32::try_from(k.unsigned_abs()).ok(),
+            Operand::Device(_) => None,
+        })
+        .map(|k| k.min(CONSTANT_LIMIT))
+        .max()
+        .unwrap_or(0);
+    let operand_span = OPERAND_SPAN + longest_constant;
+    let mut spans: BTreeMap<&str, Vec<(u32, u32)>> = BTreeMap::new();
+    let operands = req.operands.values().filter_map(|o| match o {
+        Operand::Device(d) => Some((d, operand_span)),
+        Operand::Constant(_) => None,
+    });
+    let set = req.memory.explicit().keys().map(|d| (d, SET_SPAN));
+    for (d, len) in operands.chain(set) {
+        let last = d.index.saturating_add(len - 1);
+        spans.entry(&d.code).or_default().push((d.index, last));
+    }
+    let mut out = Vec::new();
+    for (code, list) in spans {
+        let Some(ranges) = req.profile.ranges(req.variant, code) else {
+            continue;
+        };
+        // Clip every span to each range the device has (a gap between ranges holds no word).
+        let mut pieces: Vec<(u32, u32)> = list
+            .iter()
+            .flat_map(|&(first, last)| {
+                ranges
+                    .iter()
+                    .map(move |r| (first.max(r.first), last.min(r.last)))
+            })
+            .filter(|(first, last)| first <= last)
+            .collect();
+        pieces.sort_unstable();
+        let mut merged: Vec<(u32, u32)> = Vec::new();
+        for (first, last) in pieces {
+            match merged.last_mut() {
+                Some((_, end)) if first <= end.saturating_add(MERGE_GAP) => {
+                    *end = (*end).max(last);
+                }
+                _ => merged.push((first, last)),
+            }
+        }
+        out.extend(merged.into_iter().map(|(f, l)| (code.to_string(), f, l)));
+    }
+    out
+}
+
+/// The window with its values before execution: explicit words and fill alike.
+pub fn memory(req: &Request<'_>) -> Vec<MemoryRange> {
+    let fill = req.memory.fill();
+    ranges(req)
+        .into_iter()
+        .map(|(code, first, last)| {
+            let mut device = Device::new(code, first);
+            let mut words = Vec::with_capacity((last - first + 1) as usize);
+            for index in first..=last {
+                device.index = index;
+                words.push(fill.word(&device));
+            }
+            device.index = first;
+            let end = Device::new(device.code.clone(), last);
+            for (d, value) in req.memory.explicit().range(&device..=&end) {
+                words[(d.index - first) as usize] = *value;
+            }
+            MemoryRange {
+                start: device.to_string(),
+                words,
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::memory::{Fill, Image};
+    use crate::profile::Profile;
+
+    fn profile() -> Profile {
+        serde_yaml::from_str(
+            "id: p\nname: P\nshort: p\nmanuals: {}\nerrors: {signal: code, flag: SM0}\n\
+             devices: {D: {first: 0, last: 1000}}\ninstructions: {}\n\
+             variants: [{id: v, description: v}, {id: small, description: s, devices: {D: {first: 0, last: 120}}}]\n",
+        )
+        .expect("profile")
+    }
+
+    fn request_ranges(
+        profile: &Profile,
+        variant: &str,
+        operands: &[(&str, Operand)],
+        set: &[u32],
+    ) -> Vec<(String, u32, u32)> {
+        let operands: BTreeMap<String, Operand> = operands
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.clone()))
+            .collect();
+        let image = Image::new(
+            set.iter().map(|i| (Device::new("D", *i), 0)).collect(),
+            Fill::A,
+        );
+        let flags = BTreeMap::new();
+        let req = Request {
+            profile,
+            variant: profile.variant(variant).expect("variant"),
+            instruction: "X",
+            case_id: "c",
+            flags: &flags,
+            operands: &operands,
+            memory: &image,
+        };
+        ranges(&req)
+    }
+
+    fn dev(i: u32) -> Operand {
+        Operand::Device(Device::new("D", i))
+    }
+
+    #[test]
+    fn covers_operands_and_set_words_merged() {
+        let p = profile();
+        let r = request_ranges(&p, "v", &[("s", dev(100)), ("d", dev(200))], &[100, 101]);
+        assert_eq!(
+            r,
+            vec![("D".into(), 100, 163), ("D".into(), 200, 263)],
+            "the set words lie inside the operand span"
+        );
+        let r = request_ranges(&p, "v", &[("s", dev(100)), ("d", dev(150))], &[]);
+        assert_eq!(r, vec![("D".into(), 100, 213)]);
+    }
+
+    #[test]
+    fn a_count_operand_widens_the_span() {
+        let p = profile();
+        let r = request_ranges(
+            &p,
+            "v",
+            &[("s", dev(0)), ("n", Operand::Constant(100))],
+            &[],
+        );
+        assert_eq!(r, vec![("D".into(), 0, 163)]);
+    }
+
+    #[test]
+    fn clips_to_the_variant_range() {
+        let p = profile();
+        let ranges = p.ranges(p.variant("small").expect("v"), "D").expect("D");
+        assert_eq!((ranges.first, ranges.last), (0, 120));
+        let r = request_ranges(&p, "small", &[("s", dev(100))], &[]);
+        assert_eq!(r, vec![("D".into(), 100, 120)]);
+        let r = request_ranges(&p, "small", &[("s", dev(500))], &[]);
+        assert!(r.is_empty(), "{r:?}");
+    }
+}

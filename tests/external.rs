@@ -1,0 +1,691 @@
+//! External backends: each way a backend can fail is an outcome with its own label, never a pass
+//! and never a harness crash; the protocol path itself conforms; known differences cannot rot.
+//!
+//! The faulty backend (`tests/fixtures/external/faulty_adapter.py`) forwards to the reference
+//! model served by the binary and sabotages one case, `ext-target`, of a three-case corpus:
+//! the case before it and the one after it must still conform.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::{Arc, OnceLock};
+use std::time::Duration;
+
+use plc_conformance::backend::external::config;
+use plc_conformance::backend::external::{ExternalErrorKind, ExternalSpec, Launch};
+use plc_conformance::backend::Backend;
+use plc_conformance::compare::Verdict;
+use plc_conformance::plan::{plan, Trial};
+use plc_conformance::session::{project_backends, Paths, Session, SessionError};
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn fixtures() -> PathBuf {
+    root().join("tests/fixtures/external")
+}
+
+const BIN: &str = env!("CARGO_BIN_EXE_plc-conformance");
+
+/// The Python interpreter itself (not a launcher script in front of it, which would add a
+/// shell start to every restart), or `None` on a machine without python3.
+fn interpreter() -> Option<&'static str> {
+    static PATH: OnceLock<Option<String>> = OnceLock::new();
+    PATH.get_or_init(|| {
+        let out = Command::new("python3")
+            .args(["-c", "import sys; print(sys.executable)"])
+            .output()
+            .ok()?;
+        let path = String::from_utf8_lossy(&out.stdout).trim().to_string();
+        (out.status.success() && !path.is_empty()).then_some(path)
+    })
+    .as_deref()
+}
+
+/// Python runs the fixture adapters; a machine without it cannot run these tests.
+fn python() -> bool {
+    let ok = interpreter().is_some();
+    if !ok {
+        eprintln!("skipped: python3 is not installed; the fixture adapters need it");
+    }
+    ok
+}
+
+fn fixture_session() -> Session {
+    let paths = Paths {
+        vendors: root().join("vendors"),
+        vectors: vec![fixtures().join("vectors")],
+    };
+    Session::load(&paths).unwrap_or_else(|e| panic!("fixture corpus: {e}"))
+}
+
+fn corpus_session() -> Session {
+    Session::load(&Paths::under(root())).unwrap_or_else(|e| panic!("corpus: {e}"))
+}
+
+fn python_backend(name: &str, script: &Path, args: &[&str]) -> ExternalSpec {
+    let python = interpreter().unwrap_or("python3").to_string();
+    let mut argv = vec![python, script.display().to_string()];
+    argv.extend(args.iter().map(|a| a.to_string()));
+    let mut spec = ExternalSpec::new(name, Launch::Exec(argv));
+    spec.env = vec![(config::ENV_SELF.into(), BIN.into())];
+    spec.profile = Some("mitsubishi-iqr".into());
+    spec.timeout = Duration::from_secs(3);
+    spec.startup_timeout = Duration::from_secs(10);
+    spec
+}
+
+fn faulty(mode: &str) -> ExternalSpec {
+    python_backend(
+        "faulty",
+        &fixtures().join("faulty_adapter.py"),
+        &[mode, "ext-target"],
+    )
+}
+
+/// The trials of the one external backend in a session.
+fn trials_of(session: &Session, name: &str) -> Vec<Trial> {
+    let backend: Vec<Arc<dyn Backend>> = session
+        .backends
+        .iter()
+        .filter(|b| b.name() == name)
+        .cloned()
+        .collect();
+    plan(&session.corpus, &session.profiles, &backend)
+}
+
+/// Verdicts by case id, run one trial at a time (as `cargo test` does) or in one batch (as
+/// `plc-conformance run` does).
+fn verdicts(session: &Session, name: &str, batched: bool) -> Vec<(String, Verdict)> {
+    let trials = trials_of(session, name);
+    let verdicts: Vec<Verdict> = if batched {
+        session
+            .run_all(&trials)
+            .into_iter()
+            .map(|v| v.expect("no trial of the fixture corpus is skipped"))
+            .collect()
+    } else {
+        trials.iter().map(|t| session.verdict(t)).collect()
+    };
+    trials
+        .iter()
+        .map(|t| t.case.id.clone())
+        .zip(verdicts)
+        .collect()
+}
+
+fn with_faulty(mode: &str) -> Session {
+    let mut session = fixture_session();
+    session
+        .add_external(faulty(mode), true)
+        .unwrap_or_else(|e| panic!("faulty backend in mode {mode} does not start: {e}"));
+    session
+}
+
+/// Runs the faulty backend both ways and checks that only `ext-target` fails, with `label`;
+/// returns the failure's text.
+fn assert_only_target_fails(mode: &str, label: &str) -> String {
+    let session = with_faulty(mode);
+    let mut text = String::new();
+    for batched in [false, true] {
+        let verdicts = verdicts(&session, "faulty", batched);
+        assert_eq!(verdicts.len(), 3, "{verdicts:?}");
+        for (case, verdict) in &verdicts {
+            if case == "ext-target" {
+                assert_eq!(verdict.label(), label, "{mode}: {verdict:?}");
+                assert!(verdict.is_failure());
+                text = format!("{verdict:?}");
+            } else {
+                assert_eq!(
+                    verdict,
+                    &Verdict::Conforms,
+                    "{mode} (batched: {batched}): {case} must conform once the backend restarts"
+                );
+            }
+        }
+    }
+    text
+}
+
+#[test]
+fn a_crash_fails_the_case_shows_stderr_and_the_run_goes_on() {
+    if !python() {
+        return;
+    }
+    let text = assert_only_target_fails("crash", "crashed");
+    assert!(text.contains("exited with status 3"), "{text}");
+    assert!(
+        text.contains("| faulty adapter: crash on ext-target"),
+        "stderr is shown with the case: {text}"
+    );
+}
+
+#[test]
+fn a_backend_that_cannot_restart_leaves_the_rest_unreachable() {
+    if !python() {
+        return;
+    }
+    let marker =
+        std::env::temp_dir().join(format!("plc-conformance-marker-{}", std::process::id()));
+    let _ = std::fs::remove_file(&marker);
+    let mut spec = faulty("crash-for-good");
+    spec.env
+        .push(("FAULTY_MARKER".into(), marker.display().to_string()));
+    let mut session = fixture_session();
+    session.add_external(spec, true).expect("starts");
+    let v = verdicts(&session, "faulty", true);
+    let _ = std::fs::remove_file(&marker);
+    assert_eq!(v[0].1, Verdict::Conforms);
+    assert_eq!(v[1].1.label(), "crashed");
+    assert_eq!(v[2].1.label(), "unreachable", "{:?}", v[2].1);
+    let text = format!("{:?}", v[2].1);
+    assert!(text.contains("could not be started again"), "{text}");
+    assert!(text.contains("refusing to start after the crash"), "{text}");
+}
+
+#[test]
+fn a_killed_backend_is_a_crash() {
+    if !python() {
+        return;
+    }
+    let text = assert_only_target_fails("kill", "crashed");
+    assert!(text.contains("killed by signal 9 (SIGKILL)"), "{text}");
+}
+
+#[test]
+fn a_hung_backend_times_out_and_is_replaced() {
+    if !python() {
+        return;
+    }
+    let mut session = fixture_session();
+    let mut spec = faulty("hang");
+    spec.timeout = Duration::from_millis(1500);
+    session.add_external(spec, true).expect("starts");
+    let verdicts = verdicts(&session, "faulty", true);
+    let target = &verdicts[1];
+    assert_eq!(target.0, "ext-target");
+    assert_eq!(target.1.label(), "timeout", "{:?}", target.1);
+    let text = format!("{:?}", target.1);
+    assert!(text.contains("within 1.5 s"), "{text}");
+    assert!(
+        text.contains("faulty adapter: hang on ext-target"),
+        "{text}"
+    );
+    assert_eq!(verdicts[2].1, Verdict::Conforms);
+}
+
+#[test]
+fn a_line_that_is_not_json_is_a_protocol_error_quoting_it() {
+    if !python() {
+        return;
+    }
+    let text = assert_only_target_fails("garbage", "protocol-error");
+    assert!(
+        text.contains("`Segmentation fault? no, just not JSON`"),
+        "{text}"
+    );
+}
+
+#[test]
+fn json_that_is_not_a_protocol_message_is_a_protocol_error() {
+    if !python() {
+        return;
+    }
+    let text = assert_only_target_fails("wrong-shape", "protocol-error");
+    assert!(text.contains("not a protocol message"), "{text}");
+    assert!(text.contains(r#"\"writes\": \"D200\""#), "{text}");
+}
+
+#[test]
+fn an_answer_for_another_request_is_a_protocol_error() {
+    if !python() {
+        return;
+    }
+    let text = assert_only_target_fails("wrong-id", "protocol-error");
+    assert!(text.contains("an answer for request"), "{text}");
+}
+
+#[test]
+fn an_oversized_line_is_cut_and_reported() {
+    if !python() {
+        return;
+    }
+    let text = assert_only_target_fails("oversized", "protocol-error");
+    assert!(text.contains("over the 1024 KiB limit"), "{text}");
+    assert!(
+        text.len() < 4096,
+        "the quote of a 2 MiB line is short: {} bytes",
+        text.len()
+    );
+}
+
+#[test]
+fn unsupported_for_a_claimed_case_is_a_difference() {
+    if !python() {
+        return;
+    }
+    let text = assert_only_target_fails("unsupported", "unsupported");
+    assert!(text.contains("not today"), "{text}");
+}
+
+#[test]
+fn a_wrong_value_differs() {
+    if !python() {
+        return;
+    }
+    assert_only_target_fails("differ", "differs");
+}
+
+fn start_error(spec: ExternalSpec) -> (ExternalErrorKind, String) {
+    let mut session = fixture_session();
+    match session.add_external(spec, true) {
+        Err(SessionError::External(e)) => (e.kind.clone(), e.to_string()),
+        Err(other) => panic!("unexpected error: {other}"),
+        Ok(_) => panic!("the backend started"),
+    }
+}
+
+#[test]
+fn handshake_failures_are_errors_before_any_case() {
+    if !python() {
+        return;
+    }
+    let (kind, text) = start_error(faulty("exit-at-start"));
+    assert!(matches!(kind, ExternalErrorKind::Handshake(_)), "{text}");
+    assert!(
+        text.contains("exited with status 1 before answering hello"),
+        "{text}"
+    );
+    assert!(
+        text.contains("| faulty adapter: cannot open the emulator image"),
+        "{text}"
+    );
+
+    let mut spec = faulty("hang-at-start");
+    spec.startup_timeout = Duration::from_secs(1);
+    let (kind, text) = start_error(spec);
+    assert!(matches!(kind, ExternalErrorKind::Handshake(_)), "{text}");
+    assert!(text.contains("no answer to hello within 1 s"), "{text}");
+
+    let (_, text) = start_error(faulty("bad-hello"));
+    assert!(text.contains("`HELLO, this is not JSON`"), "{text}");
+
+    let (kind, text) = start_error(faulty("version"));
+    assert_eq!(kind, ExternalErrorKind::Version { theirs: 99 });
+    assert!(
+        text.contains("speaks protocol version 99; this harness speaks version 1"),
+        "{text}"
+    );
+
+    let (kind, text) = start_error(faulty("profile"));
+    assert!(matches!(kind, ExternalErrorKind::Capabilities(_)), "{text}");
+    assert!(
+        text.contains("configured as implementing profile `mitsubishi-iqr` but its handshake claims `mitsubishi-fx5`"),
+        "{text}"
+    );
+
+    let (_, text) = start_error(faulty("claims-unknown"));
+    assert!(text.contains("claims instruction `FROB`"), "{text}");
+}
+
+#[test]
+fn a_command_that_does_not_exist_cannot_be_started() {
+    let spec = ExternalSpec::new(
+        "nothing",
+        Launch::Exec(vec!["/nonexistent/emulator".into()]),
+    );
+    let (kind, text) = start_error(spec);
+    assert!(matches!(kind, ExternalErrorKind::Spawn(_)), "{text}");
+    assert!(text.contains("`/nonexistent/emulator`"), "{text}");
+}
+
+fn served(profile: &str) -> ExternalSpec {
+    let mut spec = ExternalSpec::new(
+        format!("served-{profile}"),
+        Launch::Shell(format!("\"$PLC_CONFORMANCE\" serve --profile {profile}")),
+    );
+    spec.env = vec![(config::ENV_SELF.into(), BIN.into())];
+    spec.cwd = Some(root().to_path_buf());
+    spec
+}
+
+fn served_reference() -> ExternalSpec {
+    served("mitsubishi-iqr")
+}
+
+/// Every built-in model through the protocol must judge exactly like the model called
+/// directly, on every trial of the corpus and both ways of running.
+#[test]
+fn every_served_reference_model_matches_the_built_in_one_everywhere() {
+    let mut session = corpus_session();
+    let builtin: Vec<Arc<dyn Backend>> = session.backends.clone();
+    assert!(!builtin.is_empty());
+    for model in builtin {
+        let served = session
+            .add_external(served(model.profile()), true)
+            .unwrap_or_else(|e| panic!("serve {} starts: {e}", model.profile()));
+        let direct: Vec<Option<Verdict>> = session.run_all(&plan(
+            &session.corpus,
+            &session.profiles,
+            std::slice::from_ref(&model),
+        ));
+        let served_trials = trials_of(&session, served.name());
+        assert_eq!(direct.len(), served_trials.len(), "{}", model.name());
+        let batched = session.run_all(&served_trials);
+        for ((trial, d), b) in served_trials.iter().zip(&direct).zip(&batched) {
+            assert_eq!(d, b, "{} batched", trial.name());
+            let single = trial.skip.is_none().then(|| session.verdict(trial));
+            assert_eq!(d, &single, "{} one at a time", trial.name());
+            assert!(
+                !d.as_ref().is_some_and(Verdict::is_failure),
+                "{}: {d:?}",
+                trial.name()
+            );
+        }
+    }
+}
+
+/// The Python helper end to end: an adapter written with it conforms where it claims to, and a
+/// flag setting it does not implement skips the case with a reason.
+#[test]
+fn an_adapter_written_with_the_python_helper_conforms() {
+    if !python() {
+        return;
+    }
+    let mut session = corpus_session();
+    let spec = python_backend("habin-py", &fixtures().join("habin_adapter.py"), &[]);
+    session.add_external(spec, true).expect("starts");
+    let trials = trials_of(&session, "habin-py");
+    let verdicts = session.run_all(&trials);
+    let mut ran = 0;
+    for (t, v) in trials.iter().zip(&verdicts) {
+        match v {
+            None => {
+                let unclaimed = format!(
+                    "habin-py does not implement {} on {}",
+                    t.instruction, t.variant
+                );
+                let reason = t.skip.as_deref().unwrap_or_default();
+                assert!(
+                    reason == "habin-py does not implement SM705 on" || reason == unclaimed,
+                    "{}: {reason}",
+                    t.name()
+                );
+            }
+            Some(v) => {
+                ran += 1;
+                assert!(!v.is_failure(), "{}: {v:?}", t.name());
+            }
+        }
+    }
+    assert!(ran > 0, "no trial ran");
+    assert!(
+        trials
+            .iter()
+            .any(|t| t.instruction == "HABIN" && t.skip.is_some()),
+        "the corpus has SM705-on HABIN cases, which must be skipped"
+    );
+}
+
+fn known_file(name: &str, yaml: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("plc-conformance-known-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let file = dir.join(name);
+    std::fs::write(&file, yaml).expect("write known file");
+    file
+}
+
+#[test]
+fn known_differences_pass_stale_entries_fail_and_faults_stay_faults() {
+    if !python() {
+        return;
+    }
+    let listing = |case: &str| {
+        format!("differences:\n  - case: {case}\n    reason: \"the emulator rounds D200 down\"\n")
+    };
+    // Listed and differs: a known difference, not a failure.
+    let mut session = fixture_session();
+    let mut spec = faulty("differ");
+    spec.known_differences = Some(known_file("differ.yaml", &listing("ext-target")));
+    session.add_external(spec, true).expect("starts");
+    let v = verdicts(&session, "faulty", true);
+    assert_eq!(v[1].1.label(), "known-difference");
+    assert!(!v[1].1.is_failure());
+    assert!(format!("{:?}", v[1].1).contains("differ.yaml:2"));
+
+    // Listed but conforms: a stale entry, a failure.
+    let mut session = fixture_session();
+    let mut spec = faulty("differ");
+    spec.known_differences = Some(known_file("stale.yaml", &listing("ext-before")));
+    session.add_external(spec, true).expect("starts");
+    let v = verdicts(&session, "faulty", false);
+    assert_eq!(v[0].1.label(), "stale-entry");
+    assert!(v[0].1.is_failure());
+    assert_eq!(
+        v[1].1.label(),
+        "differs",
+        "an unlisted difference still fails"
+    );
+
+    // A crash on a listed case is still a crash.
+    let mut session = fixture_session();
+    let mut spec = faulty("crash");
+    spec.known_differences = Some(known_file("crash.yaml", &listing("ext-target")));
+    session.add_external(spec, true).expect("starts");
+    let v = verdicts(&session, "faulty", true);
+    assert_eq!(v[1].1.label(), "crashed");
+}
+
+#[test]
+fn a_known_differences_file_naming_an_unknown_case_is_an_error_with_its_line() {
+    let mut session = fixture_session();
+    let mut spec = served_reference();
+    let file = known_file(
+        "unknown.yaml",
+        "differences:\n  - case: ext-target\n    reason: fine\n  - case: no-such-case\n    reason: typo\n    variant: rcpu\n",
+    );
+    spec.known_differences = Some(file.clone());
+    match session.add_external(spec, true) {
+        Err(SessionError::Load(e)) => {
+            let text = e.to_string();
+            assert!(
+                text.contains(&format!(
+                    "{}:4: differences[1].case: unknown case id `no-such-case`",
+                    file.display()
+                )),
+                "{text}"
+            );
+        }
+        Err(other) => panic!("unexpected error: {other}"),
+        Ok(_) => panic!("an unknown case id was accepted"),
+    }
+}
+
+/// The project file's pymcprotocol backend, run on the corpus: every difference it shows must be
+/// in its known-differences file, and every entry there must still differ.
+#[test]
+fn pymcprotocol_differs_exactly_where_its_known_differences_say() {
+    let (file, explicit) = (root().join(config::FILE_NAME), true);
+    let project = project_backends(&file, explicit, Path::new(BIN)).expect("project file loads");
+    let Some(pymc) = project
+        .configured
+        .iter()
+        .find(|c| c.spec.name == "pymcprotocol")
+    else {
+        let why = project
+            .skipped
+            .iter()
+            .find(|w| w.contains("`pymcprotocol`"))
+            .expect("plc-conformance.yaml configures pymcprotocol");
+        eprintln!(
+            "skipped: {why}; install it with `python3 -m venv .venv-adapters && \
+             .venv-adapters/bin/pip install -r adapters/python/requirements.txt` (CI does)"
+        );
+        return;
+    };
+    let mut session = corpus_session();
+    session
+        .add_external(pymc.spec.clone(), true)
+        .expect("pymcprotocol adapter starts");
+    let trials = trials_of(&session, "pymcprotocol");
+    let verdicts = session.run_all(&trials);
+    let failures: Vec<String> = trials
+        .iter()
+        .zip(&verdicts)
+        .filter(|(_, v)| v.as_ref().is_some_and(Verdict::is_failure))
+        .map(|(t, v)| format!("{}: {v:?}", t.name()))
+        .collect();
+    assert!(failures.is_empty(), "{failures:#?}");
+    let count = |label: &str| {
+        verdicts
+            .iter()
+            .filter(|v| v.as_ref().is_some_and(|v| v.label() == label))
+            .count()
+    };
+    assert!(count("conforms") > 0, "pymcprotocol conforms nowhere");
+    assert!(
+        count("known-difference") > 0,
+        "the lowercase-digit finding is gone"
+    );
+}
+
+/// The checked-in protocol schema is what the message types generate.
+#[test]
+fn protocol_schema_is_current() {
+    let path = root().join("schema/protocol.schema.json");
+    let text = std::fs::read_to_string(&path).expect("schema/protocol.schema.json");
+    let checked_in: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    assert!(
+        checked_in == plc_conformance::backend::external::protocol::protocol_schema(),
+        "schema/protocol.schema.json is stale: run \
+         `cargo run -- schema --kind protocol > schema/protocol.schema.json`"
+    );
+}
+
+fn cli(args: &[&str]) -> std::process::Output {
+    Command::new(BIN)
+        .args(["--root", root().to_str().unwrap_or(".")])
+        .args(args)
+        .env("NO_COLOR", "1")
+        .env_remove(config::ENV_CONFIG)
+        .output()
+        .expect("the binary runs")
+}
+
+#[test]
+fn the_command_line_reports_a_failed_handshake_before_any_case() {
+    if !python() {
+        return;
+    }
+    let script = fixtures().join("faulty_adapter.py");
+    let backend = format!("external:broken=python3 {} version", script.display());
+    let out = cli(&["run", "--backend", &backend]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("error: external backend `broken`"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("speaks protocol version 99"), "{stderr}");
+    assert!(out.stdout.is_empty(), "no case ran");
+}
+
+#[test]
+fn the_command_line_runs_an_external_backend_and_labels_its_crash() {
+    if !python() {
+        return;
+    }
+    let script = fixtures().join("faulty_adapter.py");
+    let backend = format!(
+        "external:faulty=python3 {} crash ext-target",
+        script.display()
+    );
+    let vectors = fixtures().join("vectors");
+    let out = cli(&[
+        "run",
+        "--vectors",
+        vectors.to_str().unwrap_or_default(),
+        "--backend",
+        &backend,
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    assert!(
+        stdout.contains("faulty::habin::ext-target::rcpu crashed"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("| faulty adapter: crash on ext-target"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("faulty: 2 passed, 1 failed"), "{stdout}");
+}
+
+#[test]
+fn the_command_line_takes_a_known_differences_file_and_fails_a_stale_entry() {
+    let file = known_file(
+        "cli-stale.yaml",
+        "differences:\n  - case: habin-fixed-text-form\n    reason: \"was wrong once\"\n",
+    );
+    let out = cli(&[
+        "run",
+        "--backend",
+        r#"external:served="$PLC_CONFORMANCE" serve --profile mitsubishi-iqr"#,
+        "--known-differences",
+        &format!("served={}", file.display()),
+        "--filter",
+        "habin-fixed-text-form",
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    assert!(
+        stdout.contains("served::habin::habin-fixed-text-form::rcpu stale-entry"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("(was wrong once), but conforms: remove the entry"),
+        "{stdout}"
+    );
+}
+
+#[test]
+fn serve_speaks_the_protocol() {
+    let mut child = Command::new(BIN)
+        .args([
+            "--root",
+            root().to_str().unwrap_or("."),
+            "serve",
+            "--profile",
+            "mitsubishi-iqr",
+        ])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .expect("serve starts");
+    {
+        use std::io::Write;
+        let mut stdin = child.stdin.take().expect("stdin");
+        let messages = concat!(
+            r#"{"type":"hello","protocol":1,"harness":"test"}"#,
+            "\n",
+            r#"{"type":"run","cases":[{"id":7,"case":"c","instruction":"HABIN","profile":"mitsubishi-iqr","variant":"rcpu","flags":{"SM705":false},"operands":{"s":"D100","d":"D200"},"fill":"A","memory":[{"start":"D100","words":[16693,17464]}]}]}"#,
+            "\n",
+            r#"{"type":"shutdown"}"#,
+            "\n"
+        );
+        stdin.write_all(messages.as_bytes()).expect("write");
+    }
+    let out = child.wait_with_output().expect("serve ends");
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 2, "{text}");
+    assert!(
+        lines[0].starts_with(r#"{"type":"hello","protocol":1,"#),
+        "{text}"
+    );
+    assert_eq!(
+        lines[1],
+        r#"{"type":"result","id":7,"writes":{"D200":23181},"error":null}"#
+    );
+}
