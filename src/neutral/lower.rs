@@ -102,7 +102,8 @@ impl NeutralVerdict {
                 entry,
                 difference,
             } => format!(
-                "known difference ({entry}): {reason}; {}",
+                "known difference ({entry}): {}; {}",
+                reason.trim_end_matches('.'),
                 difference.describe()
             ),
             NeutralVerdict::StaleEntry { reason, entry } => format!(
