@@ -13,7 +13,7 @@ use crate::backend::Backend;
 use crate::compare::Verdict;
 use crate::load::{load_corpus, load_profiles, LoadErrors};
 use crate::neutral::lower::{plan_neutral, NeutralTrial, NeutralVerdict};
-use crate::plan::plan;
+use crate::plan::{plan, Trial};
 use crate::report::text::{case_line, render, Palette};
 use crate::report::{json, Summary, TrialResult};
 use crate::session::{project_backends, Paths, ProjectBackends, Session};
@@ -208,46 +208,73 @@ pub(super) fn select_backends(
     Ok(chosen)
 }
 
+/// A loaded session with the chosen backends started, and the project file they came from.
+pub(super) struct Prepared {
+    pub session: Session,
+    pub project: ProjectBackends,
+    pub backends: Vec<std::sync::Arc<dyn Backend>>,
+}
+
+/// Loads the corpus and the project file and starts the backends a command asks for: every
+/// external backend has agreed on the protocol before a case runs.
+pub(super) fn prepare(
+    cli: &Cli,
+    paths: &Paths,
+    args: &BackendArgs,
+    own_corpus: bool,
+) -> Result<Prepared, u8> {
+    let mut session = load(paths)?;
+    let project = project(cli)?;
+    let backends = start_backends(&mut session, &project, args, own_corpus)?;
+    Ok(Prepared {
+        session,
+        project,
+        backends,
+    })
+}
+
+/// [`select_backends`], with its error reported here.
+pub(super) fn start_backends(
+    session: &mut Session,
+    project: &ProjectBackends,
+    args: &BackendArgs,
+    own_corpus: bool,
+) -> Result<Vec<std::sync::Arc<dyn Backend>>, u8> {
+    select_backends(session, project, args, own_corpus).map_err(|message| {
+        let message = message.strip_prefix("error: ").unwrap_or(&message);
+        eprintln!("error: {message}");
+        EXIT_BAD_INPUT
+    })
+}
+
+/// The native and cross-vendor trials of the chosen backends whose names contain `filter`.
+pub(super) fn plan_trials(
+    session: &Session,
+    backends: &[std::sync::Arc<dyn Backend>],
+    filter: Option<&str>,
+) -> (Vec<Trial>, Vec<NeutralTrial>) {
+    let keep = |name: String| filter.is_none_or(|f| name.contains(f));
+    let trials = plan(&session.corpus, &session.profiles, backends)
+        .into_iter()
+        .filter(|t| keep(t.name()))
+        .collect();
+    let neutral = plan_neutral(&session.corpus.neutral, &session.profiles, backends)
+        .into_iter()
+        .filter(|t| keep(t.name()))
+        .collect();
+    (trials, neutral)
+}
+
 fn run(cli: &Cli, paths: &Paths, args: &RunArgs) -> u8 {
-    let mut session = match load(paths) {
-        Ok(s) => s,
-        Err(code) => return code,
-    };
-    let project = match project(cli) {
+    let Prepared {
+        session,
+        project,
+        backends,
+    } = match prepare(cli, paths, &args.backends, args.vectors.is_empty()) {
         Ok(p) => p,
         Err(code) => return code,
     };
-    // Every external backend is started and has agreed on the protocol before a case runs.
-    let backends = match select_backends(
-        &mut session,
-        &project,
-        &args.backends,
-        args.vectors.is_empty(),
-    ) {
-        Ok(b) => b,
-        Err(message) => {
-            let message = message.strip_prefix("error: ").unwrap_or(&message);
-            eprintln!("error: {message}");
-            return EXIT_BAD_INPUT;
-        }
-    };
-    let trials: Vec<_> = plan(&session.corpus, &session.profiles, &backends)
-        .into_iter()
-        .filter(|t| {
-            args.filter
-                .as_ref()
-                .is_none_or(|f| t.name().contains(f.as_str()))
-        })
-        .collect();
-    let neutral: Vec<NeutralTrial> =
-        plan_neutral(&session.corpus.neutral, &session.profiles, &backends)
-            .into_iter()
-            .filter(|t| {
-                args.filter
-                    .as_ref()
-                    .is_none_or(|f| t.name().contains(f.as_str()))
-            })
-            .collect();
+    let (trials, neutral) = plan_trials(&session, &backends, args.filter.as_deref());
     if trials.is_empty() && neutral.is_empty() {
         eprintln!("error: no trial matches (check --backend and --filter; `plc-conformance list` shows what exists)");
         return EXIT_BAD_INPUT;

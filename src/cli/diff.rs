@@ -6,7 +6,9 @@ use anstream::{eprintln, print, println};
 use clap::ValueEnum;
 use serde::Serialize;
 
-use super::commands::{load, project, select_backends, EXIT_BAD_INPUT, EXIT_DIFFERENCES, EXIT_OK};
+use super::commands::{
+    plan_trials, prepare, start_backends, Prepared, EXIT_BAD_INPUT, EXIT_DIFFERENCES, EXIT_OK,
+};
 use super::{BackendArgs, Cli};
 use crate::backend::Backend;
 use crate::backend::Response;
@@ -69,27 +71,13 @@ struct JsonReport<'a> {
 }
 
 pub fn diff(cli: &Cli, paths: &Paths, args: &DiffArgs) -> u8 {
-    let mut session = match load(paths) {
-        Ok(s) => s,
-        Err(code) => return code,
-    };
-    let project = match project(cli) {
-        Ok(p) => p,
-        Err(code) => return code,
-    };
     let own_corpus = args.vectors.is_empty();
-    let choose = |session: &mut Session, backends: &BackendArgs| {
-        select_backends(session, &project, backends, own_corpus).map_err(|message| {
-            let message = message
-                .strip_prefix("error: ")
-                .unwrap_or(&message)
-                .to_string();
-            eprintln!("error: {message}");
-            EXIT_BAD_INPUT
-        })
-    };
-    let chosen = match choose(&mut session, &args.backends) {
-        Ok(c) => c,
+    let Prepared {
+        mut session,
+        project,
+        backends: chosen,
+    } = match prepare(cli, paths, &args.backends, own_corpus) {
+        Ok(p) => p,
         Err(code) => return code,
     };
     if let Some(other) = &args.against {
@@ -101,24 +89,12 @@ pub fn diff(cli: &Cli, paths: &Paths, args: &DiffArgs) -> u8 {
             known_differences: Vec::new(),
             ..args.backends.clone()
         };
-        return match choose(&mut session, &other) {
+        return match start_backends(&mut session, &project, &other, own_corpus) {
             Ok(b) => against(&session, &first, &b[0], args.filter.as_deref()),
             Err(code) => code,
         };
     }
-    let keep = |name: &str| {
-        args.filter
-            .as_ref()
-            .is_none_or(|f| name.contains(f.as_str()))
-    };
-    let trials: Vec<_> = plan(&session.corpus, &session.profiles, &chosen)
-        .into_iter()
-        .filter(|t| keep(&t.name()))
-        .collect();
-    let neutral: Vec<_> = plan_neutral(&session.corpus.neutral, &session.profiles, &chosen)
-        .into_iter()
-        .filter(|t| keep(&t.name()))
-        .collect();
+    let (trials, neutral) = plan_trials(&session, &chosen, args.filter.as_deref());
     if trials.is_empty() && neutral.is_empty() {
         eprintln!("error: no trial matches (check --backend and --filter)");
         return EXIT_BAD_INPUT;
