@@ -174,3 +174,26 @@ fn usage_errors_exit_two_with_help() {
     assert_eq!(out.status.code(), Some(0));
     assert!(text(&out.stdout).contains("--backend <NAME>"));
 }
+
+#[test]
+fn run_reports_cross_vendor_trials_too() {
+    let out = cli(&[
+        "run",
+        "--backend",
+        "fc4a",
+        "--format",
+        "json",
+        "--filter",
+        "xv-h2v-4-digits",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON output");
+    let xv = report["cross_vendor"].as_array().expect("cross_vendor");
+    assert_eq!(xv.len(), 1, "{xv:?}");
+    assert_eq!(
+        xv[0]["name"],
+        "cross-vendor::fc4a::atoh::xv-h2v-4-digits::c10r2"
+    );
+    assert_eq!(xv[0]["verdict"]["verdict"], "matches");
+    assert_eq!(report["summary"]["passed"], 1);
+}
