@@ -45,6 +45,11 @@ fn interpreter() -> Option<&'static str> {
 /// Python runs the fixture adapters; a machine without it cannot run these tests.
 fn python() -> bool {
     let ok = interpreter().is_some();
+    // CI sets PLC_CONFORMANCE_REQUIRE_BACKENDS: there a missing interpreter is a failure.
+    assert!(
+        ok || std::env::var_os("PLC_CONFORMANCE_REQUIRE_BACKENDS").is_none(),
+        "python3 is required for the fixture adapters"
+    );
     if !ok {
         eprintln!("skipped: python3 is not installed; the fixture adapters need it");
     }
