@@ -5,7 +5,7 @@ use std::path::Path;
 
 use super::profiles::unknown;
 use super::{FileContext, LoadErrorKind};
-use crate::model::{Basis, Citation};
+use crate::model::Citation;
 use crate::neutral::lower::{lowering_key, parse_operand};
 use crate::neutral::spec::{NeutralCaseSpec, NeutralFileSpec};
 use crate::neutral::{NeutralCase, NeutralOutcome, Operation};
@@ -111,12 +111,8 @@ fn lower_case(
             file.operation,
             cx,
         ),
-        None if spec.basis == Basis::Unspecified => None,
         None => {
-            cx.error(
-                key,
-                LoadErrorKind::Missing("expect: only `basis: unspecified` may leave it out"),
-            );
+            super::vectors::check_expect_optional(key, spec.basis, cx);
             None
         }
     };

@@ -224,12 +224,8 @@ fn lower_case(
     let before = lower_memory(&format!("{key}.before"), &spec.before, h, cx);
     let expect = match &spec.expect {
         Some(e) => Some(lower_expect(&format!("{key}.expect"), e, h, cx)),
-        None if spec.basis == Basis::Unspecified => None,
         None => {
-            cx.error(
-                key,
-                LoadErrorKind::Missing("expect: only `basis: unspecified` may leave it out"),
-            );
+            check_expect_optional(key, spec.basis, cx);
             None
         }
     };
@@ -267,6 +263,16 @@ pub(crate) fn check_id(key: &str, id: &str, cx: &mut FileContext<'_>) {
             LoadErrorKind::Invalid(format!(
                 "case id `{id}` must be lowercase letters, digits and `-`, like `fixed-4-digits-example`"
             )),
+        );
+    }
+}
+
+/// Only an `unspecified` case may leave its expectation out.
+pub(crate) fn check_expect_optional(key: &str, basis: Basis, cx: &mut FileContext<'_>) {
+    if basis != Basis::Unspecified {
+        cx.error(
+            key,
+            LoadErrorKind::Missing("expect: only `basis: unspecified` may leave it out"),
         );
     }
 }

@@ -137,16 +137,7 @@ impl KnownDifferences {
                 }
                 continue;
             };
-            if case.basis == Basis::Unspecified {
-                cx.error(
-                    key("case"),
-                    LoadErrorKind::Invalid(format!(
-                        "case `{}` is unspecified: it is recorded and never fails, so there is no \
-                         difference to list",
-                        entry.case
-                    )),
-                );
-            }
+            check_not_unspecified(&entry, case.basis, &mut cx, &key);
             if let Some(i) = &entry.instruction {
                 if !case.instructions.contains(i) {
                     cx.error(
@@ -252,6 +243,25 @@ impl KnownDifferences {
     }
 }
 
+/// An `unspecified` case is recorded and never fails: there is no difference to list.
+fn check_not_unspecified(
+    entry: &Entry,
+    basis: Basis,
+    cx: &mut FileContext<'_>,
+    key: &dyn Fn(&str) -> String,
+) {
+    if basis == Basis::Unspecified {
+        cx.error(
+            key("case"),
+            LoadErrorKind::Invalid(format!(
+                "case `{}` is unspecified: it is recorded and never fails, so there is no \
+                 difference to list",
+                entry.case
+            )),
+        );
+    }
+}
+
 /// An entry for a cross-vendor case: `instruction` names one of the profile's lowerings of the
 /// case's operation.
 fn check_neutral_entry(
@@ -277,16 +287,7 @@ fn check_neutral_entry(
             )),
         );
     }
-    if case.basis == Basis::Unspecified {
-        cx.error(
-            key("case"),
-            LoadErrorKind::Invalid(format!(
-                "case `{}` is unspecified: it is recorded and never fails, so there is no \
-                 difference to list",
-                entry.case
-            )),
-        );
-    }
+    check_not_unspecified(entry, case.basis, cx, key);
     if let Some(l) = &entry.instruction {
         if !lowerings.contains(l) {
             cx.error(
