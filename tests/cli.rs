@@ -1,20 +1,10 @@
 //! The command line as a user meets it: exit codes, messages with file:line, output formats.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
+use std::path::PathBuf;
 
-fn cli(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_plc-conformance"))
-        .args(["--root", root().to_str().unwrap_or(".")])
-        .args(args)
-        .env("NO_COLOR", "1")
-        .output()
-        .expect("the binary runs")
-}
+use common::{cli, scratch};
 
 fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
@@ -22,10 +12,7 @@ fn text(bytes: &[u8]) -> String {
 
 /// A scratch folder holding one vector file.
 fn scratch_vectors(test: &str, yaml: &str) -> PathBuf {
-    let dir =
-        std::env::temp_dir().join(format!("plc-conformance-cli-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = scratch(&format!("cli-{test}"));
     std::fs::write(dir.join("case.yaml"), yaml).expect("write vector");
     dir
 }

@@ -1,33 +1,16 @@
 //! `plc-conformance diff`: each report format parses or loads, the matrix groups rows, and a
 //! saved run makes a later run fail only on new differences.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
+use std::path::PathBuf;
+
+use common::{cli, root};
 use quick_xml::events::Event;
 use quick_xml::Reader;
 
-fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn cli(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_plc-conformance"))
-        .args(["--root", root().to_str().unwrap_or(".")])
-        .args(args)
-        .env("NO_COLOR", "1")
-        .output()
-        .expect("the binary runs")
-}
-
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
-        "plc-conformance-diff-{}-{name}",
-        std::process::id()
-    ));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
+    common::scratch(&format!("diff-{name}"))
 }
 
 /// Element names and the count of each, from a document that must be well-formed XML.

@@ -2,16 +2,39 @@
 //! a check that the corpus tells each of them apart from the manual.
 #![allow(dead_code)]
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
 use std::sync::Arc;
 
 use plc_conformance::backend::{Backend, Fault, Request, Response};
 use plc_conformance::plan::plan;
 use plc_conformance::session::{Paths, Session};
 
+/// The project root: its `vendors/`, `vectors/` and project file.
+pub fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Runs the binary on this project, without colour.
+pub fn cli(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_plc-conformance"))
+        .args(["--root", root().to_str().unwrap_or(".")])
+        .args(args)
+        .env("NO_COLOR", "1")
+        .output()
+        .expect("the binary runs")
+}
+
+/// An empty scratch folder for one test.
+pub fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("plc-conformance-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
 pub fn session() -> Session {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    match Session::load(&Paths::under(root)) {
+    match Session::load(&Paths::under(root())) {
         Ok(s) => s,
         Err(e) => panic!("the corpus does not load:\n{e}"),
     }
