@@ -160,6 +160,22 @@ pub enum ErrorReport {
     Flag(#[schemars(regex(pattern = r"^[A-Z]+[0-9]+$"))] String),
 }
 
+/// Refuses a field a message of this type does not have: decoding every type's fields into one
+/// struct would otherwise accept, say, `cases` on a `hello`.
+fn only_fields(
+    kind: &str,
+    present: &[(&str, bool)],
+    allowed: &[&str],
+) -> Result<(), serde_json::Error> {
+    use serde::de::Error;
+    match present.iter().find(|(k, p)| *p && !allowed.contains(k)) {
+        Some((k, _)) => Err(serde_json::Error::custom(format!(
+            "unknown field `{k}` in a `{kind}` message"
+        ))),
+        None => Ok(()),
+    }
+}
+
 impl HarnessMessage {
     /// Reads one line. Equivalent to deserializing the enum, but field by field: serde reads an
     /// internally tagged enum by buffering the whole message first, which for a batch of cases
@@ -176,20 +192,12 @@ impl HarnessMessage {
             cases: Option<Vec<CaseRequest>>,
         }
         let l: Line = serde_json::from_slice(line)?;
-        let only = |allowed: &[&str]| {
-            let present = [
-                ("protocol", l.protocol.is_some()),
-                ("harness", l.harness.is_some()),
-                ("cases", l.cases.is_some()),
-            ];
-            match present.iter().find(|(k, p)| *p && !allowed.contains(k)) {
-                Some((k, _)) => Err(serde_json::Error::custom(format!(
-                    "unknown field `{k}` in a `{}` message",
-                    l.kind
-                ))),
-                None => Ok(()),
-            }
-        };
+        let present = [
+            ("protocol", l.protocol.is_some()),
+            ("harness", l.harness.is_some()),
+            ("cases", l.cases.is_some()),
+        ];
+        let only = |allowed: &[&str]| only_fields(&l.kind, &present, allowed);
         let missing = |k: &'static str| serde_json::Error::missing_field(k);
         match l.kind.as_str() {
             "hello" => {
@@ -248,14 +256,7 @@ impl BackendMessage {
             ("backend", l.backend.is_some()),
             ("capabilities", l.capabilities.is_some()),
         ];
-        let only = |allowed: &[&str]| match present.iter().find(|(k, p)| *p && !allowed.contains(k))
-        {
-            Some((k, _)) => Err(serde_json::Error::custom(format!(
-                "unknown field `{k}` in a `{}` message",
-                l.kind
-            ))),
-            None => Ok(()),
-        };
+        let only = |allowed: &[&str]| only_fields(&l.kind, &present, allowed);
         let missing = |k: &'static str| serde_json::Error::missing_field(k);
         match l.kind.as_str() {
             "result" => {
