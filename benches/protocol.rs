@@ -12,11 +12,12 @@
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use plc_conformance::backend::external::{ExternalBackend, ExternalSpec, Launch};
+use plc_conformance::backend::external::ExternalBackend;
 use plc_conformance::backend::{Backend, Request};
+use plc_conformance::execute::{images, requests};
 use plc_conformance::memory::Image;
-use plc_conformance::plan::plan;
-use plc_conformance::session::{Paths, Session};
+use plc_conformance::model::project::{ExternalSettings, Launch};
+use plc_conformance::runner::{Paths, Project};
 
 struct Setup {
     name: &'static str,
@@ -32,7 +33,7 @@ fn main() {
     // ignored.
     let filter: Option<String> = std::env::args().skip(1).find(|a| !a.starts_with("--"));
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let session = match Session::load(&Paths::under(root)) {
+    let session = match Project::load(&Paths::under(root)) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("the corpus does not load:\n{e}");
@@ -45,16 +46,16 @@ fn main() {
         .filter(|b| b.name() == "iqr")
         .cloned()
         .collect();
-    let trials: Vec<_> = plan(&session.corpus, &session.profiles, &reference)
+    let trials: Vec<_> = session
+        .plan(&reference)
         .into_iter()
         .filter(|t| t.skip.is_none())
         .collect();
-    let images: Vec<Vec<Image>> = trials.iter().map(|t| t.images()).collect();
+    let images: Vec<Vec<Image>> = trials.iter().map(images).collect();
     let base: Vec<Request<'_>> = trials
         .iter()
         .zip(&images)
-        .filter_map(|(t, i)| t.requests(i).ok())
-        .flatten()
+        .flat_map(|(t, i)| requests(t, i))
         .collect();
     if base.is_empty() {
         eprintln!("the corpus has no iQ-R request to send");
@@ -144,7 +145,7 @@ fn main() {
     row("built-in model, called directly", requests.len(), best);
 
     for setup in setups {
-        let mut spec = ExternalSpec::new("bench", setup.launch);
+        let mut spec = ExternalSettings::new("bench", setup.launch);
         spec.batch = setup.batch;
         spec.persistent = setup.persistent;
         spec.timeout = Duration::from_secs(30);

@@ -1,29 +1,33 @@
 //! plc-conformance: a differential conformance harness for PLC instructions.
 //!
-//! Data flows one way: [`load`] reads vector files and vendor profiles into a validated
-//! [`model::Corpus`]; [`plan`] pairs every case with every backend variant that should run it;
-//! each [`backend::Backend`] executes a case on a [`memory::Image`]; [`compare`] judges the
-//! outcome against the expectation; [`report`] renders the verdicts.
+//! Data flows one way, one module per stage, none importing from a later one:
 //!
-//! Beside that main line: [`neutral`] asks every vendor the same cross-vendor question through
-//! its own instruction and lifts the answers back to comparable values; [`matrix`] arranges
-//! results as cases x backends with rows grouped by behaviour; [`baseline`] keeps a run and
-//! compares a later one with it; [`backend::external`] runs implementations in other processes
-//! over the documented protocol; [`session`] ties a project's data and backends together.
+//! - [`spec`]: the on-disk formats (vector files, cross-vendor files, profiles, the project file,
+//!   known-differences files), shape only;
+//! - [`load`]: turns them into the validated [`model`] (corpus, profiles, project backends,
+//!   known differences), reporting every problem with `file:line` and key;
+//! - [`plan`]: pairs every case with every backend, variant and instruction (or cross-vendor
+//!   lowering) into [`plan::Trial`]s, deciding what is skipped or cannot fail;
+//! - [`execute`]: runs trials on their [`backend`]s under both fills, batched per backend;
+//! - [`judge`]: turns observations into one [`judge::Verdict`] and applies known differences;
+//! - [`report`]: reporters fed by events render text, JSON, JUnit, HTML and matrices.
+//!
+//! [`runner`] drives the stages for a project, [`libtest`] maps them onto libtest trials for
+//! `cargo test` (and for emulators written in Rust), and [`cli`] is the command line.
+//! [`device`], [`value`], [`memory`] and [`text`] are shared leaves.
 
 pub mod backend;
-pub mod baseline;
 pub mod cli;
-pub mod compare;
 pub mod device;
+pub mod execute;
+pub mod judge;
+pub mod libtest;
 pub mod load;
-pub mod matrix;
 pub mod memory;
 pub mod model;
-pub mod neutral;
 pub mod plan;
-pub mod profile;
 pub mod report;
-pub mod session;
+pub mod runner;
 pub mod spec;
+pub mod text;
 pub mod value;

@@ -108,13 +108,16 @@ fn run_json_reports_every_trial() {
     ]);
     assert_eq!(out.status.code(), Some(0));
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON output");
-    let trials = report["trials"].as_array().expect("trials");
+    assert_eq!(report["format"], "plc-conformance-results");
+    assert_eq!(report["version"], 2);
+    let trials = report["records"].as_array().expect("records");
     assert!(!trials.is_empty());
     assert_eq!(
         report["summary"]["passed"].as_u64(),
         Some(trials.len() as u64)
     );
     for t in trials {
+        assert_eq!(t["status"], "pass");
         assert_eq!(t["verdict"]["verdict"], "conforms");
         assert!(t["line"].as_u64().is_some_and(|l| l > 0));
     }
@@ -175,12 +178,13 @@ fn run_reports_cross_vendor_trials_too() {
     ]);
     assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON output");
-    let xv = report["cross_vendor"].as_array().expect("cross_vendor");
+    let xv = report["records"].as_array().expect("records");
     assert_eq!(xv.len(), 1, "{xv:?}");
     assert_eq!(
-        xv[0]["name"],
+        xv[0]["trial"],
         "cross-vendor::fc4a::atoh::xv-h2v-4-digits::c10r2"
     );
-    assert_eq!(xv[0]["verdict"]["verdict"], "matches");
+    assert_eq!(xv[0]["section"], "cross-vendor hex-to-value");
+    assert_eq!(xv[0]["verdict"]["verdict"], "conforms");
     assert_eq!(report["summary"]["passed"], 1);
 }

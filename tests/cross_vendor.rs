@@ -1,7 +1,8 @@
-//! Cross-vendor cases: a wrong vendor model shows up as a difference in the neutral cases too, a
-//! different kind of error signal is never taken for the expected class, an outcome that depends
-//! on memory the lowering does not set is caught, and bad neutral files are load errors with
-//! file:line.
+//! Cross-vendor cases: a wrong vendor model shows up as a difference in the cross-vendor cases
+//! too, a different kind of error signal is never taken for the expected class, an outcome that
+//! depends on memory the lowering does not set is caught, cross-vendor trials follow the same
+//! rules as native ones (known differences, recorded cases, faults), and bad cross-vendor files
+//! are load errors with file:line.
 
 mod common;
 
@@ -9,28 +10,36 @@ use std::path::Path;
 use std::sync::Arc;
 
 use common::{reference, session, Mutant};
-use plc_conformance::backend::{Backend, Outcome, Response};
+use plc_conformance::backend::{Backend, Fault, Outcome, Response};
 use plc_conformance::device::Device;
+use plc_conformance::judge::{Difference, Status, Verdict};
 use plc_conformance::load::CorpusBuilder;
+use plc_conformance::memory::Fill;
+use plc_conformance::model::known::{Entry, KnownDifferences};
 use plc_conformance::model::ErrorSignal;
-use plc_conformance::neutral::lower::{plan_neutral, NeutralVerdict};
-use plc_conformance::session::Session;
+use plc_conformance::plan::Trial;
+use plc_conformance::report::text::{render, Palette};
+use plc_conformance::runner::{run_one, Project};
 use rstest::rstest;
 
-/// The verdicts of every neutral trial on one backend, by trial name.
-fn verdicts(session: &Session, backend: &Arc<dyn Backend>) -> Vec<(String, NeutralVerdict)> {
-    plan_neutral(
-        &session.corpus.neutral,
-        &session.profiles,
-        std::slice::from_ref(backend),
-    )
-    .into_iter()
-    .filter(|t| t.skip.is_none())
-    .map(|t| (t.name(), t.run()))
-    .collect()
+/// Every cross-vendor trial on one backend.
+fn trials(session: &Project, backend: &Arc<dyn Backend>) -> Vec<Trial> {
+    session
+        .plan(std::slice::from_ref(backend))
+        .into_iter()
+        .filter(|t| t.is_cross_vendor() && t.skip.is_none())
+        .collect()
 }
 
-fn failing(session: &Session, backend: &Arc<dyn Backend>) -> Vec<String> {
+/// The verdicts of every cross-vendor trial on one backend, by trial name.
+fn verdicts(session: &Project, backend: &Arc<dyn Backend>) -> Vec<(String, Verdict)> {
+    trials(session, backend)
+        .into_iter()
+        .map(|t| (t.name(), run_one(&t)))
+        .collect()
+}
+
+fn failing(session: &Project, backend: &Arc<dyn Backend>) -> Vec<String> {
     verdicts(session, backend)
         .into_iter()
         .filter(|(_, v)| v.is_failure())
@@ -39,12 +48,12 @@ fn failing(session: &Session, backend: &Arc<dyn Backend>) -> Vec<String> {
 }
 
 #[test]
-fn every_reference_model_answers_every_neutral_case_as_expected() {
+fn every_reference_model_answers_every_cross_vendor_case_as_expected() {
     let s = session();
     assert!(
-        s.corpus.neutral.len() >= 40,
+        s.corpus.cross_vendor.len() >= 40,
         "the cross-vendor corpus has {} cases",
-        s.corpus.neutral.len()
+        s.corpus.cross_vendor.len()
     );
     for b in &s.backends {
         assert_eq!(failing(&s, b), Vec::<String>::new(), "{}", b.name());
@@ -83,17 +92,14 @@ fn an_idec_model_reporting_a_code_is_not_an_idec_error() {
             other => other,
         })
     });
-    let v = verdicts(&s, &mutant);
-    let (_, lowercase) = v
-        .iter()
-        .find(|(n, _)| n.contains("::atoh::xv-h2v-lowercase::"))
+    let trial = trials(&s, &mutant)
+        .into_iter()
+        .find(|t| t.name().contains("::atoh::xv-h2v-lowercase::"))
         .expect("the lowercase case runs on ATOH");
+    let lowercase = run_one(&trial);
     assert!(lowercase.is_failure(), "{lowercase:?}");
-    assert!(
-        lowercase.describe().contains("actual error 3401H"),
-        "{}",
-        lowercase.describe()
-    );
+    let text = render(&trial, &lowercase, Palette::plain());
+    assert!(text.contains("actual error 3401H"), "{text}");
 }
 
 #[test]
@@ -113,10 +119,118 @@ fn an_outcome_that_depends_on_unset_memory_is_caught() {
     });
     let v = verdicts(&s, &mutant);
     assert!(
-        v.iter()
-            .any(|(_, v)| matches!(v, NeutralVerdict::FillDependent { .. })),
+        v.iter().any(|(_, v)| matches!(
+            v,
+            Verdict::Differs {
+                difference: Difference::FillDependent { .. }
+            }
+        )),
         "no trial noticed the fill dependence"
     );
+}
+
+/// The mutant that copies an unset word into the result: its answer depends on the fill.
+fn reads_unset_memory(s: &Project) -> Arc<dyn Backend> {
+    let fx5 = reference(s, "mitsubishi-fx5");
+    Mutant::new("reads-unset-memory", &fx5, |req, base| {
+        base.execute(req).map(|r| match r {
+            Response::Done(mut o) if o.error.is_none() => {
+                let stray = req.memory.read(&Device::new("D", 150));
+                o.writes.insert(Device::new("D", 200), stray);
+                Response::Done(o)
+            }
+            other => other,
+        })
+    })
+}
+
+/// Native and cross-vendor trials once disagreed here: a listed known difference is not a
+/// failure on either side.
+#[test]
+fn a_listed_cross_vendor_difference_is_a_known_difference_not_a_failure() {
+    let mut s = session();
+    let mutant = reads_unset_memory(&s);
+    let (name, _) = verdicts(&s, &mutant)
+        .into_iter()
+        .find(|(_, v)| v.is_failure())
+        .expect("the mutant fails a cross-vendor trial");
+    let trial = trials(&s, &mutant)
+        .into_iter()
+        .find(|t| t.name() == name)
+        .expect("planned");
+    s.known.insert(
+        "reads-unset-memory".into(),
+        KnownDifferences {
+            file: "known.yaml".into(),
+            entries: vec![Entry {
+                case: trial.case_id().to_string(),
+                instruction: Some(trial.check_name().to_string()),
+                variant: None,
+                reason: "reads D150".into(),
+                location: "known.yaml:2".into(),
+            }],
+            ignored: Vec::new(),
+        },
+    );
+    let listed = trials(&s, &mutant)
+        .into_iter()
+        .find(|t| t.name() == name)
+        .expect("planned");
+    assert!(listed.ignored_because().is_some(), "known at planning time");
+    let v = run_one(&listed);
+    assert!(matches!(v, Verdict::KnownDifference { .. }), "{v:?}");
+    assert_eq!(v.status(), Status::Ignored);
+    assert!(!v.is_failure());
+}
+
+/// Native and cross-vendor trials once disagreed here: an `unspecified` case whose answer
+/// depends on the fill is recorded (with that noted), not a failure.
+#[test]
+fn an_unspecified_cross_vendor_case_that_depends_on_the_fill_is_recorded() {
+    let mut s = session();
+    let text = format!(
+        "{HEADER}  - id: xv-open\n    basis: unspecified\n    text: \"5A8D\"\n    digits: 4\n"
+    );
+    let mut builder = CorpusBuilder::default();
+    builder.add_file(Path::new("xv.yaml"), &text, &s.profiles);
+    s.corpus = builder.finish().expect("loads");
+    let mutant = reads_unset_memory(&s);
+    let v = verdicts(&s, &mutant);
+    assert!(!v.is_empty());
+    assert!(
+        v.iter().any(|(_, v)| matches!(
+            v,
+            Verdict::Recorded {
+                fill_dependent: true,
+                ..
+            }
+        )),
+        "{v:?}"
+    );
+    assert!(v.iter().all(|(_, v)| !v.is_failure()), "{v:?}");
+}
+
+/// Native and cross-vendor trials once disagreed here: a cross-vendor fault says which fill it
+/// happened under.
+#[test]
+fn a_cross_vendor_fault_keeps_its_fill() {
+    let s = session();
+    let iqr = reference(&s, "mitsubishi-iqr");
+    let mutant = Mutant::new("fails-under-fill-b", &iqr, |req, base| {
+        if req.memory.fill() == Fill::B {
+            Err(Fault::Crashed("exited with status 3".into()))
+        } else {
+            base.execute(req)
+        }
+    });
+    let v = verdicts(&s, &mutant);
+    assert!(!v.is_empty());
+    for (name, v) in &v {
+        assert!(
+            matches!(v, Verdict::Fault { fill: Fill::B, .. }),
+            "{name}: {v:?}"
+        );
+    }
 }
 
 const HEADER: &str = "operation: hex-to-value\nsource: test\ncases:\n";

@@ -71,7 +71,7 @@ fn json_report_has_matrices_and_records() {
     let out = cli(&["diff", "--format", "json"]);
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert_eq!(report["format"], "plc-conformance-results");
-    assert_eq!(report["version"], 1);
+    assert_eq!(report["version"], 2);
     let records = report["records"].as_array().expect("records");
     let sections = report["sections"].as_array().expect("sections");
     assert!(!sections.is_empty());

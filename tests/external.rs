@@ -10,12 +10,13 @@ use std::process::Command;
 use std::sync::{Arc, OnceLock};
 use std::time::Duration;
 
-use plc_conformance::backend::external::config;
-use plc_conformance::backend::external::{ExternalErrorKind, ExternalSpec, Launch};
+use plc_conformance::backend::external::ExternalErrorKind;
 use plc_conformance::backend::Backend;
-use plc_conformance::compare::Verdict;
-use plc_conformance::plan::{plan, Trial};
-use plc_conformance::session::{project_backends, Paths, Session, SessionError};
+use plc_conformance::judge::Verdict;
+use plc_conformance::load::{load_project, ENV_CONFIG, ENV_SELF, FILE_NAME};
+use plc_conformance::model::project::{ExternalSettings, Launch};
+use plc_conformance::plan::Trial;
+use plc_conformance::runner::{run_one, verdicts as run_all, Paths, Project, SetupError};
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -56,31 +57,31 @@ fn python() -> bool {
     ok
 }
 
-fn fixture_session() -> Session {
+fn fixture_session() -> Project {
     let paths = Paths {
         vendors: root().join("vendors"),
         vectors: vec![fixtures().join("vectors")],
     };
-    Session::load(&paths).unwrap_or_else(|e| panic!("fixture corpus: {e}"))
+    Project::load(&paths).unwrap_or_else(|e| panic!("fixture corpus: {e}"))
 }
 
-fn corpus_session() -> Session {
-    Session::load(&Paths::under(root())).unwrap_or_else(|e| panic!("corpus: {e}"))
+fn corpus_session() -> Project {
+    Project::load(&Paths::under(root())).unwrap_or_else(|e| panic!("corpus: {e}"))
 }
 
-fn python_backend(name: &str, script: &Path, args: &[&str]) -> ExternalSpec {
+fn python_backend(name: &str, script: &Path, args: &[&str]) -> ExternalSettings {
     let python = interpreter().unwrap_or("python3").to_string();
     let mut argv = vec![python, script.display().to_string()];
     argv.extend(args.iter().map(|a| a.to_string()));
-    let mut spec = ExternalSpec::new(name, Launch::Exec(argv));
-    spec.env = vec![(config::ENV_SELF.into(), BIN.into())];
+    let mut spec = ExternalSettings::new(name, Launch::Exec(argv));
+    spec.env = vec![(ENV_SELF.into(), BIN.into())];
     spec.profile = Some("mitsubishi-iqr".into());
     spec.timeout = Duration::from_secs(3);
     spec.startup_timeout = Duration::from_secs(10);
     spec
 }
 
-fn faulty(mode: &str) -> ExternalSpec {
+fn faulty(mode: &str) -> ExternalSettings {
     python_backend(
         "faulty",
         &fixtures().join("faulty_adapter.py"),
@@ -89,37 +90,37 @@ fn faulty(mode: &str) -> ExternalSpec {
 }
 
 /// The trials of the one external backend in a session.
-fn trials_of(session: &Session, name: &str) -> Vec<Trial> {
+fn trials_of(session: &Project, name: &str) -> Vec<Trial> {
     let backend: Vec<Arc<dyn Backend>> = session
         .backends
         .iter()
         .filter(|b| b.name() == name)
         .cloned()
         .collect();
-    plan(&session.corpus, &session.profiles, &backend)
+    session.plan(&backend)
 }
 
 /// Verdicts by case id, run one trial at a time (as `cargo test` does) or in one batch (as
 /// `plc-conformance run` does).
-fn verdicts(session: &Session, name: &str, batched: bool) -> Vec<(String, Verdict)> {
+fn verdicts(session: &Project, name: &str, batched: bool) -> Vec<(String, Verdict)> {
     let trials = trials_of(session, name);
+    assert!(
+        trials.iter().all(|t| t.skip.is_none()),
+        "no trial of the fixture corpus is skipped"
+    );
     let verdicts: Vec<Verdict> = if batched {
-        session
-            .run_all(&trials)
-            .into_iter()
-            .map(|v| v.expect("no trial of the fixture corpus is skipped"))
-            .collect()
+        run_all(&trials)
     } else {
-        trials.iter().map(|t| session.verdict(t)).collect()
+        trials.iter().map(run_one).collect()
     };
     trials
         .iter()
-        .map(|t| t.case.id.clone())
+        .map(|t| t.case_id().to_string())
         .zip(verdicts)
         .collect()
 }
 
-fn with_faulty(mode: &str) -> Session {
+fn with_faulty(mode: &str) -> Project {
     let mut session = fixture_session();
     session
         .add_external(faulty(mode), true)
@@ -281,10 +282,10 @@ fn a_wrong_value_differs() {
     assert_only_target_fails("differ", "differs");
 }
 
-fn start_error(spec: ExternalSpec) -> (ExternalErrorKind, String) {
+fn start_error(spec: ExternalSettings) -> (ExternalErrorKind, String) {
     let mut session = fixture_session();
     match session.add_external(spec, true) {
-        Err(SessionError::External(e)) => (e.kind.clone(), e.to_string()),
+        Err(SetupError::External(e)) => (e.kind.clone(), e.to_string()),
         Err(other) => panic!("unexpected error: {other}"),
         Ok(_) => panic!("the backend started"),
     }
@@ -335,7 +336,7 @@ fn handshake_failures_are_errors_before_any_case() {
 
 #[test]
 fn a_command_that_does_not_exist_cannot_be_started() {
-    let spec = ExternalSpec::new(
+    let spec = ExternalSettings::new(
         "nothing",
         Launch::Exec(vec!["/nonexistent/emulator".into()]),
     );
@@ -344,17 +345,17 @@ fn a_command_that_does_not_exist_cannot_be_started() {
     assert!(text.contains("`/nonexistent/emulator`"), "{text}");
 }
 
-fn served(profile: &str) -> ExternalSpec {
-    let mut spec = ExternalSpec::new(
+fn served(profile: &str) -> ExternalSettings {
+    let mut spec = ExternalSettings::new(
         format!("served-{profile}"),
         Launch::Shell(format!("\"$PLC_CONFORMANCE\" serve --profile {profile}")),
     );
-    spec.env = vec![(config::ENV_SELF.into(), BIN.into())];
+    spec.env = vec![(ENV_SELF.into(), BIN.into())];
     spec.cwd = Some(root().to_path_buf());
     spec
 }
 
-fn served_reference() -> ExternalSpec {
+fn served_reference() -> ExternalSettings {
     served("mitsubishi-iqr")
 }
 
@@ -369,23 +370,15 @@ fn every_served_reference_model_matches_the_built_in_one_everywhere() {
         let served = session
             .add_external(served(model.profile()), true)
             .unwrap_or_else(|e| panic!("serve {} starts: {e}", model.profile()));
-        let direct: Vec<Option<Verdict>> = session.run_all(&plan(
-            &session.corpus,
-            &session.profiles,
-            std::slice::from_ref(&model),
-        ));
+        let direct: Vec<Verdict> = run_all(&session.plan(std::slice::from_ref(&model)));
         let served_trials = trials_of(&session, served.name());
         assert_eq!(direct.len(), served_trials.len(), "{}", model.name());
-        let batched = session.run_all(&served_trials);
+        let batched = run_all(&served_trials);
         for ((trial, d), b) in served_trials.iter().zip(&direct).zip(&batched) {
             assert_eq!(d, b, "{} batched", trial.name());
-            let single = trial.skip.is_none().then(|| session.verdict(trial));
+            let single = run_one(trial);
             assert_eq!(d, &single, "{} one at a time", trial.name());
-            assert!(
-                !d.as_ref().is_some_and(Verdict::is_failure),
-                "{}: {d:?}",
-                trial.name()
-            );
+            assert!(!d.is_failure(), "{}: {d:?}", trial.name());
         }
     }
 }
@@ -401,14 +394,14 @@ fn an_adapter_written_with_the_python_helper_conforms() {
     let spec = python_backend("habin-py", &fixtures().join("habin_adapter.py"), &[]);
     session.add_external(spec, true).expect("starts");
     let trials = trials_of(&session, "habin-py");
-    let verdicts = session.run_all(&trials);
+    let verdicts = run_all(&trials);
     let mut ran = 0;
     for (t, v) in trials.iter().zip(&verdicts) {
         match v {
-            None => {
+            Verdict::Skipped { .. } => {
                 let unclaimed = format!(
                     "habin-py does not implement {} on {}",
-                    t.instruction, t.variant
+                    t.input.instruction, t.variant
                 );
                 let reason = t.skip.as_deref().unwrap_or_default();
                 assert!(
@@ -417,7 +410,7 @@ fn an_adapter_written_with_the_python_helper_conforms() {
                     t.name()
                 );
             }
-            Some(v) => {
+            v => {
                 ran += 1;
                 assert!(!v.is_failure(), "{}: {v:?}", t.name());
             }
@@ -427,7 +420,7 @@ fn an_adapter_written_with_the_python_helper_conforms() {
     assert!(
         trials
             .iter()
-            .any(|t| t.instruction == "HABIN" && t.skip.is_some()),
+            .any(|t| t.input.instruction == "HABIN" && t.skip.is_some()),
         "the corpus has SM705-on HABIN cases, which must be skipped"
     );
 }
@@ -491,7 +484,7 @@ fn a_known_differences_file_naming_an_unknown_case_is_an_error_with_its_line() {
     );
     spec.known_differences = Some(file.clone());
     match session.add_external(spec, true) {
-        Err(SessionError::Load(e)) => {
+        Err(SetupError::Load(e)) => {
             let text = e.to_string();
             assert!(
                 text.contains(&format!(
@@ -510,17 +503,17 @@ fn a_known_differences_file_naming_an_unknown_case_is_an_error_with_its_line() {
 /// in its known-differences file, and every entry there must still differ.
 #[test]
 fn pymcprotocol_differs_exactly_where_its_known_differences_say() {
-    let (file, explicit) = (root().join(config::FILE_NAME), true);
-    let project = project_backends(&file, explicit, Path::new(BIN)).expect("project file loads");
+    let (file, explicit) = (root().join(FILE_NAME), true);
+    let project = load_project(&file, explicit, Path::new(BIN)).expect("project file loads");
     let Some(pymc) = project
         .configured
         .iter()
-        .find(|c| c.spec.name == "pymcprotocol")
+        .find(|c| c.settings.name == "pymcprotocol")
     else {
         let why = project
             .skipped
             .iter()
-            .find(|w| w.contains("`pymcprotocol`"))
+            .find(|w| w.name == "pymcprotocol")
             .expect("plc-conformance.yaml configures pymcprotocol");
         eprintln!(
             "skipped: {why}; install it with `python3 -m venv .venv-adapters && \
@@ -530,23 +523,18 @@ fn pymcprotocol_differs_exactly_where_its_known_differences_say() {
     };
     let mut session = corpus_session();
     session
-        .add_external(pymc.spec.clone(), true)
+        .add_external(pymc.settings.clone(), true)
         .expect("pymcprotocol adapter starts");
     let trials = trials_of(&session, "pymcprotocol");
-    let verdicts = session.run_all(&trials);
+    let verdicts = run_all(&trials);
     let failures: Vec<String> = trials
         .iter()
         .zip(&verdicts)
-        .filter(|(_, v)| v.as_ref().is_some_and(Verdict::is_failure))
+        .filter(|(_, v)| v.is_failure())
         .map(|(t, v)| format!("{}: {v:?}", t.name()))
         .collect();
     assert!(failures.is_empty(), "{failures:#?}");
-    let count = |label: &str| {
-        verdicts
-            .iter()
-            .filter(|v| v.as_ref().is_some_and(|v| v.label() == label))
-            .count()
-    };
+    let count = |label: &str| verdicts.iter().filter(|v| v.label() == label).count();
     assert!(count("conforms") > 0, "pymcprotocol conforms nowhere");
     assert!(
         count("known-difference") > 0,
@@ -572,7 +560,7 @@ fn cli(args: &[&str]) -> std::process::Output {
         .args(["--root", root().to_str().unwrap_or(".")])
         .args(args)
         .env("NO_COLOR", "1")
-        .env_remove(config::ENV_CONFIG)
+        .env_remove(ENV_CONFIG)
         .output()
         .expect("the binary runs")
 }

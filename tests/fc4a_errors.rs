@@ -11,11 +11,13 @@ use std::path::Path;
 
 use common::{reference, session, Mutant};
 use plc_conformance::backend::{Backend, Response};
-use plc_conformance::compare::Verdict;
+use plc_conformance::judge::Difference;
+use plc_conformance::judge::Verdict;
 use plc_conformance::load::{load_profiles, CorpusBuilder};
 use plc_conformance::model::{Basis, ErrorSignal};
-use plc_conformance::plan::plan;
-use plc_conformance::session::Session;
+use plc_conformance::plan::{Check, Trial};
+use plc_conformance::runner::run_one;
+use plc_conformance::runner::Project;
 use std::sync::Arc;
 
 const PROFILE: &str = "idec-fc4a";
@@ -41,27 +43,37 @@ fn signalling(
 
 /// Runs the FC4A corpus on a backend; checks every trial that expects M8004 fails on the error
 /// alone and every other asserted trial conforms; returns the names of the failing trials.
-fn failing_on_error_only(session: &Session, backend: &Arc<dyn Backend>) -> Vec<String> {
+/// The native trials of the corpus on a backend.
+fn native(session: &Project, backend: &Arc<dyn Backend>) -> Vec<Trial> {
+    session
+        .plan(std::slice::from_ref(backend))
+        .into_iter()
+        .filter(|t| !t.is_cross_vendor())
+        .collect()
+}
+
+fn failing_on_error_only(session: &Project, backend: &Arc<dyn Backend>) -> Vec<String> {
     let m8004 = ErrorSignal::Flag("M8004".parse().expect("a device name"));
     let mut failing = Vec::new();
-    for trial in plan(
-        &session.corpus,
-        &session.profiles,
-        std::slice::from_ref(backend),
-    ) {
+    for trial in native(session, backend) {
         assert!(trial.skip.is_none(), "{} is skipped", trial.name());
-        if trial.case.basis == Basis::Unspecified {
+        let Check::Native { case, .. } = &trial.check else {
+            continue;
+        };
+        if case.basis == Basis::Unspecified {
             continue;
         }
-        let expects_flag = trial
-            .case
+        let expects_flag = case
             .expect
             .as_ref()
             .is_some_and(|e| e.error.as_ref() == Some(&m8004));
-        let verdict = trial.run();
+        let verdict = run_one(&trial);
         if expects_flag {
             assert!(verdict.is_failure(), "{} passes: {verdict:?}", trial.name());
-            let Verdict::Differs { mismatches } = &verdict else {
+            let Verdict::Differs {
+                difference: Difference::Words { mismatches },
+            } = &verdict
+            else {
                 panic!("{}: expected a difference, got {verdict:?}", trial.name());
             };
             assert!(
@@ -123,12 +135,8 @@ fn the_reference_signals_m8004() {
         Some(ErrorSignal::Flag("M8004".parse().expect("a device name"))),
         &base,
     );
-    for trial in plan(
-        &session.corpus,
-        &session.profiles,
-        std::slice::from_ref(&m8004),
-    ) {
-        assert!(!trial.run().is_failure(), "{} fails", trial.name());
+    for trial in session.plan(std::slice::from_ref(&m8004)) {
+        assert!(!run_one(&trial).is_failure(), "{} fails", trial.name());
     }
 }
 

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use plc_conformance::load::{load_profiles, CorpusBuilder, LoadError};
-use plc_conformance::profile::Profiles;
+use plc_conformance::model::profile::Profiles;
 use rstest::rstest;
 
 fn profiles() -> Profiles {

@@ -11,12 +11,12 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use common::{assert_corpus_kills, failing_trials, reference, session, Mutant};
-use plc_conformance::backend::text::{digit_value, pack_low_first, packed_char};
 use plc_conformance::backend::{Backend, Fault, Outcome, Request, Response};
 use plc_conformance::device::Device;
 use plc_conformance::memory::Image;
+use plc_conformance::model::profile::{DeviceRange, DeviceRanges};
 use plc_conformance::model::Operand;
-use plc_conformance::profile::{DeviceRange, DeviceRanges};
+use plc_conformance::text::{digit_value, pack_low_first, packed_char};
 
 const PROFILE: &str = "idec-fc4a";
 
@@ -383,16 +383,14 @@ fn unspecified_upper_byte_is_not_asserted() {
         "unspecified behaviour fails trials: {failing:?}"
     );
     // It does behave differently: the recorded outcome of the 0131H case changes.
-    let probe = plc_conformance::plan::plan(
-        &session.corpus,
-        &session.profiles,
-        std::slice::from_ref(&low_byte),
-    )
-    .into_iter()
-    .find(|t| t.case.id == "atoh-upper-byte-0131h")
-    .expect("the 0131H case is in the corpus");
-    match probe.run() {
-        plc_conformance::compare::Verdict::Recorded { observed, .. } => {
+    let probe = session
+        .plan(std::slice::from_ref(&low_byte))
+        .into_iter()
+        .find(|t| t.case_id() == "atoh-upper-byte-0131h")
+        .expect("the 0131H case is in the corpus");
+    match plc_conformance::runner::run_one(&probe) {
+        plc_conformance::judge::Verdict::Recorded { observed, .. } => {
+            let observed = observed.to_string();
             assert!(!observed.contains("error"), "recorded {observed}")
         }
         other => panic!("expected a recorded verdict, got {other:?}"),

@@ -14,8 +14,8 @@ use plc_conformance::backend::fx5::{self, Packing};
 use plc_conformance::backend::{Backend, Fault, Outcome, Request, Response};
 use plc_conformance::device::Device;
 use plc_conformance::memory::Image;
+use plc_conformance::model::profile::Variant;
 use plc_conformance::model::{ErrorSignal, Operand};
-use plc_conformance::profile::Variant;
 
 type Answer = Result<Response, Fault>;
 

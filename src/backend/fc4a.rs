@@ -8,10 +8,10 @@
 //! profile, so a model with other data register ranges is an edit to `vendors/idec-fc4a.yaml`.
 
 use super::reference::{Model, Stop};
-use super::text::{digit_char, digit_value};
 use super::{Outcome, Request, Unsupported};
 use crate::memory::Scratch;
 use crate::model::Operand;
+use crate::text::{digit_char, digit_value};
 
 /// The profile this model implements.
 pub const PROFILE: &str = "idec-fc4a";

@@ -15,11 +15,11 @@
 //! the codes; vectors that break two rules at once are `unspecified`.
 
 use super::reference::{Model, Stop};
-use super::text::{digit_char, digit_value, packed_char};
 use super::{Outcome, Request, Unsupported};
 use crate::device::Device;
 use crate::memory::{Image, Scratch};
 use crate::model::Operand;
+use crate::text::{digit_char, digit_value, packed_char};
 use crate::value::to_bits;
 
 /// The profile this model implements.
@@ -309,8 +309,8 @@ mod tests {
     use crate::backend::{Backend, Response};
     use crate::load::load_profiles;
     use crate::memory::Fill;
+    use crate::model::profile::Profile;
     use crate::model::ErrorSignal;
-    use crate::profile::Profile;
 
     fn profile() -> Profile {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("vendors");

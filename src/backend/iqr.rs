@@ -6,10 +6,10 @@
 //! flag support per firmware and the error signalling come from the profile.
 
 use super::reference::{Model, Stop};
-use super::text::{digit_char, digit_value, pack_low_first, packed_char};
 use super::{Outcome, Request, Unsupported};
 use crate::memory::Scratch;
 use crate::model::Operand;
+use crate::text::{digit_char, digit_value, pack_low_first, packed_char};
 
 /// The profile this model implements.
 pub const PROFILE: &str = "mitsubishi-iqr";

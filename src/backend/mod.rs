@@ -2,15 +2,14 @@
 //!
 //! A backend executes one instruction on one memory image and answers with the words it wrote
 //! and the error it signalled, or says it does not implement what was asked. It knows nothing of
-//! YAML or reporting; everything vendor-specific it needs comes in the [`Request`] from the
-//! profile.
+//! YAML, planning, judging or reporting; everything vendor-specific it needs comes in the
+//! [`Request`] from the profile.
 
 pub mod external;
 pub mod fc4a;
 pub mod fx5;
 pub mod iqr;
 pub mod reference;
-pub mod text;
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -20,8 +19,8 @@ use serde::Serialize;
 
 use crate::device::Device;
 use crate::memory::Image;
+use crate::model::profile::{Profile, Profiles, Variant};
 use crate::model::{ErrorSignal, Operand};
-use crate::profile::{Profile, Profiles, SignalKind, Variant};
 
 /// Everything a backend needs to execute one case.
 #[derive(Debug, Clone, Copy)]
@@ -41,29 +40,13 @@ impl Request<'_> {
     /// A flag as the CPU sees it: the case's setting, or the profile default, except that a
     /// variant which does not implement the flag always sees the default.
     pub fn flag(&self, name: &str) -> bool {
-        let default = self.profile.flags.get(name).is_some_and(|f| f.default);
-        if self.variant.ignores_flags.iter().any(|f| f == name) {
-            return default;
-        }
-        self.flags.get(name).copied().unwrap_or(default)
+        self.profile.flag_seen(self.variant, self.flags, name)
     }
 
     /// The flags the case sets, with the profile's defaults for the rest, as the vector wrote
     /// them (before the variant's view): what an external backend is told.
     pub fn all_flags(&self) -> BTreeMap<String, bool> {
-        self.profile
-            .instructions
-            .get(self.instruction)
-            .map(|def| {
-                def.flags
-                    .iter()
-                    .map(|f| {
-                        let default = self.profile.flags.get(f).is_some_and(|d| d.default);
-                        (f.clone(), self.flags.get(f).copied().unwrap_or(default))
-                    })
-                    .collect()
-            })
-            .unwrap_or_default()
+        self.profile.flags_of(self.instruction, self.flags)
     }
 
     pub fn operand(&self, name: &str) -> Result<&Operand, Unsupported> {
@@ -90,14 +73,7 @@ impl Request<'_> {
     /// The signal for an operation error with the vendor's code. For a profile that signals
     /// with a flag only, the code is not visible and the flag is what the program sees.
     pub fn error(&self, code: u16) -> ErrorSignal {
-        let flag = &self.profile.errors.flag;
-        match self.profile.errors.signal {
-            SignalKind::Code => ErrorSignal::Code(code),
-            SignalKind::Flag => ErrorSignal::Flag(
-                flag.parse()
-                    .unwrap_or_else(|_| Device::new(flag.clone(), 0)),
-            ),
-        }
+        self.profile.error(code)
     }
 }
 
@@ -153,6 +129,18 @@ pub enum Fault {
     Unreachable(String),
 }
 
+impl Fault {
+    /// The fault's kind as reports label it.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Fault::Crashed(_) => "crashed",
+            Fault::Timeout(_) => "timeout",
+            Fault::Protocol(_) => "protocol-error",
+            Fault::Unreachable(_) => "unreachable",
+        }
+    }
+}
+
 impl fmt::Display for Fault {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
@@ -192,6 +180,11 @@ pub trait Backend: Send + Sync {
     /// batch in one exchange, which is what makes it fast.
     fn execute_batch(&self, requests: &[Request<'_>]) -> Vec<Result<Response, Fault>> {
         requests.iter().map(|r| self.execute(r)).collect()
+    }
+    /// How many times the backend's process has been started again after a fault: the
+    /// executor reports each restart as an event.
+    fn restarts(&self) -> usize {
+        0
     }
 }
 

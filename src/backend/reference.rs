@@ -4,7 +4,7 @@
 use std::marker::PhantomData;
 
 use super::{Backend, Fault, Outcome, Request, Response, Unsupported};
-use crate::profile::Profile;
+use crate::model::profile::Profile;
 
 /// One vendor family's reference model.
 pub trait Model: Send + Sync + 'static {

@@ -1,15 +1,21 @@
-//! The `plc-conformance` command line.
+//! The `plc-conformance` command line: argument parsing here, each command in its own file, all
+//! of them calling into the library. Errors are rendered once, at this edge.
 //!
 //! Exit codes: 0 when everything ran conforms (or the input is valid), 1 when a backend differs
 //! from the corpus, 2 for bad input or usage.
 
-mod commands;
-mod diff;
+mod backends;
+mod info;
+mod run;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
+
+pub const EXIT_OK: u8 = 0;
+pub const EXIT_DIFFERENCES: u8 = 1;
+pub const EXIT_BAD_INPUT: u8 = 2;
 
 #[derive(Debug, Parser)]
 #[command(
@@ -32,8 +38,19 @@ pub struct Cli {
     /// ROOT/plc-conformance.yaml when it exists].
     #[arg(long, global = true, value_name = "FILE")]
     pub config: Option<PathBuf>,
+    /// When to colour the output.
+    #[arg(long, global = true, value_enum, default_value_t = Color::Auto)]
+    pub color: Color,
     #[command(subcommand)]
     pub command: Command,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Color {
+    /// On a terminal, unless NO_COLOR is set.
+    Auto,
+    Always,
+    Never,
 }
 
 #[derive(Debug, Subcommand)]
@@ -41,7 +58,7 @@ pub enum Command {
     /// Run the corpus against backends and report differences.
     Run(RunArgs),
     /// Compare backends: matrices of cases x backends with rows grouped by behaviour.
-    Diff(diff::DiffArgs),
+    Diff(DiffArgs),
     /// Check vector files (and the vendor profiles) without running anything.
     Validate {
         /// Vector files or folders [default: ROOT/vectors].
@@ -72,21 +89,31 @@ pub enum Command {
 pub struct RunArgs {
     #[command(flatten)]
     pub backends: BackendArgs,
-    /// Only trials whose name (`backend::instruction::case::variant`) contains this text.
-    #[arg(long)]
-    pub filter: Option<String>,
-    /// Output format.
+    #[command(flatten)]
+    pub report: ReportArgs,
+    /// Output format: `text` lists each failure as it happens, then the counts.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     pub format: Format,
-    /// Vector files or folders [default: ROOT/vectors].
-    #[arg(long = "vectors", value_name = "PATH")]
-    pub vectors: Vec<PathBuf>,
-    /// Also print what each backend did on `unspecified` cases.
+    /// Also print what each backend did on `unspecified` cases (text format).
     #[arg(long)]
     pub show_recorded: bool,
 }
 
-/// Which backends a command runs, shared by `run` and `diff`.
+#[derive(Debug, clap::Args)]
+pub struct DiffArgs {
+    #[command(flatten)]
+    pub backends: BackendArgs,
+    #[command(flatten)]
+    pub report: ReportArgs,
+    /// Report format: `text` is the grouped matrices (coloured on a terminal).
+    #[arg(long, value_enum, default_value_t = Format::Text)]
+    pub format: Format,
+    /// Compare the (first) chosen backend directly with this one, word by word.
+    #[arg(long, value_name = "NAME")]
+    pub against: Option<String>,
+}
+
+/// Which backends and trials a command runs, shared by `run` and `diff`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct BackendArgs {
     /// Backends to run: a name (see `list`), or `external:NAME=COMMAND` to start a process that
@@ -100,12 +127,45 @@ pub struct BackendArgs {
     /// A known-differences file for an `external:` backend given here.
     #[arg(long = "known-differences", value_name = "NAME=FILE")]
     pub known_differences: Vec<String>,
+    /// Only trials whose name (`backend::instruction::case::variant`, or
+    /// `cross-vendor::backend::lowering::case::variant`) contains this text.
+    #[arg(long)]
+    pub filter: Option<String>,
+    /// Vector files or folders [default: ROOT/vectors].
+    #[arg(long = "vectors", value_name = "PATH")]
+    pub vectors: Vec<PathBuf>,
+    /// Backends run side by side [default: the number of CPUs].
+    #[arg(short = 'j', long, value_name = "N")]
+    pub jobs: Option<usize>,
+}
+
+/// Where a report goes and how it is compared, shared by `run` and `diff`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct ReportArgs {
+    /// Write the report to this file instead of standard output.
+    #[arg(long, value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    /// Also save the results (the JSON report) for a later `--baseline`.
+    #[arg(long, value_name = "FILE")]
+    pub save: Option<PathBuf>,
+    /// Compare with a saved run: list new, fixed and changed differences, and fail only on new
+    /// ones.
+    #[arg(long, value_name = "FILE")]
+    pub baseline: Option<PathBuf>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum Format {
+    /// For `run`: failures as they happen, then counts. For `diff`: the grouped matrices.
     Text,
+    /// The grouped matrices as text.
+    Matrix,
+    /// The versioned JSON report (usable as a `--baseline`).
     Json,
+    /// JUnit XML, one test case per trial.
+    Junit,
+    /// One self-contained HTML file.
+    Html,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -127,5 +187,18 @@ pub enum SchemaKind {
 /// Parses the arguments, runs the command and returns its exit status.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
-    ExitCode::from(commands::dispatch(&cli))
+    match cli.color {
+        Color::Always => anstream::ColorChoice::Always.write_global(),
+        Color::Never => anstream::ColorChoice::Never.write_global(),
+        Color::Auto => {}
+    }
+    let code = match &cli.command {
+        Command::Run(args) => run::run(&cli, args),
+        Command::Diff(args) => run::diff(&cli, args),
+        Command::Validate { paths } => info::validate(&cli, paths),
+        Command::List { filter } => info::list(&cli, filter.as_deref()),
+        Command::Schema { kind } => info::schema(*kind),
+        Command::Serve { profile } => info::serve(&cli, profile),
+    };
+    ExitCode::from(code)
 }

@@ -1,13 +1,17 @@
-//! Loading: YAML files -> validated profiles and corpus.
+//! Loading: YAML files -> the validated model (profiles, corpus, project file, known
+//! differences).
 //!
 //! Every problem is collected with its file, line and key, and loading fails if there is any:
 //! a corpus with a bad case is not run with that case left out, because a silently skipped
 //! vector looks exactly like a passing one.
 
+mod checks;
+mod cross_vendor;
 mod error;
+mod known;
 mod locate;
-mod neutral;
 mod profiles;
+mod project;
 mod vectors;
 
 use std::path::{Path, PathBuf};
@@ -15,8 +19,13 @@ use std::path::{Path, PathBuf};
 use serde::de::DeserializeOwned;
 
 pub use error::{LoadError, LoadErrorKind, LoadErrors};
+pub use known::load_known;
 pub use locate::LineIndex;
 pub use profiles::{load_profiles, parse_profile};
+pub use project::{
+    load_project, locate_project, requirements_enforced, valid_name, ENV_CONFIG, ENV_REQUIRE,
+    ENV_SELF, FILE_NAME,
+};
 pub use vectors::{load_corpus, CorpusBuilder};
 
 /// The YAML files under a path: the file itself, or every `.yaml`/`.yml` below a folder, in a

@@ -3,11 +3,13 @@
 use std::collections::BTreeSet;
 use std::path::Path;
 
+use super::checks::unknown;
 use super::{
     parse_yaml, read_file, yaml_files, FileContext, LineIndex, LoadError, LoadErrorKind, LoadErrors,
 };
 use crate::device::Device;
-use crate::profile::{DeviceDef, DeviceRanges, Profile, Profiles, SignalKind};
+use crate::model::profile::{ErrorSignalling, Profile, Profiles};
+use crate::spec::profile::{DeviceDef, DeviceRanges, ProfileSpec, SignalKind};
 
 /// Loads every profile in a folder.
 pub fn load_profiles(dir: &Path) -> Result<Profiles, LoadErrors> {
@@ -55,7 +57,7 @@ pub fn load_profiles(dir: &Path) -> Result<Profiles, LoadErrors> {
 
 /// Parses and checks one profile; problems go to `errors`.
 pub fn parse_profile(file: &Path, text: &str, errors: &mut Vec<LoadError>) -> Option<Profile> {
-    let profile: Profile = match parse_yaml(file, text) {
+    let spec: ProfileSpec = match parse_yaml(file, text) {
         Ok(p) => p,
         Err(e) => {
             errors.push(e);
@@ -64,11 +66,33 @@ pub fn parse_profile(file: &Path, text: &str, errors: &mut Vec<LoadError>) -> Op
     };
     let before = errors.len();
     let mut cx = FileContext::new(file, text, errors);
-    check_profile(&profile, &mut cx);
-    (cx.errors.len() == before).then_some(profile)
+    check_profile(&spec, &mut cx);
+    let cross_vendor = super::cross_vendor::lower_section(&spec, &mut cx);
+    if cx.errors.len() != before {
+        return None;
+    }
+    let device = |name: &str| name.parse::<Device>().ok();
+    let errors = ErrorSignalling {
+        signal: spec.errors.signal,
+        flag: device(&spec.errors.flag)?,
+        register: spec.errors.register.as_deref().and_then(device),
+        also: spec.errors.also.iter().filter_map(|d| device(d)).collect(),
+    };
+    Some(Profile {
+        id: spec.id,
+        name: spec.name,
+        short: spec.short,
+        manuals: spec.manuals,
+        errors,
+        flags: spec.flags,
+        devices: spec.devices,
+        instructions: spec.instructions,
+        variants: spec.variants,
+        cross_vendor,
+    })
 }
 
-fn check_profile(p: &Profile, cx: &mut FileContext<'_>) {
+fn check_profile(p: &ProfileSpec, cx: &mut FileContext<'_>) {
     let flags: Vec<String> = p.flags.keys().cloned().collect();
     let devices: Vec<String> = p.devices.keys().cloned().collect();
     let instructions: Vec<String> = p.instructions.keys().cloned().collect();
@@ -119,7 +143,6 @@ fn check_profile(p: &Profile, cx: &mut FileContext<'_>) {
             }
         }
     }
-    super::neutral::check_section(p, cx);
     if p.variants.is_empty() {
         cx.error(
             "variants",
@@ -188,13 +211,5 @@ fn check_ranges(key: &str, ranges: &DeviceRanges, def: &DeviceDef, cx: &mut File
                 );
             }
         }
-    }
-}
-
-pub(crate) fn unknown(what: &'static str, name: &str, expected: &[String]) -> LoadErrorKind {
-    LoadErrorKind::Unknown {
-        what,
-        name: name.to_string(),
-        expected: expected.to_vec(),
     }
 }

@@ -4,12 +4,12 @@ use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use super::profiles::unknown;
+use super::checks::{check_cite, check_expect_optional, check_id, text_bytes, unknown};
 use super::{parse_yaml, read_file, yaml_files, FileContext, LoadError, LoadErrorKind, LoadErrors};
 use crate::device::Device;
-use crate::model::{Basis, Case, Citation, Corpus, ErrorSignal, Expectation, Location, Operand};
-use crate::profile::{Profile, Profiles, SignalKind};
-use crate::spec::{
+use crate::model::profile::{Profile, Profiles, SignalKind};
+use crate::model::{Case, Citation, Corpus, ErrorSignal, Expectation, Location, Operand};
+use crate::spec::vectors::{
     CaseSpec, ExpectSpec, FlagSpec, ScalarSpec, SourceSpec, ValueSpec, VectorFileSpec,
 };
 use crate::value::{parse_number, parse_word, to_bits};
@@ -43,7 +43,7 @@ pub fn load_corpus(paths: &[PathBuf], profiles: &Profiles) -> Result<Corpus, Loa
 #[derive(Default)]
 pub struct CorpusBuilder {
     cases: Vec<Arc<Case>>,
-    neutral: Vec<Arc<crate::neutral::NeutralCase>>,
+    cross_vendor: Vec<Arc<crate::model::cross_vendor::CrossVendorCase>>,
     ids: HashMap<String, Location>,
     errors: Vec<LoadError>,
 }
@@ -51,11 +51,11 @@ pub struct CorpusBuilder {
 impl CorpusBuilder {
     /// Adds one vector file given as text; `file` is the name errors will show.
     pub fn add_file(&mut self, file: &Path, text: &str, profiles: &Profiles) {
-        if super::neutral::is_neutral(&super::LineIndex::new(text)) {
-            let cases = super::neutral::add_file(file, text, profiles, &mut self.errors);
+        if super::cross_vendor::is_cross_vendor(&super::LineIndex::new(text)) {
+            let cases = super::cross_vendor::add_file(file, text, profiles, &mut self.errors);
             for (key, case) in cases {
                 if self.claim_id(&key, &case.id, &case.location) {
-                    self.neutral.push(Arc::new(case));
+                    self.cross_vendor.push(Arc::new(case));
                 }
             }
             return;
@@ -112,7 +112,7 @@ impl CorpusBuilder {
         if self.errors.is_empty() {
             Ok(Corpus {
                 cases: self.cases,
-                neutral: self.neutral,
+                cross_vendor: self.cross_vendor,
             })
         } else {
             Err(LoadErrors(self.errors))
@@ -248,54 +248,6 @@ fn lower_case(
         expect,
         note: spec.note.clone(),
     })
-}
-
-/// Case ids: lowercase letters, digits and `-`, so that trial names stay filterable.
-pub(crate) fn check_id(key: &str, id: &str, cx: &mut FileContext<'_>) {
-    let ok = !id.is_empty()
-        && id
-            .chars()
-            .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-')
-        && !id.starts_with('-');
-    if !ok {
-        cx.error(
-            format!("{key}.id"),
-            LoadErrorKind::Invalid(format!(
-                "case id `{id}` must be lowercase letters, digits and `-`, like `fixed-4-digits-example`"
-            )),
-        );
-    }
-}
-
-/// Only an `unspecified` case may leave its expectation out.
-pub(crate) fn check_expect_optional(key: &str, basis: Basis, cx: &mut FileContext<'_>) {
-    if basis != Basis::Unspecified {
-        cx.error(
-            key,
-            LoadErrorKind::Missing("expect: only `basis: unspecified` may leave it out"),
-        );
-    }
-}
-
-/// The citation text; required unless the basis is `unspecified`.
-pub(crate) fn check_cite(
-    key: &str,
-    basis: Basis,
-    cite: Option<&str>,
-    cx: &mut FileContext<'_>,
-) -> Option<String> {
-    let cite = cite.map(str::trim).filter(|c| !c.is_empty());
-    if cite.is_none() && basis != Basis::Unspecified {
-        cx.error(
-            key,
-            LoadErrorKind::Missing(match basis {
-                Basis::Manual => "cite: `basis: manual` must say where the manual states it",
-                Basis::Observed => "cite: `basis: observed` must give the provenance",
-                _ => "cite: `basis: inferred` must say what the reading rests on",
-            }),
-        );
-    }
-    cite.map(str::to_string)
 }
 
 fn lower_flags(
@@ -496,21 +448,6 @@ fn missing_word(p: &Profile, d: &Device) -> LoadErrorKind {
     })
 }
 
-/// Text as the bytes a PLC stores: one per character, so no character may be above FFH.
-pub(crate) fn text_bytes(key: &str, text: &str, cx: &mut FileContext<'_>) -> Option<Vec<u8>> {
-    let out: Option<Vec<u8>> = text.chars().map(|c| u8::try_from(c).ok()).collect();
-    if out.is_none() {
-        cx.error(
-            key,
-            LoadErrorKind::Invalid(format!(
-                "`{}` has a character above FFH; ASCII text stores one byte per character",
-                text.escape_default()
-            )),
-        );
-    }
-    out
-}
-
 /// The words a value spec stands for.
 fn expand(key: &str, value: &ValueSpec, cx: &mut FileContext<'_>) -> Option<Vec<u16>> {
     let word = |s: &ScalarSpec| match s {
@@ -582,7 +519,12 @@ fn lower_error(
     p: &Profile,
     cx: &mut FileContext<'_>,
 ) -> Option<ErrorSignal> {
-    let (flag, register) = (&p.errors.flag, p.errors.register.as_deref().unwrap_or("?"));
+    let flag = &p.errors.flag;
+    let register = p
+        .errors
+        .register
+        .as_ref()
+        .map_or_else(|| "?".to_string(), ToString::to_string);
     match p.errors.signal {
         SignalKind::Code => {
             let code = match value {
@@ -604,8 +546,8 @@ fn lower_error(
             }
         }
         SignalKind::Flag => {
-            if value.to_string() == *flag {
-                flag.parse().ok().map(ErrorSignal::Flag)
+            if value.to_string() == flag.to_string() {
+                Some(ErrorSignal::Flag(flag.clone()))
             } else {
                 cx.error(
                     key,

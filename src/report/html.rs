@@ -5,7 +5,10 @@
 
 use std::fmt::Write;
 
-use crate::matrix::{Record, Section, Status};
+use super::json::RunInfo;
+use super::matrix::Section;
+use super::record::Record;
+use crate::judge::Status;
 
 const STYLE: &str = "\
 body{font-family:system-ui,sans-serif;margin:2em;color:#222}\
@@ -37,13 +40,13 @@ fn escape(text: &str) -> String {
 
 fn class_of(status: Status) -> &'static str {
     match status {
-        Status::Conforms => "conforms",
-        Status::Recorded | Status::Skipped => "other",
-        _ => "fails",
+        Status::Pass => "conforms",
+        Status::Ignored | Status::Skipped => "other",
+        Status::Fail => "fails",
     }
 }
 
-pub fn render(sections: &[Section<'_>], records: &[Record]) -> String {
+pub fn render(sections: &[Section<'_>], records: &[Record], run: &RunInfo) -> String {
     let failing = records.iter().filter(|r| r.status.is_failure()).count();
     let mut out = String::new();
     let _ = write!(
@@ -55,6 +58,46 @@ pub fn render(sections: &[Section<'_>], records: &[Record]) -> String {
         records.len(),
         sections.len()
     );
+    let _ = writeln!(
+        out,
+        "<p class=\"meta\">{}{}; backends: {}</p>",
+        escape(&run.tool),
+        if run.interrupted {
+            " (interrupted: incomplete)"
+        } else {
+            ""
+        },
+        escape(
+            &run.backends
+                .iter()
+                .map(|b| format!("{} ({})", b.name, b.description))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    );
+    out.push_str(
+        "<p class=\"legend\"><span class=\"conforms\">conforms</span> \
+         <span class=\"other\">recorded, known difference or skipped</span> \
+         <span class=\"fails\">fails (marked !)</span></p>\n",
+    );
+    if failing > 0 {
+        out.push_str("<h2>Failures</h2>\n<ul id=\"failures\">\n");
+        for (i, r) in records
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| r.status.is_failure())
+        {
+            let _ = writeln!(
+                out,
+                "<li><a href=\"#failure-{i}\">{}</a> — {} ({}:{})</li>",
+                escape(&r.trial),
+                escape(&r.label),
+                escape(&r.file),
+                r.line
+            );
+        }
+        out.push_str("</ul>\n");
+    }
     for (i, section) in sections.iter().enumerate() {
         let _ = write!(
             out,
@@ -83,7 +126,7 @@ pub fn render(sections: &[Section<'_>], records: &[Record]) -> String {
                             out,
                             "<td class=\"{}\" title=\"{}\">{}{mark}</td>",
                             class_of(r.status),
-                            escape(r.status.label()),
+                            escape(&r.label),
                             escape(&r.shown)
                         );
                     }
@@ -114,6 +157,23 @@ pub fn render(sections: &[Section<'_>], records: &[Record]) -> String {
                 let _ = writeln!(out, "<pre>{}</pre>", escape(&r.detail));
             }
             out.push_str("</details>\n");
+        }
+    }
+    if failing > 0 {
+        out.push_str("<h2>Failure details</h2>\n");
+        for (i, r) in records
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| r.status.is_failure())
+        {
+            let _ = writeln!(
+                out,
+                "<section id=\"failure-{i}\"><h3>{}</h3><p>{}:{}</p><pre>{}</pre></section>",
+                escape(&r.trial),
+                escape(&r.file),
+                r.line,
+                escape(&r.detail)
+            );
         }
     }
     out.push_str("</body>\n</html>\n");

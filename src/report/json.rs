@@ -1,105 +1,60 @@
-//! The JSON report of `plc-conformance run --format json`.
+//! The JSON report of `run` and `diff`: one versioned document for both.
 //!
-//! Shape: `{ "summary": {passed, failed, recorded, skipped}, "trials": [ {name, backend,
-//! profile, variant, instruction, case, basis, file, line, skipped?, verdict?} ] }`, where a
-//! verdict is `{"verdict": "conforms" | "differs" | "unsupported" | "fault" | "recorded" |
-//! "known_difference" | "stale_entry", ...}`; the summary also counts `known` differences.
-//! Cross-vendor trials follow in `"cross_vendor": [ {name, backend, lowering, variant, case,
-//! basis, file, line, skipped?, verdict?} ]`, a verdict being `{"verdict": "matches" | "differs"
-//! | "fill_dependent" | "unsupported" | "fault" | "recorded" | "known_difference" |
-//! "stale_entry", ...}`; the summary counts them too.
+//! Shape: `{"format": "plc-conformance-results", "version": 2, "run": {tool, backends,
+//! interrupted}, "summary": {passed, failed, skipped, recorded, known}, "records": [Record],
+//! "sections": [matrix]}`. Each record carries the trial's status, its structured behaviour and,
+//! where it ran, its verdict (words in hex, as the manuals write them). The document is also a
+//! saved run: `--baseline` reads its records.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
-use super::{Summary, TrialResult};
-use crate::compare::Verdict;
-use crate::model::Basis;
-use crate::neutral::lower::{NeutralTrial, NeutralVerdict};
+use super::matrix::Section;
+use super::record::Record;
+use super::Summary;
 
-#[derive(Serialize)]
-struct Record<'a> {
-    name: String,
-    backend: &'a str,
-    profile: &'a str,
-    variant: &'a str,
-    instruction: &'a str,
-    case: &'a str,
-    basis: Basis,
-    file: String,
-    line: usize,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    skipped: Option<&'a str>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    verdict: Option<&'a Verdict>,
+pub const FORMAT: &str = "plc-conformance-results";
+pub const VERSION: u32 = 2;
+
+/// What ran: shown in reports so a saved result says where it came from.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct RunInfo {
+    /// `plc-conformance 0.1.0`.
+    pub tool: String,
+    /// Each backend of the run, with what it says of itself.
+    pub backends: Vec<BackendInfo>,
+    /// Whether the run stopped before every trial finished.
+    pub interrupted: bool,
+}
+
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct BackendInfo {
+    pub name: String,
+    pub description: String,
 }
 
 #[derive(Serialize)]
-struct NeutralRecord<'a> {
-    name: String,
-    backend: &'a str,
-    lowering: &'a str,
-    variant: &'a str,
-    case: &'a str,
-    basis: Basis,
-    file: String,
-    line: usize,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    skipped: Option<&'a str>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    verdict: Option<&'a NeutralVerdict>,
+struct Document<'a> {
+    format: &'static str,
+    version: u32,
+    run: &'a RunInfo,
+    summary: &'a Summary,
+    records: &'a [Record],
+    sections: &'a [Section<'a>],
 }
 
-#[derive(Serialize)]
-struct Report<'a> {
-    summary: Summary,
-    trials: Vec<Record<'a>>,
-    cross_vendor: Vec<NeutralRecord<'a>>,
-}
-
-/// Renders a run as pretty-printed JSON.
 pub fn render(
-    results: &[TrialResult],
-    neutral: &[(NeutralTrial, Option<NeutralVerdict>)],
+    records: &[Record],
+    sections: &[Section<'_>],
+    summary: &Summary,
+    run: &RunInfo,
 ) -> String {
-    let trials = results
-        .iter()
-        .map(|r| Record {
-            name: r.trial.name(),
-            backend: r.trial.backend.name(),
-            profile: &r.trial.profile.id,
-            variant: &r.trial.variant,
-            instruction: &r.trial.instruction,
-            case: &r.trial.case.id,
-            basis: r.trial.case.basis,
-            file: r.trial.case.location.file.display().to_string(),
-            line: r.trial.case.location.line,
-            skipped: r.trial.skip.as_deref(),
-            verdict: r.verdict.as_ref(),
-        })
-        .collect();
-    let cross_vendor = neutral
-        .iter()
-        .map(|(t, v)| NeutralRecord {
-            name: t.name(),
-            backend: t.backend.name(),
-            lowering: &t.lowering.name,
-            variant: t.variant(),
-            case: &t.case.id,
-            basis: t.case.basis,
-            file: t.case.location.file.display().to_string(),
-            line: t.case.location.line,
-            skipped: t.skip.as_deref(),
-            verdict: v.as_ref(),
-        })
-        .collect();
-    let mut summary = Summary::of(results);
-    summary.add(&Summary::of_neutral(
-        neutral.iter().map(|(_, v)| v.as_ref()),
-    ));
-    let report = Report {
+    serde_json::to_string_pretty(&Document {
+        format: FORMAT,
+        version: VERSION,
+        run,
         summary,
-        trials,
-        cross_vendor,
-    };
-    serde_json::to_string_pretty(&report).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+        records,
+        sections,
+    })
+    .unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
 }

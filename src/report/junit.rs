@@ -6,7 +6,8 @@ use std::collections::BTreeMap;
 
 use quick_junit::{NonSuccessKind, Report, TestCase, TestCaseStatus, TestSuite};
 
-use crate::matrix::{Record, Status};
+use super::record::Record;
+use crate::judge::Status;
 
 pub fn render(records: &[Record]) -> String {
     let mut suites: BTreeMap<(String, String), Vec<&Record>> = BTreeMap::new();
@@ -21,16 +22,16 @@ pub fn render(records: &[Record]) -> String {
         let mut suite = TestSuite::new(format!("{section} / {column}"));
         for r in cells {
             let status = match r.status {
-                Status::Conforms => TestCaseStatus::success(),
-                Status::Skipped | Status::Recorded => {
+                Status::Pass => TestCaseStatus::success(),
+                Status::Skipped | Status::Ignored => {
                     let mut s = TestCaseStatus::skipped();
-                    s.set_message(format!("{}: {}", r.status.label(), r.shown));
+                    s.set_message(format!("{}: {}", r.label, r.shown));
                     s
                 }
-                failing => {
+                Status::Fail => {
                     let mut s = TestCaseStatus::non_success(NonSuccessKind::Failure);
-                    s.set_message(format!("{}: {}", failing.label(), r.shown));
-                    s.set_type(failing.label());
+                    s.set_message(format!("{}: {}", r.label, r.shown));
+                    s.set_type(r.label.clone());
                     s.set_description(r.detail.clone());
                     s
                 }

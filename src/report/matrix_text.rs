@@ -5,7 +5,8 @@ use std::fmt::Write;
 
 use anstyle::{AnsiColor, Style};
 
-use crate::matrix::{Section, Status};
+use super::matrix::Section;
+use crate::judge::Status;
 
 /// How many row ids a group line lists before it says "+N more".
 const LISTED_ROWS: usize = 4;
@@ -23,9 +24,9 @@ fn cell_style(status: Status, coloured: bool) -> Style {
         return Style::new();
     }
     match status {
-        Status::Conforms => AnsiColor::Green.on_default(),
-        Status::Recorded | Status::Skipped => AnsiColor::Cyan.on_default(),
-        _ => AnsiColor::Red.on_default(),
+        Status::Pass => AnsiColor::Green.on_default(),
+        Status::Ignored | Status::Skipped => AnsiColor::Cyan.on_default(),
+        Status::Fail => AnsiColor::Red.on_default(),
     }
 }
 

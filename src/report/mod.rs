@@ -1,18 +1,58 @@
-//! Reporting trial results: text for people, JSON for tools.
+//! Reporting: every output of the tool is a [`Reporter`] fed by [`Event`]s.
+//!
+//! The runner emits events as trials finish — run started, trial finished with its verdict,
+//! backend restarted, run finished — and a reporter turns them into text for people, a JSON
+//! document for tools, JUnit XML for CI dashboards, an HTML page or a matrix. Reporters do all
+//! the printing; nothing before this stage writes to the terminal.
 
+pub mod baseline;
+pub mod document;
 pub mod html;
 pub mod json;
 pub mod junit;
+pub mod matrix;
 pub mod matrix_text;
+pub mod record;
 pub mod text;
+pub mod text_reporter;
 
-use crate::compare::Verdict;
+use crate::judge::{Status, Verdict};
 use crate::plan::Trial;
 
-/// A trial and what became of it. A skipped trial has no verdict.
-pub struct TrialResult {
-    pub trial: Trial,
-    pub verdict: Option<Verdict>,
+/// What happens during a run, in order.
+pub enum Event<'a> {
+    /// The plan is made: how many trials will be reported.
+    RunStarted { trials: usize },
+    /// One trial is judged. `index` is its place in the plan, so reporters that list results
+    /// can keep plan order while results arrive backend by backend.
+    TrialFinished {
+        index: usize,
+        trial: &'a Trial,
+        verdict: &'a Verdict,
+    },
+    /// A backend's process was started again after a fault.
+    BackendRestarted { backend: &'a str, restarts: usize },
+    /// Every trial is reported; `interrupted` when the run stopped early.
+    RunFinished {
+        summary: &'a Summary,
+        interrupted: bool,
+    },
+}
+
+/// Something that turns a run's events into output.
+pub trait Reporter {
+    fn event(&mut self, event: &Event<'_>);
+}
+
+/// Two reporters fed the same events (for example the text report and the collector of a
+/// saved run).
+pub struct Tee<'a>(pub &'a mut dyn Reporter, pub &'a mut dyn Reporter);
+
+impl Reporter for Tee<'_> {
+    fn event(&mut self, event: &Event<'_>) {
+        self.0.event(event);
+        self.1.event(event);
+    }
 }
 
 /// Counts for a run's closing line.
@@ -27,47 +67,25 @@ pub struct Summary {
 }
 
 impl Summary {
-    pub fn of<'a>(results: impl IntoIterator<Item = &'a TrialResult>) -> Self {
-        let mut s = Summary::default();
-        for r in results {
-            match &r.verdict {
-                None => s.skipped += 1,
-                Some(Verdict::Recorded { .. }) => s.recorded += 1,
-                Some(Verdict::KnownDifference { .. }) => s.known += 1,
-                Some(v) if v.is_failure() => s.failed += 1,
-                Some(_) => s.passed += 1,
-            }
+    /// Counts one verdict.
+    pub fn add(&mut self, verdict: &Verdict) {
+        match verdict.status() {
+            Status::Pass => self.passed += 1,
+            Status::Fail => self.failed += 1,
+            Status::Skipped => self.skipped += 1,
+            Status::Ignored => match verdict {
+                Verdict::KnownDifference { .. } => self.known += 1,
+                _ => self.recorded += 1,
+            },
         }
-        s
     }
-}
 
-impl Summary {
-    /// Counts cross-vendor verdicts (`None` for a skipped trial) the same way.
-    pub fn of_neutral<'a>(
-        verdicts: impl IntoIterator<Item = Option<&'a crate::neutral::lower::NeutralVerdict>>,
-    ) -> Self {
-        use crate::neutral::lower::NeutralVerdict;
+    pub fn of<'a>(verdicts: impl IntoIterator<Item = &'a Verdict>) -> Self {
         let mut s = Summary::default();
         for v in verdicts {
-            match v {
-                None => s.skipped += 1,
-                Some(NeutralVerdict::Recorded { .. }) => s.recorded += 1,
-                Some(NeutralVerdict::KnownDifference { .. }) => s.known += 1,
-                Some(v) if v.is_failure() => s.failed += 1,
-                Some(_) => s.passed += 1,
-            }
+            s.add(v);
         }
         s
-    }
-
-    /// Adds another summary's counts to this one.
-    pub fn add(&mut self, other: &Summary) {
-        self.passed += other.passed;
-        self.failed += other.failed;
-        self.recorded += other.recorded;
-        self.skipped += other.skipped;
-        self.known += other.known;
     }
 }
 

@@ -6,9 +6,10 @@ use std::fmt::Write;
 use anstyle::{AnsiColor, Style};
 use similar::{ChangeTag, TextDiff};
 
-use crate::compare::{Mismatch, Verdict, WordRow};
+use crate::judge::{Difference, Mismatch, Verdict, WordRow};
+use crate::model::cross_vendor::Operation;
 use crate::model::{error_text, Case};
-use crate::plan::Trial;
+use crate::plan::{Check, Trial};
 use crate::value::hex_word;
 
 /// Styles for the text report; all plain unless colour is on, so the same renderer serves a
@@ -56,31 +57,55 @@ fn show_byte(b: u8) -> String {
     }
 }
 
-/// The case's setting: what ran, with which flags, operands and memory.
+/// The trial's setting: what ran, with which flags, operands and memory.
 pub fn describe_setting(trial: &Trial) -> String {
-    let case = &trial.case;
     let mut out = String::new();
     let _ = writeln!(
         out,
         "  case:        {} (basis: {}; {})",
-        case.id, case.basis, case.citation
+        trial.case_id(),
+        trial.basis(),
+        trial.citation()
     );
+    if let Check::CrossVendor { lowering, case } = &trial.check {
+        let question = match case.operation {
+            Operation::HexToValue => format!(
+                "{} {}, {} digit(s)",
+                case.operation,
+                crate::model::cross_vendor::Answer::Text(case.text.clone()),
+                case.digits
+            ),
+            Operation::ValueToHex => format!(
+                "{} {}, {} digit(s)",
+                case.operation,
+                crate::model::cross_vendor::Answer::Value(case.value),
+                case.digits
+            ),
+        };
+        let _ = writeln!(out, "  question:    {question}");
+        let _ = writeln!(
+            out,
+            "  lowering:    {}: {}",
+            lowering.key, lowering.description
+        );
+    }
+    let input = &trial.input;
     let _ = writeln!(
         out,
         "  run:         {} on {} variant {} via backend {}",
-        trial.instruction,
+        input.instruction,
         trial.profile.id,
         trial.variant,
         trial.backend.name()
     );
     let _ = writeln!(out, "  flags:       {}", flags_text(trial));
-    let operands: Vec<String> = case
+    let operands: Vec<String> = input
         .operands
         .iter()
         .map(|(k, v)| format!("{k}={v}"))
         .collect();
     let _ = writeln!(out, "  operands:    {}", operands.join(" "));
-    let before: Vec<String> = case
+    let before: Vec<String> = input
         .before
         .iter()
         .map(|(d, v)| format!("{d}={}", hex_word(*v)))
@@ -98,15 +123,19 @@ pub fn describe_setting(trial: &Trial) -> String {
 }
 
 fn flags_text(trial: &Trial) -> String {
-    let Some(def) = trial.profile.instructions.get(&trial.instruction) else {
+    let Some(def) = trial.profile.instructions.get(&trial.input.instruction) else {
         return String::new();
     };
     let variant = trial.profile.variant(&trial.variant);
     def.flags
         .iter()
         .map(|f| {
-            let default = trial.profile.flags.get(f).is_some_and(|d| d.default);
-            let on = trial.case.flags.get(f).copied().unwrap_or(default);
+            let on = trial
+                .input
+                .flags
+                .get(f)
+                .copied()
+                .unwrap_or_else(|| trial.profile.flag_default(f));
             let ignored = variant.is_some_and(|v| v.ignores_flags.contains(f));
             format!(
                 "{f}={}{}",
@@ -129,7 +158,7 @@ pub fn render(trial: &Trial, verdict: &Verdict, palette: Palette) -> String {
     let _ = writeln!(
         out,
         "{h}{}: {} {}{h:#}",
-        trial.case.location,
+        trial.location(),
         trial.name(),
         verdict.label()
     );
@@ -141,21 +170,24 @@ pub fn render(trial: &Trial, verdict: &Verdict, palette: Palette) -> String {
 fn render_body(out: &mut String, verdict: &Verdict, palette: Palette) {
     match verdict {
         Verdict::Conforms => {}
-        Verdict::KnownDifference {
-            reason,
-            entry,
-            difference,
-        } => {
-            let _ = writeln!(out, "  known difference ({entry}): {reason}");
-            render_body(out, difference, palette);
-        }
-        Verdict::StaleEntry { reason, entry } => {
+        Verdict::KnownDifference { entry, difference } => {
             let _ = writeln!(
                 out,
-                "  listed as a known difference at {entry} ({reason}), but conforms: remove the entry"
+                "  known difference ({}): {}",
+                entry.location, entry.reason
+            );
+            render_body(out, difference, palette);
+        }
+        Verdict::StaleEntry { entry } => {
+            let _ = writeln!(
+                out,
+                "  listed as a known difference at {} ({}), but conforms: remove the entry",
+                entry.location, entry.reason
             );
         }
-        Verdict::Differs { mismatches } => {
+        Verdict::Differs {
+            difference: Difference::Words { mismatches },
+        } => {
             // Fills that went wrong the same way are shown once.
             let mut shown: Vec<(String, Vec<&str>)> = Vec::new();
             for m in mismatches {
@@ -177,6 +209,24 @@ fn render_body(out: &mut String, verdict: &Verdict, palette: Palette) {
                 out.push_str(&body);
             }
         }
+        Verdict::Differs {
+            difference: Difference::Answer { expected, actual },
+        } => {
+            let _ = writeln!(
+                out,
+                "  answer: expected {}{expected}{:#}, actual {}{actual}{:#}",
+                palette.removed, palette.removed, palette.added, palette.added
+            );
+        }
+        Verdict::Differs {
+            difference: Difference::FillDependent { fill_a, fill_b },
+        } => {
+            let _ = writeln!(
+                out,
+                "  the answer depends on memory the case does not set: {fill_a} under fill A, \
+                 {fill_b} under fill B"
+            );
+        }
         Verdict::Unsupported { reason } => {
             let _ = writeln!(
                 out,
@@ -185,6 +235,9 @@ fn render_body(out: &mut String, verdict: &Verdict, palette: Palette) {
         }
         Verdict::Fault { fill, fault } => {
             let _ = writeln!(out, "  fill {}: {fault}", fill.name());
+        }
+        Verdict::Skipped { reason } => {
+            let _ = writeln!(out, "  skipped: {reason}");
         }
         Verdict::Recorded {
             observed,

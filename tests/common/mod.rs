@@ -7,8 +7,7 @@ use std::process::{Command, Output};
 use std::sync::Arc;
 
 use plc_conformance::backend::{Backend, Fault, Request, Response};
-use plc_conformance::plan::plan;
-use plc_conformance::session::{Paths, Session};
+use plc_conformance::runner::{Paths, Project};
 
 /// The project root: its `vendors/`, `vectors/` and project file.
 pub fn root() -> &'static Path {
@@ -33,15 +32,15 @@ pub fn scratch(name: &str) -> PathBuf {
     dir
 }
 
-pub fn session() -> Session {
-    match Session::load(&Paths::under(root())) {
+pub fn session() -> Project {
+    match Project::load(&Paths::under(root())) {
         Ok(s) => s,
         Err(e) => panic!("the corpus does not load:\n{e}"),
     }
 }
 
 /// The reference backend of a profile.
-pub fn reference(session: &Session, profile: &str) -> Arc<dyn Backend> {
+pub fn reference(session: &Project, profile: &str) -> Arc<dyn Backend> {
     session
         .backends
         .iter()
@@ -94,22 +93,19 @@ impl Backend for Mutant {
 }
 
 /// The trials of the corpus that fail on a backend (recorded `unspecified` cases never do).
-pub fn failing_trials(session: &Session, backend: &Arc<dyn Backend>) -> Vec<String> {
-    plan(
-        &session.corpus,
-        &session.profiles,
-        std::slice::from_ref(backend),
-    )
-    .into_iter()
-    .filter(|t| t.skip.is_none())
-    .filter(|t| t.run().is_failure())
-    .map(|t| t.name())
-    .collect()
+pub fn failing_trials(session: &Project, backend: &Arc<dyn Backend>) -> Vec<String> {
+    session
+        .plan(std::slice::from_ref(backend))
+        .into_iter()
+        .filter(|t| t.skip.is_none())
+        .filter(|t| plc_conformance::runner::run_one(t).is_failure())
+        .map(|t| t.name())
+        .collect()
 }
 
 /// Asserts that the reference passes and that every mutant fails at least one trial.
 pub fn assert_corpus_kills(
-    session: &Session,
+    session: &Project,
     reference: &Arc<dyn Backend>,
     mutants: &[Arc<dyn Backend>],
 ) {

@@ -8,8 +8,6 @@
 //! What it cannot do at all — start, or agree on the protocol — is an error before any case
 //! runs.
 
-pub mod config;
-pub mod known;
 mod process;
 pub mod protocol;
 pub mod serve;
@@ -17,14 +15,13 @@ pub mod window;
 
 use std::collections::BTreeMap;
 use std::fmt;
-use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use serde::Serialize;
 
+pub use process::MAX_LINE;
 use process::{describe_exit, Next, Process};
-pub use process::{Launch, MAX_LINE};
 use protocol::{
     BackendInfo, BackendMessage, Capabilities, CaseRequest, ErrorReport, FillName, HarnessMessage,
     MemoryRange, OperandValue, PROTOCOL_VERSION,
@@ -33,60 +30,12 @@ use protocol::{
 use super::{Backend, Fault, Outcome, Request, Response};
 use crate::device::Device;
 use crate::memory::Fill;
+use crate::model::profile::{Profile, Profiles, Variant};
+use crate::model::project::ExternalSettings;
 use crate::model::{ErrorSignal, Operand};
-use crate::profile::{Profile, Profiles, Variant};
 
-/// The per-case time limit unless configured.
-pub const DEFAULT_TIMEOUT: Duration = Duration::from_secs(5);
-/// The time a backend has to start and answer `hello` unless configured.
-pub const DEFAULT_STARTUP_TIMEOUT: Duration = Duration::from_secs(20);
-/// Cases per `run` message unless configured.
-pub const DEFAULT_BATCH: usize = 256;
 /// How much of an offending line a protocol error quotes.
 const QUOTE: usize = 200;
-
-/// How to run one external backend.
-#[derive(Debug, Clone)]
-pub struct ExternalSpec {
-    /// The name in trial names and on the command line.
-    pub name: String,
-    pub launch: Launch,
-    /// The profile family the configuration says the backend implements; the handshake must
-    /// agree. `None` takes the handshake's word.
-    pub profile: Option<String>,
-    /// The limit for one case's answer.
-    pub timeout: Duration,
-    /// The limit for starting and answering `hello`.
-    pub startup_timeout: Duration,
-    /// The backend's known-differences file.
-    pub known_differences: Option<PathBuf>,
-    /// The working directory of the process.
-    pub cwd: Option<PathBuf>,
-    /// Extra environment variables for the process.
-    pub env: Vec<(String, String)>,
-    /// Cases per `run` message.
-    pub batch: usize,
-    /// Whether the process stays up between cases (the normal way), or is started for each
-    /// case and shut down after it (for measuring what persistence buys).
-    pub persistent: bool,
-}
-
-impl ExternalSpec {
-    pub fn new(name: impl Into<String>, launch: Launch) -> Self {
-        ExternalSpec {
-            name: name.into(),
-            launch,
-            profile: None,
-            timeout: DEFAULT_TIMEOUT,
-            startup_timeout: DEFAULT_STARTUP_TIMEOUT,
-            known_differences: None,
-            cwd: None,
-            env: Vec::new(),
-            batch: DEFAULT_BATCH,
-            persistent: true,
-        }
-    }
-}
 
 /// Why an external backend cannot be used at all.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -131,8 +80,9 @@ impl std::error::Error for ExternalError {}
 
 /// A backend in another process.
 pub struct ExternalBackend {
-    spec: ExternalSpec,
+    settings: ExternalSettings,
     info: BackendInfo,
+    restarts: std::sync::atomic::AtomicUsize,
     capabilities: Capabilities,
     profile: Arc<Profile>,
     state: Mutex<State>,
@@ -150,7 +100,7 @@ impl ExternalBackend {
     /// Starts the process and completes the handshake; checks the capabilities against the
     /// profiles and the configured profile family.
     pub fn start(
-        spec: ExternalSpec,
+        spec: ExternalSettings,
         profiles: &Profiles,
     ) -> Result<ExternalBackend, ExternalError> {
         let error = |kind| ExternalError {
@@ -168,8 +118,9 @@ impl ExternalBackend {
             None
         };
         Ok(ExternalBackend {
-            spec,
+            settings: spec,
             info,
+            restarts: std::sync::atomic::AtomicUsize::new(0),
             capabilities,
             profile,
             state: Mutex::new(State {
@@ -180,8 +131,8 @@ impl ExternalBackend {
         })
     }
 
-    pub fn spec(&self) -> &ExternalSpec {
-        &self.spec
+    pub fn settings(&self) -> &ExternalSettings {
+        &self.settings
     }
 
     pub fn info(&self) -> &BackendInfo {
@@ -212,14 +163,20 @@ impl ExternalBackend {
                 break;
             }
             if state.process.is_none() {
-                match handshake(&self.spec) {
-                    Ok((p, _, _)) => state.process = Some(p),
+                match handshake(&self.settings) {
+                    Ok((p, _, _)) => {
+                        if self.settings.persistent {
+                            self.restarts
+                                .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        }
+                        state.process = Some(p)
+                    }
                     Err(kind) => {
                         let why = format!(
                             "could not be started again: {}",
                             ExternalError {
-                                backend: self.spec.name.clone(),
-                                command: self.spec.launch.to_string(),
+                                backend: self.settings.name.clone(),
+                                command: self.settings.launch.to_string(),
                                 kind,
                             }
                         );
@@ -233,12 +190,12 @@ impl ExternalBackend {
             };
             let mark = process.stderr_mark();
             process.send(run_message(rest));
-            let mut deadline = Instant::now() + self.spec.timeout;
+            let mut deadline = Instant::now() + self.settings.timeout;
             for case in rest {
                 match self.answer(process, case, deadline) {
                     Ok(response) => {
                         results.push(Ok(response));
-                        deadline = Instant::now() + self.spec.timeout;
+                        deadline = Instant::now() + self.settings.timeout;
                     }
                     Err(fault) => {
                         let mut process = state.process.take();
@@ -252,7 +209,7 @@ impl ExternalBackend {
                 }
             }
         }
-        if !self.spec.persistent {
+        if !self.settings.persistent {
             if let Some(p) = state.process.take() {
                 p.shutdown(shutdown_message());
             }
@@ -283,7 +240,7 @@ impl ExternalBackend {
                 return Err(Fault::Timeout(format!(
                     "no answer to {} within {}",
                     which(),
-                    seconds(self.spec.timeout)
+                    seconds(self.settings.timeout)
                 )))
             }
             Next::Closed(why) => {
@@ -340,7 +297,7 @@ impl Drop for ExternalBackend {
 
 impl Backend for ExternalBackend {
     fn name(&self) -> &str {
-        &self.spec.name
+        &self.settings.name
     }
 
     fn profile(&self) -> &str {
@@ -350,7 +307,7 @@ impl Backend for ExternalBackend {
     fn describe(&self) -> String {
         format!(
             "external: {} {} (`{}`)",
-            self.info.name, self.info.version, self.spec.launch
+            self.info.name, self.info.version, self.settings.launch
         )
     }
 
@@ -382,11 +339,11 @@ impl Backend for ExternalBackend {
             .iter()
             .filter(|(flag, _)| reads.contains(flag))
             .find_map(|(flag, settings)| {
-                let value = effective_flag(&self.profile, variant, flags, flag);
+                let value = self.profile.flag_seen(variant, flags, flag);
                 (!settings.contains(&value)).then(|| {
                     format!(
                         "{} does not implement {flag} {}",
-                        self.spec.name,
+                        self.settings.name,
                         if value { "on" } else { "off" }
                     )
                 })
@@ -397,6 +354,10 @@ impl Backend for ExternalBackend {
         self.execute_batch(std::slice::from_ref(request))
             .pop()
             .unwrap_or_else(|| Err(Fault::Protocol("no answer".into())))
+    }
+
+    fn restarts(&self) -> usize {
+        self.restarts.load(std::sync::atomic::Ordering::Relaxed)
     }
 
     fn execute_batch(&self, requests: &[Request<'_>]) -> Vec<Result<Response, Fault>> {
@@ -411,8 +372,8 @@ impl Backend for ExternalBackend {
             .zip(first..)
             .map(|(r, id)| case_request(r, id))
             .collect();
-        let size = if self.spec.persistent {
-            self.spec.batch.max(1)
+        let size = if self.settings.persistent {
+            self.settings.batch.max(1)
         } else {
             1
         };
@@ -423,23 +384,9 @@ impl Backend for ExternalBackend {
     }
 }
 
-/// A flag as the CPU sees it on a variant (the same rule as [`Request::flag`]).
-fn effective_flag(
-    profile: &Profile,
-    variant: &Variant,
-    flags: &BTreeMap<String, bool>,
-    flag: &str,
-) -> bool {
-    let default = profile.flags.get(flag).is_some_and(|f| f.default);
-    if variant.ignores_flags.iter().any(|f| f == flag) {
-        return default;
-    }
-    flags.get(flag).copied().unwrap_or(default)
-}
-
 /// Starts the process and exchanges `hello`.
 fn handshake(
-    spec: &ExternalSpec,
+    spec: &ExternalSettings,
 ) -> Result<(Process, BackendInfo, Capabilities), ExternalErrorKind> {
     let mut process = Process::spawn(&spec.launch, spec.cwd.as_ref(), &spec.env)
         .map_err(|e| ExternalErrorKind::Spawn(e.to_string()))?;
@@ -519,7 +466,7 @@ fn handshake(
 
 /// Checks a handshake's capabilities against the profiles and the configured family.
 fn check_capabilities(
-    spec: &ExternalSpec,
+    spec: &ExternalSettings,
     caps: &Capabilities,
     profiles: &Profiles,
 ) -> Result<Arc<Profile>, String> {
@@ -582,10 +529,7 @@ pub fn case_request(req: &Request<'_>, id: u64) -> CaseRequest {
         .variant
         .ignores_flags
         .iter()
-        .map(|f| {
-            let default = req.profile.flags.get(f).is_some_and(|d| d.default);
-            (f.clone(), default)
-        })
+        .map(|f| (f.clone(), req.profile.flag_default(f)))
         .collect();
     CaseRequest {
         id,

@@ -16,30 +16,14 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+use crate::model::project::Launch;
+
 /// The longest line read from a backend: 1 MiB.
 pub const MAX_LINE: usize = 1 << 20;
 /// How much of a backend's stderr is kept.
 const STDERR_TAIL: usize = 16 * 1024;
 /// How long a backend has to exit after `shutdown` before it is killed.
 const GRACE: Duration = Duration::from_millis(1000);
-
-/// How to start a backend.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Launch {
-    /// A command line run by the shell (`sh -c`).
-    Shell(String),
-    /// A program and its arguments, run directly.
-    Exec(Vec<String>),
-}
-
-impl std::fmt::Display for Launch {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Launch::Shell(s) => f.write_str(s),
-            Launch::Exec(args) => f.write_str(&args.join(" ")),
-        }
-    }
-}
 
 /// What came out of a backend's stdout.
 #[derive(Debug)]

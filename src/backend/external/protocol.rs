@@ -307,8 +307,7 @@ pub enum ProtocolMessage {
 /// The JSON Schema (draft-07) of the protocol's messages, as `plc-conformance schema --kind
 /// protocol` prints it.
 pub fn protocol_schema() -> serde_json::Value {
-    let generator = schemars::generate::SchemaSettings::draft07().into_generator();
-    serde_json::to_value(generator.into_root_schema_for::<ProtocolMessage>()).unwrap_or_default()
+    crate::spec::schema_of::<ProtocolMessage>()
 }
 
 #[cfg(test)]

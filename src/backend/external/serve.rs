@@ -15,8 +15,8 @@ use super::protocol::{
 use crate::backend::{Backend, Request, Response};
 use crate::device::Device;
 use crate::memory::{Fill, Image};
+use crate::model::profile::Profile;
 use crate::model::{ErrorSignal, Operand};
-use crate::profile::Profile;
 
 /// Serves one backend until `shutdown` or the end of input. Errors are I/O errors and messages
 /// that are not the harness's; both end the session.

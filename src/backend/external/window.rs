@@ -106,13 +106,16 @@ pub fn memory(req: &Request<'_>) -> Vec<MemoryRange> {
 mod tests {
     use super::*;
     use crate::memory::{Fill, Image};
-    use crate::profile::Profile;
+    use crate::model::profile::Profile;
 
     fn profile() -> Profile {
-        serde_yaml::from_str(
-            "id: p\nname: P\nshort: p\nmanuals: {}\nerrors: {signal: code, flag: SM0}\n\
+        let mut errors = Vec::new();
+        crate::load::parse_profile(
+            std::path::Path::new("p.yaml"),
+            "id: p\nname: P\nshort: p\nmanuals: {}\nerrors: {signal: code, flag: SM0, register: SD0}\n\
              devices: {D: {first: 0, last: 1000}}\ninstructions: {}\n\
              variants: [{id: v, description: v}, {id: small, description: s, devices: {D: {first: 0, last: 120}}}]\n",
+            &mut errors,
         )
         .expect("profile")
     }

@@ -18,12 +18,13 @@
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use schemars::JsonSchema;
-use serde::Deserialize;
-
-use super::{ExternalSpec, Launch, DEFAULT_BATCH, DEFAULT_STARTUP_TIMEOUT, DEFAULT_TIMEOUT};
-use crate::load::{parse_yaml, read_file, FileContext, LoadErrorKind, LoadErrors};
+use super::{parse_yaml, read_file, FileContext, LoadError, LoadErrorKind, LoadErrors};
+use crate::model::project::{
+    Configured, ExternalSettings, Launch, ProjectBackends, DEFAULT_BATCH, DEFAULT_STARTUP_TIMEOUT,
+    DEFAULT_TIMEOUT,
+};
 use crate::model::Location;
+use crate::spec::project::{CommandSpec, ProjectFileSpec};
 
 /// The file name looked for in the project root.
 pub const FILE_NAME: &str = "plc-conformance.yaml";
@@ -35,82 +36,9 @@ pub const ENV_REQUIRE: &str = "PLC_CONFORMANCE_REQUIRE_BACKENDS";
 /// The environment variable a backend's command sees naming the plc-conformance binary.
 pub const ENV_SELF: &str = "PLC_CONFORMANCE";
 
-#[derive(Debug, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-#[schemars(title = "plc-conformance project file")]
-pub struct ProjectFileSpec {
-    /// External backends, run as extra trials.
-    #[serde(default)]
-    pub backends: Vec<BackendSpec>,
-}
-
-#[derive(Debug, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct BackendSpec {
-    /// The name in trial names: lowercase letters, digits, `-` and `_`.
-    pub name: String,
-    /// A command line run by `sh -c`, or a list of program and arguments run directly.
-    pub command: CommandSpec,
-    /// The profile family the backend implements; its handshake must claim the same.
-    #[serde(default)]
-    pub profile: Option<String>,
-    /// Seconds to wait for one case's answer.
-    #[serde(default)]
-    pub timeout: Option<f64>,
-    /// Seconds to wait for the backend to start and answer `hello`.
-    #[serde(default)]
-    pub startup_timeout: Option<f64>,
-    /// The backend's known-differences file.
-    #[serde(default)]
-    pub known_differences: Option<PathBuf>,
-    /// Files the backend needs (an interpreter in a virtual environment, a built binary). When
-    /// one is missing the backend is skipped with a message, or is an error when
-    /// `PLC_CONFORMANCE_REQUIRE_BACKENDS` is set.
-    #[serde(default)]
-    pub requires: Vec<PathBuf>,
-    /// Cases per `run` message.
-    #[serde(default)]
-    pub batch: Option<usize>,
-}
-
-#[derive(Debug, Deserialize, JsonSchema)]
-#[serde(untagged)]
-pub enum CommandSpec {
-    Shell(String),
-    Exec(Vec<String>),
-}
-
-/// A backend from the project file.
-#[derive(Debug, Clone)]
-pub struct Configured {
-    pub spec: ExternalSpec,
-    pub requires: Vec<PathBuf>,
-    pub location: Location,
-}
-
-impl Configured {
-    /// What is missing for this backend to run, if anything.
-    pub fn missing(&self) -> Option<String> {
-        let missing: Vec<String> = self
-            .requires
-            .iter()
-            .filter(|p| !p.exists())
-            .map(|p| p.display().to_string())
-            .collect();
-        (!missing.is_empty()).then(|| {
-            format!(
-                "external backend `{}` ({}) needs {}, which is missing",
-                self.spec.name,
-                self.location,
-                missing.join(", ")
-            )
-        })
-    }
-}
-
 /// Where the project file is: `PLC_CONFORMANCE_CONFIG`, else `ROOT/plc-conformance.yaml`. The
 /// flag says whether it was named explicitly (then it must exist).
-pub fn locate(root: &Path) -> (PathBuf, bool) {
+pub fn locate_project(root: &Path) -> (PathBuf, bool) {
     match std::env::var_os(ENV_CONFIG) {
         Some(p) if !p.is_empty() => (PathBuf::from(p), true),
         _ => (root.join(FILE_NAME), false),
@@ -122,8 +50,45 @@ pub fn requirements_enforced() -> bool {
     std::env::var(ENV_REQUIRE).is_ok_and(|v| !v.is_empty() && v != "0")
 }
 
-/// Reads the project file. `plc_conformance` is the binary backends see as `$PLC_CONFORMANCE`.
-pub fn load(file: &Path, plc_conformance: &Path) -> Result<Vec<Configured>, LoadErrors> {
+/// Reads the project file at `file` (see [`locate_project`]). A missing file that was not named
+/// explicitly means no external backends. Backends whose requirements are missing are set aside,
+/// or are an error when [`requirements_enforced`]. `plc_conformance` is the binary backends see
+/// as `$PLC_CONFORMANCE`.
+pub fn load_project(
+    file: &Path,
+    explicit: bool,
+    plc_conformance: &Path,
+) -> Result<ProjectBackends, LoadErrors> {
+    if !explicit && !file.exists() {
+        return Ok(ProjectBackends::default());
+    }
+    let all = read_project(file, plc_conformance)?;
+    let enforced = requirements_enforced();
+    let mut out = ProjectBackends::default();
+    let mut errors = Vec::new();
+    for c in all {
+        match c.missing() {
+            None => out.configured.push(c),
+            Some(skipped) if enforced => errors.push(LoadError {
+                file: c.location.file.clone(),
+                line: Some(c.location.line),
+                key: Some("requires".into()),
+                kind: LoadErrorKind::Invalid(format!(
+                    "{skipped} ({ENV_REQUIRE} is set, so every configured backend must run)"
+                ))
+                .into(),
+            }),
+            Some(skipped) => out.skipped.push(skipped),
+        }
+    }
+    if errors.is_empty() {
+        Ok(out)
+    } else {
+        Err(LoadErrors(errors))
+    }
+}
+
+fn read_project(file: &Path, plc_conformance: &Path) -> Result<Vec<Configured>, LoadErrors> {
     let text = read_file(file).map_err(|e| LoadErrors(vec![e]))?;
     let spec: ProjectFileSpec = parse_yaml(file, &text).map_err(|e| LoadErrors(vec![e]))?;
     let dir = file
@@ -193,16 +158,16 @@ pub fn load(file: &Path, plc_conformance: &Path) -> Result<Vec<Configured>, Load
                 LoadErrorKind::Invalid("a batch holds at least one case".into()),
             );
         }
-        let mut spec = ExternalSpec::new(b.name, launch);
-        spec.profile = b.profile;
-        spec.timeout = timeout;
-        spec.startup_timeout = startup_timeout;
-        spec.known_differences = b.known_differences.map(|p| dir.join(p));
-        spec.cwd = Some(dir.clone());
-        spec.env = vec![(ENV_SELF.into(), plc_conformance.display().to_string())];
-        spec.batch = b.batch.unwrap_or(DEFAULT_BATCH).max(1);
+        let mut settings = ExternalSettings::new(b.name, launch);
+        settings.profile = b.profile;
+        settings.timeout = timeout;
+        settings.startup_timeout = startup_timeout;
+        settings.known_differences = b.known_differences.map(|p| dir.join(p));
+        settings.cwd = Some(dir.clone());
+        settings.env = vec![(ENV_SELF.into(), plc_conformance.display().to_string())];
+        settings.batch = b.batch.unwrap_or(DEFAULT_BATCH).max(1);
         out.push(Configured {
-            spec,
+            settings,
             requires: b.requires.into_iter().map(|p| dir.join(p)).collect(),
             location,
         });
@@ -220,19 +185,6 @@ pub fn valid_name(name: &str) -> bool {
         && name
             .chars()
             .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-' || c == '_')
-}
-
-/// The JSON Schema (draft-07) of the project file.
-pub fn project_schema() -> serde_json::Value {
-    let generator = schemars::generate::SchemaSettings::draft07().into_generator();
-    serde_json::to_value(generator.into_root_schema_for::<ProjectFileSpec>()).unwrap_or_default()
-}
-
-/// The JSON Schema (draft-07) of a known-differences file.
-pub fn known_schema() -> serde_json::Value {
-    let generator = schemars::generate::SchemaSettings::draft07().into_generator();
-    serde_json::to_value(generator.into_root_schema_for::<super::known::KnownFileSpec>())
-        .unwrap_or_default()
 }
 
 #[cfg(test)]
@@ -259,9 +211,9 @@ mod tests {
              - name: py\n    command: [python3, adapter.py]\n",
         );
         let dir = file.parent().expect("dir").to_path_buf();
-        let all = load(&file, Path::new("/bin/plc-conformance")).expect("loads");
+        let all = read_project(&file, Path::new("/bin/plc-conformance")).expect("loads");
         assert_eq!(all.len(), 2);
-        let emu = &all[0].spec;
+        let emu = &all[0].settings;
         assert_eq!(emu.launch, Launch::Shell("./emu --serve".into()));
         assert_eq!(emu.timeout, Duration::from_millis(500));
         assert_eq!(emu.startup_timeout, DEFAULT_STARTUP_TIMEOUT);
@@ -272,12 +224,14 @@ mod tests {
             vec![(ENV_SELF.to_string(), "/bin/plc-conformance".to_string())]
         );
         assert_eq!(all[0].location.line, 2);
-        assert!(all[0].missing().is_some_and(|m| m.contains("emu")));
+        assert!(all[0]
+            .missing()
+            .is_some_and(|m| m.to_string().contains("emu")));
         assert_eq!(
-            all[1].spec.launch,
+            all[1].settings.launch,
             Launch::Exec(vec!["python3".into(), "adapter.py".into()])
         );
-        assert_eq!(all[1].spec.timeout, DEFAULT_TIMEOUT);
+        assert_eq!(all[1].settings.timeout, DEFAULT_TIMEOUT);
         assert!(all[1].missing().is_none());
     }
 
@@ -288,7 +242,7 @@ mod tests {
             "backends:\n  - name: Emu\n    command: x\n  - name: ok\n    command: []\n  \
              - name: ok\n    command: y\n    timeout: 0\n",
         );
-        let errors = load(&file, Path::new("p"))
+        let errors = read_project(&file, Path::new("p"))
             .expect_err("invalid")
             .to_string();
         let at = |line: usize, rest: &str| format!("{}:{line}: {rest}", file.display());
@@ -301,7 +255,7 @@ mod tests {
             assert!(errors.contains(&expected), "{expected}\nin:\n{errors}");
         }
         let file = write("shape", "backends:\n  - name: emu\n    comand: x\n");
-        let errors = load(&file, Path::new("p"))
+        let errors = read_project(&file, Path::new("p"))
             .expect_err("invalid")
             .to_string();
         assert!(

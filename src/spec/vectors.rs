@@ -309,10 +309,3 @@ impl JsonSchema for ValueSpec {
         schema_shapes::Value::json_schema(generator)
     }
 }
-
-/// The JSON Schema (draft-07) of a vector file, as `plc-conformance schema` prints it.
-pub fn vector_file_schema() -> serde_json::Value {
-    let generator = schemars::generate::SchemaSettings::draft07().into_generator();
-    let schema = generator.into_root_schema_for::<VectorFileSpec>();
-    serde_json::to_value(schema).unwrap_or_default()
-}

@@ -1,4 +1,4 @@
-//! Vendor profiles: what a vendor varies, as data.
+//! Vendor profiles as written on disk: what a vendor varies, as data.
 //!
 //! A profile (one file in `vendors/`) lists the manuals the vectors cite, the device codes and
 //! their ranges, how errors are signalled, the mode flags with their defaults, the instructions
@@ -11,11 +11,12 @@ use std::collections::BTreeMap;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use crate::device::Device;
+use super::cross_vendor::CrossVendorSectionSpec;
 
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct Profile {
+#[schemars(title = "plc-conformance vendor profile")]
+pub struct ProfileSpec {
     /// The id vectors name in `profiles:`, e.g. `mitsubishi-iqr`.
     pub id: String,
     /// The vendor's name for the family.
@@ -25,7 +26,7 @@ pub struct Profile {
     /// The manuals vectors may cite, by id.
     pub manuals: BTreeMap<String, Manual>,
     /// How the CPU signals an operation error.
-    pub errors: ErrorSignalling,
+    pub errors: ErrorSignallingSpec,
     /// How characters are stored in words (for readers; the instructions' semantics say it too).
     #[serde(default)]
     pub text_layout: Option<String>,
@@ -40,7 +41,7 @@ pub struct Profile {
     pub variants: Vec<Variant>,
     /// How the profile answers the cross-vendor operations.
     #[serde(default)]
-    pub neutral: Option<crate::neutral::NeutralSection>,
+    pub neutral: Option<CrossVendorSectionSpec>,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
@@ -56,7 +57,7 @@ pub struct Manual {
 /// How an operation error becomes visible to a program.
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct ErrorSignalling {
+pub struct ErrorSignallingSpec {
     /// Whether a program sees an error code or only a flag.
     pub signal: SignalKind,
     /// The flag an error turns on (MELSEC SM0, IDEC M8004).
@@ -246,92 +247,6 @@ pub struct Variant {
     /// The instructions this variant has; all of the profile's when absent.
     #[serde(default)]
     pub instructions: Option<Vec<String>>,
-}
-
-impl Profile {
-    pub fn variant(&self, id: &str) -> Option<&Variant> {
-        self.variants.iter().find(|v| v.id == id)
-    }
-
-    /// The ranges of a device code on a variant.
-    pub fn ranges(&self, variant: &Variant, code: &str) -> Option<DeviceRanges> {
-        variant
-            .devices
-            .get(code)
-            .cloned()
-            .or_else(|| self.devices.get(code).map(DeviceDef::ranges))
-    }
-
-    /// Whether `count` consecutive word operands from `head` all exist on the variant: every
-    /// point they take lies in one range (a span across a gap does not exist).
-    pub fn words_exist(&self, variant: &Variant, head: &Device, count: u32) -> bool {
-        let (Some(def), Some(ranges)) = (
-            self.devices.get(&head.code),
-            self.ranges(variant, &head.code),
-        ) else {
-            return false;
-        };
-        let Some(first) = def.numbering.point(head.index) else {
-            return false;
-        };
-        if count == 0 {
-            return true;
-        }
-        let last = first + u64::from(count) * u64::from(def.points_per_word.max(1)) - 1;
-        let fits = ranges.iter().any(|r| {
-            match (def.numbering.point(r.first), def.numbering.point(r.last)) {
-                (Some(lo), Some(hi)) => lo <= first && last <= hi,
-                _ => false,
-            }
-        });
-        fits
-    }
-
-    /// Whether any variant has this word; memory a vector sets must exist somewhere.
-    pub fn word_exists_anywhere(&self, device: &Device) -> bool {
-        self.variants.iter().any(|v| self.words_exist(v, device, 1))
-    }
-
-    /// Whether a variant has an instruction.
-    pub fn has_instruction(&self, variant: &Variant, instruction: &str) -> bool {
-        self.instructions.contains_key(instruction)
-            && variant
-                .instructions
-                .as_ref()
-                .is_none_or(|list| list.iter().any(|i| i == instruction))
-    }
-}
-
-/// The JSON Schema (draft-07) of a vendor profile.
-pub fn profile_schema() -> serde_json::Value {
-    let generator = schemars::generate::SchemaSettings::draft07().into_generator();
-    serde_json::to_value(generator.into_root_schema_for::<Profile>()).unwrap_or_default()
-}
-
-/// The loaded profiles, by id.
-#[derive(Debug, Clone, Default)]
-pub struct Profiles {
-    by_id: BTreeMap<String, std::sync::Arc<Profile>>,
-}
-
-impl Profiles {
-    pub fn new(profiles: impl IntoIterator<Item = Profile>) -> Self {
-        Profiles {
-            by_id: profiles
-                .into_iter()
-                .map(|p| (p.id.clone(), std::sync::Arc::new(p)))
-                .collect(),
-        }
-    }
-    pub fn get(&self, id: &str) -> Option<&std::sync::Arc<Profile>> {
-        self.by_id.get(id)
-    }
-    pub fn iter(&self) -> impl Iterator<Item = &std::sync::Arc<Profile>> {
-        self.by_id.values()
-    }
-    pub fn ids(&self) -> Vec<String> {
-        self.by_id.keys().cloned().collect()
-    }
 }
 
 #[cfg(test)]

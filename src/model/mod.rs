@@ -1,7 +1,12 @@
-//! The validated corpus: what the loader produces and everything downstream consumes.
+//! The validated model: what the loader produces and everything downstream consumes.
 //!
 //! Unlike [`crate::spec`], nothing here is stringly typed: devices are parsed, values are words,
 //! flags are booleans, and every case knows where it was written so a report can point at it.
+
+pub mod cross_vendor;
+pub mod known;
+pub mod profile;
+pub mod project;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt;
@@ -49,7 +54,7 @@ impl fmt::Display for Operand {
 /// How an operation error became visible: the vendor's code, or a flag for vendors that signal
 /// with a relay only. The two never compare equal, so an IDEC expectation of M8004 is never
 /// satisfied by a Mitsubishi-style code, nor the other way round.
-#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ErrorSignal {
     Code(u16),
@@ -128,5 +133,5 @@ impl Case {
 pub struct Corpus {
     pub cases: Vec<Arc<Case>>,
     /// Cross-vendor cases (`vectors/cross-vendor/`).
-    pub neutral: Vec<Arc<crate::neutral::NeutralCase>>,
+    pub cross_vendor: Vec<Arc<cross_vendor::CrossVendorCase>>,
 }

@@ -1,7 +1,9 @@
 //! Saved runs and run-to-run comparison, so that CI can fail only on new differences.
 //!
-//! A saved run is the JSON document `{"format": "plc-conformance-results", "version": 1,
-//! "records": [...]}` with one [`Record`] per cell. Records are matched by trial name.
+//! A saved run is the JSON report (`{"format": "plc-conformance-results", "version": 2,
+//! "records": [...], ...}`, see [`super::json`]) with one [`Record`] per trial. Records are
+//! matched by trial name and compared by status and structured behaviour, never by the text
+//! shown, so rewording a message does not change what counts as new.
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -9,26 +11,15 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::matrix::Record;
+use super::json::{FORMAT, VERSION};
+use super::record::Record;
 
-pub const FORMAT: &str = "plc-conformance-results";
-pub const VERSION: u32 = 1;
-
+/// The part of a JSON report a baseline needs.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct SavedRun {
     pub format: String,
     pub version: u32,
     pub records: Vec<Record>,
-}
-
-impl SavedRun {
-    pub fn new(records: Vec<Record>) -> Self {
-        SavedRun {
-            format: FORMAT.into(),
-            version: VERSION,
-            records,
-        }
-    }
 }
 
 /// Why a saved run could not be read.
@@ -52,19 +43,25 @@ pub fn load(path: &Path) -> Result<SavedRun, BaselineError> {
         message,
     };
     let text = std::fs::read_to_string(path).map_err(|e| error(e.to_string()))?;
-    let run: SavedRun = serde_json::from_str(&text).map_err(|e| {
+    // The format and version are read first, so that a run saved by another version is told
+    // apart from a damaged file.
+    let head: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
         error(format!(
             "not a saved run (line {}, column {}): {e}",
             e.line(),
             e.column()
         ))
     })?;
-    if run.format != FORMAT || run.version != VERSION {
+    let format = head.get("format").and_then(|f| f.as_str()).unwrap_or("");
+    let version = head.get("version").and_then(|v| v.as_u64()).unwrap_or(0);
+    if format != FORMAT || version != u64::from(VERSION) {
         return Err(error(format!(
-            "format `{}` version {} is not `{FORMAT}` version {VERSION}",
-            run.format, run.version
+            "format `{format}` version {version} is not `{FORMAT}` version {VERSION}; save the \
+             baseline again with this version (`--save FILE`)"
         )));
     }
+    let run: SavedRun =
+        serde_json::from_value(head).map_err(|e| error(format!("not a saved run: {e}")))?;
     Ok(run)
 }
 
@@ -91,9 +88,7 @@ pub fn compare<'a>(before: &'a [Record], now: &'a [Record]) -> Changes<'a> {
             (false, true) => changes.new.push(r),
             (true, false) => changes.fixed.push((was.unwrap_or(r), r)),
             (true, true) => match was {
-                Some(w)
-                    if w.status == r.status && w.behaviour == r.behaviour && w.shown == r.shown =>
-                {
+                Some(w) if w.status == r.status && w.behaviour == r.behaviour => {
                     changes.unchanged += 1
                 }
                 Some(w) => changes.changed.push((w, r)),
@@ -108,10 +103,19 @@ pub fn compare<'a>(before: &'a [Record], now: &'a [Record]) -> Changes<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::matrix::Status;
+    use crate::judge::Status;
     use crate::model::Basis;
+    use crate::report::record::Behaviour;
 
     fn r(trial: &str, status: Status, shown: &str) -> Record {
+        let behaviour = match shown {
+            "ok" => Behaviour::Conforms,
+            "x" => Behaviour::WrongWords,
+            "timeout" => Behaviour::Fault {
+                kind: "timeout".into(),
+            },
+            _ => Behaviour::Unsupported,
+        };
         Record {
             section: "s".into(),
             row: trial.into(),
@@ -121,26 +125,28 @@ mod tests {
             line: 1,
             basis: Basis::Manual,
             status,
-            behaviour: shown.into(),
+            label: shown.into(),
+            behaviour,
             shown: shown.into(),
             detail: String::new(),
+            verdict: None,
         }
     }
 
     #[test]
     fn sorts_new_fixed_and_changed() {
         let before = vec![
-            r("a", Status::Conforms, "ok"),
-            r("b", Status::Differs, "x"),
-            r("c", Status::Differs, "x"),
-            r("d", Status::Differs, "x"),
+            r("a", Status::Pass, "ok"),
+            r("b", Status::Fail, "x"),
+            r("c", Status::Fail, "x"),
+            r("d", Status::Fail, "x"),
         ];
         let now = vec![
-            r("a", Status::Differs, "x"),
-            r("b", Status::Conforms, "ok"),
-            r("c", Status::Differs, "y"),
-            r("d", Status::Differs, "x"),
-            r("e", Status::Timeout, "timeout"),
+            r("a", Status::Fail, "x"),
+            r("b", Status::Pass, "ok"),
+            r("c", Status::Fail, "y"),
+            r("d", Status::Fail, "x"),
+            r("e", Status::Fail, "timeout"),
         ];
         let c = compare(&before, &now);
         let names = |v: &[&Record]| v.iter().map(|r| r.trial.clone()).collect::<Vec<_>>();

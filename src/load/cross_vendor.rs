@@ -1,40 +1,40 @@
-//! Lowering cross-vendor vector files and checking profiles' `neutral` sections.
+//! Loading cross-vendor vector files and the `neutral` sections of profiles.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
+use std::sync::Arc;
 
-use super::profiles::unknown;
+use super::checks::{check_cite, check_expect_optional, check_id, text_bytes, unknown};
 use super::{FileContext, LoadErrorKind};
-use crate::model::Citation;
-use crate::neutral::lower::{lowering_key, parse_operand};
-use crate::neutral::spec::{NeutralCaseSpec, NeutralFileSpec};
-use crate::neutral::{NeutralCase, NeutralOutcome, Operation};
-use crate::profile::{Profile, Profiles};
+use crate::device::Device;
+use crate::model::cross_vendor::{
+    Answer, CrossVendorCase, CrossVendorSection, ErrorClass, Lowering, Operation,
+};
+use crate::model::profile::{Profiles, SignalKind};
+use crate::model::{Citation, ErrorSignal, Operand};
+use crate::spec::cross_vendor::{CrossVendorCaseSpec, CrossVendorFileSpec};
+use crate::spec::profile::ProfileSpec;
 use crate::spec::ScalarSpec;
-use crate::value::{parse_number, to_bits};
+use crate::value::{parse_number, parse_word, to_bits};
 
 /// The most digits a neutral case may ask for: results are lifted into 64 bits.
 const MAX_DIGITS: u32 = 16;
 
 /// Whether a vector file is a cross-vendor one (it names an `operation`, not `instructions`).
-pub fn is_neutral(index: &super::LineIndex) -> bool {
+pub fn is_cross_vendor(index: &super::LineIndex) -> bool {
     index.line("operation").is_some() && index.line("instructions").is_none()
 }
 
 pub(crate) fn lower_file(
-    spec: &NeutralFileSpec,
+    spec: &CrossVendorFileSpec,
     profiles: &Profiles,
     cx: &mut FileContext<'_>,
-) -> Vec<(String, NeutralCase)> {
+) -> Vec<(String, CrossVendorCase)> {
     let keys: BTreeSet<String> = profiles
         .iter()
-        .flat_map(|p| {
-            p.neutral
-                .iter()
-                .flat_map(|n| n.lowerings.iter())
-                .filter(|l| l.operation == spec.operation)
-                .map(|l| lowering_key(p, l))
-        })
+        .flat_map(|p| p.cross_vendor.lowerings.iter())
+        .filter(|l| l.operation == spec.operation)
+        .map(|l| l.key.clone())
         .collect();
     let known: Vec<String> = keys.iter().cloned().collect();
     spec.cases
@@ -49,14 +49,14 @@ pub(crate) fn lower_file(
 
 fn lower_case(
     key: &str,
-    spec: &NeutralCaseSpec,
-    file: &NeutralFileSpec,
+    spec: &CrossVendorCaseSpec,
+    file: &CrossVendorFileSpec,
     lowerings: &[String],
     cx: &mut FileContext<'_>,
-) -> Option<NeutralCase> {
+) -> Option<CrossVendorCase> {
     let before = cx.errors.len();
-    super::vectors::check_id(key, &spec.id, cx);
-    let cite = super::vectors::check_cite(key, spec.basis, spec.cite.as_deref(), cx);
+    check_id(key, &spec.id, cx);
+    let cite = check_cite(key, spec.basis, spec.cite.as_deref(), cx);
     if spec.digits > MAX_DIGITS {
         cx.error(
             format!("{key}.digits"),
@@ -72,9 +72,7 @@ fn lower_case(
                 );
             }
             let text = match &spec.text {
-                Some(t) => {
-                    super::vectors::text_bytes(&format!("{key}.text"), t, cx).unwrap_or_default()
-                }
+                Some(t) => text_bytes(&format!("{key}.text"), t, cx).unwrap_or_default(),
                 None => {
                     cx.error(
                         key,
@@ -112,7 +110,7 @@ fn lower_case(
             cx,
         ),
         None => {
-            super::vectors::check_expect_optional(key, spec.basis, cx);
+            check_expect_optional(key, spec.basis, cx);
             None
         }
     };
@@ -143,7 +141,7 @@ fn lower_case(
             except.insert(name.clone(), (o, e.why.clone()));
         }
     }
-    (cx.errors.len() == before).then(|| NeutralCase {
+    (cx.errors.len() == before).then(|| CrossVendorCase {
         id: spec.id.clone(),
         operation: file.operation,
         basis: spec.basis,
@@ -166,18 +164,18 @@ fn outcome(
     key: &str,
     value: Option<&ScalarSpec>,
     text: Option<&str>,
-    error: Option<&crate::neutral::ErrorClass>,
+    error: Option<&ErrorClass>,
     op: Operation,
     cx: &mut FileContext<'_>,
-) -> Option<NeutralOutcome> {
+) -> Option<Answer> {
     match (value, text, error) {
         (Some(v), None, None) if op == Operation::HexToValue => {
-            number(&format!("{key}.value"), v, 64, cx).map(NeutralOutcome::Value)
+            number(&format!("{key}.value"), v, 64, cx).map(Answer::Value)
         }
         (None, Some(t), None) if op == Operation::ValueToHex => {
-            super::vectors::text_bytes(&format!("{key}.text"), t, cx).map(NeutralOutcome::Text)
+            text_bytes(&format!("{key}.text"), t, cx).map(Answer::Text)
         }
-        (None, None, Some(e)) => Some(NeutralOutcome::Error(e.clone())),
+        (None, None, Some(e)) => Some(Answer::Error(e.clone())),
         _ => {
             cx.error(
                 key,
@@ -215,24 +213,41 @@ fn number(key: &str, v: &ScalarSpec, bits: u32, cx: &mut FileContext<'_>) -> Opt
         .ok()
 }
 
-/// Checks a profile's `neutral` section against the rest of the profile.
-pub(crate) fn check_section(p: &Profile, cx: &mut FileContext<'_>) {
-    let Some(section) = &p.neutral else { return };
-    for key in section.errors.keys() {
-        let ok = match p.errors.signal {
-            crate::profile::SignalKind::Code => crate::value::parse_word(key).is_ok(),
-            crate::profile::SignalKind::Flag => *key == p.errors.flag,
+/// Parses a lowering's operand: a device or a constant.
+pub(crate) fn parse_operand(text: &str) -> Result<Operand, String> {
+    if let Ok(k) = parse_number(text) {
+        return Ok(Operand::Constant(k));
+    }
+    text.parse::<Device>()
+        .map(Operand::Device)
+        .map_err(|e| e.to_string())
+}
+
+/// Checks a profile's `neutral` section against the rest of the profile and parses it.
+pub(crate) fn lower_section(p: &ProfileSpec, cx: &mut FileContext<'_>) -> CrossVendorSection {
+    let mut out = CrossVendorSection::default();
+    let Some(section) = &p.neutral else {
+        return out;
+    };
+    for (key, class) in &section.errors {
+        let signal = match p.errors.signal {
+            SignalKind::Code => parse_word(key).ok().map(ErrorSignal::Code),
+            SignalKind::Flag => (*key == p.errors.flag)
+                .then(|| key.parse::<Device>().ok().map(ErrorSignal::Flag))
+                .flatten(),
         };
-        if !ok {
-            cx.error(
+        match signal {
+            Some(s) => out.errors.push((s, class.clone())),
+            None => cx.error(
                 format!("neutral.errors.{key}"),
                 LoadErrorKind::Invalid(format!("`{key}` is not an error signal of this profile")),
-            );
+            ),
         }
     }
     let mut names = BTreeSet::new();
     for (i, l) in section.lowerings.iter().enumerate() {
         let key = format!("neutral.lowerings[{i}]");
+        let before = cx.errors.len();
         if !names.insert(&l.name) {
             cx.error(
                 format!("{key}.name"),
@@ -247,12 +262,16 @@ pub(crate) fn check_section(p: &Profile, cx: &mut FileContext<'_>) {
             );
             continue;
         };
-        if let Some(v) = &l.variant {
-            if p.variant(v).is_none() {
-                let known: Vec<String> = p.variants.iter().map(|v| v.id.clone()).collect();
-                cx.error(format!("{key}.variant"), unknown("variant", v, &known));
+        let variant = match &l.variant {
+            Some(v) => {
+                if !p.variants.iter().any(|pv| pv.id == *v) {
+                    let known: Vec<String> = p.variants.iter().map(|v| v.id.clone()).collect();
+                    cx.error(format!("{key}.variant"), unknown("variant", v, &known));
+                }
+                v.clone()
             }
-        }
+            None => p.variants.first().map(|v| v.id.clone()).unwrap_or_default(),
+        };
         for flag in l.flags.keys() {
             if !def.flags.contains(flag) {
                 cx.error(
@@ -261,34 +280,54 @@ pub(crate) fn check_section(p: &Profile, cx: &mut FileContext<'_>) {
                 );
             }
         }
-        let operands: Vec<String> = def.operands.keys().cloned().collect();
+        let names_of_operands: Vec<String> = def.operands.keys().cloned().collect();
+        let mut operands = BTreeMap::new();
         for (name, text) in &l.operands {
             if !def.operands.contains_key(name) {
                 cx.error(
                     format!("{key}.operands.{name}"),
-                    unknown("operand", name, &operands),
+                    unknown("operand", name, &names_of_operands),
                 );
-            } else if let Err(e) = parse_operand(text) {
-                cx.error(format!("{key}.operands.{name}"), LoadErrorKind::Invalid(e));
+                continue;
+            }
+            match parse_operand(text) {
+                Ok(o) => {
+                    operands.insert(name.clone(), o);
+                }
+                Err(e) => cx.error(format!("{key}.operands.{name}"), LoadErrorKind::Invalid(e)),
             }
         }
-        for (field, name) in [
-            ("source", Some(&l.source)),
-            ("destination", Some(&l.destination)),
-            ("count", l.count.as_ref()),
-        ] {
-            let Some(name) = name else { continue };
-            let given = l.operands.contains_key(name)
-                || (field == "count" && def.operands.contains_key(name));
-            if !given {
+        if let Some(count) = &l.count {
+            if !l.operands.contains_key(count) && !def.operands.contains_key(count) {
+                cx.error(
+                    format!("{key}.count"),
+                    LoadErrorKind::Invalid(format!(
+                        "`{count}` is not among the lowering's operands"
+                    )),
+                );
+            }
+        }
+        let mut device = |field: &str, name: &str| match operands.get(name) {
+            Some(Operand::Device(d)) => Some(d.clone()),
+            Some(Operand::Constant(_)) => {
+                cx.error(
+                    format!("{key}.{field}"),
+                    LoadErrorKind::Invalid(format!("operand `{name}` must be a device")),
+                );
+                None
+            }
+            None => {
                 cx.error(
                     format!("{key}.{field}"),
                     LoadErrorKind::Invalid(format!(
                         "`{name}` is not among the lowering's operands"
                     )),
                 );
+                None
             }
-        }
+        };
+        let source = device("source", &l.source);
+        let destination = device("destination", &l.destination);
         let covered = l.operands.len()
             + usize::from(
                 l.count
@@ -301,29 +340,51 @@ pub(crate) fn check_section(p: &Profile, cx: &mut FileContext<'_>) {
                 LoadErrorKind::Invalid(format!(
                     "{} needs operands {}",
                     l.instruction,
-                    operands.join(", ")
+                    names_of_operands.join(", ")
                 )),
             );
         }
         if l.count.is_none() && l.width.is_none() {
             cx.error(
-                key,
+                &key,
                 LoadErrorKind::Missing(
                     "width: an instruction that takes no count has a fixed digit width",
                 ),
             );
         }
+        let (Some(source), Some(destination)) = (source, destination) else {
+            continue;
+        };
+        if cx.errors.len() != before {
+            continue;
+        }
+        out.lowerings.push(Arc::new(Lowering {
+            key: format!("{}/{}", p.short, l.name),
+            name: l.name.clone(),
+            description: l.description.clone(),
+            operation: l.operation,
+            instruction: l.instruction.clone(),
+            variant,
+            flags: l.flags.clone(),
+            operands,
+            source,
+            destination,
+            text: l.text,
+            count: l.count.clone(),
+            width: l.width,
+        }));
     }
+    out
 }
 
-/// Reads a neutral file into cases.
+/// Reads a cross-vendor file into cases.
 pub(crate) fn add_file(
     file: &Path,
     text: &str,
     profiles: &Profiles,
     errors: &mut Vec<super::LoadError>,
-) -> Vec<(String, NeutralCase)> {
-    let spec: NeutralFileSpec = match super::parse_yaml(file, text) {
+) -> Vec<(String, CrossVendorCase)> {
+    let spec: CrossVendorFileSpec = match super::parse_yaml(file, text) {
         Ok(s) => s,
         Err(e) => {
             errors.push(e);

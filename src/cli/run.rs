@@ -1,0 +1,396 @@
+//! `run` and `diff`: plan, run and report, with the same report formats, saved runs and
+//! baselines; `diff --against` compares two backends word by word.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+
+use anstream::{eprintln, print, println};
+
+use super::backends::{prepare, start, Prepared};
+use super::{
+    BackendArgs, Cli, DiffArgs, Format, ReportArgs, RunArgs, EXIT_BAD_INPUT, EXIT_DIFFERENCES,
+    EXIT_OK,
+};
+use crate::backend::{Backend, Response};
+use crate::execute::{execute, Observation};
+use crate::judge::words::rows;
+use crate::model::{error_text, Expectation};
+use crate::plan::Trial;
+use crate::report::baseline::{self, SavedRun};
+use crate::report::document::{self, Collector};
+use crate::report::json::{BackendInfo, RunInfo};
+use crate::report::text::{memory_diff, Palette};
+use crate::report::text_reporter::TextReporter;
+use crate::report::{Reporter, Tee};
+use crate::runner::{self, Project};
+
+pub fn run(cli: &Cli, args: &RunArgs) -> u8 {
+    execute_command(
+        cli,
+        &args.backends,
+        &args.report,
+        args.format,
+        args.show_recorded,
+    )
+}
+
+pub fn diff(cli: &Cli, args: &DiffArgs) -> u8 {
+    if let Some(other) = &args.against {
+        return against(cli, &args.backends, other);
+    }
+    let format = match args.format {
+        Format::Text => Format::Matrix,
+        f => f,
+    };
+    execute_command(cli, &args.backends, &args.report, format, false)
+}
+
+fn execute_command(
+    cli: &Cli,
+    backend_args: &BackendArgs,
+    report: &ReportArgs,
+    format: Format,
+    show_recorded: bool,
+) -> u8 {
+    // The baseline is read before anything is written, so that `--save F --baseline F`
+    // compares with the run saved before, not with this one.
+    let before = match &report.baseline {
+        Some(path) => match baseline::load(path) {
+            Ok(b) => Some(b),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return EXIT_BAD_INPUT;
+            }
+        },
+        None => None,
+    };
+    let Prepared {
+        project,
+        file,
+        backends,
+    } = match prepare(cli, backend_args) {
+        Ok(p) => p,
+        Err(code) => return code,
+    };
+    let trials = planned(&project, &backends, backend_args.filter.as_deref());
+    if trials.is_empty() {
+        eprintln!(
+            "error: no trial matches (check --backend and --filter; `plc-conformance list` shows \
+             what exists)"
+        );
+        return EXIT_BAD_INPUT;
+    }
+    let jobs = backend_args.jobs.unwrap_or_else(|| {
+        std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
+    });
+    let stop = AtomicBool::new(false);
+    let mut collector = Collector::default();
+    if format == Format::Text {
+        let notes = if backend_args.backends.is_empty() {
+            file.skipped.iter().map(ToString::to_string).collect()
+        } else {
+            Vec::new()
+        };
+        let (out, palette): (Box<dyn Write>, Palette) = match &report.output {
+            Some(path) => match std::fs::File::create(path) {
+                Ok(f) => (Box::new(f), Palette::plain()),
+                Err(e) => {
+                    eprintln!("error: cannot write {}: {e}", path.display());
+                    return EXIT_BAD_INPUT;
+                }
+            },
+            None => (Box::new(anstream::stdout()), Palette::coloured()),
+        };
+        let mut text = TextReporter::new(out, palette, show_recorded, notes);
+        runner::run(&trials, jobs, &stop, &mut Tee(&mut text, &mut collector));
+    } else {
+        runner::run(&trials, jobs, &stop, &mut collector as &mut dyn Reporter);
+    }
+    let (records, summary, interrupted) = collector.finish();
+    let info = RunInfo {
+        tool: format!("plc-conformance {}", env!("CARGO_PKG_VERSION")),
+        backends: backends
+            .iter()
+            .map(|b| BackendInfo {
+                name: b.name().to_string(),
+                description: b.describe(),
+            })
+            .collect(),
+        interrupted,
+    };
+    if format != Format::Text {
+        let doc_format = match format {
+            Format::Json => document::Format::Json,
+            Format::Junit => document::Format::Junit,
+            Format::Html => document::Format::Html,
+            Format::Matrix | Format::Text => document::Format::Matrix,
+        };
+        let coloured = report.output.is_none()
+            && anstream::AutoStream::choice(&std::io::stdout()) != anstream::ColorChoice::Never;
+        let rendered = document::render(doc_format, &records, &summary, &info, coloured);
+        if let Err(code) = write_out(report.output.as_deref(), &rendered) {
+            return code;
+        }
+    }
+    for (name, known) in &project.known {
+        if !known.ignored.is_empty() {
+            eprintln!(
+                "note: {} entr{} of {} (backend {name}) name cases not in this corpus and were \
+                 not used",
+                known.ignored.len(),
+                if known.ignored.len() == 1 { "y" } else { "ies" },
+                known.file.display()
+            );
+        }
+    }
+    if let Some(path) = &report.save {
+        let saved = document::render(document::Format::Json, &records, &summary, &info, false);
+        if let Err(e) = write_atomically(path, &saved) {
+            eprintln!("error: cannot save the run to {}: {e}", path.display());
+            return EXIT_BAD_INPUT;
+        }
+    }
+    if let Some(before) = before {
+        return compare_with(report.baseline.as_deref(), &before, &records);
+    }
+    if summary.failed > 0 {
+        EXIT_DIFFERENCES
+    } else {
+        EXIT_OK
+    }
+}
+
+/// The planned trials whose names contain `filter`.
+fn planned(project: &Project, backends: &[Arc<dyn Backend>], filter: Option<&str>) -> Vec<Trial> {
+    project
+        .plan(backends)
+        .into_iter()
+        .filter(|t| filter.is_none_or(|f| t.name().contains(f)))
+        .collect()
+}
+
+fn compare_with(
+    path: Option<&Path>,
+    before: &SavedRun,
+    records: &[crate::report::record::Record],
+) -> u8 {
+    let changes = baseline::compare(&before.records, records);
+    eprintln!(
+        "against {}: {} new, {} fixed, {} changed, {} unchanged difference(s)",
+        path.map(|p| p.display().to_string()).unwrap_or_default(),
+        changes.new.len(),
+        changes.fixed.len(),
+        changes.changed.len(),
+        changes.unchanged
+    );
+    for r in &changes.new {
+        eprintln!("  new:     {} ({}: {})", r.trial, r.label, r.shown);
+    }
+    for (was, now) in &changes.fixed {
+        eprintln!(
+            "  fixed:   {} (was {}: {})",
+            now.trial, was.label, was.shown
+        );
+    }
+    for (was, now) in &changes.changed {
+        eprintln!("  changed: {} ({} -> {})", now.trial, was.shown, now.shown);
+    }
+    if changes.new.is_empty() {
+        EXIT_OK
+    } else {
+        EXIT_DIFFERENCES
+    }
+}
+
+fn write_out(path: Option<&Path>, text: &str) -> Result<(), u8> {
+    match path {
+        Some(p) => write_atomically(p, text).map_err(|e| {
+            eprintln!("error: cannot write {}: {e}", p.display());
+            EXIT_BAD_INPUT
+        }),
+        None => {
+            println!("{text}");
+            Ok(())
+        }
+    }
+}
+
+/// Writes a file whole or not at all: a temporary file beside it, then a rename, so an
+/// interrupted run never leaves half a report or a damaged baseline.
+fn write_atomically(path: &Path, text: &str) -> std::io::Result<()> {
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let temp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+    std::fs::write(&temp, text)?;
+    std::fs::rename(&temp, path).inspect_err(|_| {
+        let _ = std::fs::remove_file(&temp);
+    })
+}
+
+/// Two backends side by side: every trial both run, and where their outcomes differ, the
+/// per-word diff of one against the other. Backends of different families share only the
+/// cross-vendor cases, compared as answers.
+fn against(cli: &Cli, args: &BackendArgs, other: &str) -> u8 {
+    let Prepared {
+        mut project,
+        file,
+        backends,
+    } = match prepare(cli, args) {
+        Ok(p) => p,
+        Err(code) => return code,
+    };
+    let Some(a) = backends.first().cloned() else {
+        return EXIT_BAD_INPUT;
+    };
+    let other_args = BackendArgs {
+        backends: vec![other.to_string()],
+        known_differences: Vec::new(),
+        ..args.clone()
+    };
+    let b = match start(&mut project, &file, &other_args) {
+        Ok(b) => b[0].clone(),
+        Err(code) => return code,
+    };
+    let filter = args.filter.as_deref();
+    let trials_a = planned(&project, std::slice::from_ref(&a), filter);
+    let trials_b = planned(&project, std::slice::from_ref(&b), None);
+    let key = |t: &Trial| {
+        (
+            t.is_cross_vendor(),
+            t.input.instruction.clone(),
+            t.case_id().to_string(),
+            t.check_name().to_string(),
+            t.variant.clone(),
+        )
+    };
+    let same_family = a.profile() == b.profile();
+    let palette = Palette::coloured();
+    let (mut compared, mut differing, mut faulty) = (0, 0, 0);
+    for ta in trials_a.iter().filter(|t| t.skip.is_none()) {
+        let tb = if same_family {
+            trials_b
+                .iter()
+                .find(|t| t.skip.is_none() && key(t) == key(ta))
+        } else {
+            // Different families meet on the cross-vendor cases, through their own lowerings.
+            trials_b.iter().find(|t| {
+                t.skip.is_none() && t.is_cross_vendor() && ta.is_cross_vendor() && {
+                    t.case_id() == ta.case_id()
+                }
+            })
+        };
+        let Some(tb) = tb else { continue };
+        compared += 1;
+        let (oa, ob) = (execute(ta), execute(tb));
+        let text = if same_family && !ta.is_cross_vendor() {
+            compare_outcomes(ta, &oa, &ob, palette)
+        } else {
+            compare_answers(ta, tb, &oa, &ob)
+        };
+        if oa.iter().chain(&ob).any(|o| o.result.is_err()) {
+            faulty += 1;
+        }
+        if !text.is_empty() {
+            differing += 1;
+            println!(
+                "{}: {} — {} vs {}",
+                ta.location(),
+                ta.name(),
+                a.name(),
+                b.name()
+            );
+            print!("{text}");
+        }
+    }
+    println!(
+        "{} vs {}: {compared} trials compared, {differing} differ",
+        a.name(),
+        b.name()
+    );
+    if compared == 0 {
+        eprintln!(
+            "error: {} and {} share no trial that both run",
+            a.name(),
+            b.name()
+        );
+        return EXIT_BAD_INPUT;
+    }
+    if differing == 0 && faulty == 0 {
+        EXIT_OK
+    } else {
+        EXIT_DIFFERENCES
+    }
+}
+
+/// The per-word diff of B's outcome against A's, under each fill; empty when they agree.
+fn compare_outcomes(
+    trial: &Trial,
+    a: &[Observation],
+    b: &[Observation],
+    palette: Palette,
+) -> String {
+    let mut out = String::new();
+    for (oa, ob) in a.iter().zip(b) {
+        let image = crate::memory::Image::new(trial.input.before.clone(), oa.fill);
+        match (&oa.result, &ob.result) {
+            (Ok(Response::Done(x)), Ok(Response::Done(y))) => {
+                let expect = Expectation {
+                    after: crate::judge::Effect::of(&image, x).changed,
+                    error: x.error.clone(),
+                };
+                let rows = rows(&image, &expect, y);
+                let words = rows.iter().any(|r| r.expected != r.actual);
+                if words || x.error != y.error {
+                    out.push_str(&format!(
+                        "  fill {} (- first backend, + second):\n",
+                        oa.fill.name()
+                    ));
+                    if words {
+                        out.push_str(&memory_diff(&rows, palette));
+                    }
+                    if x.error != y.error {
+                        out.push_str(&format!(
+                            "  error: {} vs {}\n",
+                            error_text(x.error.as_ref()),
+                            error_text(y.error.as_ref())
+                        ));
+                    }
+                }
+            }
+            (x, y) if x != y => {
+                out.push_str(&format!("  fill {}: {x:?} vs {y:?}\n", oa.fill.name()));
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+/// Cross-vendor answers of two trials (each through its own lowering), under each fill.
+fn compare_answers(ta: &Trial, tb: &Trial, a: &[Observation], b: &[Observation]) -> String {
+    let mut out = String::new();
+    for (oa, ob) in a.iter().zip(b) {
+        let answer = |t: &Trial, o: &Observation| match (&t.check, &o.result) {
+            (crate::plan::Check::CrossVendor { lowering, case }, Ok(Response::Done(x))) => {
+                let image = crate::memory::Image::new(t.input.before.clone(), o.fill);
+                crate::judge::lift::lift(&t.profile, lowering, case.digits, x, &image).to_string()
+            }
+            (_, Ok(Response::Unsupported(r))) => format!("unsupported: {r}"),
+            (_, Err(f)) => f.to_string(),
+            (_, Ok(Response::Done(_))) => "not a cross-vendor answer".to_string(),
+        };
+        let (x, y) = (answer(ta, oa), answer(tb, ob));
+        if x != y {
+            out.push_str(&format!("  fill {}: {x} vs {y}\n", oa.fill.name()));
+        }
+    }
+    out
+}

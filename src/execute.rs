@@ -1,0 +1,152 @@
+//! Executing planned trials: each under every fill, batched per backend.
+//!
+//! Every trial runs under [`Fill::ALL`], so a stray write is always a change and a read of memory
+//! the case does not set shows as a fill-dependent result. Trials of one backend are sent in
+//! chunks (an external backend answers a chunk in one exchange, which is what makes it fast),
+//! backends run side by side on their own threads, and each trial's observations are handed
+//! back as soon as its chunk is answered, so a report can show the first difference while a slow
+//! backend is still running.
+
+use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc;
+
+use serde::Serialize;
+
+use crate::backend::{Fault, Request, Response};
+use crate::memory::{Fill, Image};
+use crate::plan::Trial;
+
+/// Trials per exchange with a backend.
+pub const CHUNK: usize = 128;
+
+/// What one backend did under one fill.
+#[derive(Debug, Clone, Serialize)]
+pub struct Observation {
+    pub fill: Fill,
+    pub result: Result<Response, Fault>,
+}
+
+/// What the executor reports while it runs.
+#[derive(Debug)]
+pub enum Progress {
+    /// The observations of the trial at this index of the planned list.
+    Observed(usize, Vec<Observation>),
+    /// A backend's process was started again after a fault; `restarts` counts them so far.
+    Restarted { backend: String, restarts: usize },
+}
+
+/// The memory before a trial, once per fill (in [`Fill::ALL`] order).
+pub fn images(trial: &Trial) -> Vec<Image> {
+    Fill::ALL
+        .iter()
+        .map(|&fill| Image::new(trial.input.before.clone(), fill))
+        .collect()
+}
+
+/// The requests that run a trial on its images. A variant the profile lacks cannot happen for a
+/// planned trial (the plan takes variants from the profile), and gives no request.
+pub fn requests<'a>(trial: &'a Trial, images: &'a [Image]) -> Vec<Request<'a>> {
+    let Some(variant) = trial.profile.variant(&trial.variant) else {
+        return Vec::new();
+    };
+    images
+        .iter()
+        .map(|memory| Request {
+            profile: &trial.profile,
+            variant,
+            instruction: &trial.input.instruction,
+            case_id: trial.case_id(),
+            flags: &trial.input.flags,
+            operands: &trial.input.operands,
+            memory,
+        })
+        .collect()
+}
+
+/// Runs one trial under every fill.
+pub fn execute(trial: &Trial) -> Vec<Observation> {
+    let images = images(trial);
+    let results = trial.backend.execute_batch(&requests(trial, &images));
+    pair(results)
+}
+
+fn pair(results: Vec<Result<Response, Fault>>) -> Vec<Observation> {
+    Fill::ALL
+        .iter()
+        .zip(results)
+        .map(|(&fill, result)| Observation { fill, result })
+        .collect()
+}
+
+/// Runs the trials at `indices` (skipped trials are not sent), each backend's in chunks on a
+/// thread of its own with at most `jobs` backends at once, and calls `progress` on the calling
+/// thread as results come in. Once `stop` is set no further chunk starts.
+pub fn execute_all(
+    trials: &[Trial],
+    indices: &[usize],
+    jobs: usize,
+    stop: &AtomicBool,
+    mut progress: impl FnMut(Progress),
+) {
+    let mut by_backend: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
+    for &i in indices {
+        if trials[i].skip.is_none() {
+            by_backend
+                .entry(trials[i].backend.name())
+                .or_default()
+                .push(i);
+        }
+    }
+    let groups: Vec<Vec<usize>> = by_backend.into_values().collect();
+    for wave in groups.chunks(jobs.max(1)) {
+        let (tx, rx) = mpsc::channel::<Progress>();
+        std::thread::scope(|scope| {
+            for group in wave {
+                let tx = tx.clone();
+                scope.spawn(move || run_backend(trials, group, stop, &tx));
+            }
+            drop(tx);
+            for p in rx {
+                progress(p);
+            }
+        });
+    }
+}
+
+/// One backend's trials, chunk by chunk.
+fn run_backend(trials: &[Trial], group: &[usize], stop: &AtomicBool, tx: &mpsc::Sender<Progress>) {
+    let Some(&first) = group.first() else {
+        return;
+    };
+    let backend = &trials[first].backend;
+    let mut restarts = backend.restarts();
+    for chunk in group.chunks(CHUNK) {
+        if stop.load(Ordering::Relaxed) {
+            return;
+        }
+        let images: Vec<Vec<Image>> = chunk.iter().map(|&i| images(&trials[i])).collect();
+        let mut all = Vec::new();
+        let mut spans = Vec::new();
+        for (&i, images) in chunk.iter().zip(&images) {
+            let r = requests(&trials[i], images);
+            spans.push((i, r.len()));
+            all.extend(r);
+        }
+        let mut results = backend.execute_batch(&all).into_iter();
+        for (i, len) in spans {
+            let answers: Vec<_> = results.by_ref().take(len).collect();
+            if tx.send(Progress::Observed(i, pair(answers))).is_err() {
+                return;
+            }
+        }
+        let now = backend.restarts();
+        if now != restarts {
+            restarts = now;
+            let _ = tx.send(Progress::Restarted {
+                backend: backend.name().to_string(),
+                restarts,
+            });
+        }
+    }
+}

@@ -1,0 +1,501 @@
+//! Judging: what a trial's observations mean, as one [`Verdict`].
+//!
+//! One judging function serves native and cross-vendor trials alike, and the known-differences
+//! list of the trial's backend is applied here, once. A native case compares words and error
+//! signals with its expectation; a cross-vendor case lifts each fill's outcome to an
+//! [`Answer`] and compares that. The comparer knows nothing of vendors beyond what the profile
+//! says.
+
+pub mod lift;
+pub mod words;
+
+use serde::{Deserialize, Serialize};
+
+use crate::backend::{Fault, Response};
+use crate::execute::Observation;
+use crate::memory::{Fill, Image};
+use crate::model::cross_vendor::Answer;
+use crate::model::known::Entry;
+use crate::model::Basis;
+use crate::plan::{Check, Trial};
+pub use words::{Effect, Mismatch, WordRow};
+
+/// The verdict of one trial.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case", tag = "verdict")]
+pub enum Verdict {
+    Conforms,
+    Differs {
+        difference: Difference,
+    },
+    /// A backend that claimed the trial answered that it does not implement it.
+    Unsupported {
+        reason: String,
+    },
+    /// The backend gave no usable answer under this fill.
+    Fault {
+        fill: Fill,
+        fault: Fault,
+    },
+    /// An `unspecified` case (or one without an expectation): what the backend did, recorded,
+    /// never a failure.
+    Recorded {
+        observed: Observed,
+        /// Whether the two fills gave different outcomes: the backend reads memory the case does
+        /// not set.
+        fill_dependent: bool,
+    },
+    /// Not run, with why (the backend does not claim it).
+    Skipped {
+        reason: String,
+    },
+    /// A difference the backend's known-differences file lists: reported, not a failure.
+    KnownDifference {
+        entry: KnownEntry,
+        difference: Box<Verdict>,
+    },
+    /// A known-differences entry for a trial that conforms: a failure until the entry goes.
+    StaleEntry {
+        entry: KnownEntry,
+    },
+}
+
+/// How a trial differed.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case", tag = "kind")]
+pub enum Difference {
+    /// Native: the words or the error under one or more fills.
+    Words { mismatches: Vec<Mismatch> },
+    /// Cross-vendor: another answer than the case expects of this lowering.
+    Answer { expected: Answer, actual: Answer },
+    /// Cross-vendor: the answer depends on memory the case does not set.
+    FillDependent { fill_a: Answer, fill_b: Answer },
+}
+
+/// What a backend did on a recorded trial.
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "kind", content = "value")]
+pub enum Observed {
+    /// Native: the words changed and the error (under fill A).
+    Memory(Effect),
+    /// Cross-vendor: the answer (under fill A).
+    Answer(Answer),
+}
+
+impl std::fmt::Display for Observed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Observed::Memory(e) => write!(f, "{e}"),
+            Observed::Answer(a) => write!(f, "{a}"),
+        }
+    }
+}
+
+/// A known-differences entry as a verdict cites it.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct KnownEntry {
+    pub reason: String,
+    /// `file:line` of the entry.
+    pub location: String,
+}
+
+/// What a verdict means for a run: the one place where verdicts become pass or fail.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Status {
+    Pass,
+    Fail,
+    /// Ran, but cannot fail: recorded, or a listed known difference.
+    Ignored,
+    /// Did not run.
+    Skipped,
+}
+
+impl Status {
+    pub fn is_failure(self) -> bool {
+        self == Status::Fail
+    }
+}
+
+impl Verdict {
+    pub fn status(&self) -> Status {
+        match self {
+            Verdict::Conforms => Status::Pass,
+            Verdict::Differs { .. }
+            | Verdict::Unsupported { .. }
+            | Verdict::Fault { .. }
+            | Verdict::StaleEntry { .. } => Status::Fail,
+            Verdict::Recorded { .. } | Verdict::KnownDifference { .. } => Status::Ignored,
+            Verdict::Skipped { .. } => Status::Skipped,
+        }
+    }
+
+    pub fn is_failure(&self) -> bool {
+        self.status() == Status::Fail
+    }
+
+    /// A short label: what a summary or a matrix legend shows.
+    pub fn label(&self) -> &'static str {
+        match self {
+            Verdict::Conforms => "conforms",
+            Verdict::Differs { .. } => "differs",
+            Verdict::Unsupported { .. } => "unsupported",
+            Verdict::Fault { fault, .. } => fault.kind(),
+            Verdict::Recorded { .. } => "recorded",
+            Verdict::Skipped { .. } => "skipped",
+            Verdict::KnownDifference { .. } => "known-difference",
+            Verdict::StaleEntry { .. } => "stale-entry",
+        }
+    }
+}
+
+/// Judges a trial from its observations (one per fill, in [`Fill::ALL`] order) and applies the
+/// known-differences entry the plan found for it.
+pub fn judge(trial: &Trial, observations: &[Observation]) -> Verdict {
+    apply_known(trial.known.as_ref(), judge_unlisted(trial, observations))
+}
+
+/// The verdict of a trial that is not run.
+pub fn skipped(reason: &str) -> Verdict {
+    Verdict::Skipped {
+        reason: reason.to_string(),
+    }
+}
+
+fn judge_unlisted(trial: &Trial, observations: &[Observation]) -> Verdict {
+    if observations.len() != Fill::ALL.len() {
+        return Verdict::Fault {
+            fill: observations.first().map_or(Fill::A, |o| o.fill),
+            fault: Fault::Protocol(format!(
+                "{} answer(s) for {} fills",
+                observations.len(),
+                Fill::ALL.len()
+            )),
+        };
+    }
+    // A fault or an `unsupported` answer under any fill is the verdict.
+    let mut outcomes = Vec::new();
+    for obs in observations {
+        match &obs.result {
+            Err(fault) => {
+                return Verdict::Fault {
+                    fill: obs.fill,
+                    fault: fault.clone(),
+                }
+            }
+            Ok(Response::Unsupported(reason)) => {
+                return Verdict::Unsupported {
+                    reason: reason.clone(),
+                }
+            }
+            Ok(Response::Done(outcome)) => {
+                outcomes.push((Image::new(trial.input.before.clone(), obs.fill), outcome))
+            }
+        }
+    }
+    match &trial.check {
+        Check::Native { case, .. } => {
+            let effects: Vec<Effect> = outcomes.iter().map(|(i, o)| Effect::of(i, o)).collect();
+            let fill_dependent = effects.windows(2).any(|p| p[0] != p[1]);
+            let expect = match &case.expect {
+                Some(e) if case.basis != Basis::Unspecified => e,
+                _ => {
+                    return Verdict::Recorded {
+                        observed: Observed::Memory(effects.into_iter().next().unwrap_or_else(
+                            || Effect {
+                                changed: Default::default(),
+                                error: None,
+                            },
+                        )),
+                        fill_dependent,
+                    }
+                }
+            };
+            let mismatches: Vec<Mismatch> = outcomes
+                .iter()
+                .filter_map(|(image, outcome)| {
+                    words::mismatch(image, expect, outcome, image.fill())
+                })
+                .collect();
+            if mismatches.is_empty() {
+                Verdict::Conforms
+            } else {
+                Verdict::Differs {
+                    difference: Difference::Words { mismatches },
+                }
+            }
+        }
+        Check::CrossVendor { lowering, case } => {
+            let answers: Vec<Answer> = outcomes
+                .iter()
+                .map(|(image, outcome)| {
+                    lift::lift(&trial.profile, lowering, case.digits, outcome, image)
+                })
+                .collect();
+            let fill_dependent = answers.windows(2).any(|p| p[0] != p[1]);
+            let expected = match case.expected_for(&lowering.key) {
+                Some(e) if case.basis != Basis::Unspecified => e,
+                _ => {
+                    return Verdict::Recorded {
+                        observed: Observed::Answer(answers[0].clone()),
+                        fill_dependent,
+                    }
+                }
+            };
+            if fill_dependent {
+                return Verdict::Differs {
+                    difference: Difference::FillDependent {
+                        fill_a: answers[0].clone(),
+                        fill_b: answers[1].clone(),
+                    },
+                };
+            }
+            if answers[0] == *expected {
+                Verdict::Conforms
+            } else {
+                Verdict::Differs {
+                    difference: Difference::Answer {
+                        expected: expected.clone(),
+                        actual: answers[0].clone(),
+                    },
+                }
+            }
+        }
+    }
+}
+
+/// Applies a known-differences entry: a listed difference (or `unsupported` answer) is a known
+/// difference, a listed trial that conforms is a stale entry, and a fault stays a fault.
+pub fn apply_known(entry: Option<&Entry>, verdict: Verdict) -> Verdict {
+    let Some(entry) = entry else {
+        return verdict;
+    };
+    let cited = KnownEntry {
+        reason: entry.reason.clone(),
+        location: entry.location.clone(),
+    };
+    match verdict {
+        Verdict::Differs { .. } | Verdict::Unsupported { .. } => Verdict::KnownDifference {
+            entry: cited,
+            difference: Box::new(verdict),
+        },
+        Verdict::Conforms => Verdict::StaleEntry { entry: cited },
+        other => other,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::collections::BTreeMap;
+    use std::path::{Path, PathBuf};
+    use std::sync::Arc;
+
+    use super::*;
+    use crate::backend::{Backend, Outcome, Request};
+    use crate::device::Device;
+    use crate::model::{Case, Citation, ErrorSignal, Expectation, Location};
+    use crate::plan::Input;
+
+    /// A backend that is never asked anything: these tests judge given observations.
+    struct Idle;
+
+    impl Backend for Idle {
+        fn name(&self) -> &str {
+            "idle"
+        }
+        fn profile(&self) -> &str {
+            "p"
+        }
+        fn describe(&self) -> String {
+            "idle".into()
+        }
+        fn claims(&self, _: &str, _: &str) -> bool {
+            true
+        }
+        fn execute(&self, _: &Request<'_>) -> Result<Response, Fault> {
+            Err(Fault::Unreachable("idle".into()))
+        }
+    }
+
+    fn trial(case: Case) -> Trial {
+        let mut errors = Vec::new();
+        let profile = crate::load::parse_profile(
+            Path::new("p.yaml"),
+            "id: p\nname: P\nshort: p\nmanuals: {}\nerrors: {signal: code, flag: SM0, register: SD0}\n\
+             devices: {D: {first: 0, last: 1000}}\ninstructions: {}\n\
+             variants: [{id: v, description: v}]\n",
+            &mut errors,
+        )
+        .expect("profile");
+        Trial {
+            backend: Arc::new(Idle),
+            profile: Arc::new(profile),
+            variant: "v".into(),
+            input: Arc::new(Input {
+                instruction: "HABIN".into(),
+                flags: BTreeMap::new(),
+                operands: BTreeMap::new(),
+                before: case.before.clone(),
+            }),
+            check: Check::Native {
+                instruction: "HABIN".into(),
+                case: Arc::new(case),
+            },
+            skip: None,
+            known: None,
+        }
+    }
+
+    fn d(i: u32) -> Device {
+        Device::new("D", i)
+    }
+
+    fn case(basis: Basis, expect: Option<Expectation>) -> Case {
+        Case {
+            id: "c".into(),
+            basis,
+            citation: Citation {
+                manual: "m".into(),
+                page: "1".into(),
+                text: None,
+            },
+            location: Location {
+                file: PathBuf::from("f.yaml"),
+                line: 1,
+            },
+            instructions: Arc::from(vec!["HABIN".to_string()]),
+            profiles: Arc::from(vec!["p".to_string()]),
+            variants: None,
+            flags: BTreeMap::new(),
+            operands: BTreeMap::new(),
+            before: BTreeMap::from([(d(100), 0x4135)]),
+            expect,
+            note: None,
+        }
+    }
+
+    fn done(writes: &[(u32, u16)], error: Option<ErrorSignal>) -> Vec<Observation> {
+        Fill::ALL
+            .iter()
+            .map(|&fill| Observation {
+                fill,
+                result: Ok(Response::Done(Outcome {
+                    writes: writes.iter().map(|(i, v)| (d(*i), *v)).collect(),
+                    error: error.clone(),
+                })),
+            })
+            .collect()
+    }
+
+    fn expect(after: &[(u32, u16)], error: Option<ErrorSignal>) -> Option<Expectation> {
+        Some(Expectation {
+            after: after.iter().map(|(i, v)| (d(*i), *v)).collect(),
+            error,
+        })
+    }
+
+    #[test]
+    fn the_expected_change_conforms() {
+        let c = case(Basis::Manual, expect(&[(200, 0x5A8D)], None));
+        assert_eq!(
+            judge(&trial(c.clone()), &done(&[(200, 0x5A8D)], None)),
+            Verdict::Conforms
+        );
+    }
+
+    #[test]
+    fn a_stray_write_differs() {
+        let c = case(Basis::Manual, expect(&[(200, 0x5A8D)], None));
+        let v = judge(&trial(c.clone()), &done(&[(200, 0x5A8D), (201, 0)], None));
+        assert!(v.is_failure(), "{v:?}");
+    }
+
+    #[test]
+    fn rewriting_a_word_with_its_value_is_no_change() {
+        let c = case(Basis::Manual, expect(&[], None));
+        assert_eq!(
+            judge(&trial(c.clone()), &done(&[(100, 0x4135)], None)),
+            Verdict::Conforms
+        );
+    }
+
+    #[test]
+    fn a_missing_change_differs() {
+        let c = case(Basis::Manual, expect(&[(200, 0x5A8D)], None));
+        assert!(judge(&trial(c.clone()), &done(&[], None)).is_failure());
+    }
+
+    #[test]
+    fn a_code_never_satisfies_a_flag() {
+        let flag = ErrorSignal::Flag(Device::new("M", 8004));
+        let c = case(Basis::Manual, expect(&[], Some(flag)));
+        assert!(judge(
+            &trial(c.clone()),
+            &done(&[], Some(ErrorSignal::Code(0x3401)))
+        )
+        .is_failure());
+        assert!(judge(&trial(c.clone()), &done(&[], None)).is_failure());
+    }
+
+    #[test]
+    fn faults_and_unsupported_fail() {
+        let c = case(Basis::Manual, expect(&[], None));
+        let mut fault = done(&[], None);
+        fault[0].result = Err(Fault::Timeout("5 s".into()));
+        assert_eq!(judge(&trial(c.clone()), &fault).label(), "timeout");
+        assert!(judge(&trial(c.clone()), &fault).is_failure());
+        let mut unsupported = done(&[], None);
+        unsupported[0].result = Ok(Response::Unsupported("no".into()));
+        assert!(judge(&trial(c.clone()), &unsupported).is_failure());
+    }
+
+    #[test]
+    fn unspecified_records_and_notes_fill_dependence() {
+        let c = case(Basis::Unspecified, None);
+        let mut obs = done(&[(200, 1)], None);
+        let v = judge(&trial(c.clone()), &obs);
+        assert!(
+            matches!(&v, Verdict::Recorded { observed, fill_dependent: false } if observed.to_string() == "D200=0001H"),
+            "{v:?}"
+        );
+        obs[1].result = Ok(Response::Done(Outcome::default()));
+        assert!(matches!(
+            judge(&trial(c.clone()), &obs),
+            Verdict::Recorded {
+                fill_dependent: true,
+                ..
+            }
+        ));
+    }
+}
+
+#[cfg(test)]
+mod known_tests {
+    use super::*;
+
+    fn entry() -> Entry {
+        Entry {
+            case: "c".into(),
+            instruction: None,
+            variant: None,
+            reason: "r".into(),
+            location: "k.yaml:2".into(),
+        }
+    }
+
+    #[test]
+    fn a_listed_difference_is_known_and_a_listed_pass_is_stale() {
+        let differs = Verdict::Unsupported { reason: "u".into() };
+        let known = apply_known(Some(&entry()), differs);
+        assert_eq!(known.status(), Status::Ignored);
+        assert!(!known.is_failure());
+        let stale = apply_known(Some(&entry()), Verdict::Conforms);
+        assert!(matches!(stale, Verdict::StaleEntry { .. }));
+        assert!(stale.is_failure());
+        let fault = Verdict::Fault {
+            fill: Fill::B,
+            fault: Fault::Crashed("x".into()),
+        };
+        assert_eq!(apply_known(Some(&entry()), fault.clone()), fault);
+    }
+}

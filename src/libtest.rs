@@ -1,0 +1,238 @@
+//! The corpus as libtest trials, for `cargo test` and `cargo nextest run`.
+//!
+//! One trial per (backend, instruction, case, variant) and per (backend, lowering, cross-vendor
+//! case). `cargo test --test conformance -- habin` filters, `--list` lists, `--exact NAME` runs
+//! one. A failing trial prints the vector's `file:line`, what ran and a word-by-word diff.
+//!
+//! Trials whose outcome is known when planning — skipped, `unspecified` (recorded only), listed
+//! known differences — are marked ignored, so that `cargo test` and nextest count them as
+//! skipped; `-- --include-ignored` runs them too (a recorded trial then shows what the backend
+//! did, and a known difference that now conforms fails as a stale entry).
+//!
+//! The external backends of the project file run as extra trials, each started only when a
+//! trial of it runs: `--list` starts none, and a process running one trial (as nextest does)
+//! starts only that trial's backend. A backend that cannot start fails its `NAME::handshake`
+//! trial and every trial of it; one whose requirements are missing shows as an ignored
+//! `NAME::setup` trial with the reason.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::process::ExitCode;
+use std::sync::{Arc, OnceLock};
+
+use libtest_mimic::{Arguments, Completion, Failed, Trial as Test};
+
+use crate::backend::external::ExternalBackend;
+use crate::backend::{Backend, Fault, Request, Response};
+use crate::judge::{Status, Verdict};
+use crate::load::{load_known, load_project, locate_project};
+use crate::model::profile::Profiles;
+use crate::model::project::ExternalSettings;
+use crate::plan::Trial;
+use crate::report::text::{render, Palette};
+use crate::runner::{run_one, Paths, Project};
+
+/// Runs the corpus under `root` as libtest trials: the built-in reference models, the project
+/// file's external backends, and `extra` backends (an emulator written in Rust implements
+/// [`Backend`] and passes itself here). `binary` is the plc-conformance executable that project
+/// backends see as `$PLC_CONFORMANCE`.
+pub fn main(root: &Path, binary: &Path, extra: Vec<Arc<dyn Backend>>) -> ExitCode {
+    let args = Arguments::from_args();
+    let mut project = match Project::load(&Paths::under(root)) {
+        Ok(p) => p,
+        Err(errors) => {
+            eprintln!("the corpus does not load:\n{errors}");
+            return ExitCode::from(2);
+        }
+    };
+    let (file, explicit) = locate_project(root);
+    let configured = match load_project(&file, explicit, binary) {
+        Ok(p) => p,
+        Err(errors) => {
+            eprintln!("the project file does not load:\n{errors}");
+            return ExitCode::from(2);
+        }
+    };
+    let mut tests = Vec::new();
+    for skipped in configured.skipped {
+        let name = format!("{}::setup", skipped.name);
+        let why = skipped.to_string();
+        tests.push(
+            Test::ignorable_test(name, move || Ok(Completion::ignored_with(why)))
+                .with_ignored_flag(true),
+        );
+    }
+    let mut backends = project.backends.clone();
+    backends.extend(extra);
+    let mut lazies: Vec<Arc<LazyStart>> = Vec::new();
+    for c in configured.configured {
+        let name = c.settings.name.clone();
+        match c.settings.profile.clone() {
+            // A backend whose profile is declared is planned without starting it.
+            Some(profile) => {
+                let lazy = Arc::new(LazyStart {
+                    settings: c.settings.clone(),
+                    profiles: project.profiles.clone(),
+                    started: OnceLock::new(),
+                });
+                if let (Some(known), Some(p)) = (
+                    c.settings.known_differences.as_ref(),
+                    project.profiles.get(&profile),
+                ) {
+                    match load_known(known, p, &project.corpus, true) {
+                        Ok(k) => {
+                            project.known.insert(name.clone(), k);
+                        }
+                        Err(e) => {
+                            let message = e.to_string();
+                            tests.push(Test::test(format!("{name}::handshake"), move || {
+                                Err(Failed::from(message))
+                            }));
+                            continue;
+                        }
+                    }
+                }
+                let handshake = lazy.clone();
+                tests.push(Test::test(format!("{name}::handshake"), move || {
+                    handshake.get().map(|_| ()).map_err(Failed::from)
+                }));
+                backends.push(Arc::new(Placeholder {
+                    name,
+                    profile,
+                    lazy: lazy.clone(),
+                }));
+                lazies.push(lazy);
+            }
+            None => match project.add_external(c.settings, true) {
+                Ok(b) => backends.push(b),
+                Err(e) => {
+                    let message = e.to_string();
+                    tests.push(Test::test(format!("{name}::handshake"), move || {
+                        Err(Failed::from(message))
+                    }));
+                }
+            },
+        }
+    }
+    let by_name: BTreeMap<String, Arc<LazyStart>> = lazies
+        .iter()
+        .map(|l| (l.settings.name.clone(), l.clone()))
+        .collect();
+    let trials = project.plan(&backends);
+    tests.extend(trials.into_iter().map(|t| {
+        let lazy = by_name.get(t.backend.name()).cloned();
+        test(t, lazy)
+    }));
+    let conclusion = libtest_mimic::run(&args, tests);
+    // Started processes get their shutdown message before the harness exits.
+    drop(lazies);
+    drop(project);
+    conclusion.exit_code()
+}
+
+/// One planned trial as a libtest trial; `lazy` starts its backend when the backend is only
+/// planned so far.
+fn test(trial: Trial, lazy: Option<Arc<LazyStart>>) -> Test {
+    let name = trial.name();
+    let ignored = trial.ignored_because().is_some();
+    Test::ignorable_test(name, move || outcome(trial, lazy)).with_ignored_flag(ignored)
+}
+
+/// Runs a trial and maps its verdict onto libtest: a pass, an ignored trial with its reason, or
+/// a failure with the full report.
+fn outcome(mut trial: Trial, lazy: Option<Arc<LazyStart>>) -> Result<Completion, Failed> {
+    if let Some(lazy) = lazy {
+        let real = lazy.get().map_err(Failed::from)?;
+        trial.skip = real_skip(&trial, real.as_ref());
+        trial.backend = real;
+    }
+    let verdict = run_one(&trial);
+    match verdict.status() {
+        Status::Pass => Ok(Completion::Completed),
+        Status::Fail => Err(Failed::from(render(&trial, &verdict, Palette::plain()))),
+        Status::Skipped | Status::Ignored => Ok(Completion::ignored_with(ignored_text(&verdict))),
+    }
+}
+
+fn ignored_text(verdict: &Verdict) -> String {
+    match verdict {
+        Verdict::Recorded {
+            observed,
+            fill_dependent,
+        } => format!(
+            "unspecified, recorded: {observed}{}",
+            if *fill_dependent {
+                " (depends on the fill)"
+            } else {
+                ""
+            }
+        ),
+        Verdict::KnownDifference { entry, .. } => {
+            format!("known difference ({}): {}", entry.location, entry.reason)
+        }
+        Verdict::Skipped { reason } => reason.clone(),
+        other => other.label().to_string(),
+    }
+}
+
+/// Why the started backend does not run a trial planned for its placeholder.
+fn real_skip(trial: &Trial, real: &dyn Backend) -> Option<String> {
+    let instruction = &trial.input.instruction;
+    if !real.claims(instruction, &trial.variant) {
+        return Some(format!(
+            "{} does not implement {instruction} on {}",
+            real.name(),
+            trial.variant
+        ));
+    }
+    let variant = trial.profile.variant(&trial.variant)?;
+    real.declines(&trial.input.flags, instruction, variant)
+}
+
+/// An external backend started on first use, once per process.
+struct LazyStart {
+    settings: ExternalSettings,
+    profiles: Profiles,
+    started: OnceLock<Result<Arc<dyn Backend>, String>>,
+}
+
+impl LazyStart {
+    fn get(&self) -> Result<Arc<dyn Backend>, String> {
+        self.started
+            .get_or_init(|| {
+                ExternalBackend::start(self.settings.clone(), &self.profiles)
+                    .map(|b| Arc::new(b) as Arc<dyn Backend>)
+                    .map_err(|e| e.to_string())
+            })
+            .clone()
+    }
+}
+
+/// Stands in for a configured backend while planning: it claims everything its profile has, and
+/// the trial asks the started backend before running.
+struct Placeholder {
+    name: String,
+    profile: String,
+    lazy: Arc<LazyStart>,
+}
+
+impl Backend for Placeholder {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn profile(&self) -> &str {
+        &self.profile
+    }
+    fn describe(&self) -> String {
+        format!(
+            "external, started on first use ({})",
+            self.lazy.settings.launch
+        )
+    }
+    fn claims(&self, _instruction: &str, _variant: &str) -> bool {
+        true
+    }
+    fn execute(&self, _request: &Request<'_>) -> Result<Response, Fault> {
+        Err(Fault::Unreachable("the backend was not started".into()))
+    }
+}

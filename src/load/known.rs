@@ -1,0 +1,303 @@
+//! Known differences: the cases a backend is expected to get wrong, each with its reason.
+//!
+//! An implementation under test rarely conforms everywhere on day one, and its authors need a
+//! green run that still catches regressions. A listed trial that differs passes as a "known
+//! difference"; a listed trial that conforms fails as a "stale entry", so the list shrinks as
+//! the implementation improves and can never rot; an unlisted difference fails as usual. A
+//! fault is never excused by the list: a crash is not a difference of semantics.
+//!
+//! ```yaml
+//! differences:
+//!   - case: habin-fixed-lowercase-is-invalid
+//!     instruction: HABIN        # optional: every instruction of the case when absent
+//!     variant: rcpu             # optional: every variant when absent
+//!     reason: "int(text, 16) accepts lowercase digits"
+//! ```
+
+use std::path::Path;
+
+use super::{parse_yaml, read_file, FileContext, LoadErrorKind, LoadErrors};
+use crate::model::cross_vendor::CrossVendorCase;
+use crate::model::known::{Entry, KnownDifferences};
+use crate::model::profile::Profile;
+use crate::model::{Basis, Corpus};
+use crate::spec::known::KnownFileSpec;
+
+/// Loads and checks a known-differences file against the profile and the corpus. With `strict`,
+/// an entry for a case the corpus does not have is an error (a typo would otherwise excuse
+/// nothing and go unnoticed); without it, such entries are set aside.
+pub fn load_known(
+    file: &Path,
+    profile: &Profile,
+    corpus: &Corpus,
+    strict: bool,
+) -> Result<KnownDifferences, LoadErrors> {
+    let text = read_file(file).map_err(|e| LoadErrors(vec![e]))?;
+    let spec: KnownFileSpec = parse_yaml(file, &text).map_err(|e| LoadErrors(vec![e]))?;
+    let mut errors = Vec::new();
+    let mut cx = FileContext::new(file, &text, &mut errors);
+    let mut known = KnownDifferences {
+        file: file.to_path_buf(),
+        ..KnownDifferences::default()
+    };
+    for (i, e) in spec.differences.into_iter().enumerate() {
+        let key = |k: &str| format!("differences[{i}].{k}");
+        let location = cx.location(&format!("differences[{i}]")).to_string();
+        let entry = Entry {
+            case: e.case,
+            instruction: e.instruction,
+            variant: e.variant,
+            reason: e.reason.trim().to_string(),
+            location,
+        };
+        if entry.reason.is_empty() {
+            cx.error(
+                key("reason"),
+                LoadErrorKind::Invalid("a known difference needs its reason".into()),
+            );
+        }
+        if let Some(cv) = corpus.cross_vendor.iter().find(|c| c.id == entry.case) {
+            check_cross_vendor_entry(&entry, cv, profile, &mut cx, &key);
+            known.entries.push(entry);
+            continue;
+        }
+        let Some(case) = corpus
+            .cases
+            .iter()
+            .find(|c| c.id == entry.case && c.profiles.contains(&profile.id))
+        else {
+            if strict {
+                cx.error(
+                    key("case"),
+                    LoadErrorKind::Invalid(format!(
+                        "unknown case id `{}`: no case of profile {} has it",
+                        entry.case, profile.id
+                    )),
+                );
+            } else {
+                known.ignored.push(entry);
+            }
+            continue;
+        };
+        check_not_unspecified(&entry, case.basis, &mut cx, &key);
+        if let Some(i) = &entry.instruction {
+            if !case.instructions.contains(i) {
+                cx.error(
+                    key("instruction"),
+                    LoadErrorKind::Unknown {
+                        what: "instruction of this case",
+                        name: i.clone(),
+                        expected: case.instructions.to_vec(),
+                    },
+                );
+            }
+        }
+        if let Some(v) = &entry.variant {
+            let runs: Vec<String> = profile
+                .variants
+                .iter()
+                .filter(|pv| case.runs_on(&pv.id))
+                .map(|pv| pv.id.clone())
+                .collect();
+            if !runs.contains(v) {
+                cx.error(
+                    key("variant"),
+                    LoadErrorKind::Unknown {
+                        what: "variant of this case",
+                        name: v.clone(),
+                        expected: runs,
+                    },
+                );
+            }
+        }
+        if let Some(first) = known.entries.iter().find(|k| {
+            k.case == entry.case && k.instruction == entry.instruction && k.variant == entry.variant
+        }) {
+            cx.error(
+                key("case"),
+                LoadErrorKind::Invalid(format!(
+                    "the same trials are already listed at {}",
+                    first.location
+                )),
+            );
+        }
+        known.entries.push(entry);
+    }
+    if errors.is_empty() {
+        Ok(known)
+    } else {
+        Err(LoadErrors(errors))
+    }
+}
+
+/// An `unspecified` case is recorded and never fails: there is no difference to list.
+fn check_not_unspecified(
+    entry: &Entry,
+    basis: Basis,
+    cx: &mut FileContext<'_>,
+    key: &dyn Fn(&str) -> String,
+) {
+    if basis == Basis::Unspecified {
+        cx.error(
+            key("case"),
+            LoadErrorKind::Invalid(format!(
+                "case `{}` is unspecified: it is recorded and never fails, so there is no \
+                 difference to list",
+                entry.case
+            )),
+        );
+    }
+}
+
+/// An entry for a cross-vendor case: `instruction` names one of the profile's lowerings of the
+/// case's operation.
+fn check_cross_vendor_entry(
+    entry: &Entry,
+    case: &CrossVendorCase,
+    profile: &Profile,
+    cx: &mut FileContext<'_>,
+    key: &dyn Fn(&str) -> String,
+) {
+    let lowerings: Vec<String> = profile
+        .cross_vendor
+        .lowerings
+        .iter()
+        .filter(|l| l.operation == case.operation)
+        .map(|l| l.name.clone())
+        .collect();
+    if lowerings.is_empty() {
+        cx.error(
+            key("case"),
+            LoadErrorKind::Invalid(format!(
+                "cross-vendor case `{}` does not run on profile {}: it lowers no {}",
+                entry.case, profile.id, case.operation
+            )),
+        );
+    }
+    check_not_unspecified(entry, case.basis, cx, key);
+    if let Some(l) = &entry.instruction {
+        if !lowerings.contains(l) {
+            cx.error(
+                key("instruction"),
+                LoadErrorKind::Unknown {
+                    what: "lowering of this cross-vendor case",
+                    name: l.clone(),
+                    expected: lowerings,
+                },
+            );
+        }
+    }
+    if let Some(v) = &entry.variant {
+        if profile.variant(v).is_none() {
+            let known: Vec<String> = profile.variants.iter().map(|v| v.id.clone()).collect();
+            cx.error(
+                key("variant"),
+                LoadErrorKind::Unknown {
+                    what: "variant",
+                    name: v.clone(),
+                    expected: known,
+                },
+            );
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::collections::{BTreeMap, BTreeSet};
+    use std::path::PathBuf;
+    use std::sync::Arc;
+
+    use super::*;
+    use crate::model::{Case, Citation, Location};
+
+    fn case(id: &str, basis: Basis, variants: Option<&[&str]>) -> Arc<Case> {
+        Arc::new(Case {
+            id: id.into(),
+            basis,
+            citation: Citation {
+                manual: "m".into(),
+                page: "1".into(),
+                text: None,
+            },
+            location: Location {
+                file: PathBuf::from("v.yaml"),
+                line: 1,
+            },
+            instructions: Arc::from(vec!["HABIN".to_string(), "HABINP".to_string()]),
+            profiles: Arc::from(vec!["p".to_string()]),
+            variants: variants.map(|v| v.iter().map(|s| s.to_string()).collect::<BTreeSet<_>>()),
+            flags: BTreeMap::new(),
+            operands: BTreeMap::new(),
+            before: BTreeMap::new(),
+            expect: None,
+            note: None,
+        })
+    }
+
+    fn profile() -> Profile {
+        let mut errors = Vec::new();
+        crate::load::parse_profile(
+            Path::new("p.yaml"),
+            "id: p\nname: P\nshort: p\nmanuals: {}\nerrors: {signal: code, flag: SM0, register: SD0}\n\
+             devices: {D: {first: 0, last: 100}}\ninstructions: {}\n\
+             variants: [{id: a, description: a}, {id: b, description: b}]\n",
+            &mut errors,
+        )
+        .expect("profile")
+    }
+
+    fn load(text: &str, strict: bool) -> Result<KnownDifferences, String> {
+        let dir =
+            std::env::temp_dir().join(format!("plc-conformance-known-unit-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let file = dir.join(format!("k{}.yaml", text.len()));
+        std::fs::write(&file, text).expect("write");
+        let corpus = Corpus {
+            cases: vec![
+                case("c1", Basis::Manual, None),
+                case("only-a", Basis::Manual, Some(&["a"])),
+                case("open", Basis::Unspecified, None),
+            ],
+            cross_vendor: Vec::new(),
+        };
+        load_known(&file, &profile(), &corpus, strict).map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn entries_are_checked_against_the_corpus_and_profile() {
+        let errors = load(
+            "differences:\n\
+             - {case: c1, instruction: DHABIN, reason: r}\n\
+             - {case: only-a, variant: b, reason: r}\n\
+             - {case: open, reason: r}\n\
+             - {case: c1, reason: \"  \"}\n\
+             - {case: c1, reason: again}\n\
+             - {case: typo, reason: r}\n",
+            true,
+        )
+        .expect_err("invalid");
+        for expected in [
+            ":2: differences[0].instruction: unknown instruction of this case `DHABIN`; expected one of: HABIN, HABINP",
+            ":3: differences[1].variant: unknown variant of this case `b`; expected one of: a",
+            ":4: differences[2].case: case `open` is unspecified",
+            ":5: differences[3].reason: a known difference needs its reason",
+            ":6: differences[4].case: the same trials are already listed at",
+            ":7: differences[5].case: unknown case id `typo`",
+        ] {
+            assert!(errors.contains(expected), "{expected}\nin:\n{errors}");
+        }
+    }
+
+    #[test]
+    fn another_corpus_sets_unknown_cases_aside() {
+        let known = load(
+            "differences:\n  - {case: c1, reason: r}\n  - {case: elsewhere, reason: r}\n",
+            false,
+        )
+        .expect("loads");
+        assert_eq!(known.entries.len(), 1);
+        assert_eq!(known.ignored.len(), 1);
+        assert_eq!(known.ignored[0].case, "elsewhere");
+    }
+}

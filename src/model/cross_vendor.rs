@@ -1,0 +1,124 @@
+//! Cross-vendor operations: one vendor-neutral question, asked of every vendor.
+//!
+//! Several vendors implement "hex ASCII text -> value" and "value -> hex ASCII text", each with
+//! its own operands, character layout, digit-count convention and error signalling. A
+//! cross-vendor case gives only the text (or value) and a digit count. Each profile says, as data,
+//! how to lower that onto one of its instructions — which operands, flags and layout — and how
+//! its error signals read as shared error classes. The outcome is lifted back to an [`Answer`],
+//! so that the vendors' answers to the same question can be compared side by side.
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+
+use super::{Basis, Citation, ErrorSignal, Location, Operand};
+use crate::device::Device;
+pub use crate::spec::cross_vendor::{ErrorClass, Operation, TextLayout};
+
+/// What a vendor answered to a cross-vendor question.
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Answer {
+    Value(u64),
+    /// Characters as bytes, up to the first 00H.
+    Text(Vec<u8>),
+    Error(ErrorClass),
+    /// An error signal the profile does not classify (shown as the vendor wrote it).
+    OtherError(String),
+}
+
+impl fmt::Display for Answer {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Answer::Value(v) => write!(f, "{v:04X}H"),
+            Answer::Text(t) => {
+                write!(f, "\"")?;
+                for b in t {
+                    match b {
+                        0x20..=0x7E if *b != b'"' && *b != b'\\' => write!(f, "{}", *b as char)?,
+                        _ => write!(f, "\\x{b:02X}")?,
+                    }
+                }
+                write!(f, "\"")
+            }
+            Answer::Error(c) => write!(f, "{c}"),
+            Answer::OtherError(e) => write!(f, "error {e}"),
+        }
+    }
+}
+
+/// How a profile answers the cross-vendor operations, validated.
+#[derive(Debug, Clone, Default)]
+pub struct CrossVendorSection {
+    /// How the profile's error signals read as shared classes.
+    pub errors: Vec<(ErrorSignal, ErrorClass)>,
+    pub lowerings: Vec<Arc<Lowering>>,
+}
+
+impl CrossVendorSection {
+    /// A vendor's error signal as a shared class, by the profile's table.
+    pub fn classify(&self, signal: &ErrorSignal) -> Answer {
+        match self.errors.iter().find(|(s, _)| s == signal) {
+            Some((_, class)) => Answer::Error(class.clone()),
+            None => Answer::OtherError(signal.to_string()),
+        }
+    }
+}
+
+/// One way of answering a cross-vendor operation with one of a profile's instructions, with its
+/// operands parsed and its variant resolved when the profile was loaded.
+#[derive(Debug, Clone)]
+pub struct Lowering {
+    /// `<profile short>/<name>`: how cross-vendor cases and matrix columns name it.
+    pub key: String,
+    pub name: String,
+    pub description: String,
+    pub operation: Operation,
+    pub instruction: String,
+    pub variant: String,
+    pub flags: BTreeMap<String, bool>,
+    /// The fixed operands.
+    pub operands: BTreeMap<String, Operand>,
+    /// The head of the input: the text for hex-to-value, the value for value-to-hex.
+    pub source: Device,
+    /// The head of the result.
+    pub destination: Device,
+    pub text: TextLayout,
+    /// The operand that receives the digit count, for instructions that take one.
+    pub count: Option<String>,
+    /// The digits the instruction handles when it takes no count (HABIN, BINHA: 4).
+    pub width: Option<u32>,
+}
+
+/// A validated cross-vendor case.
+#[derive(Debug, Clone, Serialize)]
+pub struct CrossVendorCase {
+    pub id: String,
+    pub operation: Operation,
+    pub basis: Basis,
+    pub citation: Citation,
+    pub location: Location,
+    /// The text (hex-to-value) as bytes.
+    pub text: Vec<u8>,
+    /// The value (value-to-hex).
+    pub value: u64,
+    /// The digit count given to instructions that take one.
+    pub digits: u32,
+    /// The answer every lowering is expected to give unless listed in `except`.
+    pub expect: Option<Answer>,
+    /// Lowerings that answer differently, by `<profile short>/<lowering>`, with the reason.
+    pub except: BTreeMap<String, (Answer, String)>,
+    pub note: Option<String>,
+}
+
+impl CrossVendorCase {
+    /// What a lowering is expected to answer.
+    pub fn expected_for(&self, lowering_key: &str) -> Option<&Answer> {
+        self.except
+            .get(lowering_key)
+            .map(|(o, _)| o)
+            .or(self.expect.as_ref())
+    }
+}

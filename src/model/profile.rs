@@ -1,0 +1,174 @@
+//! A validated vendor profile: what the backends and the planner read at run time.
+//!
+//! Everything a profile writes as a string that means something — the error flag and register,
+//! the error classes of the cross-vendor section, the lowerings' operands — is parsed when the
+//! profile is loaded, so nothing is re-parsed (or guessed) while trials run. The plain data
+//! (device ranges, instruction operand lists, variants) is the same as on disk.
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use super::cross_vendor::CrossVendorSection;
+use super::ErrorSignal;
+use crate::device::Device;
+pub use crate::spec::profile::{
+    DeviceDef, DeviceRange, DeviceRanges, FlagDef, InstructionDef, Manual, Numbering, OperandDef,
+    SignalKind, Variant,
+};
+
+#[derive(Debug, Clone)]
+pub struct Profile {
+    /// The id vectors name in `profiles:`, e.g. `mitsubishi-iqr`.
+    pub id: String,
+    /// The vendor's name for the family.
+    pub name: String,
+    /// The short name used for its reference backend and cross-vendor columns, e.g. `iqr`.
+    pub short: String,
+    pub manuals: BTreeMap<String, Manual>,
+    pub errors: ErrorSignalling,
+    pub flags: BTreeMap<String, FlagDef>,
+    pub devices: BTreeMap<String, DeviceDef>,
+    pub instructions: BTreeMap<String, InstructionDef>,
+    pub variants: Vec<Variant>,
+    /// How the profile answers the cross-vendor operations (empty when it does not).
+    pub cross_vendor: CrossVendorSection,
+}
+
+/// How an operation error becomes visible to a program, with its devices parsed.
+#[derive(Debug, Clone)]
+pub struct ErrorSignalling {
+    pub signal: SignalKind,
+    /// The flag an error turns on (MELSEC SM0, IDEC M8004).
+    pub flag: Device,
+    /// The register holding the code (MELSEC SD0).
+    pub register: Option<Device>,
+    /// Further registers that receive the code (FX5: SD8067).
+    pub also: Vec<Device>,
+}
+
+impl Profile {
+    pub fn variant(&self, id: &str) -> Option<&Variant> {
+        self.variants.iter().find(|v| v.id == id)
+    }
+
+    /// The ranges of a device code on a variant.
+    pub fn ranges(&self, variant: &Variant, code: &str) -> Option<DeviceRanges> {
+        variant
+            .devices
+            .get(code)
+            .cloned()
+            .or_else(|| self.devices.get(code).map(DeviceDef::ranges))
+    }
+
+    /// Whether `count` consecutive word operands from `head` all exist on the variant: every
+    /// point they take lies in one range (a span across a gap does not exist).
+    pub fn words_exist(&self, variant: &Variant, head: &Device, count: u32) -> bool {
+        let (Some(def), Some(ranges)) = (
+            self.devices.get(&head.code),
+            self.ranges(variant, &head.code),
+        ) else {
+            return false;
+        };
+        let Some(first) = def.numbering.point(head.index) else {
+            return false;
+        };
+        if count == 0 {
+            return true;
+        }
+        let last = first + u64::from(count) * u64::from(def.points_per_word.max(1)) - 1;
+        let fits = ranges.iter().any(|r| {
+            match (def.numbering.point(r.first), def.numbering.point(r.last)) {
+                (Some(lo), Some(hi)) => lo <= first && last <= hi,
+                _ => false,
+            }
+        });
+        fits
+    }
+
+    /// Whether any variant has this word; memory a vector sets must exist somewhere.
+    pub fn word_exists_anywhere(&self, device: &Device) -> bool {
+        self.variants.iter().any(|v| self.words_exist(v, device, 1))
+    }
+
+    /// Whether a variant has an instruction.
+    pub fn has_instruction(&self, variant: &Variant, instruction: &str) -> bool {
+        self.instructions.contains_key(instruction)
+            && variant
+                .instructions
+                .as_ref()
+                .is_none_or(|list| list.iter().any(|i| i == instruction))
+    }
+
+    /// A flag's default.
+    pub fn flag_default(&self, flag: &str) -> bool {
+        self.flags.get(flag).is_some_and(|f| f.default)
+    }
+
+    /// A flag as the CPU of a variant sees it: the setting, or the profile default, except that
+    /// a variant which does not implement the flag always sees the default. The one place this
+    /// rule lives: the reference models, the external-backend capabilities and the reports all
+    /// ask here.
+    pub fn flag_seen(&self, variant: &Variant, set: &BTreeMap<String, bool>, flag: &str) -> bool {
+        if variant.ignores_flags.iter().any(|f| f == flag) {
+            return self.flag_default(flag);
+        }
+        set.get(flag)
+            .copied()
+            .unwrap_or_else(|| self.flag_default(flag))
+    }
+
+    /// Every flag an instruction reads, as set or defaulted (before the variant's view).
+    pub fn flags_of(
+        &self,
+        instruction: &str,
+        set: &BTreeMap<String, bool>,
+    ) -> BTreeMap<String, bool> {
+        self.instructions
+            .get(instruction)
+            .map(|def| {
+                def.flags
+                    .iter()
+                    .map(|f| {
+                        let on = set.get(f).copied().unwrap_or_else(|| self.flag_default(f));
+                        (f.clone(), on)
+                    })
+                    .collect()
+            })
+            .unwrap_or_default()
+    }
+
+    /// The signal for an operation error with the vendor's code. For a profile that signals
+    /// with a flag only, the code is not visible and the flag is what the program sees.
+    pub fn error(&self, code: u16) -> ErrorSignal {
+        match self.errors.signal {
+            SignalKind::Code => ErrorSignal::Code(code),
+            SignalKind::Flag => ErrorSignal::Flag(self.errors.flag.clone()),
+        }
+    }
+}
+
+/// The loaded profiles, by id.
+#[derive(Debug, Clone, Default)]
+pub struct Profiles {
+    by_id: BTreeMap<String, Arc<Profile>>,
+}
+
+impl Profiles {
+    pub fn new(profiles: impl IntoIterator<Item = Profile>) -> Self {
+        Profiles {
+            by_id: profiles
+                .into_iter()
+                .map(|p| (p.id.clone(), Arc::new(p)))
+                .collect(),
+        }
+    }
+    pub fn get(&self, id: &str) -> Option<&Arc<Profile>> {
+        self.by_id.get(id)
+    }
+    pub fn iter(&self) -> impl Iterator<Item = &Arc<Profile>> {
+        self.by_id.values()
+    }
+    pub fn ids(&self) -> Vec<String> {
+        self.by_id.keys().cloned().collect()
+    }
+}

@@ -1,0 +1,46 @@
+//! Lowering a cross-vendor case onto a profile's instruction: the operands, flags and memory
+//! that ask the vendor's instruction the case's question. (Lifting the answer back is the
+//! judge's part.)
+
+use super::Input;
+use crate::model::cross_vendor::{CrossVendorCase, Lowering, Operation, TextLayout};
+use crate::model::Operand;
+use crate::text::pack_low_first;
+
+/// The input that runs `case` through `lowering`.
+pub(super) fn input(lowering: &Lowering, case: &CrossVendorCase) -> Input {
+    let mut operands = lowering.operands.clone();
+    if let Some(count) = &lowering.count {
+        operands.insert(count.clone(), Operand::Constant(i64::from(case.digits)));
+    }
+    let words: Vec<u16> = match lowering.operation {
+        Operation::HexToValue => {
+            let mut chars = case.text.clone();
+            chars.push(0);
+            match lowering.text {
+                TextLayout::Packed => pack_low_first(&chars),
+                TextLayout::Words => chars.iter().map(|c| u16::from(*c)).collect(),
+            }
+        }
+        Operation::ValueToHex => {
+            // As many words as the value needs or the digits read, the upper ones zero, so that
+            // an instruction reading past the value reads zeros, not the fill.
+            let v = case.value;
+            let digits = lowering.width.unwrap_or(case.digits);
+            let needed = if v > 0xFFFF { 2 } else { 1 };
+            let count = digits.div_ceil(4).clamp(needed, 4);
+            (0..count).map(|i| (v >> (16 * i)) as u16).collect()
+        }
+    };
+    let before = words
+        .into_iter()
+        .enumerate()
+        .filter_map(|(i, w)| lowering.source.offset(i as u32).map(|d| (d, w)))
+        .collect();
+    Input {
+        instruction: lowering.instruction.clone(),
+        flags: lowering.flags.clone(),
+        operands,
+        before,
+    }
+}

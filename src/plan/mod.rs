@@ -1,0 +1,253 @@
+//! Planning: which trials a run has, and what each one asks of its backend.
+//!
+//! A trial is one check on one backend, on one variant of the backend's profile. The check is a
+//! native case run as one of its file's instructions, or a cross-vendor case run through one of
+//! the profile's lowerings; either way the plan turns it into the same [`Input`] (instruction,
+//! flags, operands, memory set), so everything after planning — executing, judging, reporting —
+//! has one path for both. What is known when planning is decided here: a trial the backend does
+//! not claim is skipped with the reason, and a trial whose outcome cannot fail (an `unspecified`
+//! case, a listed known difference) is marked so that a test runner can count it as ignored.
+
+mod lowering;
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use crate::backend::Backend;
+use crate::device::Device;
+use crate::model::cross_vendor::{CrossVendorCase, Lowering};
+use crate::model::known::{Entry, KnownDifferences};
+use crate::model::profile::{Profile, Profiles};
+use crate::model::{Basis, Case, Citation, Corpus, Location, Operand};
+
+/// What a trial checks.
+#[derive(Debug, Clone)]
+pub enum Check {
+    /// A case of the corpus, run as one of its file's instructions.
+    Native {
+        instruction: String,
+        case: Arc<Case>,
+    },
+    /// A cross-vendor case, run through one of the profile's lowerings.
+    CrossVendor {
+        lowering: Arc<Lowering>,
+        case: Arc<CrossVendorCase>,
+    },
+}
+
+/// What a trial asks its backend to execute, under every fill.
+#[derive(Debug, Clone, Default)]
+pub struct Input {
+    pub instruction: String,
+    /// The flags set; the rest hold the profile default.
+    pub flags: BTreeMap<String, bool>,
+    pub operands: BTreeMap<String, Operand>,
+    /// The memory set before execution; every other word holds the fill.
+    pub before: BTreeMap<Device, u16>,
+}
+
+/// One check on one backend and variant.
+#[derive(Clone)]
+pub struct Trial {
+    pub backend: Arc<dyn Backend>,
+    pub profile: Arc<Profile>,
+    pub variant: String,
+    pub check: Check,
+    pub input: Arc<Input>,
+    /// Why the trial is not run, when the backend does not claim it.
+    pub skip: Option<String>,
+    /// The known-differences entry covering the trial, if any.
+    pub known: Option<Entry>,
+}
+
+impl Trial {
+    /// `backend::instruction::case-id::variant`, or `cross-vendor::backend::lowering::case-id::
+    /// variant`: filtering on a prefix selects a backend, an instruction or a case across
+    /// variants. The basis is not part of the name, so a name survives a change of basis.
+    pub fn name(&self) -> String {
+        match &self.check {
+            Check::Native { instruction, case } => format!(
+                "{}::{}::{}::{}",
+                self.backend.name(),
+                instruction.to_lowercase(),
+                case.id,
+                self.variant
+            ),
+            Check::CrossVendor { lowering, case } => format!(
+                "cross-vendor::{}::{}::{}::{}",
+                self.backend.name(),
+                lowering.name,
+                case.id,
+                self.variant
+            ),
+        }
+    }
+
+    pub fn case_id(&self) -> &str {
+        match &self.check {
+            Check::Native { case, .. } => &case.id,
+            Check::CrossVendor { case, .. } => &case.id,
+        }
+    }
+
+    pub fn basis(&self) -> Basis {
+        match &self.check {
+            Check::Native { case, .. } => case.basis,
+            Check::CrossVendor { case, .. } => case.basis,
+        }
+    }
+
+    pub fn location(&self) -> &Location {
+        match &self.check {
+            Check::Native { case, .. } => &case.location,
+            Check::CrossVendor { case, .. } => &case.location,
+        }
+    }
+
+    pub fn citation(&self) -> &Citation {
+        match &self.check {
+            Check::Native { case, .. } => &case.citation,
+            Check::CrossVendor { case, .. } => &case.citation,
+        }
+    }
+
+    /// What a known-differences entry and a report name the check by: the instruction of a
+    /// native case, the lowering of a cross-vendor one.
+    pub fn check_name(&self) -> &str {
+        match &self.check {
+            Check::Native { instruction, .. } => instruction,
+            Check::CrossVendor { lowering, .. } => &lowering.name,
+        }
+    }
+
+    pub fn is_cross_vendor(&self) -> bool {
+        matches!(self.check, Check::CrossVendor { .. })
+    }
+
+    /// Why the outcome of this trial can be told before it runs: skipped, recorded only
+    /// (`unspecified`), or a listed known difference. A test runner shows such a trial as
+    /// ignored; it still runs when asked, and a known difference that conforms then fails as a
+    /// stale entry.
+    pub fn ignored_because(&self) -> Option<String> {
+        if let Some(skip) = &self.skip {
+            return Some(skip.clone());
+        }
+        if self.basis() == Basis::Unspecified {
+            return Some("unspecified: what the backend does is recorded, never judged".into());
+        }
+        self.known
+            .as_ref()
+            .map(|e| format!("known difference ({}): {}", e.location, e.reason))
+    }
+}
+
+/// Every trial of the corpus on the given backends, in corpus order: native cases first, then
+/// cross-vendor ones. A native case runs on a backend when the backend implements one of the
+/// case's profiles, on every variant the case allows and as every instruction of its file; a
+/// cross-vendor case runs through every lowering of its operation in the backend's profile.
+pub fn plan(
+    corpus: &Corpus,
+    profiles: &Profiles,
+    backends: &[Arc<dyn Backend>],
+    known: &BTreeMap<String, KnownDifferences>,
+) -> Vec<Trial> {
+    let mut trials = Vec::new();
+    for backend in backends {
+        let Some(profile) = profiles.get(backend.profile()) else {
+            continue;
+        };
+        let list = known.get(backend.name());
+        for case in &corpus.cases {
+            if !case.profiles.iter().any(|p| *p == profile.id) {
+                continue;
+            }
+            for instruction in case.instructions.iter() {
+                let input = Arc::new(Input {
+                    instruction: instruction.clone(),
+                    flags: case.flags.clone(),
+                    operands: case.operands.clone(),
+                    before: case.before.clone(),
+                });
+                for variant in profile.variants.iter().filter(|v| case.runs_on(&v.id)) {
+                    trials.push(trial(
+                        backend,
+                        profile,
+                        &variant.id,
+                        Check::Native {
+                            instruction: instruction.clone(),
+                            case: case.clone(),
+                        },
+                        input.clone(),
+                        list,
+                    ));
+                }
+            }
+        }
+    }
+    for backend in backends {
+        let Some(profile) = profiles.get(backend.profile()) else {
+            continue;
+        };
+        let list = known.get(backend.name());
+        for case in &corpus.cross_vendor {
+            for lowering in profile
+                .cross_vendor
+                .lowerings
+                .iter()
+                .filter(|l| l.operation == case.operation)
+            {
+                let input = Arc::new(lowering::input(lowering, case));
+                trials.push(trial(
+                    backend,
+                    profile,
+                    &lowering.variant,
+                    Check::CrossVendor {
+                        lowering: lowering.clone(),
+                        case: case.clone(),
+                    },
+                    input,
+                    list,
+                ));
+            }
+        }
+    }
+    trials
+}
+
+fn trial(
+    backend: &Arc<dyn Backend>,
+    profile: &Arc<Profile>,
+    variant: &str,
+    check: Check,
+    input: Arc<Input>,
+    known: Option<&KnownDifferences>,
+) -> Trial {
+    let mut t = Trial {
+        backend: backend.clone(),
+        profile: profile.clone(),
+        variant: variant.to_string(),
+        check,
+        input,
+        skip: None,
+        known: None,
+    };
+    t.skip = skip_reason(&t);
+    t.known = known
+        .and_then(|k| k.entry(t.case_id(), t.check_name(), &t.variant))
+        .cloned();
+    t
+}
+
+/// Why the backend will not run a trial, if it will not.
+fn skip_reason(t: &Trial) -> Option<String> {
+    let instruction = &t.input.instruction;
+    if !t.backend.claims(instruction, &t.variant) {
+        return Some(format!(
+            "{} does not implement {instruction} on {}",
+            t.backend.name(),
+            t.variant
+        ));
+    }
+    let variant = t.profile.variant(&t.variant)?;
+    t.backend.declines(&t.input.flags, instruction, variant)
+}

@@ -1,0 +1,77 @@
+//! Reports written as one document at the end of a run: JSON, JUnit XML, HTML and the matrix.
+//! A [`Collector`] keeps every trial's [`Record`] in plan order; [`render`] writes them in the
+//! chosen format.
+
+use super::matrix::sections;
+use super::record::Record;
+use super::{Event, Reporter, Summary};
+
+/// The document formats.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    /// Grouped matrices as text.
+    Matrix,
+    /// The versioned JSON document (also a saved run for `--baseline`).
+    Json,
+    /// JUnit XML.
+    Junit,
+    /// One self-contained HTML file.
+    Html,
+}
+
+/// Collects records as trials finish.
+#[derive(Default)]
+pub struct Collector {
+    records: Vec<(usize, Record)>,
+    summary: Summary,
+    interrupted: bool,
+}
+
+impl Collector {
+    /// The records in plan order, the counts, and whether the run was interrupted.
+    pub fn finish(mut self) -> (Vec<Record>, Summary, bool) {
+        self.records.sort_by_key(|(i, _)| *i);
+        (
+            self.records.into_iter().map(|(_, r)| r).collect(),
+            self.summary,
+            self.interrupted,
+        )
+    }
+}
+
+impl Reporter for Collector {
+    fn event(&mut self, event: &Event<'_>) {
+        match event {
+            Event::TrialFinished {
+                index,
+                trial,
+                verdict,
+            } => self.records.push((*index, Record::of(trial, verdict))),
+            Event::RunFinished {
+                summary,
+                interrupted,
+            } => {
+                self.summary = **summary;
+                self.interrupted = *interrupted;
+            }
+            Event::RunStarted { .. } | Event::BackendRestarted { .. } => {}
+        }
+    }
+}
+
+/// Renders records in a document format; `coloured` applies to the matrix text only.
+pub fn render(
+    format: Format,
+    records: &[Record],
+    summary: &Summary,
+    meta: &super::json::RunInfo,
+    coloured: bool,
+) -> String {
+    let matrices = sections(records);
+    match format {
+        Format::Matrix => super::matrix_text::render(&matrices, coloured),
+        Format::Json => super::json::render(records, &matrices, summary, meta),
+        Format::Junit => super::junit::render(records),
+        Format::Html => super::html::render(&matrices, records, meta),
+    }
+}

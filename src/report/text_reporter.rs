@@ -1,0 +1,141 @@
+//! The text report of `plc-conformance run`: each failure as soon as its trial is judged, then
+//! known differences grouped by entry, skips grouped by reason, and the counts.
+
+use std::collections::BTreeMap;
+use std::io::Write;
+
+use super::text::{render, Palette};
+use super::{Event, Reporter, Summary};
+use crate::judge::Verdict;
+
+/// A known-differences entry and the trials it covers, in plan order.
+struct KnownGroup {
+    first: usize,
+    reason: String,
+    trials: Vec<(usize, String)>,
+}
+
+pub struct TextReporter<W: Write> {
+    out: W,
+    palette: Palette,
+    show_recorded: bool,
+    /// Lines printed after the results, before the counts (backends left out, and why).
+    notes: Vec<String>,
+    known: BTreeMap<String, KnownGroup>,
+    skipped: BTreeMap<String, usize>,
+    /// Counts per backend; cross-vendor trials count apart.
+    per_backend: BTreeMap<String, Summary>,
+    cross_vendor: Option<Summary>,
+    restarts: BTreeMap<String, usize>,
+}
+
+impl<W: Write> TextReporter<W> {
+    pub fn new(out: W, palette: Palette, show_recorded: bool, notes: Vec<String>) -> Self {
+        TextReporter {
+            out,
+            palette,
+            show_recorded,
+            notes,
+            known: BTreeMap::new(),
+            skipped: BTreeMap::new(),
+            per_backend: BTreeMap::new(),
+            cross_vendor: None,
+            restarts: BTreeMap::new(),
+        }
+    }
+
+    fn finish(&mut self, summary: &Summary, interrupted: bool) {
+        let out = &mut self.out;
+        let mut known: Vec<(&String, &KnownGroup)> = self.known.iter().collect();
+        known.sort_by_key(|(_, g)| g.first);
+        for (entry, group) in known {
+            let _ = writeln!(out, "known difference ({entry}): {}", group.reason);
+            let mut trials = group.trials.clone();
+            trials.sort();
+            for (_, line) in trials {
+                let _ = writeln!(out, "  {line}");
+            }
+        }
+        for (reason, count) in &self.skipped {
+            let _ = writeln!(out, "skipped {count} trial(s): {reason}");
+        }
+        for note in &self.notes {
+            let _ = writeln!(out, "skipped: {note}");
+        }
+        for (backend, n) in &self.restarts {
+            let _ = writeln!(
+                out,
+                "note: {backend} was started again {n} time(s) after a fault"
+            );
+        }
+        for (backend, s) in &self.per_backend {
+            let _ = writeln!(out, "{backend}: {s}");
+        }
+        if let Some(s) = &self.cross_vendor {
+            let _ = writeln!(out, "cross-vendor: {s}");
+        }
+        if interrupted {
+            let _ = writeln!(
+                out,
+                "interrupted: the counts cover the trials that finished"
+            );
+        }
+        let _ = writeln!(out, "{summary}");
+        let _ = out.flush();
+    }
+}
+
+impl<W: Write> Reporter for TextReporter<W> {
+    fn event(&mut self, event: &Event<'_>) {
+        match event {
+            Event::RunStarted { .. } => {}
+            Event::TrialFinished {
+                index,
+                trial,
+                verdict,
+            } => {
+                let counts = if trial.is_cross_vendor() {
+                    self.cross_vendor.get_or_insert_with(Summary::default)
+                } else {
+                    self.per_backend
+                        .entry(trial.backend.name().to_string())
+                        .or_default()
+                };
+                counts.add(verdict);
+                match verdict {
+                    v if v.is_failure() => {
+                        let _ = writeln!(self.out, "{}", render(trial, v, self.palette));
+                        let _ = self.out.flush();
+                    }
+                    Verdict::KnownDifference { entry, .. } => {
+                        let group = self.known.entry(entry.location.clone()).or_insert_with(|| {
+                            KnownGroup {
+                                first: *index,
+                                reason: entry.reason.clone(),
+                                trials: Vec::new(),
+                            }
+                        });
+                        group.first = group.first.min(*index);
+                        group
+                            .trials
+                            .push((*index, format!("{} ({})", trial.name(), trial.location())));
+                    }
+                    Verdict::Skipped { reason } => {
+                        *self.skipped.entry(reason.clone()).or_default() += 1;
+                    }
+                    v @ Verdict::Recorded { .. } if self.show_recorded => {
+                        let _ = writeln!(self.out, "{}", render(trial, v, self.palette));
+                    }
+                    _ => {}
+                }
+            }
+            Event::BackendRestarted { backend, restarts } => {
+                self.restarts.insert(backend.to_string(), *restarts);
+            }
+            Event::RunFinished {
+                summary,
+                interrupted,
+            } => self.finish(summary, *interrupted),
+        }
+    }
+}

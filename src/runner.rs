@@ -1,0 +1,195 @@
+//! Running a project: its profiles, corpus and backends, through plan -> execute -> judge, with
+//! every result sent to a reporter as it is judged.
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+use crate::backend::external::{ExternalBackend, ExternalError};
+use crate::backend::{reference_backends, Backend};
+use crate::execute::{execute, execute_all, Progress};
+use crate::judge::{judge, skipped, Verdict};
+use crate::load::{load_corpus, load_known, load_profiles, LoadErrors};
+use crate::model::known::KnownDifferences;
+use crate::model::profile::Profiles;
+use crate::model::project::ExternalSettings;
+use crate::model::Corpus;
+use crate::plan::{plan, Trial};
+use crate::report::{Event, Reporter, Summary};
+
+/// Where a project keeps its data.
+#[derive(Debug, Clone)]
+pub struct Paths {
+    pub vendors: PathBuf,
+    pub vectors: Vec<PathBuf>,
+}
+
+impl Paths {
+    /// `vendors/` and `vectors/` under a project root.
+    pub fn under(root: &Path) -> Self {
+        Paths {
+            vendors: root.join("vendors"),
+            vectors: vec![root.join("vectors")],
+        }
+    }
+}
+
+/// A loaded project: what a run plans from.
+pub struct Project {
+    pub profiles: Profiles,
+    pub corpus: Corpus,
+    /// The built-in reference models and the external backends added so far.
+    pub backends: Vec<Arc<dyn Backend>>,
+    /// Known differences by backend name.
+    pub known: BTreeMap<String, KnownDifferences>,
+}
+
+/// Why an external backend could not be added.
+#[derive(Debug)]
+pub enum SetupError {
+    /// Its known-differences file is wrong.
+    Load(LoadErrors),
+    /// It could not be started or refused the protocol.
+    External(ExternalError),
+    /// Its name is already taken.
+    Duplicate(String),
+}
+
+impl fmt::Display for SetupError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SetupError::Load(e) => write!(f, "{e}"),
+            SetupError::External(e) => write!(f, "{e}"),
+            SetupError::Duplicate(name) => write!(f, "there are two backends named `{name}`"),
+        }
+    }
+}
+
+impl std::error::Error for SetupError {}
+
+impl Project {
+    /// Loads profiles and corpus and sets up the built-in reference backends.
+    pub fn load(paths: &Paths) -> Result<Project, LoadErrors> {
+        let profiles = load_profiles(&paths.vendors)?;
+        let corpus = load_corpus(&paths.vectors, &profiles)?;
+        let backends = reference_backends(&profiles);
+        Ok(Project {
+            profiles,
+            corpus,
+            backends,
+            known: BTreeMap::new(),
+        })
+    }
+
+    /// Starts an external backend and adds it, with its known differences. `strict_known`
+    /// makes entries for cases outside the corpus errors (see [`load_known`]).
+    pub fn add_external(
+        &mut self,
+        settings: ExternalSettings,
+        strict_known: bool,
+    ) -> Result<Arc<ExternalBackend>, SetupError> {
+        if self.backends.iter().any(|b| b.name() == settings.name) {
+            return Err(SetupError::Duplicate(settings.name));
+        }
+        let known_file = settings.known_differences.clone();
+        let backend = Arc::new(
+            ExternalBackend::start(settings, &self.profiles).map_err(SetupError::External)?,
+        );
+        // The backend's profile was checked when it started.
+        if let (Some(file), Some(profile)) = (known_file, self.profiles.get(backend.profile())) {
+            let known =
+                load_known(&file, profile, &self.corpus, strict_known).map_err(SetupError::Load)?;
+            self.known.insert(backend.name().to_string(), known);
+        }
+        self.backends.push(backend.clone());
+        Ok(backend)
+    }
+
+    /// Every trial of the corpus on these backends, with their known differences.
+    pub fn plan(&self, backends: &[Arc<dyn Backend>]) -> Vec<Trial> {
+        plan(&self.corpus, &self.profiles, backends, &self.known)
+    }
+}
+
+/// Runs one trial: skipped, or executed under every fill and judged.
+pub fn run_one(trial: &Trial) -> Verdict {
+    match &trial.skip {
+        Some(reason) => skipped(reason),
+        None => judge(trial, &execute(trial)),
+    }
+}
+
+/// Runs trials and reports each verdict as it is judged: skipped trials first, then each
+/// backend's results as they come in (backends side by side, at most `jobs` at once). When
+/// `stop` is set, no further chunk is started and the run finishes with what it has, reported
+/// as interrupted. Returns the counts.
+pub fn run(
+    trials: &[Trial],
+    jobs: usize,
+    stop: &AtomicBool,
+    reporter: &mut dyn Reporter,
+) -> Summary {
+    let mut summary = Summary::default();
+    reporter.event(&Event::RunStarted {
+        trials: trials.len(),
+    });
+    for (i, t) in trials.iter().enumerate() {
+        if let Some(reason) = &t.skip {
+            finished(reporter, &mut summary, trials, i, skipped(reason));
+        }
+    }
+    let indices: Vec<usize> = (0..trials.len()).collect();
+    execute_all(trials, &indices, jobs, stop, |progress| match progress {
+        Progress::Observed(i, observations) => {
+            let verdict = judge(&trials[i], &observations);
+            finished(reporter, &mut summary, trials, i, verdict);
+        }
+        Progress::Restarted { backend, restarts } => {
+            reporter.event(&Event::BackendRestarted {
+                backend: &backend,
+                restarts,
+            });
+        }
+    });
+    let interrupted = stop.load(Ordering::Relaxed);
+    reporter.event(&Event::RunFinished {
+        summary: &summary,
+        interrupted,
+    });
+    summary
+}
+
+/// Runs trials (each backend's batched) and returns their verdicts in plan order.
+pub fn verdicts(trials: &[Trial]) -> Vec<Verdict> {
+    struct Keep(Vec<Option<Verdict>>);
+    impl Reporter for Keep {
+        fn event(&mut self, event: &Event<'_>) {
+            if let Event::TrialFinished { index, verdict, .. } = event {
+                self.0[*index] = Some((*verdict).clone());
+            }
+        }
+    }
+    let mut keep = Keep(vec![None; trials.len()]);
+    run(trials, 1, &AtomicBool::new(false), &mut keep);
+    keep.0
+        .into_iter()
+        .map(|v| v.unwrap_or_else(|| skipped("not run")))
+        .collect()
+}
+
+fn finished(
+    reporter: &mut dyn Reporter,
+    summary: &mut Summary,
+    trials: &[Trial],
+    index: usize,
+    verdict: Verdict,
+) {
+    summary.add(&verdict);
+    reporter.event(&Event::TrialFinished {
+        index,
+        trial: &trials[index],
+        verdict: &verdict,
+    });
+}

@@ -1,0 +1,180 @@
+//! Cross-vendor vector files, and the `neutral` section of a profile, as written on disk.
+
+use std::collections::BTreeMap;
+use std::fmt;
+
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+use super::vectors::{Basis, ScalarSpec};
+
+/// The operations several vendors implement.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Deserialize, Serialize, JsonSchema,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum Operation {
+    /// Hex ASCII text -> binary value (HABIN, FX5 HEX, ATOH).
+    HexToValue,
+    /// Binary value -> hex ASCII text (BINHA, FX5 ASCI, HTOA).
+    ValueToHex,
+}
+
+impl fmt::Display for Operation {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Operation::HexToValue => "hex-to-value",
+            Operation::ValueToHex => "value-to-hex",
+        })
+    }
+}
+
+/// What kind of error a vendor signalled, in words every vendor shares.
+#[derive(
+    Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Deserialize, Serialize, JsonSchema,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum ErrorClass {
+    /// A character that is not a hex digit.
+    InvalidDigit,
+    /// A digit count out of range.
+    InvalidCount,
+    /// An operand past the end of its device range.
+    DeviceRange,
+    /// An error whose kind the vendor does not tell (IDEC M8004).
+    Error,
+}
+
+impl fmt::Display for ErrorClass {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            ErrorClass::InvalidDigit => "invalid-digit",
+            ErrorClass::InvalidCount => "invalid-count",
+            ErrorClass::DeviceRange => "device-range",
+            ErrorClass::Error => "error",
+        })
+    }
+}
+
+/// How characters are stored in words.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum TextLayout {
+    /// Two characters per word, first character in the low byte.
+    Packed,
+    /// One character per word, in the low byte.
+    Words,
+}
+
+/// A profile's `neutral` section: how its instructions answer the cross-vendor operations.
+#[derive(Debug, Clone, Default, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CrossVendorSectionSpec {
+    /// How the profile's error signals read as cross-vendor classes, e.g. `3401H: invalid-digit`
+    /// for a code, `M8004: error` for a flag.
+    #[serde(default)]
+    pub errors: BTreeMap<String, ErrorClass>,
+    #[serde(default)]
+    pub lowerings: Vec<LoweringSpec>,
+}
+
+/// One way of answering a cross-vendor operation with one of the profile's instructions.
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct LoweringSpec {
+    /// The column name, unique within the profile, e.g. `habin-fixed`. Cross-vendor cases refer
+    /// to it as `<profile short>/<name>` (`iqr/habin-fixed`).
+    pub name: String,
+    pub description: String,
+    pub operation: Operation,
+    pub instruction: String,
+    /// The variant to run on; the profile's first when absent.
+    #[serde(default)]
+    pub variant: Option<String>,
+    /// Mode flags, e.g. `{SM705: true}`.
+    #[serde(default)]
+    pub flags: BTreeMap<String, bool>,
+    /// The fixed operands (`s: D100`, `d: D200`).
+    pub operands: BTreeMap<String, String>,
+    /// The operand holding the input: the text for hex-to-value, the value for value-to-hex.
+    pub source: String,
+    /// The operand receiving the result.
+    pub destination: String,
+    /// How the characters are stored: two per word low byte first, or one per word.
+    pub text: TextLayout,
+    /// The operand that receives the digit count (`n`, `S2`), for instructions that take one.
+    #[serde(default)]
+    pub count: Option<String>,
+    /// The digits the instruction handles when it takes no count (HABIN, BINHA: 4).
+    #[serde(default)]
+    pub width: Option<u32>,
+}
+
+/// A file of vendor-neutral cases for one operation.
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+#[schemars(title = "plc-conformance cross-vendor vector file")]
+pub struct CrossVendorFileSpec {
+    pub operation: Operation,
+    /// Where the cases' expectations come from, in words (they span several manuals).
+    pub source: String,
+    #[serde(default)]
+    pub description: Option<String>,
+    /// Texts several cases share, to be named with YAML anchors (`- &idec "..."`) and used as
+    /// aliases (`why: *idec`); not read otherwise.
+    #[serde(default)]
+    pub reasons: Vec<String>,
+    pub cases: Vec<CrossVendorCaseSpec>,
+}
+
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CrossVendorCaseSpec {
+    /// Unique in the whole corpus.
+    pub id: String,
+    pub basis: Basis,
+    #[serde(default)]
+    pub cite: Option<String>,
+    /// hex-to-value: the characters (`\0` for NUL).
+    #[serde(default)]
+    pub text: Option<String>,
+    /// value-to-hex: the value (`0ABCH`, `K100`).
+    #[serde(default)]
+    pub value: Option<ScalarSpec>,
+    /// The digit count, for instructions that take one (FX5 `n`, IDEC `S2`).
+    pub digits: u32,
+    /// What every lowering answers unless listed in `except`.
+    #[serde(default)]
+    pub expect: Option<CrossVendorExpectSpec>,
+    /// Lowerings that answer differently, by `<profile short>/<lowering name>`.
+    #[serde(default)]
+    pub except: BTreeMap<String, CrossVendorExceptSpec>,
+    #[serde(default)]
+    pub note: Option<String>,
+}
+
+/// One of `value`, `text` or `error`.
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CrossVendorExpectSpec {
+    #[serde(default)]
+    pub value: Option<ScalarSpec>,
+    #[serde(default)]
+    pub text: Option<String>,
+    #[serde(default)]
+    pub error: Option<ErrorClass>,
+}
+
+/// A lowering's own answer, and why it differs.
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CrossVendorExceptSpec {
+    #[serde(default)]
+    pub value: Option<ScalarSpec>,
+    #[serde(default)]
+    pub text: Option<String>,
+    #[serde(default)]
+    pub error: Option<ErrorClass>,
+    /// The manual rule that makes this vendor answer differently.
+    pub why: String,
+}

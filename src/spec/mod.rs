@@ -1,0 +1,48 @@
+//! Everything the project reads from disk, as written: vector files, cross-vendor files, vendor
+//! profiles, the project file and known-differences files.
+//!
+//! These types mirror the YAML one to one and check only its shape; what the values mean is
+//! checked when [`crate::load`] turns them into [`crate::model`] types. The JSON Schemas shipped
+//! for editors are generated from these types by one function, so schema and loader cannot
+//! drift.
+
+pub mod cross_vendor;
+pub mod known;
+pub mod profile;
+pub mod project;
+pub mod vectors;
+
+pub use vectors::{Basis, ScalarSpec};
+
+/// The on-disk formats that have a JSON Schema.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SchemaKind {
+    /// Vector files (`vectors/<family>/*.yaml`).
+    Vectors,
+    /// Vendor profiles (`vendors/*.yaml`).
+    Profile,
+    /// Cross-vendor vector files (`vectors/cross-vendor/*.yaml`).
+    CrossVendor,
+    /// The project file, `plc-conformance.yaml`.
+    Project,
+    /// A known-differences file.
+    Known,
+}
+
+/// The JSON Schema (draft-07) of one on-disk format.
+pub fn schema(kind: SchemaKind) -> serde_json::Value {
+    match kind {
+        SchemaKind::Vectors => schema_of::<vectors::VectorFileSpec>(),
+        SchemaKind::Profile => schema_of::<profile::ProfileSpec>(),
+        SchemaKind::CrossVendor => schema_of::<cross_vendor::CrossVendorFileSpec>(),
+        SchemaKind::Project => schema_of::<project::ProjectFileSpec>(),
+        SchemaKind::Known => schema_of::<known::KnownFileSpec>(),
+    }
+}
+
+/// The JSON Schema (draft-07) of any type: the one helper every schema comes from (the
+/// external-backend protocol's too).
+pub fn schema_of<T: schemars::JsonSchema>() -> serde_json::Value {
+    let generator = schemars::generate::SchemaSettings::draft07().into_generator();
+    serde_json::to_value(generator.into_root_schema_for::<T>()).unwrap_or_default()
+}

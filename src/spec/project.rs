@@ -1,0 +1,51 @@
+//! The project file, `plc-conformance.yaml`, as written on disk.
+
+use std::path::PathBuf;
+
+use schemars::JsonSchema;
+use serde::Deserialize;
+
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+#[schemars(title = "plc-conformance project file")]
+pub struct ProjectFileSpec {
+    /// External backends, run as extra trials.
+    #[serde(default)]
+    pub backends: Vec<BackendSpec>,
+}
+
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct BackendSpec {
+    /// The name in trial names: lowercase letters, digits, `-` and `_`.
+    pub name: String,
+    /// A command line run by `sh -c`, or a list of program and arguments run directly.
+    pub command: CommandSpec,
+    /// The profile family the backend implements; its handshake must claim the same.
+    #[serde(default)]
+    pub profile: Option<String>,
+    /// Seconds to wait for one case's answer.
+    #[serde(default)]
+    pub timeout: Option<f64>,
+    /// Seconds to wait for the backend to start and answer `hello`.
+    #[serde(default)]
+    pub startup_timeout: Option<f64>,
+    /// The backend's known-differences file.
+    #[serde(default)]
+    pub known_differences: Option<PathBuf>,
+    /// Files the backend needs (an interpreter in a virtual environment, a built binary). When
+    /// one is missing the backend is skipped with a message, or is an error when
+    /// `PLC_CONFORMANCE_REQUIRE_BACKENDS` is set.
+    #[serde(default)]
+    pub requires: Vec<PathBuf>,
+    /// Cases per `run` message.
+    #[serde(default)]
+    pub batch: Option<usize>,
+}
+
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(untagged)]
+pub enum CommandSpec {
+    Shell(String),
+    Exec(Vec<String>),
+}
