@@ -38,7 +38,15 @@ use crate::runner::{run_one, Paths, Project};
 /// backends see as `$PLC_CONFORMANCE`.
 pub fn main(root: &Path, binary: &Path, extra: Vec<Arc<dyn Backend>>) -> ExitCode {
     let args = Arguments::from_args();
-    let mut project = match Project::load(&Paths::under(root)) {
+    let mut paths = Paths::under(root);
+    // A corpus cut down to one trial's file need not hold every case a known-differences
+    // file names.
+    let mut whole_corpus = true;
+    if let Some(files) = exact_files(&args, &paths) {
+        paths.vectors = files;
+        whole_corpus = false;
+    }
+    let mut project = match Project::load(&paths) {
         Ok(p) => p,
         Err(errors) => {
             eprintln!("the corpus does not load:\n{errors}");
@@ -65,7 +73,8 @@ pub fn main(root: &Path, binary: &Path, extra: Vec<Arc<dyn Backend>>) -> ExitCod
     let mut backends = project.backends.clone();
     backends.extend(extra);
     let mut lazies: Vec<Arc<LazyStart>> = Vec::new();
-    for c in configured.configured {
+    // Backends run on request only (self-checks of the harness) have tests of their own.
+    for c in configured.configured.into_iter().filter(|c| !c.on_request) {
         let name = c.settings.name.clone();
         match c.settings.profile.clone() {
             // A backend whose profile is declared is planned without starting it.
@@ -79,7 +88,7 @@ pub fn main(root: &Path, binary: &Path, extra: Vec<Arc<dyn Backend>>) -> ExitCod
                     c.settings.known_differences.as_ref(),
                     project.profiles.get(&profile),
                 ) {
-                    match load_known(known, p, &project.corpus, true) {
+                    match load_known(known, p, &project.corpus, whole_corpus) {
                         Ok(k) => {
                             project.known.insert(name.clone(), k);
                         }
@@ -103,7 +112,7 @@ pub fn main(root: &Path, binary: &Path, extra: Vec<Arc<dyn Backend>>) -> ExitCod
                 }));
                 lazies.push(lazy);
             }
-            None => match project.add_external(c.settings, true) {
+            None => match project.add_external(c.settings, whole_corpus) {
                 Ok(b) => backends.push(b),
                 Err(e) => {
                     let message = e.to_string();
@@ -128,6 +137,36 @@ pub fn main(root: &Path, binary: &Path, extra: Vec<Arc<dyn Backend>>) -> ExitCod
     drop(lazies);
     drop(project);
     conclusion.exit_code()
+}
+
+/// With `--exact NAME` (how nextest runs each trial in a process of its own), only the vector
+/// files that can hold the trial's case are read: the case id is the name's last part but the
+/// variant, and a file holds it if its text has `id: CASE`. `None` reads everything (no exact
+/// name, or no file matches, so that libtest reports the name as unknown as usual).
+fn exact_files(args: &Arguments, paths: &Paths) -> Option<Vec<std::path::PathBuf>> {
+    if !args.exact {
+        return None;
+    }
+    let name = args.filter.as_deref()?;
+    let parts: Vec<&str> = name.split("::").collect();
+    let case = parts.len().checked_sub(2).and_then(|i| parts.get(i))?;
+    let needle = format!("id: {case}");
+    let mut files = Vec::new();
+    for dir in &paths.vectors {
+        for file in crate::load::yaml_files(dir).ok()? {
+            let text = std::fs::read_to_string(&file).ok()?;
+            let holds = text.match_indices(&needle).any(|(at, _)| {
+                text[at + needle.len()..]
+                    .chars()
+                    .next()
+                    .is_none_or(|c| c.is_whitespace() || c == ',' || c == '}')
+            });
+            if holds {
+                files.push(file);
+            }
+        }
+    }
+    (!files.is_empty()).then_some(files)
 }
 
 /// One planned trial as a libtest trial; `lazy` starts its backend when the backend is only

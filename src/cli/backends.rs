@@ -104,7 +104,7 @@ fn select(
     };
     if args.backends.is_empty() {
         let mut chosen = project.backends.clone();
-        for c in &file.configured {
+        for c in file.configured.iter().filter(|c| !c.on_request) {
             chosen.push(start(project, c.settings.clone())?);
         }
         return Ok(chosen);

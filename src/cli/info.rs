@@ -67,12 +67,13 @@ pub fn list(cli: &Cli, filter: Option<&str>) -> u8 {
     }
     for c in &file.configured {
         println!(
-            "  {:<width$} profile {:<18} external, configured at {} (`{}`)",
+            "  {:<width$} profile {:<18} external{}, configured at {} (`{}`)",
             c.settings.name,
             c.settings
                 .profile
                 .as_deref()
                 .unwrap_or("(from its handshake)"),
+            if c.on_request { " (on request)" } else { "" },
             c.location,
             c.settings.launch
         );

@@ -167,6 +167,7 @@ fn read_project(file: &Path, plc_conformance: &Path) -> Result<Vec<Configured>, 
         settings.env = vec![(ENV_SELF.into(), plc_conformance.display().to_string())];
         settings.batch = b.batch.unwrap_or(DEFAULT_BATCH).max(1);
         out.push(Configured {
+            on_request: b.on_request,
             settings,
             requires: b.requires.into_iter().map(|p| dir.join(p)).collect(),
             location,

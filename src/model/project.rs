@@ -81,6 +81,8 @@ pub struct Configured {
     pub settings: ExternalSettings,
     pub requires: Vec<PathBuf>,
     pub location: Location,
+    /// Run only when named with `--backend`.
+    pub on_request: bool,
 }
 
 impl Configured {

@@ -41,6 +41,11 @@ pub struct BackendSpec {
     /// Cases per `run` message.
     #[serde(default)]
     pub batch: Option<usize>,
+    /// Run only when named with `--backend`: for a check of the harness itself (the built-in
+    /// models served through the protocol) rather than an implementation under test. Such a
+    /// backend is in no `run`, `diff` or `cargo test` trial unless asked for.
+    #[serde(default)]
+    pub on_request: bool,
 }
 
 #[derive(Debug, Deserialize, JsonSchema)]
