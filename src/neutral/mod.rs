@@ -25,7 +25,7 @@ use crate::model::{Basis, Citation, Location};
 )]
 #[serde(rename_all = "kebab-case")]
 pub enum Operation {
-    /// Hex ASCII text -> binary value (HABIN, FX5 HEX, ATOH).
+    /// Hex ASCII text -> binary value (HABIN, FX5 HEXA, ATOH).
     HexToValue,
     /// Binary value -> hex ASCII text (BINHA, FX5 ASCI, HTOA).
     ValueToHex,
