@@ -394,7 +394,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                 }
             })
         }),
-        Mutant::new("hexa-odd-count-reads-the-whole-last-word", base, |req, b| {
+        Mutant::new("hexa-odd-count-reads-whole-last-word", base, |req, b| {
             let Some(n) = n_of(req) else {
                 return b.execute(req);
             };
