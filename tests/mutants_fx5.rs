@@ -1,4 +1,4 @@
-//! Teeth for the FX5 corpus: plausible wrong implementations of ASCI(P) and HEX(P), each the
+//! Teeth for the FX5 corpus: plausible wrong implementations of ASCI(P) and HEXA(P), each the
 //! reference model with one behaviour changed, and a check that some vector catches each one.
 //! A survivor means the corpus has a gap: add the vector that tells it apart from the manual.
 
@@ -234,7 +234,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                 b.execute(req)
             }
         }),
-        Mutant::new("hex-ignores-sm8161", base, |req, b| {
+        Mutant::new("hexa-ignores-sm8161", base, |req, b| {
             if is_asci(req) {
                 b.execute(req)
             } else {
@@ -311,7 +311,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                 _ => Ok(answer),
             }
         }),
-        Mutant::new("hex-left-justified-like-iqr", base, |req, b| {
+        Mutant::new("hexa-left-justified-like-iqr", base, |req, b| {
             reshape(req, b, |req, o| {
                 let (Some(s), Some(d), Some(n)) = (device(req, "s"), device(req, "d"), n_of(req))
                 else {
@@ -333,7 +333,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                 Outcome { writes, ..o }
             })
         }),
-        Mutant::new("hex-accepts-lowercase", base, |req, b| {
+        Mutant::new("hexa-accepts-lowercase", base, |req, b| {
             if is_asci(req) {
                 return b.execute(req);
             }
@@ -353,7 +353,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                 ..*req
             })
         }),
-        Mutant::new("hex-keeps-old-high-digits", base, |req, b| {
+        Mutant::new("hexa-keeps-old-high-digits", base, |req, b| {
             reshape(req, b, |req, mut o| {
                 let Some(n) = n_of(req) else { return o };
                 if is_asci(req) || o.error.is_some() || n % 4 == 0 {
@@ -366,7 +366,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                 o
             })
         }),
-        Mutant::new("hex-clears-the-next-word", base, |req, b| {
+        Mutant::new("hexa-clears-the-next-word", base, |req, b| {
             reshape(req, b, |req, mut o| {
                 let (Some(d), Some(n)) = (device(req, "d"), n_of(req)) else {
                     return o;
@@ -379,7 +379,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                 o
             })
         }),
-        Mutant::new("hex-8bit-checks-the-high-byte", base, |req, b| {
+        Mutant::new("hexa-8bit-checks-the-high-byte", base, |req, b| {
             reshape(req, b, |req, o| {
                 let (Some(s), Some(n)) = (device(req, "s"), n_of(req)) else {
                     return o;
@@ -394,7 +394,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                 }
             })
         }),
-        Mutant::new("hex-odd-count-reads-the-whole-last-word", base, |req, b| {
+        Mutant::new("hexa-odd-count-reads-whole-last-word", base, |req, b| {
             let Some(n) = n_of(req) else {
                 return b.execute(req);
             };
@@ -429,7 +429,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                 _ => o,
             })
         }),
-        Mutant::new("hex-invalid-character-as-3405h", base, |req, b| {
+        Mutant::new("hexa-invalid-character-as-3405h", base, |req, b| {
             reshape(req, b, |req, o| match code(&o) {
                 Some(fx5::ERR_INVALID_DATA) => Outcome::error(req.error(fx5::ERR_COUNT)),
                 _ => o,

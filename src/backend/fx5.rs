@@ -1,17 +1,17 @@
-//! Reference model of MELSEC iQ-F FX5 ASCI(P) and HEX(P).
+//! Reference model of MELSEC iQ-F FX5 ASCI(P) and HEXA(P).
 //!
-//! Rules and their evidence are in `semantics.md` sections 0, 3, 4 and 7; the corpus authors'
-//! summary is `vectors/mitsubishi-fx5/README.md`. ASCI writes the lowest n hex digits of a
-//! multi-word source, most significant first; HEX reads n characters and stores the number they
-//! spell right-justified. SM8161 chooses two characters per word (16-bit mode) or one (8-bit
-//! mode); SM701 decides whether ASCI stores a NULL after the last character.
+//! Rules and their evidence are in `docs/semantics.md#fx5-asci` and `docs/semantics.md#fx5-hexa`;
+//! the corpus authors' summary is `vectors/mitsubishi-fx5/README.md`. ASCI writes the lowest n
+//! hex digits of a multi-word source, most significant first; HEXA reads n characters and
+//! stores the number they spell right-justified. SM8161 chooses two characters per word (16-bit
+//! mode) or one (8-bit mode); SM701 decides whether ASCI stores a NULL after the last character.
 //!
-//! The FX HEX is not the MELSEC Q/iQ-R instruction of the same name, which left-justifies: the
-//! two share a mnemonic and nothing else, so nothing here is shared with [`super::iqr`].
+//! HEXA descends from the FX3 HEX (FNC 83), which is not the MELSEC Q/iQ-R instruction named
+//! HEX: that one left-justifies, so nothing here is shared with [`super::iqr`].
 //!
 //! Checks run in this order, and each stops the instruction before anything is written:
 //! n (3405H), because the extent of (s) and (d) depends on it; then the words (s) and (d) occupy
-//! (2820H); then, for HEX, the characters (3401H). The manual does not fix the order between
+//! (2820H); then, for HEXA, the characters (3401H). The manual does not fix the order between
 //! the codes; vectors that break two rules at once are `unspecified`.
 
 use super::reference::{Model, Stop};
@@ -27,8 +27,8 @@ pub const PROFILE: &str = "mitsubishi-fx5";
 
 /// A device past the end of its range (ASCI(P) error table).
 pub const ERR_DEVICE_RANGE: u16 = 0x2820;
-/// A character that is not a hex digit. The FX5 code for HEX is not confirmed: 3401H is the
-/// family's "invalid data" code (semantics.md section 4, inferred).
+/// A character that is not a hex digit. The FX5 code for HEXA is not confirmed: 3401H is the
+/// family's "invalid data" code (`docs/semantics.md#fx5-hexa-rules`, inferred).
 pub const ERR_INVALID_DATA: u16 = 0x3401;
 /// n outside 1 to 32767 (ASCI(P) error table, erratum 2: "(s)" there means (n)).
 pub const ERR_COUNT: u16 = 0x3405;
@@ -137,7 +137,7 @@ pub fn asci_stores(chars: &[u8], packing: Packing, terminate: bool) -> Vec<Store
     }
 }
 
-/// The `n` characters HEX reads from (s) on: low then high byte of each word in 16-bit mode,
+/// The `n` characters HEXA reads from (s) on: low then high byte of each word in 16-bit mode,
 /// the low byte of each word in 8-bit mode (the high byte is not read).
 pub fn hex_chars(memory: &Image, s: &Device, n: u32, packing: Packing) -> Vec<u8> {
     (0..n)
@@ -148,7 +148,7 @@ pub fn hex_chars(memory: &Image, s: &Device, n: u32, packing: Packing) -> Vec<u8
         .collect()
 }
 
-/// The words HEX writes at (d): four digits per word.
+/// The words HEXA writes at (d): four digits per word.
 pub fn hex_destination_words(n: u32) -> u32 {
     n.div_ceil(4)
 }
@@ -184,7 +184,7 @@ enum Op {
 fn op(instruction: &str) -> Option<Op> {
     match instruction {
         "ASCI" | "ASCIP" => Some(Op::Asci),
-        "HEX" | "HEXP" => Some(Op::Hex),
+        "HEXA" | "HEXAP" => Some(Op::Hex),
         _ => None,
     }
 }
@@ -271,7 +271,7 @@ fn asci(req: &Request<'_>) -> Result<Outcome, Stop> {
     })
 }
 
-/// HEX: n ASCII characters at (s) -> hex code at (d), right-justified.
+/// HEXA: n ASCII characters at (s) -> hex code at (d), right-justified.
 fn hex(req: &Request<'_>) -> Result<Outcome, Stop> {
     let n = count(req)?;
     let packing = packing(req);
@@ -384,18 +384,18 @@ mod tests {
             for x in 0..=u16::MAX {
                 let asci = rig.run("ASCI", &flags, 4, &image([(100, x)], Fill::A));
                 assert_eq!(asci.error, None, "ASCI {x:04X}H");
-                // The characters, moved to the source of HEX.
+                // The characters, moved to the source of HEXA.
                 let text = asci
                     .writes
                     .iter()
                     .map(|(dev, w)| (dev.index - 100, *w))
                     .collect::<Vec<_>>();
-                let back = rig.run("HEX", &flags, 4, &image(text, Fill::A));
-                assert_eq!(back.error, None, "HEX of ASCI {x:04X}H");
+                let back = rig.run("HEXA", &flags, 4, &image(text, Fill::A));
+                assert_eq!(back.error, None, "HEXA of ASCI {x:04X}H");
                 assert_eq!(
                     back.writes,
                     BTreeMap::from([(d(200), x)]),
-                    "HEX(ASCI({x:04X}H)) with SM8161 {sm8161}"
+                    "HEXA(ASCI({x:04X}H)) with SM8161 {sm8161}"
                 );
             }
         }
@@ -514,7 +514,7 @@ mod tests {
             let out = rig.run("ASCI", &[], n, &memory);
             assert_eq!(out.error, Some(ErrorSignal::Code(ERR_COUNT)), "n={n}");
             assert!(out.writes.is_empty(), "n={n}");
-            let out = rig.run("HEX", &[], n, &memory);
+            let out = rig.run("HEXA", &[], n, &memory);
             assert_eq!(out.error, Some(ErrorSignal::Code(ERR_COUNT)), "n={n}");
         }
     }

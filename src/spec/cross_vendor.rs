@@ -14,7 +14,7 @@ use super::vectors::{Basis, ScalarSpec};
 )]
 #[serde(rename_all = "kebab-case")]
 pub enum Operation {
-    /// Hex ASCII text -> binary value (HABIN, FX5 HEX, ATOH).
+    /// Hex ASCII text -> binary value (HABIN, FX5 HEXA, ATOH).
     HexToValue,
     /// Binary value -> hex ASCII text (BINHA, FX5 ASCI, HTOA).
     ValueToHex,
