@@ -1,6 +1,7 @@
 //! Reference model of IDEC MicroSmart FC4A ATOH (ASCII to hex) and HTOA (hex to ASCII).
 //!
-//! Rules and their evidence are in `semantics.md` sections 0, 5 and 6: one character per word,
+//! Rules and their evidence are in `docs/semantics.md#layout`, `docs/semantics.md#fc4a-atoh` and
+//! `docs/semantics.md#fc4a-htoa`: one character per word,
 //! and the whole word is the character (30H-39H, 41H-46H), so a word with a non-zero upper byte
 //! is not a digit; the digit count S2 is 1-4, given as a constant or read from a word operand;
 //! every error is a user program execution error, which a program sees only as M8004 turning

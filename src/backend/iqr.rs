@@ -1,7 +1,7 @@
 //! Reference model of MELSEC iQ-R HABIN(P)/DHABIN(P) and BINHA(P)/DBINHA(P).
 //!
-//! Rules and their evidence are in `semantics.md` sections 1-2: hex ASCII stored two characters
-//! per word, low byte first; SM705 switches between fixed digits and 00H-terminated text; SM701
+//! Rules and their evidence are in `docs/semantics.md#iqr-habin` and
+//! `docs/semantics.md#iqr-binha`: hex ASCII stored two characters per word, low byte first; SM705 switches between fixed digits and 00H-terminated text; SM701
 //! decides whether BINHA writes a terminator word after a full-length result. Device ranges,
 //! flag support per firmware and the error signalling come from the profile.
 
