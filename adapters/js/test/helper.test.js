@@ -6,6 +6,8 @@ const assert = require('node:assert/strict');
 const path = require('node:path');
 const { spawn } = require('node:child_process');
 const { PassThrough } = require('node:stream');
+const fs = require('node:fs');
+const os = require('node:os');
 
 const helper = require('..');
 
@@ -251,4 +253,24 @@ test('serveCodec refuses what the protocol cannot say', () => {
   assert.throws(() => helper.serveCodec({ name: 'x', version: '1', decode: () => 0, width: 24 }), TypeError);
   assert.throws(() => helper.serveCodec({ name: 'x', version: '1', decode: () => 0, decodeDigits: [0] }), TypeError);
   assert.throws(() => helper.serveCodec({ name: 'x', version: '1', decode: () => 0, errors: { Error: 'wrong' } }), TypeError);
+});
+
+test('privateFunctions reaches a module\'s unexported functions without changing the module', () => {
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'plc-private-'));
+  const file = path.join(dir, 'lib.js');
+  fs.writeFileSync(file, [
+    "var util = require('util');",
+    'module.exports = function Client() {};',
+    'function hidden(x) { return util.format("%s!", x); }',
+    'var notAFunction = 1;',
+  ].join('\n'));
+  try {
+    const { hidden } = helper.privateFunctions(file, ['hidden']);
+    assert.equal(hidden('ok'), 'ok!');
+    assert.equal(typeof require(file), 'function'); // the module itself is as it was
+    assert.throws(() => helper.privateFunctions(file, ['missing']), /no top-level function missing/);
+    assert.throws(() => helper.privateFunctions(file, ['notAFunction']), /no top-level function notAFunction/);
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
 });
