@@ -12,20 +12,13 @@ const { serveCodec, privateFunctions, CodecError } = require('plc-conformance-ad
 const { binarize, asciize } = privateFunctions(require.resolve('mcprotocol'), ['binarize', 'asciize']);
 
 serveCodec({
-  name: 'mcprotocol',
-  version: require('mcprotocol/package.json').version,
-  decodeDigits: [4],
-  encodeDigits: [4],
+  name: 'mcprotocol', version: require('mcprotocol/package.json').version,
+  decodeDigits: [4], encodeDigits: [4],
   decode(text, digits) {
     const bytes = binarize(text.subarray(0, digits)); // undefined: "Failed ASCII conversion"
     if (bytes === undefined) throw new CodecError('invalid-digit');
-    return bytes.readUInt16BE(0);
+    return bytes.readUInt16BE(0); // one byte (a text that ends early): RangeError
   },
-  encode(value) {
-    const word = Buffer.alloc(2);
-    word.writeUInt16BE(value);
-    return asciize(word);
-  },
-  // A text that ends inside the field leaves one byte: readUInt16BE cannot read a word.
+  encode: (value) => asciize(Buffer.from([value >> 8, value & 0xff])),
   errors: { RangeError: 'invalid-digit' },
 });
