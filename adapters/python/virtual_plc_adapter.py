@@ -20,7 +20,7 @@ at shutdown. Per case:
 - BINHA(P): an ASCII batch read (0401) of (s) returns the server's 4 characters, which are
   stored two per word from (d) (binary 1401), then 0000H unless SM701 is on. DBINHA(P): an
   ASCII random read (0403) of (s) as a double word. A constant (s) is first written to R0;
-- the window is read back in binary (0401) and answered as memory after.
+- the window is read back in binary (0401); the words that changed are the answer.
 
 Server end codes: C05CH (request data error: a field that is not hex) answers 3401H; C056H
 (address out of range) answers 2820H, so device range checks are the server's. Any other end
