@@ -1,10 +1,24 @@
-"""Turn a Python function into a plc-conformance external backend.
+"""Turn Python functions into a plc-conformance external backend.
 
 The harness starts the adapter as a child process and speaks the JSON-lines protocol of
-docs/protocol.md (version 1) on its stdin and stdout. This module does the protocol; the adapter
-writes one function that executes one case:
+docs/protocol.md on its stdin and stdout. This module does the protocol; the adapter supplies
+the conversion, at one of two levels.
+
+Codec level (protocol version 2): two functions, text to value and value to text. The harness
+runs the cross-vendor corpus against them directly, with no memory, devices or fill:
 
     import plc_adapter
+    import mylib
+
+    plc_adapter.serve_codec(
+        decode=lambda text, digits: mylib.parse_hex(text),       # bytes -> int
+        encode=lambda value, digits: mylib.format_hex(value, digits),  # int -> bytes or str
+        name="mylib", version="1.2.0",
+        decode_digits=[4], encode_digits=[4], width=16,
+        errors={mylib.BadDigit: "invalid-digit"})
+
+Instruction level (protocol version 1 or 2): one function that executes one case of a vendor's
+instruction on a CPU's memory:
 
     def run(case):
         s, d = case.device("s"), case.device("d")
@@ -13,25 +27,65 @@ writes one function that executes one case:
     plc_adapter.serve(run, name="my-emulator", version="1.0", profile="mitsubishi-iqr",
                       instructions=["INC"], flags={"SM705": [False]})
 
-Raise plc_adapter.Unsupported("why") for a case the function cannot execute; any other
-exception ends the process with its traceback on stderr, which the harness shows with the case
-(as "crashed") before starting the adapter again for the next one.
+Raise plc_adapter.Unsupported("why") for a case the function cannot execute, and
+plc_adapter.CodecError("invalid-count") for an error a codec signals itself; any other
+exception (one that `errors` does not map) ends the process with its traceback on stderr, which
+the harness shows with the case (as "crashed") before starting the adapter again for the next
+one.
 
-Standard library only, Python 3.8 or later. Nothing may be printed to stdout except through
-this module: stdout is the protocol channel (use stderr for logs).
+Standard library only, Python 3.8 or later. stdout is the protocol channel: while serving, the
+module points sys.stdout at stderr, so a stray print() in a library goes to the log rather than
+into the protocol.
 """
 
 import json
 import sys
 from collections import namedtuple
 
-PROTOCOL_VERSION = 1
+__version__ = "0.2.0"
 
-__all__ = ["Case", "Device", "Unsupported", "fill_word", "serve", "PROTOCOL_VERSION"]
+# The protocol versions this module speaks: 1 (instruction level) and 2 (adds codec level).
+PROTOCOL_VERSIONS = (1, 2)
+PROTOCOL_VERSION = 2
+
+# The error classes a codec answers with (docs/protocol.md, "Version 2").
+ERROR_CLASSES = ("invalid-digit", "invalid-count", "device-range", "error")
+
+# The two codec operations.
+HEX_TO_VALUE = "hex-to-value"
+VALUE_TO_HEX = "value-to-hex"
+
+__all__ = [
+    "Case",
+    "CodecError",
+    "Device",
+    "ERROR_CLASSES",
+    "PROTOCOL_VERSION",
+    "PROTOCOL_VERSIONS",
+    "Unsupported",
+    "fill_word",
+    "serve",
+    "serve_codec",
+]
 
 
 class Unsupported(Exception):
     """The case cannot be executed by this backend (answered as "unsupported")."""
+
+
+class CodecError(Exception):
+    """A codec's refusal of its input, answered as an error of the given class.
+
+    raise CodecError("invalid-digit"): the text holds a character that is not a hex digit;
+    "invalid-count": the digit count is not one the conversion takes; "device-range": the data
+    lies past the end of a device range; "error": an error whose kind the codec does not tell.
+    """
+
+    def __init__(self, error_class, detail=None):
+        if error_class not in ERROR_CLASSES:
+            raise ValueError("error class %r is not one of %s" % (error_class, ", ".join(ERROR_CLASSES)))
+        Exception.__init__(self, error_class if detail is None else "%s: %s" % (error_class, detail))
+        self.error_class = error_class
 
 
 class Device(namedtuple("Device", "code index")):
@@ -61,7 +115,11 @@ _DIGITS = b"0123456789ABCDEF"
 
 
 def fill_word(fill, index):
-    """The word a device holds when the case does not set it (docs/protocol.md, "Fill")."""
+    """The word a device holds when the case does not set it (docs/protocol.md, "Fill").
+
+    index: the device number, or a Device."""
+    if isinstance(index, Device):
+        index = index.index
     i = index % 16
     if fill == "A":
         return 0xA5A5 ^ ((i % 6) * 0x0101)
@@ -94,7 +152,7 @@ class Case:
         """The flag as this variant's CPU sees it: a flag the variant does not implement holds
         the value it behaves as, whatever the case set."""
         if name in self.ignored_flags:
-            return self.ignored_flags[name]
+            return bool(self.ignored_flags[name])
         return bool(self.flags.get(name, False))
 
     def operand(self, name):
@@ -144,45 +202,36 @@ class Case:
         }
 
 
-def serve(run, name, version, profile, instructions, variants=None, flags=None,
-          stdin=None, stdout=None):
-    """Answers the harness until it says shutdown or closes stdin.
+_dumps = json.JSONEncoder(separators=(",", ":")).encode
 
-    run: function(Case) executing one case (see the module documentation).
-    profile: the vendor profile id implemented, e.g. "mitsubishi-iqr".
-    instructions: the instructions implemented; variants: the profile variants (None: all).
-    flags: {flag: [settings implemented]} for flags implemented in one setting only.
-    """
-    stdin = stdin or sys.stdin
-    stdout = stdout or sys.stdout
-    capabilities = {"profile": profile, "instructions": list(instructions)}
-    if variants is not None:
-        capabilities["variants"] = list(variants)
-    if flags:
-        capabilities["flags"] = {k: [bool(v) for v in vs] for k, vs in flags.items()}
-    dumps = json.JSONEncoder(separators=(",", ":")).encode
+
+def _negotiate(message, levels):
+    """The protocol version to answer a harness hello with: the harness's own when this
+    module speaks it, else the highest this module speaks (the harness then refuses)."""
+    asked = message.get("protocol", 1)
+    if asked in levels:
+        return asked
+    sys.stderr.write("plc_adapter: the harness speaks protocol %r; this adapter speaks %s\n"
+                     % (asked, " or ".join(str(v) for v in levels)))
+    return max(levels)
+
+
+def _loop(stdin, stdout, hello, answer):
+    """Reads the harness's messages until shutdown or end of input. hello(message) and
+    answer(request) return the message to send back."""
     for line in stdin:
         if not line.strip():
             continue
         message = json.loads(line)
         kind = message.get("type")
         if kind == "hello":
-            answer = {"type": "hello", "protocol": PROTOCOL_VERSION,
-                      "backend": {"name": name, "version": version},
-                      "capabilities": capabilities}
-            stdout.write(dumps(answer) + "\n")
+            stdout.write(_dumps(hello(message)) + "\n")
         elif kind == "run":
             try:
                 for request in message["cases"]:
-                    case = Case(request)
-                    try:
-                        run(case)
-                        answer = case.answer()
-                    except Unsupported as why:
-                        answer = {"type": "unsupported", "id": case.id, "reason": str(why)}
                     # Each answer goes out at once: the harness's time limit for a case runs
                     # from the previous answer, and a buffered answer looks like a hang.
-                    stdout.write(dumps(answer) + "\n")
+                    stdout.write(_dumps(answer(request)) + "\n")
                     stdout.flush()
             finally:
                 # The answers before a failing case reach the harness, so that it blames the
@@ -194,3 +243,157 @@ def serve(run, name, version, profile, instructions, variants=None, flags=None,
         else:
             raise ValueError("unknown message type %r" % (kind,))
         stdout.flush()
+
+
+def _serving(loop, stdin, stdout):
+    """Runs loop(stdin, stdout) with sys.stdout pointed at stderr (when serving the process's
+    own stdout), so that nothing but answers reaches the protocol channel."""
+    stdin = stdin or sys.stdin
+    if stdout is not None:
+        return loop(stdin, stdout)
+    channel = sys.stdout
+    sys.stdout = sys.stderr
+    try:
+        return loop(stdin, channel)
+    finally:
+        sys.stdout = channel
+
+
+def serve(run, name, version, profile, instructions, variants=None, flags=None,
+          stdin=None, stdout=None):
+    """Answers the harness as an instruction-level backend until it says shutdown or closes
+    stdin. Speaks protocol version 1 or 2, whichever the harness asks for.
+
+    run: function(Case) executing one case (see the module documentation).
+    profile: the vendor profile id implemented, e.g. "mitsubishi-iqr".
+    instructions: the instructions implemented; variants: the profile variants (None: all).
+    flags: {flag: [settings implemented]} for flags implemented in one setting only.
+    """
+    capabilities = {"profile": profile, "instructions": list(instructions)}
+    if variants is not None:
+        capabilities["variants"] = list(variants)
+    if flags:
+        capabilities["flags"] = {k: [bool(v) for v in vs] for k, vs in flags.items()}
+
+    def hello(message):
+        return {"type": "hello", "protocol": _negotiate(message, PROTOCOL_VERSIONS),
+                "backend": {"name": name, "version": version},
+                "capabilities": capabilities}
+
+    def answer(request):
+        if "instruction" not in request:
+            return {"type": "unsupported", "id": request["id"],
+                    "reason": "%s is an instruction-level backend" % name}
+        case = Case(request)
+        try:
+            run(case)
+        except Unsupported as why:
+            return {"type": "unsupported", "id": case.id, "reason": str(why)}
+        return case.answer()
+
+    _serving(lambda i, o: _loop(i, o, hello, answer), stdin, stdout)
+
+
+def _codec_capability(digits, width):
+    if width not in (16, 32):
+        raise ValueError("width must be 16 or 32, not %r" % (width,))
+    capability = {"width": width}
+    if digits is not None:
+        digits = sorted(set(int(d) for d in digits))
+        if not digits or not all(1 <= d <= 8 for d in digits):
+            raise ValueError("digits must be counts from 1 to 8, not %r" % (digits,))
+        capability["digits"] = digits
+    return capability
+
+
+def _error_class(error, errors):
+    """The class `errors` maps the exception to (its most specific listed class), or None."""
+    if isinstance(error, CodecError):
+        return error.error_class
+    for klass in type(error).__mro__:
+        if klass in errors:
+            return errors[klass]
+    return None
+
+
+def _text_bytes(text):
+    if isinstance(text, str):
+        return text.encode("utf-8")
+    if isinstance(text, (bytes, bytearray, memoryview)):
+        return bytes(text)
+    if isinstance(text, (list, tuple)) and all(isinstance(b, int) and 0 <= b <= 255 for b in text):
+        return bytes(text)
+    raise TypeError("encode must return bytes or str, not %s" % type(text).__name__)
+
+
+def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits=None,
+                encode_digits=None, width=16, errors=None, stdin=None, stdout=None):
+    """Answers the harness as a codec-level backend (protocol version 2) until it says shutdown
+    or closes stdin.
+
+    decode: function(text: bytes, digits: int) -> int, for hex-to-value (None: not
+      implemented). text is the characters to convert, any byte values.
+    encode: function(value: int, digits: int) -> bytes or str, for value-to-hex (None: not
+      implemented). The harness reads the text up to its first 00H.
+    decode_digits, encode_digits: the digit counts each implements (None: any count 1-8);
+      cases with another count are skipped with that reason.
+    width: the value width in bits, 16 or 32: cases whose value does not fit are skipped.
+    errors: {exception class: error class}, e.g. {ValueError: "invalid-digit"}: how the
+      library's exceptions answer. A subclass maps like its nearest listed base class.
+    """
+    if name is None or version is None:
+        raise TypeError("serve_codec needs name= and version=")
+    if decode is None and encode is None:
+        raise TypeError("serve_codec needs decode=, encode= or both")
+    errors = dict(errors or {})
+    for klass, error_class in errors.items():
+        if not (isinstance(klass, type) and issubclass(klass, BaseException)):
+            raise TypeError("errors: %r is not an exception class" % (klass,))
+        if error_class not in ERROR_CLASSES:
+            raise ValueError("errors: %r is not one of %s" % (error_class, ", ".join(ERROR_CLASSES)))
+    codec = {}
+    if decode is not None:
+        codec[HEX_TO_VALUE] = _codec_capability(decode_digits, width)
+    if encode is not None:
+        codec[VALUE_TO_HEX] = _codec_capability(encode_digits, width)
+
+    def hello(message):
+        if message.get("protocol", 1) < 2:
+            sys.stderr.write("plc_adapter: %s is a codec-level backend, which needs protocol "
+                             "version 2; the harness speaks %r\n" % (name, message.get("protocol")))
+        return {"type": "hello", "protocol": 2,
+                "backend": {"name": name, "version": version},
+                "capabilities": {"codec": codec}}
+
+    def answer(request):
+        ident = request["id"]
+        operation = request.get("operation")
+        digits = request.get("digits")
+        try:
+            declared = codec.get(operation)
+            if declared is not None and digits not in declared.get("digits", range(1, 9)):
+                # Outside the declared capabilities: the harness skips such cases, and the
+                # library is never called with a count it does not take.
+                raise Unsupported("%s with %s digits is not implemented" % (operation, digits))
+            if operation == VALUE_TO_HEX and declared is not None \
+                    and not 0 <= request["value"] < 1 << declared["width"]:
+                raise Unsupported("%s is wider than %d bits" % (request["value"], declared["width"]))
+            if operation == HEX_TO_VALUE and decode is not None:
+                value = decode(bytes(request["text"]), digits)
+                if isinstance(value, bool) or not isinstance(value, int):
+                    raise TypeError("decode must return an int, not %s" % type(value).__name__)
+                return {"type": "result", "id": ident, "value": value}
+            if operation == VALUE_TO_HEX and encode is not None:
+                text = _text_bytes(encode(request["value"], digits))
+                return {"type": "result", "id": ident, "text": list(text)}
+            what = operation if operation is not None else "instruction %s" % request.get("instruction")
+            raise Unsupported("%s is not implemented by %s" % (what, name))
+        except Unsupported as why:
+            return {"type": "unsupported", "id": ident, "reason": str(why)}
+        except Exception as error:  # noqa: BLE001 - mapped, or re-raised to crash
+            error_class = _error_class(error, errors)
+            if error_class is None:
+                raise
+            return {"type": "result", "id": ident, "error": error_class}
+
+    _serving(lambda i, o: _loop(i, o, hello, answer), stdin, stdout)

@@ -1,0 +1,117 @@
+// Types of plc-conformance-adapter (index.js). The protocol: docs/protocol.md.
+/// <reference types="node" />
+import type { Readable, Writable } from 'node:stream';
+
+export const VERSION: string;
+/** The newest protocol version this module speaks. */
+export const PROTOCOL_VERSION: 2;
+export const PROTOCOL_VERSIONS: readonly [1, 2];
+export type ErrorClass = 'invalid-digit' | 'invalid-count' | 'device-range' | 'error';
+export const ERROR_CLASSES: readonly ErrorClass[];
+
+/** Thrown by an adapter for a case it cannot execute: answered as "unsupported". */
+export class Unsupported extends Error {
+  constructor(reason: string);
+}
+
+/** Thrown by a codec to answer an error of the given class. */
+export class CodecError extends Error {
+  constructor(errorClass: ErrorClass, detail?: unknown);
+  readonly errorClass: ErrorClass;
+}
+
+/** A word device such as D100. */
+export class Device {
+  constructor(code: string, index: number);
+  static parse(text: string): Device;
+  readonly code: string;
+  readonly index: number;
+  /** The device n words after this one, like (s)+n in the manuals. */
+  offset(n: number): Device;
+  toString(): string;
+}
+
+/** The word a device holds when the case does not set it. */
+export function fillWord(fill: 'A' | 'B', device: Device | string | number): number;
+
+/** One case of an instruction-level run. */
+export class Case {
+  readonly id: number;
+  readonly case: string;
+  readonly instruction: string;
+  readonly profile: string;
+  readonly variant: string;
+  readonly flags: Record<string, boolean>;
+  readonly ignoredFlags: Record<string, boolean>;
+  readonly operands: Record<string, string | number>;
+  readonly fill: 'A' | 'B';
+  /** The window: "D100" -> word. */
+  readonly memory: Map<string, number>;
+  readonly writes: Map<string, number>;
+  error: { code: number } | { flag: string } | null;
+  /** The flag as this variant's CPU sees it (ignored_flags wins). */
+  flag(name: string): boolean;
+  /** A device operand as a Device, a constant as a number. */
+  operand(name: string): Device | number;
+  /** An operand that must be a device (else Unsupported). */
+  device(name: string): Device;
+  /** The word: its latest write, else the window, else the fill. */
+  read(device: Device | string): number;
+  /** Whether the word is in the window (exists on the variant, near an operand). */
+  exists(device: Device | string): boolean;
+  write(device: Device | string, value: number): void;
+  fail(error: { code: number } | { flag: string }): void;
+}
+
+/** Streams and exit behaviour, for running a backend in process (tests). */
+export interface LoopOptions {
+  input?: Readable;
+  output?: Writable;
+  stderr?: Writable;
+  /** Exit the process at shutdown (default: true when serving the process's own stdout). */
+  exit?: boolean;
+}
+
+export interface InstructionOptions extends LoopOptions {
+  name: string;
+  version: string;
+  /** The vendor profile implemented, e.g. "mitsubishi-iqr". */
+  profile: string;
+  instructions: string[];
+  /** The profile variants implemented (all when absent). */
+  variants?: string[];
+  /** For a flag implemented in one setting only, the settings implemented. */
+  flags?: Record<string, boolean[]>;
+}
+
+export function serve(run: (c: Case) => void | Promise<void>, options: InstructionOptions): Promise<number>;
+
+export type ErrorMap =
+  | Map<new (...args: any[]) => Error, ErrorClass>
+  | Array<[new (...args: any[]) => Error, ErrorClass]>
+  | Record<string, ErrorClass>;
+
+export interface CodecOptions extends LoopOptions {
+  /** hex-to-value: the characters (any byte values) and the digit count -> the value. */
+  decode?: (text: Buffer, digits: number) => number | bigint | Promise<number | bigint>;
+  /** value-to-hex: the value and the digit count -> the text (read up to its first 00H). */
+  encode?: (value: number, digits: number) => Uint8Array | number[] | string | Promise<Uint8Array | number[] | string>;
+  name: string;
+  version: string;
+  /** The digit counts decode implements (any count 1-8 when absent). */
+  decodeDigits?: number[];
+  /** The digit counts encode implements (any count 1-8 when absent). */
+  encodeDigits?: number[];
+  /** The value width in bits (default 16). */
+  width?: 16 | 32;
+  /** How the library's exceptions answer: by constructor, or by error name. */
+  errors?: ErrorMap;
+}
+
+export function serveCodec(options: CodecOptions): Promise<number>;
+
+/**
+ * The named top-level functions of a CommonJS module file, exported or not, from a separate
+ * copy of its source (the package is not changed). file: e.g. require.resolve('mcprotocol').
+ */
+export function privateFunctions(file: string, names: string[]): Record<string, (...args: any[]) => any>;

@@ -1,0 +1,435 @@
+'use strict';
+/**
+ * Turn JavaScript functions into a plc-conformance external backend.
+ *
+ * The harness starts the adapter as a child process and speaks the JSON-lines protocol of
+ * docs/protocol.md on its stdin and stdout. This module does the protocol; the adapter supplies
+ * the conversion, at one of two levels:
+ *
+ * - codec level (protocol version 2): `serveCodec({decode, encode, ...})`, text to value and
+ *   value to text, run against the cross-vendor corpus with no memory, devices or fill;
+ * - instruction level (protocol version 1 or 2): `serve(run, {profile, instructions, ...})`,
+ *   one function executing one case of a vendor's instruction on a CPU's memory.
+ *
+ * Throw `new Unsupported('why')` for a case the adapter cannot execute, and
+ * `new CodecError('invalid-count')` for an error a codec signals itself. Any other exception
+ * (one that `errors` does not map) ends the process with its stack on stderr, which the harness
+ * shows with the case ("crashed") before starting the adapter again.
+ *
+ * No dependencies, Node 18 or later. stdout is the protocol channel: while serving, the module
+ * sends console.log and console.info to stderr, so that a library's logging stays out of it.
+ */
+
+const readline = require('node:readline');
+
+const VERSION = '0.2.0';
+/** The protocol versions this module speaks: 1 (instruction level) and 2 (adds codec level). */
+const PROTOCOL_VERSIONS = Object.freeze([1, 2]);
+const PROTOCOL_VERSION = 2;
+/** The error classes a codec answers with. */
+const ERROR_CLASSES = Object.freeze(['invalid-digit', 'invalid-count', 'device-range', 'error']);
+const HEX_TO_VALUE = 'hex-to-value';
+const VALUE_TO_HEX = 'value-to-hex';
+
+/** The case cannot be executed by this backend (answered as "unsupported"). */
+class Unsupported extends Error {
+  constructor(reason) {
+    super(reason);
+    this.name = 'Unsupported';
+  }
+}
+
+/** A codec's refusal of its input, answered as an error of the given class. */
+class CodecError extends Error {
+  constructor(errorClass, detail) {
+    if (!ERROR_CLASSES.includes(errorClass)) {
+      throw new TypeError(`error class ${JSON.stringify(errorClass)} is not one of ${ERROR_CLASSES.join(', ')}`);
+    }
+    super(detail === undefined ? errorClass : `${errorClass}: ${detail}`);
+    this.name = 'CodecError';
+    this.errorClass = errorClass;
+  }
+}
+
+/** A word device such as D100: its letter code and number. */
+class Device {
+  constructor(code, index) {
+    this.code = code;
+    this.index = index;
+    Object.freeze(this);
+  }
+
+  static parse(text) {
+    const m = /^([A-Z]+)([0-9]+)$/.exec(String(text));
+    if (!m) throw new TypeError(`not a device name: ${JSON.stringify(text)}`);
+    return new Device(m[1], Number(m[2]));
+  }
+
+  /** The device n words after this one, like (s)+n in the manuals. */
+  offset(n) {
+    return new Device(this.code, this.index + n);
+  }
+
+  toString() {
+    return `${this.code}${this.index}`;
+  }
+
+  get key() {
+    return `${this.code}${this.index}`;
+  }
+}
+
+function asDevice(device) {
+  return device instanceof Device ? device : Device.parse(device);
+}
+
+const DIGITS = '0123456789ABCDEF';
+
+/**
+ * The word a device holds when the case does not set it (docs/protocol.md, "Memory"): fill A
+ * is 0xA5A5 XOR ((i mod 6) x 0x0101), fill B has "0123456789ABCDEF"[i] in the low byte and
+ * [15 - i] in the high byte, with i = device number mod 16.
+ * @param {'A'|'B'} fill
+ * @param {Device|string|number} device a device, a device name or a device number
+ */
+function fillWord(fill, device) {
+  const index = typeof device === 'number' ? device : asDevice(device).index;
+  const i = index % 16;
+  if (fill === 'A') return 0xa5a5 ^ ((i % 6) * 0x0101);
+  return DIGITS.charCodeAt(i) | (DIGITS.charCodeAt(15 - i) << 8);
+}
+
+/** One case to execute: its setting, the memory before, and what it did. */
+class Case {
+  constructor(message) {
+    this.id = message.id;
+    this.case = message.case;
+    this.instruction = message.instruction;
+    this.profile = message.profile;
+    this.variant = message.variant;
+    this.flags = message.flags || {};
+    this.ignoredFlags = message.ignored_flags || {};
+    this.operands = message.operands || {};
+    this.fill = message.fill || 'A';
+    this.memory = new Map();
+    for (const block of message.memory || []) {
+      const start = Device.parse(block.start);
+      block.words.forEach((word, i) => this.memory.set(start.offset(i).key, word));
+    }
+    this.writes = new Map();
+    this.error = null;
+  }
+
+  /** The flag as this variant's CPU sees it: `ignored_flags` wins over `flags`. */
+  flag(name) {
+    if (Object.prototype.hasOwnProperty.call(this.ignoredFlags, name)) return Boolean(this.ignoredFlags[name]);
+    return Boolean(this.flags[name]);
+  }
+
+  /** A device operand as a Device, a constant as a number. */
+  operand(name) {
+    if (!Object.prototype.hasOwnProperty.call(this.operands, name)) {
+      throw new Unsupported(`${this.instruction} needs operand ${JSON.stringify(name)}`);
+    }
+    const value = this.operands[name];
+    return typeof value === 'string' ? Device.parse(value) : value;
+  }
+
+  /** An operand that must be a device. */
+  device(name) {
+    const value = this.operand(name);
+    if (!(value instanceof Device)) {
+      throw new Unsupported(`operand ${JSON.stringify(name)} as a constant (K${value}) is not implemented`);
+    }
+    return value;
+  }
+
+  /** A word as the instruction reads it: its latest write, else the window, else the fill. */
+  read(device) {
+    const d = asDevice(device);
+    if (this.writes.has(d.key)) return this.writes.get(d.key);
+    if (this.memory.has(d.key)) return this.memory.get(d.key);
+    return fillWord(this.fill, d);
+  }
+
+  /**
+   * Whether the word exists on the case's variant, for words within 64 of a device operand:
+   * the window covers that span and is cut to the words that exist.
+   */
+  exists(device) {
+    return this.memory.has(asDevice(device).key);
+  }
+
+  /** A 16-bit write. */
+  write(device, value) {
+    const d = asDevice(device);
+    if (!Number.isInteger(value) || value < 0 || value > 0xffff) {
+      throw new RangeError(`${d}: ${value} is not a 16-bit word`);
+    }
+    this.writes.set(d.key, value);
+  }
+
+  /** Signal an operation error: `{code: 0x3401}` or `{flag: 'M8004'}`. */
+  fail({ code, flag } = {}) {
+    if (flag !== undefined) this.error = { flag: String(flag) };
+    else if (Number.isInteger(code)) this.error = { code };
+    else throw new TypeError('fail needs {code} or {flag}');
+  }
+
+  answer() {
+    return { type: 'result', id: this.id, writes: Object.fromEntries(this.writes), error: this.error };
+  }
+}
+
+/** The version to answer a harness hello with. */
+function negotiate(message, log) {
+  const asked = message.protocol === undefined ? 1 : message.protocol;
+  if (PROTOCOL_VERSIONS.includes(asked)) return asked;
+  log(`plc-conformance-adapter: the harness speaks protocol ${asked}; this adapter speaks ${PROTOCOL_VERSIONS.join(' or ')}\n`);
+  return PROTOCOL_VERSION;
+}
+
+/** JSON with bigint values written as plain integers. */
+function encodeLine(message) {
+  return JSON.stringify(message, (_, v) => (typeof v === 'bigint' ? `\u0000big${v}` : v))
+    .replace(/"\\u0000big(-?[0-9]+)"/g, '$1') + '\n';
+}
+
+/**
+ * The JSON-lines loop: reads the harness's messages one line at a time and answers each in
+ * order, awaiting an answer that is a promise before reading on. Resolves on shutdown or at the
+ * end of input; by default the process then exits once stdout is flushed.
+ */
+async function loop(hello, answer, options) {
+  const input = options.input || process.stdin;
+  const output = options.output || process.stdout;
+  const stderr = options.stderr || process.stderr;
+  const ownProcess = !options.output;
+  const exit = options.exit !== undefined ? options.exit : ownProcess;
+  const write = (message) => output.write(encodeLine(message));
+  const log = (text) => stderr.write(text);
+
+  const saved = { log: console.log, info: console.info };
+  if (ownProcess) {
+    console.log = console.info = (...args) => console.error(...args);
+  }
+  const done = (code) => new Promise((resolve) => {
+    if (ownProcess) Object.assign(console, saved);
+    if (!exit) return resolve(code);
+    // Exit once every answer has left: a write callback runs after the earlier ones.
+    output.write('', () => process.exit(code));
+  });
+
+  const lines = readline.createInterface({ input, crlfDelay: Infinity, terminal: false });
+  try {
+    for await (const line of lines) {
+      if (!line.trim()) continue;
+      const message = JSON.parse(line);
+      if (message.type === 'hello') {
+        write(await hello(message, log));
+      } else if (message.type === 'run') {
+        // Each answer goes out at once: the harness's time limit for a case runs from the
+        // previous answer.
+        for (const request of message.cases) write(await answer(request));
+      } else if (message.type === 'shutdown') {
+        lines.close();
+        return done(0);
+      } else {
+        throw new Error(`unknown message type ${JSON.stringify(message.type)}`);
+      }
+    }
+    return done(0);
+  } catch (error) {
+    lines.close();
+    log(`${error && error.stack ? error.stack : error}\n`);
+    if (!exit) {
+      if (ownProcess) Object.assign(console, saved);
+      throw error;
+    }
+    return done(1);
+  }
+}
+
+/**
+ * Answers the harness as an instruction-level backend until shutdown or the end of input.
+ * @param {(c: Case) => void | Promise<void>} run executes one case
+ * @param {object} options name, version, profile, instructions, variants, flags; and for
+ *   tests: input, output, stderr (streams) and exit (false: resolve instead of exiting)
+ */
+function serve(run, options) {
+  const { name, version, profile, instructions, variants, flags } = options || {};
+  if (!name || !version || !profile || !instructions) {
+    throw new TypeError('serve needs name, version, profile and instructions');
+  }
+  const capabilities = { profile, instructions: [...instructions] };
+  if (variants) capabilities.variants = [...variants];
+  if (flags && Object.keys(flags).length) {
+    capabilities.flags = Object.fromEntries(Object.entries(flags).map(([k, vs]) => [k, vs.map(Boolean)]));
+  }
+  const hello = (message, log) => ({
+    type: 'hello', protocol: negotiate(message, log), backend: { name, version }, capabilities,
+  });
+  const answer = async (request) => {
+    if (request.instruction === undefined) {
+      return { type: 'unsupported', id: request.id, reason: `${name} is an instruction-level backend` };
+    }
+    const c = new Case(request);
+    try {
+      await run(c);
+    } catch (error) {
+      if (error instanceof Unsupported) return { type: 'unsupported', id: c.id, reason: error.message };
+      throw error;
+    }
+    return c.answer();
+  };
+  return loop(hello, answer, options);
+}
+
+function codecCapability(digits, width) {
+  if (width !== 16 && width !== 32) throw new TypeError(`width must be 16 or 32, not ${width}`);
+  const capability = { width };
+  if (digits !== undefined && digits !== null) {
+    const counts = [...new Set(digits)].sort((a, b) => a - b);
+    if (!counts.length || !counts.every((d) => Number.isInteger(d) && d >= 1 && d <= 8)) {
+      throw new TypeError(`digits must be counts from 1 to 8, not ${JSON.stringify(digits)}`);
+    }
+    capability.digits = counts;
+  }
+  return capability;
+}
+
+/** The error class `errors` gives an exception (its nearest listed class), or undefined. */
+function errorClassOf(error, errors) {
+  if (error instanceof CodecError) return error.errorClass;
+  if (error === null || typeof error !== 'object') return undefined;
+  for (let p = Object.getPrototypeOf(error); p && p !== Object.prototype; p = Object.getPrototypeOf(p)) {
+    const ctor = p.constructor;
+    if (errors.byClass.has(ctor)) return errors.byClass.get(ctor);
+    if (ctor && errors.byName.has(ctor.name)) return errors.byName.get(ctor.name);
+  }
+  if (errors.byName.has(error.name)) return errors.byName.get(error.name);
+  return undefined;
+}
+
+/** errors as a Map or [[class, errorClass]] (by class) or {Name: errorClass} (by name). */
+function errorTable(errors) {
+  const byClass = new Map();
+  const byName = new Map();
+  const entries = errors instanceof Map || Array.isArray(errors) ? [...errors] : Object.entries(errors || {});
+  for (const [key, errorClass] of entries) {
+    if (!ERROR_CLASSES.includes(errorClass)) {
+      throw new TypeError(`errors: ${JSON.stringify(errorClass)} is not one of ${ERROR_CLASSES.join(', ')}`);
+    }
+    if (typeof key === 'function') byClass.set(key, errorClass);
+    else byName.set(String(key), errorClass);
+  }
+  return { byClass, byName };
+}
+
+function textBytes(text) {
+  if (typeof text === 'string') return [...Buffer.from(text, 'utf8')];
+  if (text instanceof Uint8Array || Array.isArray(text)) {
+    const bytes = [...text];
+    if (bytes.every((b) => Number.isInteger(b) && b >= 0 && b <= 255)) return bytes;
+  }
+  throw new TypeError(`encode must return a Buffer, Uint8Array, byte array or string, not ${typeof text}`);
+}
+
+/**
+ * Answers the harness as a codec-level backend (protocol version 2) until shutdown or the end
+ * of input.
+ * @param {object} options
+ *   decode(text: Buffer, digits) -> number | bigint (hex-to-value; absent: not implemented);
+ *   encode(value: number, digits) -> Buffer | Uint8Array | number[] | string (value-to-hex);
+ *   name, version; decodeDigits, encodeDigits: the digit counts implemented (absent: 1-8);
+ *   width: 16 (default) or 32; errors: how the library's exceptions answer, a Map of error
+ *   constructors or an object keyed by error name, to 'invalid-digit', 'invalid-count',
+ *   'device-range' or 'error'. Either function may return a promise.
+ */
+function serveCodec(options) {
+  const { decode, encode, name, version, decodeDigits, encodeDigits, width = 16 } = options || {};
+  if (!name || !version) throw new TypeError('serveCodec needs name and version');
+  if (!decode && !encode) throw new TypeError('serveCodec needs decode, encode or both');
+  const errors = errorTable(options.errors);
+  const codec = {};
+  if (decode) codec[HEX_TO_VALUE] = codecCapability(decodeDigits, width);
+  if (encode) codec[VALUE_TO_HEX] = codecCapability(encodeDigits, width);
+
+  const hello = (message, log) => {
+    if (!(message.protocol >= 2)) {
+      log(`plc-conformance-adapter: ${name} is a codec-level backend, which needs protocol version 2; the harness speaks ${message.protocol}\n`);
+    }
+    return { type: 'hello', protocol: 2, backend: { name, version }, capabilities: { codec } };
+  };
+  const answer = async (request) => {
+    const { id, operation, digits } = request;
+    try {
+      const declared = codec[operation];
+      if (declared && !(declared.digits || [1, 2, 3, 4, 5, 6, 7, 8]).includes(digits)) {
+        // Outside the declared capabilities: the harness skips such cases.
+        throw new Unsupported(`${operation} with ${digits} digits is not implemented`);
+      }
+      if (operation === HEX_TO_VALUE && decode) {
+        const value = await decode(Buffer.from(request.text), digits);
+        if (typeof value !== 'bigint' && !Number.isInteger(value)) {
+          throw new TypeError(`decode must return an integer, not ${JSON.stringify(value)}`);
+        }
+        return { type: 'result', id, value };
+      }
+      if (operation === VALUE_TO_HEX && encode) {
+        if (!(request.value >= 0 && request.value < 2 ** declared.width)) {
+          throw new Unsupported(`${request.value} is wider than ${declared.width} bits`);
+        }
+        return { type: 'result', id, text: textBytes(await encode(request.value, digits)) };
+      }
+      const what = operation !== undefined ? operation : `instruction ${request.instruction}`;
+      throw new Unsupported(`${what} is not implemented by ${name}`);
+    } catch (error) {
+      if (error instanceof Unsupported) return { type: 'unsupported', id, reason: error.message };
+      const errorClass = errorClassOf(error, errors);
+      if (errorClass === undefined) throw error;
+      return { type: 'result', id, error: errorClass };
+    }
+  };
+  return loop(hello, answer, options);
+}
+
+/**
+ * The named top-level functions of a CommonJS module file, including ones it does not export.
+ *
+ * Many protocol libraries keep their codec functions private. This loads a separate copy of
+ * the module's source (the package's files are not changed, and the copy `require` returns
+ * is not touched) and hands back the functions asked for.
+ * @param {string} file the module's path, e.g. require.resolve('mcprotocol') from the adapter
+ * @param {string[]} names
+ */
+function privateFunctions(file, names) {
+  const fs = require('node:fs');
+  const path = require('node:path');
+  const vm = require('node:vm');
+  const Module = require('node:module');
+  const pick = names.map((n) => `${JSON.stringify(n)}: typeof ${n} === 'undefined' ? undefined : ${n}`).join(', ');
+  const source = `${fs.readFileSync(file, 'utf8')}\n;module.exports = {${pick}};`;
+  const wrapper = vm.runInThisContext(Module.wrap(source), { filename: file });
+  const module = { exports: {} };
+  wrapper.call(module.exports, module.exports, Module.createRequire(file), module, file, path.dirname(file));
+  for (const n of names) {
+    if (typeof module.exports[n] !== 'function') throw new TypeError(`${file} has no top-level function ${n}`);
+  }
+  return module.exports;
+}
+
+module.exports = {
+  VERSION,
+  PROTOCOL_VERSION,
+  PROTOCOL_VERSIONS,
+  ERROR_CLASSES,
+  Case,
+  CodecError,
+  Device,
+  Unsupported,
+  fillWord,
+  privateFunctions,
+  serve,
+  serveCodec,
+};
