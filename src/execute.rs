@@ -13,14 +13,15 @@ use std::sync::mpsc;
 
 use serde::Serialize;
 
-use crate::backend::{Fault, Request, Response};
+use crate::backend::{Fault, Question, Request, Response};
 use crate::memory::{Fill, Image};
-use crate::plan::Trial;
+use crate::plan::{Check, Trial};
 
 /// Trials per exchange with a backend.
 pub const CHUNK: usize = 128;
 
-/// What one backend did under one fill.
+/// What one backend did under one fill (a codec-level backend answers once, reported under
+/// fill A: it reads no memory).
 #[derive(Debug, Clone, Serialize)]
 pub struct Observation {
     pub fill: Fill,
@@ -47,13 +48,16 @@ pub fn images(trial: &Trial) -> Vec<Image> {
 /// The requests that run a trial on its images. A variant the profile lacks cannot happen for a
 /// planned trial (the plan takes variants from the profile), and gives no request.
 pub fn requests<'a>(trial: &'a Trial, images: &'a [Image]) -> Vec<Request<'a>> {
-    let Some(variant) = trial.profile.variant(&trial.variant) else {
+    let Some(profile) = &trial.profile else {
+        return Vec::new();
+    };
+    let Some(variant) = profile.variant(&trial.variant) else {
         return Vec::new();
     };
     images
         .iter()
         .map(|memory| Request {
-            profile: &trial.profile,
+            profile,
             variant,
             instruction: &trial.input.instruction,
             case_id: trial.case_id(),
@@ -64,8 +68,25 @@ pub fn requests<'a>(trial: &'a Trial, images: &'a [Image]) -> Vec<Request<'a>> {
         .collect()
 }
 
-/// Runs one trial under every fill.
+/// The question a codec-level trial asks.
+pub fn question(trial: &Trial) -> Option<Question<'_>> {
+    let Check::Codec { case } = &trial.check else {
+        return None;
+    };
+    Some(Question {
+        case_id: &case.id,
+        operation: case.operation,
+        text: &case.text,
+        value: case.value,
+        digits: case.digits,
+    })
+}
+
+/// Runs one trial under every fill (a codec-level trial once).
 pub fn execute(trial: &Trial) -> Vec<Observation> {
+    if let Some(q) = question(trial) {
+        return pair(trial.backend.convert_batch(&[q]));
+    }
     let images = images(trial);
     let results = trial.backend.execute_batch(&requests(trial, &images));
     pair(results)
@@ -125,19 +146,33 @@ fn run_backend(trials: &[Trial], group: &[usize], stop: &AtomicBool, tx: &mpsc::
         if stop.load(Ordering::Relaxed) {
             return;
         }
-        let images: Vec<Vec<Image>> = chunk.iter().map(|&i| images(&trials[i])).collect();
-        let mut all = Vec::new();
-        let mut spans = Vec::new();
-        for (&i, images) in chunk.iter().zip(&images) {
-            let r = requests(&trials[i], images);
-            spans.push((i, r.len()));
-            all.extend(r);
-        }
-        let mut results = backend.execute_batch(&all).into_iter();
-        for (i, len) in spans {
-            let answers: Vec<_> = results.by_ref().take(len).collect();
-            if tx.send(Progress::Observed(i, pair(answers))).is_err() {
-                return;
+        if backend.codec().is_some() {
+            let questions: Vec<Question<'_>> =
+                chunk.iter().filter_map(|&i| question(&trials[i])).collect();
+            let mut answers = backend.convert_batch(&questions).into_iter();
+            for &i in chunk {
+                let answer = answers.next().unwrap_or_else(|| {
+                    Err(Fault::Protocol("no answer to a codec question".into()))
+                });
+                if tx.send(Progress::Observed(i, pair(vec![answer]))).is_err() {
+                    return;
+                }
+            }
+        } else {
+            let images: Vec<Vec<Image>> = chunk.iter().map(|&i| images(&trials[i])).collect();
+            let mut all = Vec::new();
+            let mut spans = Vec::new();
+            for (&i, images) in chunk.iter().zip(&images) {
+                let r = requests(&trials[i], images);
+                spans.push((i, r.len()));
+                all.extend(r);
+            }
+            let mut results = backend.execute_batch(&all).into_iter();
+            for (i, len) in spans {
+                let answers: Vec<_> = results.by_ref().take(len).collect();
+                if tx.send(Progress::Observed(i, pair(answers))).is_err() {
+                    return;
+                }
             }
         }
         let now = backend.restarts();

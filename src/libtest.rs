@@ -88,7 +88,7 @@ pub fn main(root: &Path, binary: &Path, extra: Vec<Arc<dyn Backend>>) -> ExitCod
                     c.settings.known_differences.as_ref(),
                     project.profiles.get(&profile),
                 ) {
-                    match load_known(known, p, &project.corpus, whole_corpus) {
+                    match load_known(known, Some(p), &project.corpus, whole_corpus) {
                         Ok(k) => {
                             project.known.insert(name.clone(), k);
                         }
@@ -224,7 +224,7 @@ fn real_skip(trial: &Trial, real: &dyn Backend) -> Option<String> {
             trial.variant
         ));
     }
-    let variant = trial.profile.variant(&trial.variant)?;
+    let variant = trial.profile.as_ref()?.variant(&trial.variant)?;
     real.declines(&trial.input.flags, instruction, variant)
 }
 

@@ -97,8 +97,9 @@ impl Project {
         let backend = Arc::new(
             ExternalBackend::start(settings, &self.profiles).map_err(SetupError::External)?,
         );
-        // The backend's profile was checked when it started.
-        if let (Some(file), Some(profile)) = (known_file, self.profiles.get(backend.profile())) {
+        // The backend's profile was checked when it started; a codec-level one has none.
+        if let Some(file) = known_file {
+            let profile = self.profiles.get(backend.profile()).map(|p| p.as_ref());
             let known =
                 load_known(&file, profile, &self.corpus, strict_known).map_err(SetupError::Load)?;
             self.known.insert(backend.name().to_string(), known);

@@ -319,7 +319,7 @@ fn handshake_failures_are_errors_before_any_case() {
     let (kind, text) = start_error(faulty("version"));
     assert_eq!(kind, ExternalErrorKind::Version { theirs: 99 });
     assert!(
-        text.contains("speaks protocol version 99; this harness speaks version 1"),
+        text.contains("speaks protocol version 99; this harness speaks versions 1 and 2"),
         "{text}"
     );
 
@@ -680,5 +680,57 @@ fn serve_speaks_the_protocol() {
     assert_eq!(
         lines[1],
         r#"{"type":"result","id":7,"writes":{"D200":23181},"error":null}"#
+    );
+}
+
+/// Every backend of the project file, with its known-differences file, is green; without the
+/// file, exactly the listed trials fail: no entry excuses a trial that conforms, and no
+/// difference hides outside the list.
+#[test]
+fn each_project_backend_fails_exactly_its_known_differences_without_the_file() {
+    let (file, explicit) = (root().join(FILE_NAME), true);
+    let project = load_project(&file, explicit, Path::new(BIN)).expect("project file loads");
+    for skipped in &project.skipped {
+        assert!(
+            std::env::var_os("PLC_CONFORMANCE_REQUIRE_BACKENDS").is_none(),
+            "{skipped}"
+        );
+        eprintln!("skipped: {skipped}");
+    }
+    let mut checked = 0;
+    for c in project.configured.iter().filter(|c| !c.on_request) {
+        let Some(_) = c.settings.known_differences else {
+            continue;
+        };
+        let mut with = corpus_session();
+        with.add_external(c.settings.clone(), true)
+            .unwrap_or_else(|e| panic!("{} starts: {e}", c.settings.name));
+        let listed: Vec<String> = trials_of(&with, &c.settings.name)
+            .iter()
+            .zip(run_all(&trials_of(&with, &c.settings.name)))
+            .filter(|(_, v)| {
+                assert!(!v.is_failure(), "{v:?}");
+                matches!(v, Verdict::KnownDifference { .. })
+            })
+            .map(|(t, _)| t.name())
+            .collect();
+        let mut without = corpus_session();
+        let mut bare = c.settings.clone();
+        bare.known_differences = None;
+        without.add_external(bare, true).expect("starts");
+        let trials = trials_of(&without, &c.settings.name);
+        let failing: Vec<String> = trials
+            .iter()
+            .zip(run_all(&trials))
+            .filter(|(_, v)| v.is_failure())
+            .map(|(t, _)| t.name())
+            .collect();
+        assert!(!listed.is_empty(), "{}: nothing listed", c.settings.name);
+        assert_eq!(failing, listed, "{}", c.settings.name);
+        checked += 1;
+    }
+    assert!(
+        checked > 0 || std::env::var_os("PLC_CONFORMANCE_REQUIRE_BACKENDS").is_none(),
+        "no project backend with a known-differences file ran"
     );
 }

@@ -19,6 +19,7 @@ use serde::Serialize;
 
 use crate::device::Device;
 use crate::memory::Image;
+use crate::model::cross_vendor::{Answer, CodecAbilities, Operation};
 use crate::model::profile::{Profile, Profiles, Variant};
 use crate::model::{ErrorSignal, Operand};
 
@@ -95,11 +96,27 @@ impl Outcome {
     }
 }
 
+/// A cross-vendor question asked of a codec-level backend: no memory, no devices, no fill.
+#[derive(Debug, Clone, Copy)]
+pub struct Question<'a> {
+    /// The cross-vendor case id, for backends that log or correlate.
+    pub case_id: &'a str,
+    pub operation: Operation,
+    /// hex-to-value: the characters, exactly as the case gives them.
+    pub text: &'a [u8],
+    /// value-to-hex: the value.
+    pub value: u64,
+    /// The digit count (FX5 n, IDEC S2).
+    pub digits: u32,
+}
+
 /// A backend's answer to a request it understood.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase", tag = "kind", content = "value")]
 pub enum Response {
     Done(Outcome),
+    /// A codec-level backend's answer to a [`Question`].
+    Answer(Answer),
     /// The backend does not implement this (instruction, variant, operand kind, ...).
     Unsupported(String),
 }
@@ -152,11 +169,12 @@ impl fmt::Display for Fault {
     }
 }
 
-/// An implementation of one profile family.
+/// An implementation under test: of one profile family (instruction level), or of the
+/// cross-vendor operations directly (codec level, see [`Backend::codec`]).
 pub trait Backend: Send + Sync {
     /// The name used on the command line and in trial names.
     fn name(&self) -> &str;
-    /// The profile id whose vectors this backend runs.
+    /// The profile id whose vectors this backend runs (empty for a codec-level backend).
     fn profile(&self) -> &str;
     /// One line for `plc-conformance list`.
     fn describe(&self) -> String;
@@ -185,6 +203,80 @@ pub trait Backend: Send + Sync {
     /// executor reports each restart as an event.
     fn restarts(&self) -> usize {
         0
+    }
+    /// For a codec-level backend, the cross-vendor operations it implements: it then runs the
+    /// cross-vendor corpus through [`Backend::convert_batch`] and no native case.
+    fn codec(&self) -> Option<&CodecAbilities> {
+        None
+    }
+    /// Answers cross-vendor questions, in order (codec-level backends).
+    fn convert_batch(&self, questions: &[Question<'_>]) -> Vec<Result<Response, Fault>> {
+        questions
+            .iter()
+            .map(|_| {
+                Ok(Response::Unsupported(format!(
+                    "{} is not a codec-level backend",
+                    self.name()
+                )))
+            })
+            .collect()
+    }
+}
+
+/// A codec written in Rust: what a library implements, in the fewest words. Wrap it with
+/// [`codec_backend`] to run it as a backend (in process, no protocol).
+pub trait Codec: Send + Sync {
+    /// The name in trial names.
+    fn name(&self) -> &str;
+    /// What it implements.
+    fn abilities(&self) -> CodecAbilities;
+    /// Answers one question: a value, a text or an error class; `Err` for a question it does
+    /// not implement after all (a difference when inside its abilities).
+    fn convert(&self, question: &Question<'_>) -> Result<Answer, Unsupported>;
+}
+
+/// A [`Codec`] as a [`Backend`].
+pub fn codec_backend(codec: impl Codec + 'static) -> Arc<dyn Backend> {
+    let abilities = codec.abilities();
+    Arc::new(CodecBackend { codec, abilities })
+}
+
+struct CodecBackend<C> {
+    codec: C,
+    abilities: CodecAbilities,
+}
+
+impl<C: Codec> Backend for CodecBackend<C> {
+    fn name(&self) -> &str {
+        self.codec.name()
+    }
+    fn profile(&self) -> &str {
+        ""
+    }
+    fn describe(&self) -> String {
+        "codec-level backend (in process)".into()
+    }
+    fn claims(&self, _instruction: &str, _variant: &str) -> bool {
+        false
+    }
+    fn execute(&self, _request: &Request<'_>) -> Result<Response, Fault> {
+        Ok(Response::Unsupported(
+            "a codec executes no instruction".into(),
+        ))
+    }
+    fn codec(&self) -> Option<&CodecAbilities> {
+        Some(&self.abilities)
+    }
+    fn convert_batch(&self, questions: &[Question<'_>]) -> Vec<Result<Response, Fault>> {
+        questions
+            .iter()
+            .map(|q| {
+                Ok(match self.codec.convert(q) {
+                    Ok(answer) => Response::Answer(answer),
+                    Err(u) => u.into(),
+                })
+            })
+            .collect()
     }
 }
 

@@ -379,10 +379,16 @@ fn compare_answers(ta: &Trial, tb: &Trial, a: &[Observation], b: &[Observation])
     let mut out = String::new();
     for (oa, ob) in a.iter().zip(b) {
         let answer = |t: &Trial, o: &Observation| match (&t.check, &o.result) {
-            (crate::plan::Check::CrossVendor { lowering, case }, Ok(Response::Done(x))) => {
-                let image = crate::memory::Image::new(t.input.before.clone(), o.fill);
-                crate::judge::lift::lift(&t.profile, lowering, case.digits, x, &image).to_string()
-            }
+            (crate::plan::Check::CrossVendor { lowering, case }, Ok(Response::Done(x))) => match &t
+                .profile
+            {
+                Some(profile) => {
+                    let image = crate::memory::Image::new(t.input.before.clone(), o.fill);
+                    crate::judge::lift::lift(profile, lowering, case.digits, x, &image).to_string()
+                }
+                None => "no profile".to_string(),
+            },
+            (_, Ok(Response::Answer(a))) => a.to_string(),
             (_, Ok(Response::Unsupported(r))) => format!("unsupported: {r}"),
             (_, Err(f)) => f.to_string(),
             (_, Ok(Response::Done(_))) => "not a cross-vendor answer".to_string(),

@@ -163,18 +163,20 @@ pub fn skipped(reason: &str) -> Verdict {
 }
 
 fn judge_unlisted(trial: &Trial, observations: &[Observation]) -> Verdict {
-    if observations.len() != Fill::ALL.len() {
+    let answers_expected = match trial.check {
+        Check::Codec { .. } => 1,
+        _ => Fill::ALL.len(),
+    };
+    if observations.len() != answers_expected {
         return Verdict::Fault {
             fill: observations.first().map_or(Fill::A, |o| o.fill),
             fault: Fault::Protocol(format!(
-                "{} answer(s) for {} fills",
-                observations.len(),
-                Fill::ALL.len()
+                "{} answer(s) where {answers_expected} were due",
+                observations.len()
             )),
         };
     }
     // A fault or an `unsupported` answer under any fill is the verdict.
-    let mut outcomes = Vec::new();
     for obs in observations {
         match &obs.result {
             Err(fault) => {
@@ -188,13 +190,27 @@ fn judge_unlisted(trial: &Trial, observations: &[Observation]) -> Verdict {
                     reason: reason.clone(),
                 }
             }
-            Ok(Response::Done(outcome)) => {
-                outcomes.push((Image::new(trial.input.before.clone(), obs.fill), outcome))
-            }
+            Ok(_) => {}
         }
     }
+    let wrong_kind = |obs: &Observation| Verdict::Fault {
+        fill: obs.fill,
+        fault: Fault::Protocol(match trial.check {
+            Check::Codec { .. } => "an instruction's outcome answered a codec question".into(),
+            _ => "a codec answer answered an instruction request".into(),
+        }),
+    };
     match &trial.check {
         Check::Native { case, .. } => {
+            let mut outcomes = Vec::new();
+            for obs in observations {
+                match &obs.result {
+                    Ok(Response::Done(o)) => {
+                        outcomes.push((Image::new(trial.input.before.clone(), obs.fill), o))
+                    }
+                    _ => return wrong_kind(obs),
+                }
+            }
             let effects: Vec<Effect> = outcomes.iter().map(|(i, o)| Effect::of(i, o)).collect();
             let fill_dependent = effects.windows(2).any(|p| p[0] != p[1]);
             let expect = match &case.expect {
@@ -226,40 +242,66 @@ fn judge_unlisted(trial: &Trial, observations: &[Observation]) -> Verdict {
             }
         }
         Check::CrossVendor { lowering, case } => {
-            let answers: Vec<Answer> = outcomes
-                .iter()
-                .map(|(image, outcome)| {
-                    lift::lift(&trial.profile, lowering, case.digits, outcome, image)
-                })
-                .collect();
-            let fill_dependent = answers.windows(2).any(|p| p[0] != p[1]);
-            let expected = match case.expected_for(&lowering.key) {
-                Some(e) if case.basis != Basis::Unspecified => e,
-                _ => {
-                    return Verdict::Recorded {
-                        observed: Observed::Answer(answers[0].clone()),
-                        fill_dependent,
-                    }
-                }
-            };
-            if fill_dependent {
-                return Verdict::Differs {
-                    difference: Difference::FillDependent {
-                        fill_a: answers[0].clone(),
-                        fill_b: answers[1].clone(),
-                    },
+            let Some(profile) = &trial.profile else {
+                return Verdict::Unsupported {
+                    reason: "a lowering needs its profile".into(),
                 };
-            }
-            if answers[0] == *expected {
-                Verdict::Conforms
-            } else {
-                Verdict::Differs {
-                    difference: Difference::Answer {
-                        expected: expected.clone(),
-                        actual: answers[0].clone(),
-                    },
+            };
+            let mut answers = Vec::new();
+            for obs in observations {
+                match &obs.result {
+                    Ok(Response::Done(o)) => {
+                        let image = Image::new(trial.input.before.clone(), obs.fill);
+                        answers.push(lift::lift(profile, lowering, case.digits, o, &image));
+                    }
+                    _ => return wrong_kind(obs),
                 }
             }
+            compare_answers(case.basis, case.expected_for(&lowering.key), answers)
+        }
+        Check::Codec { case } => match &observations[0].result {
+            // A codec answers the case's plain reading: it has no vendor's exceptions.
+            Ok(Response::Answer(a)) => {
+                compare_answers(case.basis, case.expect.as_ref(), vec![a.clone()])
+            }
+            _ => wrong_kind(&observations[0]),
+        },
+    }
+}
+
+/// Judges cross-vendor answers (one per fill, or one for a codec) against the expected one.
+fn compare_answers(basis: Basis, expected: Option<&Answer>, answers: Vec<Answer>) -> Verdict {
+    let fill_dependent = answers.windows(2).any(|p| p[0] != p[1]);
+    let Some(first) = answers.first().cloned() else {
+        return Verdict::Unsupported {
+            reason: "no answer".into(),
+        };
+    };
+    let expected = match expected {
+        Some(e) if basis != Basis::Unspecified => e,
+        _ => {
+            return Verdict::Recorded {
+                observed: Observed::Answer(first),
+                fill_dependent,
+            }
+        }
+    };
+    if fill_dependent {
+        return Verdict::Differs {
+            difference: Difference::FillDependent {
+                fill_a: first,
+                fill_b: answers[1].clone(),
+            },
+        };
+    }
+    if first == *expected {
+        Verdict::Conforms
+    } else {
+        Verdict::Differs {
+            difference: Difference::Answer {
+                expected: expected.clone(),
+                actual: first,
+            },
         }
     }
 }
@@ -329,7 +371,7 @@ mod tests {
         .expect("profile");
         Trial {
             backend: Arc::new(Idle),
-            profile: Arc::new(profile),
+            profile: Some(Arc::new(profile)),
             variant: "v".into(),
             input: Arc::new(Input {
                 instruction: "HABIN".into(),

@@ -23,12 +23,13 @@ use crate::model::profile::Profile;
 use crate::model::{Basis, Corpus};
 use crate::spec::known::KnownFileSpec;
 
-/// Loads and checks a known-differences file against the profile and the corpus. With `strict`,
+/// Loads and checks a known-differences file against the backend's profile (`None` for a
+/// codec-level backend, which runs the cross-vendor cases only) and the corpus. With `strict`,
 /// an entry for a case the corpus does not have is an error (a typo would otherwise excuse
 /// nothing and go unnoticed); without it, such entries are set aside.
 pub fn load_known(
     file: &Path,
-    profile: &Profile,
+    profile: Option<&Profile>,
     corpus: &Corpus,
     strict: bool,
 ) -> Result<KnownDifferences, LoadErrors> {
@@ -56,7 +57,40 @@ pub fn load_known(
                 LoadErrorKind::Invalid("a known difference needs its reason".into()),
             );
         }
-        if let Some(cv) = corpus.cross_vendor.iter().find(|c| c.id == entry.case) {
+        let cross_vendor = corpus.cross_vendor.iter().find(|c| c.id == entry.case);
+        let Some(profile) = profile else {
+            // A codec has neither instructions nor variants, and answers cross-vendor cases only.
+            for (k, given) in [
+                ("instruction", entry.instruction.is_some()),
+                ("variant", entry.variant.is_some()),
+            ] {
+                if given {
+                    cx.error(
+                        key(k),
+                        LoadErrorKind::Invalid(format!(
+                            "a codec-level backend has no {k}: leave `{k}` out"
+                        )),
+                    );
+                }
+            }
+            match cross_vendor {
+                Some(cv) => {
+                    check_not_unspecified(&entry, cv.basis, &mut cx, &key);
+                    known.entries.push(entry);
+                }
+                None if strict => cx.error(
+                    key("case"),
+                    LoadErrorKind::Invalid(format!(
+                        "unknown cross-vendor case id `{}`: a codec-level backend runs only the \
+                         cross-vendor cases",
+                        entry.case
+                    )),
+                ),
+                None => known.ignored.push(entry),
+            }
+            continue;
+        };
+        if let Some(cv) = cross_vendor {
             check_cross_vendor_entry(&entry, cv, profile, &mut cx, &key);
             known.entries.push(entry);
             continue;
@@ -261,7 +295,7 @@ mod tests {
             ],
             cross_vendor: Vec::new(),
         };
-        load_known(&file, &profile(), &corpus, strict).map_err(|e| e.to_string())
+        load_known(&file, Some(&profile()), &corpus, strict).map_err(|e| e.to_string())
     }
 
     #[test]

@@ -122,3 +122,76 @@ impl CrossVendorCase {
             .or(self.expect.as_ref())
     }
 }
+
+/// What a codec-level backend implements of the cross-vendor operations: a library's codec,
+/// asked the cross-vendor questions directly, with no memory, devices or fills.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct CodecAbilities {
+    pub hex_to_value: Option<OperationAbilities>,
+    pub value_to_hex: Option<OperationAbilities>,
+}
+
+/// What one operation of a codec takes.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct OperationAbilities {
+    /// The digit counts implemented; `None` is any count from 1 to 8.
+    pub digits: Option<Vec<u32>>,
+    /// The value width in bits.
+    pub width: u32,
+}
+
+impl Default for OperationAbilities {
+    fn default() -> Self {
+        OperationAbilities {
+            digits: None,
+            width: 16,
+        }
+    }
+}
+
+impl CodecAbilities {
+    /// Why a case is outside what the codec implements, if it is: it is then skipped with this
+    /// reason, never failed.
+    pub fn declines(&self, case: &CrossVendorCase) -> Option<String> {
+        let ability = match case.operation {
+            Operation::HexToValue => &self.hex_to_value,
+            Operation::ValueToHex => &self.value_to_hex,
+        };
+        let Some(ability) = ability else {
+            return Some(format!("implements no {}", case.operation));
+        };
+        let digits_ok = match &ability.digits {
+            Some(list) => list.contains(&case.digits),
+            None => (1..=8).contains(&case.digits),
+        };
+        if !digits_ok {
+            let taken = ability.digits.as_ref().map_or_else(
+                || "1 to 8".to_string(),
+                |l| {
+                    l.iter()
+                        .map(ToString::to_string)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                },
+            );
+            return Some(format!(
+                "takes {taken} digit(s), not {} ({})",
+                case.digits, case.operation
+            ));
+        }
+        let fits = |v: u64| ability.width >= 64 || v >> ability.width == 0;
+        match (case.operation, &case.expect) {
+            (Operation::HexToValue, Some(Answer::Value(v))) if !fits(*v) => Some(format!(
+                "the expected value {} is wider than its {} bits",
+                Answer::Value(*v),
+                ability.width
+            )),
+            (Operation::ValueToHex, _) if !fits(case.value) => Some(format!(
+                "the value {} is wider than its {} bits",
+                Answer::Value(case.value),
+                ability.width
+            )),
+            _ => None,
+        }
+    }
+}

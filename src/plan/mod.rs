@@ -33,6 +33,8 @@ pub enum Check {
         lowering: Arc<Lowering>,
         case: Arc<CrossVendorCase>,
     },
+    /// A cross-vendor case, asked of a codec-level backend directly.
+    Codec { case: Arc<CrossVendorCase> },
 }
 
 /// What a trial asks its backend to execute, under every fill.
@@ -50,7 +52,9 @@ pub struct Input {
 #[derive(Clone)]
 pub struct Trial {
     pub backend: Arc<dyn Backend>,
-    pub profile: Arc<Profile>,
+    /// The profile the trial runs on; a codec-level trial has none.
+    pub profile: Option<Arc<Profile>>,
+    /// The profile variant (empty for a codec-level trial).
     pub variant: String,
     pub check: Check,
     pub input: Arc<Input>,
@@ -80,34 +84,37 @@ impl Trial {
                 case.id,
                 self.variant
             ),
+            Check::Codec { case } => {
+                format!("cross-vendor::{}::codec::{}", self.backend.name(), case.id)
+            }
         }
     }
 
     pub fn case_id(&self) -> &str {
         match &self.check {
             Check::Native { case, .. } => &case.id,
-            Check::CrossVendor { case, .. } => &case.id,
+            Check::CrossVendor { case, .. } | Check::Codec { case } => &case.id,
         }
     }
 
     pub fn basis(&self) -> Basis {
         match &self.check {
             Check::Native { case, .. } => case.basis,
-            Check::CrossVendor { case, .. } => case.basis,
+            Check::CrossVendor { case, .. } | Check::Codec { case } => case.basis,
         }
     }
 
     pub fn location(&self) -> &Location {
         match &self.check {
             Check::Native { case, .. } => &case.location,
-            Check::CrossVendor { case, .. } => &case.location,
+            Check::CrossVendor { case, .. } | Check::Codec { case } => &case.location,
         }
     }
 
     pub fn citation(&self) -> &Citation {
         match &self.check {
             Check::Native { case, .. } => &case.citation,
-            Check::CrossVendor { case, .. } => &case.citation,
+            Check::CrossVendor { case, .. } | Check::Codec { case } => &case.citation,
         }
     }
 
@@ -117,11 +124,21 @@ impl Trial {
         match &self.check {
             Check::Native { instruction, .. } => instruction,
             Check::CrossVendor { lowering, .. } => &lowering.name,
+            Check::Codec { .. } => "codec",
         }
     }
 
+    /// Whether the trial asks a cross-vendor question (through a lowering or of a codec).
     pub fn is_cross_vendor(&self) -> bool {
-        matches!(self.check, Check::CrossVendor { .. })
+        matches!(self.check, Check::CrossVendor { .. } | Check::Codec { .. })
+    }
+
+    /// The cross-vendor case a trial asks, if it asks one.
+    pub fn cross_vendor_case(&self) -> Option<&Arc<CrossVendorCase>> {
+        match &self.check {
+            Check::Native { .. } => None,
+            Check::CrossVendor { case, .. } | Check::Codec { case } => Some(case),
+        }
     }
 
     /// Why the outcome of this trial can be told before it runs: skipped, recorded only
@@ -152,7 +169,7 @@ pub fn plan(
     known: &BTreeMap<String, KnownDifferences>,
 ) -> Vec<Trial> {
     let mut trials = Vec::new();
-    for backend in backends {
+    for backend in backends.iter().filter(|b| b.codec().is_none()) {
         let Some(profile) = profiles.get(backend.profile()) else {
             continue;
         };
@@ -185,10 +202,28 @@ pub fn plan(
         }
     }
     for backend in backends {
+        let list = known.get(backend.name());
+        if let Some(abilities) = backend.codec() {
+            for case in &corpus.cross_vendor {
+                let mut t = Trial {
+                    backend: backend.clone(),
+                    profile: None,
+                    variant: String::new(),
+                    check: Check::Codec { case: case.clone() },
+                    input: Arc::new(Input::default()),
+                    skip: abilities
+                        .declines(case)
+                        .map(|why| format!("{} {why}", backend.name())),
+                    known: None,
+                };
+                t.known = list.and_then(|k| k.entry(&case.id, "codec", "")).cloned();
+                trials.push(t);
+            }
+            continue;
+        }
         let Some(profile) = profiles.get(backend.profile()) else {
             continue;
         };
-        let list = known.get(backend.name());
         for case in &corpus.cross_vendor {
             for lowering in profile
                 .cross_vendor
@@ -224,7 +259,7 @@ fn trial(
 ) -> Trial {
     let mut t = Trial {
         backend: backend.clone(),
-        profile: profile.clone(),
+        profile: Some(profile.clone()),
         variant: variant.to_string(),
         check,
         input,
@@ -248,6 +283,6 @@ fn skip_reason(t: &Trial) -> Option<String> {
             t.variant
         ));
     }
-    let variant = t.profile.variant(&t.variant)?;
+    let variant = t.profile.as_ref()?.variant(&t.variant)?;
     t.backend.declines(&t.input.flags, instruction, variant)
 }

@@ -128,7 +128,10 @@ impl Record {
     pub fn of(trial: &Trial, verdict: &Verdict) -> Record {
         let (section, row, column) = match &trial.check {
             Check::Native { instruction, case } => (
-                trial.profile.id.clone(),
+                trial
+                    .profile
+                    .as_ref()
+                    .map_or_else(String::new, |p| p.id.clone()),
                 format!(
                     "{}::{}::{}",
                     instruction.to_lowercase(),
@@ -141,6 +144,11 @@ impl Record {
                 format!("cross-vendor {}", case.operation),
                 case.id.clone(),
                 format!("{}/{}", trial.backend.name(), lowering.name),
+            ),
+            Check::Codec { case } => (
+                format!("cross-vendor {}", case.operation),
+                case.id.clone(),
+                format!("{}/codec", trial.backend.name()),
             ),
         };
         let answer = answer_of(verdict);
@@ -204,10 +212,13 @@ fn answer_of(verdict: &Verdict) -> Option<&Answer> {
 }
 
 fn behaviour(trial: &Trial, verdict: &Verdict) -> Behaviour {
-    if let Check::CrossVendor { case, lowering } = &trial.check {
-        let answer = match verdict {
-            Verdict::Conforms => case.expected_for(&lowering.key),
-            v => answer_of(v),
+    if let Some(case) = trial.cross_vendor_case() {
+        let answer = match (verdict, &trial.check) {
+            (Verdict::Conforms, Check::CrossVendor { lowering, .. }) => {
+                case.expected_for(&lowering.key)
+            }
+            (Verdict::Conforms, _) => case.expect.as_ref(),
+            (v, _) => answer_of(v),
         };
         if let Some(a) = answer {
             let class = match a {

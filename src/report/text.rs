@@ -67,7 +67,7 @@ pub fn describe_setting(trial: &Trial) -> String {
         trial.basis(),
         trial.citation()
     );
-    if let Check::CrossVendor { lowering, case } = &trial.check {
+    if let Some(case) = trial.cross_vendor_case() {
         let question = match case.operation {
             Operation::HexToValue => format!(
                 "{} {}, {} digit(s)",
@@ -83,22 +83,37 @@ pub fn describe_setting(trial: &Trial) -> String {
             ),
         };
         let _ = writeln!(out, "  question:    {question}");
-        let _ = writeln!(
-            out,
-            "  lowering:    {}: {}",
-            lowering.key, lowering.description
-        );
+        match &trial.check {
+            Check::CrossVendor { lowering, .. } => {
+                let _ = writeln!(
+                    out,
+                    "  lowering:    {}: {}",
+                    lowering.key, lowering.description
+                );
+            }
+            _ => {
+                let _ = writeln!(
+                    out,
+                    "  run:         the codec of backend {} (no memory, devices or fills)",
+                    trial.backend.name()
+                );
+                return out;
+            }
+        }
     }
+    let Some(profile) = &trial.profile else {
+        return out;
+    };
     let input = &trial.input;
     let _ = writeln!(
         out,
         "  run:         {} on {} variant {} via backend {}",
         input.instruction,
-        trial.profile.id,
+        profile.id,
         trial.variant,
         trial.backend.name()
     );
-    let _ = writeln!(out, "  flags:       {}", flags_text(trial));
+    let _ = writeln!(out, "  flags:       {}", flags_text(trial, profile));
     let operands: Vec<String> = input
         .operands
         .iter()
@@ -122,11 +137,11 @@ pub fn describe_setting(trial: &Trial) -> String {
     out
 }
 
-fn flags_text(trial: &Trial) -> String {
-    let Some(def) = trial.profile.instructions.get(&trial.input.instruction) else {
+fn flags_text(trial: &Trial, profile: &crate::model::profile::Profile) -> String {
+    let Some(def) = profile.instructions.get(&trial.input.instruction) else {
         return String::new();
     };
-    let variant = trial.profile.variant(&trial.variant);
+    let variant = profile.variant(&trial.variant);
     def.flags
         .iter()
         .map(|f| {
@@ -135,7 +150,7 @@ fn flags_text(trial: &Trial) -> String {
                 .flags
                 .get(f)
                 .copied()
-                .unwrap_or_else(|| trial.profile.flag_default(f));
+                .unwrap_or_else(|| profile.flag_default(f));
             let ignored = variant.is_some_and(|v| v.ignores_flags.contains(f));
             format!(
                 "{f}={}{}",

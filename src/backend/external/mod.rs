@@ -23,13 +23,15 @@ use serde::Serialize;
 pub use process::MAX_LINE;
 use process::{describe_exit, Next, Process};
 use protocol::{
-    BackendInfo, BackendMessage, Capabilities, CaseRequest, ErrorReport, FillName, HarnessMessage,
-    MemoryRange, OperandValue, PROTOCOL_VERSION,
+    BackendInfo, BackendMessage, Capabilities, CaseRequest, CodecRequest, ErrorReport, FillName,
+    HarnessMessage, MemoryRange, OperandValue, RunCase, SignalReport, PROTOCOL_VERSION,
+    SUPPORTED_VERSIONS,
 };
 
-use super::{Backend, Fault, Outcome, Request, Response};
+use super::{Backend, Fault, Outcome, Question, Request, Response};
 use crate::device::Device;
 use crate::memory::Fill;
+use crate::model::cross_vendor::{Answer, CodecAbilities, OperationAbilities};
 use crate::model::profile::{Profile, Profiles, Variant};
 use crate::model::project::ExternalSettings;
 use crate::model::{ErrorSignal, Operand};
@@ -69,7 +71,8 @@ impl fmt::Display for ExternalError {
             ExternalErrorKind::Handshake(m) => write!(f, "handshake failed: {m}"),
             ExternalErrorKind::Version { theirs } => write!(
                 f,
-                "speaks protocol version {theirs}; this harness speaks version {PROTOCOL_VERSION}"
+                "speaks protocol version {theirs}; this harness speaks versions 1 and \
+                 {PROTOCOL_VERSION}"
             ),
             ExternalErrorKind::Capabilities(m) => write!(f, "{m}"),
         }
@@ -84,7 +87,10 @@ pub struct ExternalBackend {
     info: BackendInfo,
     restarts: std::sync::atomic::AtomicUsize,
     capabilities: Capabilities,
-    profile: Arc<Profile>,
+    /// The profile of an instruction-level backend.
+    profile: Option<Arc<Profile>>,
+    /// What a codec-level backend implements.
+    codec: Option<CodecAbilities>,
     state: Mutex<State>,
 }
 
@@ -109,8 +115,22 @@ impl ExternalBackend {
             kind,
         };
         let (process, info, capabilities) = handshake(&spec).map_err(error)?;
-        let profile = check_capabilities(&spec, &capabilities, profiles)
-            .map_err(|m| error(ExternalErrorKind::Capabilities(m)))?;
+        let (profile, codec) = match &capabilities.codec {
+            Some(codec) => (
+                None,
+                Some(
+                    check_codec(&spec, &capabilities, codec)
+                        .map_err(|m| error(ExternalErrorKind::Capabilities(m)))?,
+                ),
+            ),
+            None => (
+                Some(
+                    check_capabilities(&spec, &capabilities, profiles)
+                        .map_err(|m| error(ExternalErrorKind::Capabilities(m)))?,
+                ),
+                None,
+            ),
+        };
         let process = if spec.persistent {
             Some(process)
         } else {
@@ -123,6 +143,7 @@ impl ExternalBackend {
             restarts: std::sync::atomic::AtomicUsize::new(0),
             capabilities,
             profile,
+            codec,
             state: Mutex::new(State {
                 process,
                 next_id: 1,
@@ -154,7 +175,7 @@ impl ExternalBackend {
 
     /// Runs one batch of case requests, restarting the process after each fault and resending
     /// the cases after the faulty one.
-    fn run_chunk(&self, state: &mut State, cases: &[CaseRequest]) -> Vec<Result<Response, Fault>> {
+    fn run_chunk(&self, state: &mut State, cases: &[RunCase]) -> Vec<Result<Response, Fault>> {
         let mut results: Vec<Result<Response, Fault>> = Vec::with_capacity(cases.len());
         while results.len() < cases.len() {
             let rest = &cases[results.len()..];
@@ -221,10 +242,10 @@ impl ExternalBackend {
     fn answer(
         &self,
         process: &mut Process,
-        case: &CaseRequest,
+        case: &RunCase,
         deadline: Instant,
     ) -> Result<Response, Fault> {
-        let which = || format!("request {} (case {})", case.id, case.case);
+        let which = || format!("request {} (case {})", case.id(), case.case());
         let line = match process.next_line(deadline) {
             Next::Line(line) => line,
             Next::Oversized { head, length } => {
@@ -273,10 +294,22 @@ impl ExternalBackend {
                 memory,
                 writes,
                 error,
-            } if id == case.id => outcome(case, memory, writes, error)
-                .map(Response::Done)
-                .map_err(unexpected),
-            BackendMessage::Unsupported { id, reason } if id == case.id => {
+                value,
+                text,
+            } if id == case.id() => match case {
+                RunCase::Instruction(case) if value.is_none() && text.is_none() => {
+                    outcome(case, memory, writes, error)
+                        .map(Response::Done)
+                        .map_err(unexpected)
+                }
+                RunCase::Instruction(_) => Err(unexpected(
+                    "a codec answer (`value` or `text`) to an instruction request".into(),
+                )),
+                RunCase::Codec(_) => codec_answer(memory, writes, error, value, text)
+                    .map(Response::Answer)
+                    .map_err(unexpected),
+            },
+            BackendMessage::Unsupported { id, reason } if id == case.id() => {
                 Ok(Response::Unsupported(reason))
             }
             BackendMessage::Result { id, .. } | BackendMessage::Unsupported { id, .. } => {
@@ -304,6 +337,31 @@ impl Backend for ExternalBackend {
         &self.capabilities.profile
     }
 
+    fn codec(&self) -> Option<&CodecAbilities> {
+        self.codec.as_ref()
+    }
+
+    fn convert_batch(&self, questions: &[Question<'_>]) -> Vec<Result<Response, Fault>> {
+        self.send_all(|id| {
+            questions
+                .iter()
+                .zip(id..)
+                .map(|(q, id)| {
+                    RunCase::Codec(CodecRequest {
+                        id,
+                        case: q.case_id.to_string(),
+                        operation: q.operation,
+                        text: (q.operation == crate::model::cross_vendor::Operation::HexToValue)
+                            .then(|| q.text.to_vec()),
+                        value: (q.operation == crate::model::cross_vendor::Operation::ValueToHex)
+                            .then_some(q.value),
+                        digits: q.digits,
+                    })
+                })
+                .collect()
+        })
+    }
+
     fn describe(&self) -> String {
         format!(
             "external: {} {} (`{}`)",
@@ -312,6 +370,9 @@ impl Backend for ExternalBackend {
     }
 
     fn claims(&self, instruction: &str, variant: &str) -> bool {
+        let Some(profile) = &self.profile else {
+            return false;
+        };
         self.capabilities
             .instructions
             .iter()
@@ -321,10 +382,9 @@ impl Backend for ExternalBackend {
                 .variants
                 .as_ref()
                 .is_none_or(|v| v.iter().any(|v| v == variant))
-            && self
-                .profile
+            && profile
                 .variant(variant)
-                .is_some_and(|v| self.profile.has_instruction(v, instruction))
+                .is_some_and(|v| profile.has_instruction(v, instruction))
     }
 
     fn declines(
@@ -333,13 +393,14 @@ impl Backend for ExternalBackend {
         instruction: &str,
         variant: &Variant,
     ) -> Option<String> {
-        let reads = &self.profile.instructions.get(instruction)?.flags;
+        let profile = self.profile.as_ref()?;
+        let reads = &profile.instructions.get(instruction)?.flags;
         self.capabilities
             .flags
             .iter()
             .filter(|(flag, _)| reads.contains(flag))
             .find_map(|(flag, settings)| {
-                let value = self.profile.flag_seen(variant, flags, flag);
+                let value = profile.flag_seen(variant, flags, flag);
                 (!settings.contains(&value)).then(|| {
                     format!(
                         "{} does not implement {flag} {}",
@@ -361,17 +422,25 @@ impl Backend for ExternalBackend {
     }
 
     fn execute_batch(&self, requests: &[Request<'_>]) -> Vec<Result<Response, Fault>> {
+        self.send_all(|id| {
+            requests
+                .iter()
+                .zip(id..)
+                .map(|(r, id)| RunCase::Instruction(case_request(r, id)))
+                .collect()
+        })
+    }
+}
+
+impl ExternalBackend {
+    /// Sends requests in batches and reads their answers; `make` numbers them from the id given.
+    fn send_all(&self, make: impl FnOnce(u64) -> Vec<RunCase>) -> Vec<Result<Response, Fault>> {
         let mut state = match self.state.lock() {
             Ok(s) => s,
             Err(poisoned) => poisoned.into_inner(),
         };
-        let first = state.next_id;
-        state.next_id += requests.len() as u64;
-        let cases: Vec<CaseRequest> = requests
-            .iter()
-            .zip(first..)
-            .map(|(r, id)| case_request(r, id))
-            .collect();
+        let cases = make(state.next_id);
+        state.next_id += cases.len() as u64;
         let size = if self.settings.persistent {
             self.settings.batch.max(1)
         } else {
@@ -438,13 +507,24 @@ fn handshake(
     let version = serde_json::from_slice::<serde_json::Value>(&line)
         .ok()
         .and_then(|v| v.get("protocol").and_then(serde_json::Value::as_u64));
-    if let Some(theirs) = version.filter(|v| *v != u64::from(PROTOCOL_VERSION)) {
+    if let Some(theirs) =
+        version.filter(|v| !SUPPORTED_VERSIONS.iter().any(|s| u64::from(*s) == *v))
+    {
         process.kill();
         return Err(ExternalErrorKind::Version {
             theirs: u32::try_from(theirs).unwrap_or(u32::MAX),
         });
     }
     match BackendMessage::from_line(&line) {
+        Ok(BackendMessage::Hello {
+            protocol: 1,
+            capabilities: Capabilities { codec: Some(_), .. },
+            ..
+        }) => Err(failed(
+            &mut process,
+            "answers hello with protocol version 1 but claims the codec level, which is version 2"
+                .into(),
+        )),
         Ok(BackendMessage::Hello {
             protocol: _,
             backend,
@@ -462,6 +542,55 @@ fn handshake(
             ),
         )),
     }
+}
+
+/// Checks a codec-level handshake: no instruction-level claims beside it, no profile configured.
+fn check_codec(
+    spec: &ExternalSettings,
+    caps: &Capabilities,
+    codec: &protocol::CodecCapabilities,
+) -> Result<CodecAbilities, String> {
+    if let Some(configured) = &spec.profile {
+        return Err(format!(
+            "is configured as implementing profile `{configured}` but its handshake claims the \
+             codec level; leave `profile` out for a codec-level backend"
+        ));
+    }
+    if !caps.profile.is_empty()
+        || !caps.instructions.is_empty()
+        || caps.variants.is_some()
+        || !caps.flags.is_empty()
+    {
+        return Err(
+            "claims the codec level and instruction-level capabilities at once; give either \
+             `codec` or `profile` and `instructions`"
+                .into(),
+        );
+    }
+    let ability = |name: &str, c: &Option<protocol::OperationCapabilities>| match c {
+        None => Ok(None),
+        Some(c) => {
+            let width = c.width.unwrap_or(16);
+            if width != 16 && width != 32 {
+                return Err(format!("claims {name} of width {width}; give 16 or 32"));
+            }
+            if let Some(d) = c.digits.as_ref().and_then(|d| d.iter().find(|d| **d == 0)) {
+                return Err(format!("claims {name} of {d} digits"));
+            }
+            Ok(Some(OperationAbilities {
+                digits: c.digits.clone(),
+                width,
+            }))
+        }
+    };
+    let abilities = CodecAbilities {
+        hex_to_value: ability("hex-to-value", &codec.hex_to_value)?,
+        value_to_hex: ability("value-to-hex", &codec.value_to_hex)?,
+    };
+    if abilities.hex_to_value.is_none() && abilities.value_to_hex.is_none() {
+        return Err("claims the codec level but no operation".into());
+    }
+    Ok(abilities)
 }
 
 /// Checks a handshake's capabilities against the profiles and the configured family.
@@ -602,18 +731,50 @@ fn outcome(
     }
     out.error = match error {
         None => None,
-        Some(ErrorReport::Code(c)) => Some(ErrorSignal::Code(c)),
-        Some(ErrorReport::Flag(f)) => Some(ErrorSignal::Flag(device(&f)?)),
+        Some(ErrorReport::Signal(SignalReport::Code(c))) => Some(ErrorSignal::Code(c)),
+        Some(ErrorReport::Signal(SignalReport::Flag(f))) => Some(ErrorSignal::Flag(device(&f)?)),
+        Some(ErrorReport::Class(c)) => {
+            return Err(format!(
+                "an error class (`{c}`) answers a codec question, not an instruction request"
+            ))
+        }
     };
     Ok(out)
 }
 
-fn run_message(cases: &[CaseRequest]) -> Vec<u8> {
+/// A codec answer: exactly one of a value, a text or an error class, and nothing of the
+/// instruction level.
+fn codec_answer(
+    memory: Vec<MemoryRange>,
+    writes: BTreeMap<String, u16>,
+    error: Option<ErrorReport>,
+    value: Option<i64>,
+    text: Option<Vec<u8>>,
+) -> Result<Answer, String> {
+    if !memory.is_empty() || !writes.is_empty() {
+        return Err("`memory` or `writes` in the answer to a codec question".into());
+    }
+    match (value, text, error) {
+        // A negative value (some libraries return one) is an answer that differs, not garbage.
+        (Some(v), None, None) => Ok(Answer::Value(v as u64)),
+        (None, Some(t), None) => Ok(Answer::Text(
+            t.into_iter().take_while(|b| *b != 0).collect(),
+        )),
+        (None, None, Some(ErrorReport::Class(c))) => Ok(Answer::Error(c)),
+        (None, None, Some(ErrorReport::Signal(_))) => {
+            Err("a vendor's error signal answers a codec question; give an error class".into())
+        }
+        (None, None, None) => Err("no `value`, `text` or `error` in a codec answer".into()),
+        _ => Err("more than one of `value`, `text` and `error` in a codec answer".into()),
+    }
+}
+
+fn run_message(cases: &[RunCase]) -> Vec<u8> {
     #[derive(Serialize)]
     struct Run<'a> {
         #[serde(rename = "type")]
         kind: &'static str,
-        cases: &'a [CaseRequest],
+        cases: &'a [RunCase],
     }
     // Sized for the usual request, so that neither the encoding nor the newline reallocates.
     let mut out = Vec::with_capacity(cases.len() * 1536 + 64);

@@ -10,9 +10,13 @@ use std::collections::BTreeMap;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-/// The protocol version this harness speaks. A backend answering `hello` with any other version
-/// is refused before a case runs.
-pub const PROTOCOL_VERSION: u32 = 1;
+use crate::model::cross_vendor::{ErrorClass, Operation};
+
+/// The newest protocol version this harness speaks: it says so in its `hello`.
+pub const PROTOCOL_VERSION: u32 = 2;
+/// The versions a backend may answer with: 1 (instruction level only) and 2 (instruction or
+/// codec level). Any other is refused before a case runs.
+pub const SUPPORTED_VERSIONS: [u32; 2] = [1, 2];
 
 /// A message from the harness to a backend.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
@@ -27,7 +31,7 @@ pub enum HarnessMessage {
     },
     /// Cases to execute: the backend answers each with one `result` or `unsupported` line, in
     /// the order given.
-    Run { cases: Vec<CaseRequest> },
+    Run { cases: Vec<RunCase> },
     /// The last message: the backend exits. The harness then closes stdin and, after a grace
     /// period, kills a backend that is still running.
     Shutdown,
@@ -62,6 +66,49 @@ pub struct CaseRequest {
     /// The memory before execution: every word the case may touch, fill included. The backend
     /// reports memory after for these same ranges (or lists its writes).
     pub memory: Vec<MemoryRange>,
+}
+
+/// One case of a `run` message: an instruction to execute (levels 1 and 2) or a conversion to
+/// make (codec level, version 2).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(untagged)]
+pub enum RunCase {
+    Instruction(CaseRequest),
+    Codec(CodecRequest),
+}
+
+impl RunCase {
+    pub fn id(&self) -> u64 {
+        match self {
+            RunCase::Instruction(c) => c.id,
+            RunCase::Codec(c) => c.id,
+        }
+    }
+    /// The corpus case id.
+    pub fn case(&self) -> &str {
+        match self {
+            RunCase::Instruction(c) => &c.case,
+            RunCase::Codec(c) => &c.case,
+        }
+    }
+}
+
+/// One cross-vendor conversion asked of a codec-level backend.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CodecRequest {
+    pub id: u64,
+    /// The cross-vendor case id.
+    pub case: String,
+    pub operation: Operation,
+    /// hex-to-value: the characters, as byte values, exactly as the case gives them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub text: Option<Vec<u8>>,
+    /// value-to-hex: the value to convert.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub value: Option<u64>,
+    /// The digit count (FX5 n, IDEC S2).
+    pub digits: u32,
 }
 
 /// An operand: a device name or a constant.
@@ -118,6 +165,12 @@ pub enum BackendMessage {
         /// The operation error signalled, or null for none.
         #[serde(default)]
         error: Option<ErrorReport>,
+        /// Codec level, hex-to-value: the value decoded.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        value: Option<i64>,
+        /// Codec level, value-to-hex: the characters written, as byte values.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        text: Option<Vec<u8>>,
     },
     /// The backend does not implement this case. For a case it claims in its capabilities this
     /// counts as a difference, never as a skip.
@@ -133,14 +186,20 @@ pub struct BackendInfo {
 }
 
 /// What a backend implements. Trials outside it are skipped with a reason; trials inside it
-/// must be answered.
+/// must be answered. An instruction-level backend gives `profile` and `instructions`; a
+/// codec-level one (version 2) gives `codec` instead.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Capabilities {
     /// The vendor profile id it implements, e.g. `mitsubishi-iqr`.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
     pub profile: String,
     /// The instructions it implements, as the profile names them.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub instructions: Vec<String>,
+    /// Codec level: the cross-vendor operations it implements.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub codec: Option<CodecCapabilities>,
     /// The variants it implements; every variant of the profile when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub variants: Option<Vec<String>>,
@@ -150,10 +209,52 @@ pub struct Capabilities {
     pub flags: BTreeMap<String, Vec<bool>>,
 }
 
-/// An operation error: the vendor's code, or the flag a vendor signals with.
+/// The operations of a codec-level backend.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CodecCapabilities {
+    /// Text -> value; absent when not implemented.
+    #[serde(
+        rename = "hex-to-value",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub hex_to_value: Option<OperationCapabilities>,
+    /// Value -> text; absent when not implemented.
+    #[serde(
+        rename = "value-to-hex",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub value_to_hex: Option<OperationCapabilities>,
+}
+
+/// What one codec operation takes.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct OperationCapabilities {
+    /// The digit counts implemented; any from 1 to 8 when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub digits: Option<Vec<u32>>,
+    /// The value width in bits, 16 or 32 (16 when absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub width: Option<u32>,
+}
+
+/// An operation error: the vendor's code or flag (instruction level), or an error class (codec
+/// level, version 2).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(untagged)]
+pub enum ErrorReport {
+    Signal(SignalReport),
+    /// Codec level: `"invalid-digit"`, `"invalid-count"`, `"device-range"` or `"error"`.
+    Class(ErrorClass),
+}
+
+/// An instruction-level error signal.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "lowercase", deny_unknown_fields)]
-pub enum ErrorReport {
+pub enum SignalReport {
     /// The error code, e.g. `13313` for 3401H.
     Code(u16),
     /// The error flag turned on, e.g. `"M8004"`.
@@ -189,7 +290,23 @@ impl HarnessMessage {
             kind: String,
             protocol: Option<u32>,
             harness: Option<String>,
-            cases: Option<Vec<CaseRequest>>,
+            cases: Option<Vec<RunCase>>,
+        }
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct InstructionRun {
+            #[serde(rename = "type")]
+            kind: String,
+            cases: Vec<CaseRequest>,
+        }
+        // Instruction requests are read without the untagged detour when they are all there is:
+        // a batch of them is what the native adapter's throughput depends on.
+        if let Ok(run) = serde_json::from_slice::<InstructionRun>(line) {
+            if run.kind == "run" {
+                return Ok(HarnessMessage::Run {
+                    cases: run.cases.into_iter().map(RunCase::Instruction).collect(),
+                });
+            }
         }
         let l: Line = serde_json::from_slice(line)?;
         let present = [
@@ -244,6 +361,8 @@ impl BackendMessage {
             protocol: Option<u32>,
             backend: Option<BackendInfo>,
             capabilities: Option<Capabilities>,
+            value: Option<i64>,
+            text: Option<Vec<u8>>,
         }
         let l: Line = serde_json::from_slice(line)?;
         let present = [
@@ -255,17 +374,21 @@ impl BackendMessage {
             ("protocol", l.protocol.is_some()),
             ("backend", l.backend.is_some()),
             ("capabilities", l.capabilities.is_some()),
+            ("value", l.value.is_some()),
+            ("text", l.text.is_some()),
         ];
         let only = |allowed: &[&str]| only_fields(&l.kind, &present, allowed);
         let missing = |k: &'static str| serde_json::Error::missing_field(k);
         match l.kind.as_str() {
             "result" => {
-                only(&["id", "memory", "writes", "error"])?;
+                only(&["id", "memory", "writes", "error", "value", "text"])?;
                 Ok(BackendMessage::Result {
                     id: l.id.ok_or_else(|| missing("id"))?,
                     memory: l.memory.unwrap_or_default(),
                     writes: l.writes.unwrap_or_default(),
                     error: l.error,
+                    value: l.value,
+                    text: l.text,
                 })
             }
             "unsupported" => {
@@ -295,7 +418,7 @@ impl BackendMessage {
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(untagged)]
 #[schemars(
-    title = "plc-conformance external-backend protocol, version 1",
+    title = "plc-conformance external-backend protocol, versions 1 and 2",
     description = "One JSON object per line. The harness sends HarnessMessage lines on the \
                    backend's stdin; the backend answers with BackendMessage lines on stdout."
 )]
@@ -333,9 +456,21 @@ mod tests {
                 id: 3,
                 memory: vec![],
                 writes: BTreeMap::from([("D200".into(), 0x5A8D)]),
-                error: Some(ErrorReport::Code(0x3401)),
+                error: Some(ErrorReport::Signal(SignalReport::Code(0x3401))),
+                value: None,
+                text: None,
             }
         );
+        let codec: BackendMessage =
+            serde_json::from_str(r#"{"type":"result","id":7,"error":"invalid-digit"}"#)
+                .expect("codec error");
+        assert!(matches!(
+            codec,
+            BackendMessage::Result {
+                error: Some(ErrorReport::Class(ErrorClass::InvalidDigit)),
+                ..
+            }
+        ));
         let run: HarnessMessage = serde_json::from_str(
             r#"{"type":"run","cases":[{"id":1,"case":"c","instruction":"HABIN",
                 "profile":"p","variant":"v","flags":{"SM705":true},"operands":{"s":"D100","n":4},
@@ -345,8 +480,19 @@ mod tests {
         let HarnessMessage::Run { cases } = run else {
             panic!("not a run message")
         };
-        assert_eq!(cases[0].operands["n"], OperandValue::Constant(4));
-        assert_eq!(cases[0].operands["s"], OperandValue::Device("D100".into()));
+        let RunCase::Instruction(case) = &cases[0] else {
+            panic!("not an instruction request")
+        };
+        assert_eq!(case.operands["n"], OperandValue::Constant(4));
+        assert_eq!(case.operands["s"], OperandValue::Device("D100".into()));
+        let run = HarnessMessage::from_line(
+            br#"{"type":"run","cases":[{"id":7,"case":"c","operation":"hex-to-value","text":[53,65],"digits":2}]}"#,
+        )
+        .expect("codec run");
+        let HarnessMessage::Run { cases } = run else {
+            panic!("not a run message")
+        };
+        assert!(matches!(&cases[0], RunCase::Codec(c) if c.text == Some(vec![53, 65])));
         assert_eq!(
             serde_json::to_string(&HarnessMessage::Shutdown).expect("json"),
             r#"{"type":"shutdown"}"#
@@ -367,6 +513,11 @@ mod tests {
             r#"{"type":"bye","id":5}"#,
             r#"{"type":"result","id":3,"writes":{"D200":65536}}"#,
             r#"{"type":"result","id":3,"write":{}}"#,
+            r#"{"type":"result","id":7,"value":23181}"#,
+            r#"{"type":"result","id":7,"text":[48,65]}"#,
+            r#"{"type":"result","id":7,"error":"invalid-digit"}"#,
+            r#"{"type":"result","id":7,"error":"overflow"}"#,
+            r#"{"type":"hello","protocol":2,"backend":{"name":"x","version":"1"},"capabilities":{"codec":{"hex-to-value":{"digits":[4],"width":16}}}}"#,
             r#"[1,2]"#,
         ];
         for line in backend {

@@ -10,7 +10,7 @@ use std::io::{BufRead, Write};
 
 use super::protocol::{
     BackendInfo, BackendMessage, Capabilities, CaseRequest, ErrorReport, FillName, HarnessMessage,
-    OperandValue, PROTOCOL_VERSION,
+    OperandValue, RunCase, SignalReport, PROTOCOL_VERSION,
 };
 use crate::backend::{Backend, Request, Response};
 use crate::device::Device;
@@ -46,12 +46,21 @@ pub fn serve(
             )
         })?;
         match message {
-            HarnessMessage::Hello { .. } => {
-                write_message(&mut output, &hello(backend, profile))?;
+            HarnessMessage::Hello { protocol, .. } => {
+                // The version the harness asks for, up to the newest this server speaks.
+                let version = protocol.clamp(1, PROTOCOL_VERSION);
+                write_message(&mut output, &hello(backend, profile, version))?;
             }
             HarnessMessage::Run { cases } => {
                 for case in &cases {
-                    write_message(&mut output, &answer(backend, profile, case))?;
+                    let message = match case {
+                        RunCase::Instruction(case) => answer(backend, profile, case),
+                        RunCase::Codec(case) => BackendMessage::Unsupported {
+                            id: case.id,
+                            reason: "this server answers at the instruction level".into(),
+                        },
+                    };
+                    write_message(&mut output, &message)?;
                 }
             }
             HarnessMessage::Shutdown => return Ok(()),
@@ -69,7 +78,7 @@ fn write_message(output: &mut impl Write, message: &BackendMessage) -> Result<()
 }
 
 /// The capabilities of a built-in backend: every instruction it claims on some variant.
-fn hello(backend: &dyn Backend, profile: &Profile) -> BackendMessage {
+fn hello(backend: &dyn Backend, profile: &Profile, protocol: u32) -> BackendMessage {
     let instructions = profile
         .instructions
         .keys()
@@ -77,7 +86,7 @@ fn hello(backend: &dyn Backend, profile: &Profile) -> BackendMessage {
         .cloned()
         .collect();
     BackendMessage::Hello {
-        protocol: PROTOCOL_VERSION,
+        protocol,
         backend: BackendInfo {
             name: format!("plc-conformance serve ({})", backend.name()),
             version: env!("CARGO_PKG_VERSION").to_string(),
@@ -85,6 +94,7 @@ fn hello(backend: &dyn Backend, profile: &Profile) -> BackendMessage {
         capabilities: Capabilities {
             profile: profile.id.clone(),
             instructions,
+            codec: None,
             variants: None,
             flags: BTreeMap::new(),
         },
@@ -157,12 +167,17 @@ fn answer(backend: &dyn Backend, profile: &Profile, case: &CaseRequest) -> Backe
                 .iter()
                 .map(|(d, v)| (d.to_string(), *v))
                 .collect(),
-            error: outcome.error.map(|e| match e {
-                ErrorSignal::Code(c) => ErrorReport::Code(c),
-                ErrorSignal::Flag(d) => ErrorReport::Flag(d.to_string()),
+            error: outcome.error.map(|e| {
+                ErrorReport::Signal(match e {
+                    ErrorSignal::Code(c) => SignalReport::Code(c),
+                    ErrorSignal::Flag(d) => SignalReport::Flag(d.to_string()),
+                })
             }),
+            value: None,
+            text: None,
         },
         Ok(Response::Unsupported(reason)) => unsupported(reason),
+        Ok(Response::Answer(_)) => unsupported("a codec answer to an instruction request".into()),
         Err(fault) => unsupported(format!("the built-in backend failed: {fault}")),
     }
 }
