@@ -16,7 +16,7 @@
 //! `NAME::setup` trial with the reason.
 
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::{Arc, OnceLock};
 
@@ -33,110 +33,212 @@ use crate::report::text::{render, Palette};
 use crate::runner::{run_one, Paths, Project};
 
 /// Runs the corpus under `root` as libtest trials: the built-in reference models, the project
-/// file's external backends, and `extra` backends (an emulator written in Rust implements
-/// [`Backend`] and passes itself here). `binary` is the plc-conformance executable that project
-/// backends see as `$PLC_CONFORMANCE`.
+/// file's external backends, and `extra` backends. `binary` is the plc-conformance executable
+/// that project backends see as `$PLC_CONFORMANCE`. (What `tests/conformance.rs` calls; see
+/// [`Harness`] for the other choices.)
 pub fn main(root: &Path, binary: &Path, extra: Vec<Arc<dyn Backend>>) -> ExitCode {
-    let args = Arguments::from_args();
-    let mut paths = Paths::under(root);
-    // A corpus cut down to one trial's file need not hold every case a known-differences
-    // file names.
-    let mut whole_corpus = true;
-    if let Some(files) = exact_files(&args, &paths) {
-        paths.vectors = files;
-        whole_corpus = false;
+    let mut harness = Harness::new(root).project_file(binary);
+    for b in extra {
+        harness = harness.backend(b, None);
     }
-    let mut project = match Project::load(&paths) {
-        Ok(p) => p,
-        Err(errors) => {
-            eprintln!("the corpus does not load:\n{errors}");
-            return ExitCode::from(2);
+    harness.run()
+}
+
+/// The corpus as libtest trials for a `harness = false` test of your own: an emulator or a
+/// library written in Rust implements [`Backend`] (or [`crate::backend::Codec`], wrapped by
+/// [`crate::backend::codec_backend`]) and gets one trial per case it implements, with diffs and
+/// known differences, in process.
+///
+/// ```no_run
+/// # use std::sync::Arc;
+/// # fn my_backend() -> Arc<dyn plc_conformance::backend::Backend> { unimplemented!() }
+/// use plc_conformance::libtest::Harness;
+///
+/// fn main() -> std::process::ExitCode {
+///     Harness::new("path/to/plc-conformance")   // its vendors/ and vectors/
+///         .without_builtin()                     // only your backend's trials
+///         .backend(my_backend(), Some("my.known.yaml".into()))
+///         .run()
+/// }
+/// ```
+pub struct Harness {
+    root: PathBuf,
+    /// The plc-conformance binary, when the project file's backends take part.
+    project_file: Option<PathBuf>,
+    builtin: bool,
+    extra: Vec<(Arc<dyn Backend>, Option<PathBuf>)>,
+}
+
+impl Harness {
+    /// The corpus and profiles under `root` (`vendors/`, `vectors/`), with the built-in
+    /// reference models.
+    pub fn new(root: impl Into<PathBuf>) -> Self {
+        Harness {
+            root: root.into(),
+            project_file: None,
+            builtin: true,
+            extra: Vec::new(),
         }
-    };
-    let (file, explicit) = locate_project(root);
-    let configured = match load_project(&file, explicit, binary) {
-        Ok(p) => p,
-        Err(errors) => {
-            eprintln!("the project file does not load:\n{errors}");
-            return ExitCode::from(2);
-        }
-    };
-    let mut tests = Vec::new();
-    for skipped in configured.skipped {
-        let name = format!("{}::setup", skipped.name);
-        let why = skipped.to_string();
-        tests.push(
-            Test::ignorable_test(name, move || Ok(Completion::ignored_with(why)))
-                .with_ignored_flag(true),
-        );
     }
-    let mut backends = project.backends.clone();
-    backends.extend(extra);
-    let mut lazies: Vec<Arc<LazyStart>> = Vec::new();
-    // Backends run on request only (self-checks of the harness) have tests of their own.
-    for c in configured.configured.into_iter().filter(|c| !c.on_request) {
-        let name = c.settings.name.clone();
-        match c.settings.profile.clone() {
-            // A backend whose profile is declared is planned without starting it.
-            Some(profile) => {
-                let lazy = Arc::new(LazyStart {
-                    settings: c.settings.clone(),
-                    profiles: project.profiles.clone(),
-                    started: OnceLock::new(),
-                });
-                if let (Some(known), Some(p)) = (
-                    c.settings.known_differences.as_ref(),
-                    project.profiles.get(&profile),
-                ) {
-                    match load_known(known, Some(p), &project.corpus, whole_corpus) {
-                        Ok(k) => {
-                            project.known.insert(name.clone(), k);
-                        }
-                        Err(e) => {
-                            let message = e.to_string();
-                            tests.push(Test::test(format!("{name}::handshake"), move || {
-                                Err(Failed::from(message))
-                            }));
-                            continue;
-                        }
+
+    /// Also runs the external backends of the project file under the root; `binary` is what
+    /// their commands see as `$PLC_CONFORMANCE`.
+    pub fn project_file(mut self, binary: &Path) -> Self {
+        self.project_file = Some(binary.to_path_buf());
+        self
+    }
+
+    /// Leaves out the built-in reference models.
+    pub fn without_builtin(mut self) -> Self {
+        self.builtin = false;
+        self
+    }
+
+    /// Adds a backend, with its known-differences file.
+    pub fn backend(mut self, backend: Arc<dyn Backend>, known: Option<PathBuf>) -> Self {
+        self.extra.push((backend, known));
+        self
+    }
+
+    /// Parses libtest's arguments, plans, runs and reports; the exit code libtest gives.
+    pub fn run(self) -> ExitCode {
+        let args = Arguments::from_args();
+        let mut paths = Paths::under(&self.root);
+        // A corpus cut down to one trial's file need not hold every case a known-differences
+        // file names.
+        let mut whole_corpus = true;
+        if let Some(files) = exact_files(&args, &paths) {
+            paths.vectors = files;
+            whole_corpus = false;
+        }
+        let mut project = match Project::load(&paths) {
+            Ok(p) => p,
+            Err(errors) => {
+                eprintln!("the corpus does not load:\n{errors}");
+                return ExitCode::from(2);
+            }
+        };
+        let mut tests = Vec::new();
+        let mut backends = if self.builtin {
+            project.backends.clone()
+        } else {
+            Vec::new()
+        };
+        for (backend, known) in self.extra {
+            if let Some(file) = known {
+                let profile = project.profiles.get(backend.profile()).map(|p| p.as_ref());
+                match load_known(&file, profile, &project.corpus, whole_corpus) {
+                    Ok(k) => {
+                        project.known.insert(backend.name().to_string(), k);
+                    }
+                    Err(e) => {
+                        let message = e.to_string();
+                        tests.push(Test::test(
+                            format!("{}::known-differences", backend.name()),
+                            move || Err(Failed::from(message)),
+                        ));
+                        continue;
                     }
                 }
-                let handshake = lazy.clone();
-                tests.push(Test::test(format!("{name}::handshake"), move || {
-                    handshake.get().map(|_| ()).map_err(Failed::from)
-                }));
-                backends.push(Arc::new(Placeholder {
-                    name,
-                    profile,
-                    lazy: lazy.clone(),
-                }));
-                lazies.push(lazy);
             }
-            None => match project.add_external(c.settings, whole_corpus) {
-                Ok(b) => backends.push(b),
-                Err(e) => {
-                    let message = e.to_string();
-                    tests.push(Test::test(format!("{name}::handshake"), move || {
-                        Err(Failed::from(message))
-                    }));
+            backends.push(backend);
+        }
+        let mut lazies: Vec<Arc<LazyStart>> = Vec::new();
+        if let Some(binary) = &self.project_file {
+            let (file, explicit) = locate_project(&self.root);
+            let configured = match load_project(&file, explicit, binary) {
+                Ok(p) => p,
+                Err(errors) => {
+                    eprintln!("the project file does not load:\n{errors}");
+                    return ExitCode::from(2);
                 }
-            },
+            };
+            for skipped in configured.skipped {
+                let name = format!("{}::setup", skipped.name);
+                let why = skipped.to_string();
+                tests.push(
+                    Test::ignorable_test(name, move || Ok(Completion::ignored_with(why)))
+                        .with_ignored_flag(true),
+                );
+            }
+            // Backends run on request only (self-checks of the harness) have tests of their own.
+            for c in configured.configured.into_iter().filter(|c| !c.on_request) {
+                add_configured(
+                    c.settings,
+                    &mut project,
+                    whole_corpus,
+                    &mut tests,
+                    &mut backends,
+                    &mut lazies,
+                );
+            }
+        }
+        let by_name: BTreeMap<String, Arc<LazyStart>> = lazies
+            .iter()
+            .map(|l| (l.settings.name.clone(), l.clone()))
+            .collect();
+        let trials = project.plan(&backends);
+        tests.extend(trials.into_iter().map(|t| {
+            let lazy = by_name.get(t.backend.name()).cloned();
+            test(t, lazy)
+        }));
+        let conclusion = libtest_mimic::run(&args, tests);
+        // Started processes get their shutdown message before the harness exits.
+        drop(lazies);
+        drop(project);
+        conclusion.exit_code()
+    }
+}
+
+/// A project-file backend: planned without starting it when its profile is declared (it
+/// starts with the first trial that runs), else started now to learn what it implements.
+fn add_configured(
+    settings: ExternalSettings,
+    project: &mut Project,
+    whole_corpus: bool,
+    tests: &mut Vec<Test>,
+    backends: &mut Vec<Arc<dyn Backend>>,
+    lazies: &mut Vec<Arc<LazyStart>>,
+) {
+    let name = settings.name.clone();
+    let fail = |tests: &mut Vec<Test>, message: String| {
+        tests.push(Test::test(format!("{name}::handshake"), move || {
+            Err(Failed::from(message))
+        }));
+    };
+    let Some(profile) = settings.profile.clone() else {
+        match project.add_external(settings, whole_corpus) {
+            Ok(b) => backends.push(b),
+            Err(e) => fail(tests, e.to_string()),
+        }
+        return;
+    };
+    if let (Some(known), Some(p)) = (
+        settings.known_differences.as_ref(),
+        project.profiles.get(&profile),
+    ) {
+        match load_known(known, Some(p), &project.corpus, whole_corpus) {
+            Ok(k) => {
+                project.known.insert(name.clone(), k);
+            }
+            Err(e) => return fail(tests, e.to_string()),
         }
     }
-    let by_name: BTreeMap<String, Arc<LazyStart>> = lazies
-        .iter()
-        .map(|l| (l.settings.name.clone(), l.clone()))
-        .collect();
-    let trials = project.plan(&backends);
-    tests.extend(trials.into_iter().map(|t| {
-        let lazy = by_name.get(t.backend.name()).cloned();
-        test(t, lazy)
+    let lazy = Arc::new(LazyStart {
+        settings,
+        profiles: project.profiles.clone(),
+        started: OnceLock::new(),
+    });
+    let handshake = lazy.clone();
+    tests.push(Test::test(format!("{name}::handshake"), move || {
+        handshake.get().map(|_| ()).map_err(Failed::from)
     }));
-    let conclusion = libtest_mimic::run(&args, tests);
-    // Started processes get their shutdown message before the harness exits.
-    drop(lazies);
-    drop(project);
-    conclusion.exit_code()
+    backends.push(Arc::new(Placeholder {
+        name,
+        profile,
+        lazy: lazy.clone(),
+    }));
+    lazies.push(lazy);
 }
 
 /// With `--exact NAME` (how nextest runs each trial in a process of its own), only the vector

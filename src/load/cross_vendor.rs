@@ -146,8 +146,10 @@ fn lower_case(
         operation: file.operation,
         basis: spec.basis,
         citation: Citation {
-            manual: "cross-vendor".into(),
-            page: file.source.clone(),
+            // The cases of a cross-vendor file rest on several manuals: the file's `source`
+            // says which, in words.
+            manual: file.source.clone(),
+            page: String::new(),
             text: cite,
         },
         location: cx.location(key),

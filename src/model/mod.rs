@@ -92,7 +92,11 @@ pub struct Citation {
 
 impl fmt::Display for Citation {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{} p.{}", self.manual, self.page)?;
+        if self.page.is_empty() {
+            write!(f, "{}", self.manual)?;
+        } else {
+            write!(f, "{} p.{}", self.manual, self.page)?;
+        }
         if let Some(text) = &self.text {
             write!(f, ": {text}")?;
         }

@@ -1,0 +1,20 @@
+//! rmodbus against the cross-vendor corpus, in this crate's own `cargo test`: one libtest trial
+//! per cross-vendor case its codec implements, with diffs and known differences.
+
+use std::path::Path;
+use std::process::ExitCode;
+
+use plc_conformance::backend::codec_backend;
+use plc_conformance::libtest::Harness;
+use rmodbus_codec::Rmodbus;
+
+fn main() -> ExitCode {
+    let here = Path::new(env!("CARGO_MANIFEST_DIR"));
+    Harness::new(here.join("../.."))
+        .without_builtin()
+        .backend(
+            codec_backend(Rmodbus),
+            Some(here.join("rmodbus.known.yaml")),
+        )
+        .run()
+}

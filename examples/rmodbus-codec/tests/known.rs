@@ -1,0 +1,36 @@
+//! Without its known-differences file, rmodbus fails exactly the trials the file lists: the list
+//! neither hides a difference nor excuses a trial that conforms.
+
+use std::path::Path;
+
+use plc_conformance::backend::codec_backend;
+use plc_conformance::load::load_known;
+use plc_conformance::runner::{verdicts, Paths, Project};
+use rmodbus_codec::Rmodbus;
+
+#[test]
+fn rmodbus_fails_exactly_its_known_differences() {
+    let here = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let project =
+        Project::load(&Paths::under(&here.join("../.."))).unwrap_or_else(|e| panic!("{e}"));
+    let trials = project.plan(&[codec_backend(Rmodbus)]);
+    assert!(trials.iter().any(|t| t.skip.is_none()), "no trial runs");
+    let failing: Vec<String> = trials
+        .iter()
+        .zip(verdicts(&trials))
+        .filter(|(_, v)| v.is_failure())
+        .map(|(t, _)| t.case_id().to_string())
+        .collect();
+    let known = load_known(
+        &here.join("rmodbus.known.yaml"),
+        None,
+        &project.corpus,
+        true,
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let mut listed: Vec<String> = known.entries.iter().map(|e| e.case.clone()).collect();
+    let mut failing_sorted = failing.clone();
+    listed.sort();
+    failing_sorted.sort();
+    assert_eq!(failing_sorted, listed);
+}
