@@ -208,6 +208,13 @@ fn the_good_case_loads() {
     "cases[0].expect.error",
     "reports errors as a code in SD0"
 )]
+#[case::bare_decimal_error_code(
+    "after: {D200: 5A8DH}",
+    "error: 3401",
+    14,
+    "cases[0].expect.error",
+    "`3401` is a decimal number, but error codes are written in hex as the manuals write them: did you mean `3401H`?"
+)]
 // Rules of the format.
 #[case::manual_without_cite(
     "    cite: example\n",
@@ -354,4 +361,38 @@ fn unspecified_cases_need_no_cite_or_expectation() {
         .replacen("    cite: example\n", "", 1)
         .replacen("    expect:\n      after: {D200: 5A8DH}\n", "", 1);
     assert_eq!(load(&format!("{HEADER}{case}")), Ok(1));
+}
+
+/// A constant the manual does not allow for an operand describes a program that cannot exist:
+/// IDEC ATOH takes S2 as a constant 1-4 only, so a count of 5 must come from a register.
+#[test]
+fn an_unprogrammable_constant_is_a_load_error() {
+    let text = "\
+instructions: [ATOH]
+profiles: [idec-fc4a]
+source: {manual: fc4a-user, page: 14-5}
+cases:
+  - id: s2-five
+    basis: manual
+    cite: x
+    operands: {S1: D100, S2: K5, D1: D200}
+    before: {D100: 31H}
+    expect: {error: M8004}
+  - id: s2-five-from-a-register
+    basis: manual
+    cite: x
+    operands: {S1: D100, S2: D10, D1: D200}
+    before: {D100: 31H, D10: 5}
+    expect: {error: M8004}
+";
+    let errors = load(text).expect_err("K5 loaded");
+    assert_eq!(errors.len(), 1, "{errors:#?}");
+    let e = &errors[0];
+    assert_eq!(e.line, Some(8), "{e}");
+    assert_eq!(e.key.as_deref(), Some("cases[0].operands.S2"), "{e}");
+    assert!(
+        e.to_string()
+            .contains("K5 cannot be programmed: ATOH operand `S2` takes constants 1-4 only"),
+        "{e}"
+    );
 }

@@ -354,6 +354,30 @@ pub(crate) fn lower_section(p: &ProfileSpec, cx: &mut FileContext<'_>) -> CrossV
                 ),
             );
         }
+        let count_constants = l
+            .count
+            .as_ref()
+            .and_then(|c| def.operands.get(c))
+            .and_then(|d| d.constants);
+        let count_register = match &l.count_register {
+            Some(text) => match text.parse::<Device>() {
+                Ok(d) => Some(d),
+                Err(e) => {
+                    cx.error(format!("{key}.count_register"), LoadErrorKind::Device(e));
+                    None
+                }
+            },
+            None => None,
+        };
+        if count_constants.is_some() && count_register.is_none() {
+            cx.error(
+                &key,
+                LoadErrorKind::Missing(
+                    "count_register: the count operand takes only some constants, so a count \
+                     outside them needs a register",
+                ),
+            );
+        }
         let (Some(source), Some(destination)) = (source, destination) else {
             continue;
         };
@@ -373,6 +397,8 @@ pub(crate) fn lower_section(p: &ProfileSpec, cx: &mut FileContext<'_>) -> CrossV
             destination,
             text: l.text,
             count: l.count.clone(),
+            count_constants,
+            count_register,
             width: l.width,
         }));
     }

@@ -133,6 +133,20 @@ fn check_profile(p: &ProfileSpec, cx: &mut FileContext<'_>) {
             }
         }
         for (op, def) in &def.operands {
+            if def.constants.is_some() && !def.constant {
+                cx.error(
+                    format!("instructions.{name}.operands.{op}.constants"),
+                    LoadErrorKind::Invalid("`constants` needs `constant: true`".into()),
+                );
+            }
+            for code in def.limits.keys() {
+                if !def.devices.contains(code) {
+                    cx.error(
+                        format!("instructions.{name}.operands.{op}.limits.{code}"),
+                        unknown("device of this operand", code, &def.devices),
+                    );
+                }
+            }
             for (i, code) in def.devices.iter().enumerate() {
                 if !p.devices.contains_key(code) {
                     cx.error(

@@ -348,6 +348,38 @@ fn lower_operands(
                     continue;
                 };
                 match &operand {
+                    Operand::Constant(k)
+                        if def.constant && def.constants.is_some_and(|r| !r.contains(*k)) =>
+                    {
+                        let r = def.constants.unwrap_or(crate::spec::profile::ConstantRange {
+                            min: *k,
+                            max: *k,
+                        });
+                        cx.error(
+                            &okey,
+                            LoadErrorKind::Invalid(format!(
+                                "K{k} cannot be programmed: {instr} operand `{name}` takes \
+                                 constants {}-{} only ({}); give the value in a register \
+                                 (e.g. `{name}: D10` with D10 set in `before`)",
+                                r.min, r.max, p.id
+                            )),
+                        )
+                    }
+                    Operand::Device(d)
+                        if def
+                            .limits
+                            .get(&d.code)
+                            .is_some_and(|r| !r.contains(d.index)) =>
+                    {
+                        let r = def.limits[&d.code];
+                        cx.error(
+                            &okey,
+                            LoadErrorKind::Invalid(format!(
+                                "{d} cannot be programmed: {instr} operand `{name}` takes {0}{1}-{0}{2} only ({3})",
+                                d.code, r.first, r.last, p.id
+                            )),
+                        )
+                    }
                     Operand::Constant(_) if !def.constant => cx.error(
                         &okey,
                         LoadErrorKind::Invalid(format!(
@@ -528,7 +560,18 @@ fn lower_error(
     match p.errors.signal {
         SignalKind::Code => {
             let code = match value {
-                ScalarSpec::Number(n) => to_bits(&n.to_string(), *n, 16).map(|w| w as u16),
+                // The manuals write every code in hex (3401H); a bare number is almost always
+                // that code without its H, and as decimal it would be another code entirely.
+                ScalarSpec::Number(n) => {
+                    cx.error(
+                        key,
+                        LoadErrorKind::Invalid(format!(
+                            "`{n}` is a decimal number, but error codes are written in hex as \
+                             the manuals write them: did you mean `{n}H`?"
+                        )),
+                    );
+                    return None;
+                }
                 ScalarSpec::Text(t) => parse_word(t),
             };
             match code {

@@ -88,6 +88,10 @@ pub struct Lowering {
     pub text: TextLayout,
     /// The operand that receives the digit count, for instructions that take one.
     pub count: Option<String>,
+    /// The constants the count operand can be programmed with, when limited.
+    pub count_constants: Option<crate::spec::profile::ConstantRange>,
+    /// Where a count outside those constants is put instead.
+    pub count_register: Option<Device>,
     /// The digits the instruction handles when it takes no count (HABIN, BINHA: 4).
     pub width: Option<u32>,
 }

@@ -10,8 +10,20 @@ use crate::text::pack_low_first;
 /// The input that runs `case` through `lowering`.
 pub(super) fn input(lowering: &Lowering, case: &CrossVendorCase) -> Input {
     let mut operands = lowering.operands.clone();
+    let mut count_word = None;
     if let Some(count) = &lowering.count {
-        operands.insert(count.clone(), Operand::Constant(i64::from(case.digits)));
+        let digits = i64::from(case.digits);
+        // A count the instruction cannot take as a constant is read from a register, as a
+        // program would have to give it.
+        match (&lowering.count_register, lowering.count_constants) {
+            (Some(register), Some(range)) if !range.contains(digits) => {
+                operands.insert(count.clone(), Operand::Device(register.clone()));
+                count_word = Some((register.clone(), case.digits as u16));
+            }
+            _ => {
+                operands.insert(count.clone(), Operand::Constant(digits));
+            }
+        }
     }
     let words: Vec<u16> = match lowering.operation {
         Operation::HexToValue => {
@@ -32,11 +44,12 @@ pub(super) fn input(lowering: &Lowering, case: &CrossVendorCase) -> Input {
             (0..count).map(|i| (v >> (16 * i)) as u16).collect()
         }
     };
-    let before = words
+    let mut before: std::collections::BTreeMap<_, _> = words
         .into_iter()
         .enumerate()
         .filter_map(|(i, w)| lowering.source.offset(i as u32).map(|d| (d, w)))
         .collect();
+    before.extend(count_word);
     Input {
         instruction: lowering.instruction.clone(),
         flags: lowering.flags.clone(),

@@ -105,6 +105,10 @@ pub struct LoweringSpec {
     /// The operand that receives the digit count (`n`, `S2`), for instructions that take one.
     #[serde(default)]
     pub count: Option<String>,
+    /// Where the count goes when the instruction cannot take it as a constant (IDEC S2: only
+    /// constants 1-4 can be programmed, so a count of 0 or 5 is read from this register).
+    #[serde(default)]
+    pub count_register: Option<String>,
     /// The digits the instruction handles when it takes no count (HABIN, BINHA: 4).
     #[serde(default)]
     pub width: Option<u32>,

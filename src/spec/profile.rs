@@ -230,6 +230,29 @@ pub struct OperandDef {
     /// Whether a constant (`K4`, `H0ABC`) is allowed.
     #[serde(default)]
     pub constant: bool,
+    /// The constants a program can give, where the manual allows fewer than any value (IDEC
+    /// ATOH S2: 1-4): a vector with another constant describes a program that cannot exist,
+    /// and takes the value from a register instead.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub constants: Option<ConstantRange>,
+    /// Numbers a device code may have in this operand, where the manual allows fewer than the
+    /// device has (IDEC ATOH D1: M0-M1277 only).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub limits: BTreeMap<String, DeviceRange>,
+}
+
+/// An inclusive range of constants.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ConstantRange {
+    pub min: i64,
+    pub max: i64,
+}
+
+impl ConstantRange {
+    pub fn contains(&self, k: i64) -> bool {
+        (self.min..=self.max).contains(&k)
+    }
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
