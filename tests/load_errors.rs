@@ -49,14 +49,14 @@ fn the_good_case_loads() {
     "    basis: manual",
     "    basis: manual\n    colour: red",
     7,
-    "cases[0]",
+    "cases[0].colour",
     "unknown field `colour`"
 )]
 #[case::unknown_expect_key(
     "      after: {D200: 5A8DH}",
     "      after: {D200: 5A8DH}\n      writes: {}",
     15,
-    "cases[0].expect",
+    "cases[0].expect.writes",
     "unknown field `writes`"
 )]
 #[case::unknown_basis(
@@ -293,7 +293,7 @@ fn bad_case_is_reported(
     "source.manual",
     "unknown manual `fx5-manual`"
 )]
-#[case::unknown_top_key("cases:", "title: x\ncases:", 4, "", "unknown field `title`")]
+#[case::unknown_top_key("cases:", "title: x\ncases:", 4, "title", "unknown field `title`")]
 #[case::no_profiles(
     "profiles: [mitsubishi-iqr]",
     "profiles: []",
@@ -395,4 +395,31 @@ cases:
             .contains("K5 cannot be programmed: ATOH operand `S2` takes constants 1-4 only"),
         "{e}"
     );
+}
+
+/// Shape errors do not stop at the first: a file with three of them reports three, each with
+/// its line and key, and an unknown key that is a typo names the key meant.
+#[test]
+fn three_shape_errors_are_reported_in_one_pass() {
+    let case = GOOD_CASE
+        .replacen("    operands:", "    oprands:", 1)
+        .replacen("    cite: example", "    cite: example\n    colour: red", 1)
+        .replacen("      after: {D200: 5A8DH}", "      after: [D200]", 1);
+    let errors = load(&format!("{HEADER}{case}")).expect_err("loaded");
+    let rendered: Vec<String> = errors.iter().map(ToString::to_string).collect();
+    assert_eq!(errors.len(), 3, "{rendered:#?}");
+    for (line, needle) in [
+        (8, "cases[0].colour: unknown field `colour`"),
+        (
+            10,
+            "cases[0].oprands: unknown field `oprands`: did you mean `operands`?",
+        ),
+        (15, "cases[0].expect.after: expected a mapping"),
+    ] {
+        let e = errors
+            .iter()
+            .find(|e| e.to_string().contains(needle))
+            .unwrap_or_else(|| panic!("no error says `{needle}`: {rendered:#?}"));
+        assert_eq!(e.line, Some(line), "{e}");
+    }
 }

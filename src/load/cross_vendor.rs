@@ -412,13 +412,9 @@ pub(crate) fn add_file(
     profiles: &Profiles,
     errors: &mut Vec<super::LoadError>,
 ) -> Vec<(String, CrossVendorCase)> {
-    let spec: CrossVendorFileSpec = match super::parse_yaml(file, text) {
-        Ok(s) => s,
-        Err(e) => {
-            errors.push(e);
-            return Vec::new();
-        }
-    };
     let mut cx = FileContext::new(file, text, errors);
-    lower_file(&spec, profiles, &mut cx)
+    match super::parse_document::<CrossVendorFileSpec>(text, &mut cx) {
+        Some(spec) => lower_file(&spec, profiles, &mut cx),
+        None => Vec::new(),
+    }
 }

@@ -16,7 +16,7 @@
 
 use std::path::Path;
 
-use super::{parse_yaml, read_file, FileContext, LoadErrorKind, LoadErrors};
+use super::{read_file, FileContext, LoadErrorKind, LoadErrors};
 use crate::model::cross_vendor::CrossVendorCase;
 use crate::model::known::{Entry, KnownDifferences};
 use crate::model::profile::Profile;
@@ -34,9 +34,11 @@ pub fn load_known(
     strict: bool,
 ) -> Result<KnownDifferences, LoadErrors> {
     let text = read_file(file).map_err(|e| LoadErrors(vec![e]))?;
-    let spec: KnownFileSpec = parse_yaml(file, &text).map_err(|e| LoadErrors(vec![e]))?;
     let mut errors = Vec::new();
     let mut cx = FileContext::new(file, &text, &mut errors);
+    let Some(spec) = super::parse_document::<KnownFileSpec>(&text, &mut cx) else {
+        return Err(LoadErrors(errors));
+    };
     let mut known = KnownDifferences {
         file: file.to_path_buf(),
         ..KnownDifferences::default()

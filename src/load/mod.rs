@@ -12,6 +12,7 @@ mod known;
 mod locate;
 mod profiles;
 mod project;
+mod shape;
 mod vectors;
 
 use std::path::{Path, PathBuf};
@@ -104,6 +105,25 @@ impl<'a> FileContext<'a> {
             line: self.index.line(key).unwrap_or(1),
         }
     }
+}
+
+/// Reads one document as its on-disk type: first its shape against the type's schema, which
+/// reports every unknown, missing or misplaced key at once (see [`shape`]); then, when the shape
+/// is right, the deserializer, which stops at its first error. A document that is not YAML at
+/// all goes straight to the deserializer, which says where the syntax breaks. Problems go to
+/// the file's errors.
+pub(crate) fn parse_document<T: DeserializeOwned + schemars::JsonSchema>(
+    text: &str,
+    cx: &mut FileContext<'_>,
+) -> Option<T> {
+    if let Ok(doc) = serde_yaml::from_str::<serde_yaml::Value>(text) {
+        if !shape::check(&doc, &crate::spec::schema_of::<T>(), cx) {
+            return None;
+        }
+    }
+    parse_yaml(&cx.file.clone(), text)
+        .map_err(|e| cx.errors.push(e))
+        .ok()
 }
 
 /// Deserializes one YAML document, turning the deserializer's error into a [`LoadError`] with

@@ -4,9 +4,7 @@ use std::collections::BTreeSet;
 use std::path::Path;
 
 use super::checks::unknown;
-use super::{
-    parse_yaml, read_file, yaml_files, FileContext, LineIndex, LoadError, LoadErrorKind, LoadErrors,
-};
+use super::{read_file, yaml_files, FileContext, LineIndex, LoadError, LoadErrorKind, LoadErrors};
 use crate::device::Device;
 use crate::model::profile::{ErrorSignalling, Profile, Profiles};
 use crate::spec::profile::{DeviceDef, DeviceRanges, ProfileSpec, SignalKind};
@@ -57,15 +55,9 @@ pub fn load_profiles(dir: &Path) -> Result<Profiles, LoadErrors> {
 
 /// Parses and checks one profile; problems go to `errors`.
 pub fn parse_profile(file: &Path, text: &str, errors: &mut Vec<LoadError>) -> Option<Profile> {
-    let spec: ProfileSpec = match parse_yaml(file, text) {
-        Ok(p) => p,
-        Err(e) => {
-            errors.push(e);
-            return None;
-        }
-    };
     let before = errors.len();
     let mut cx = FileContext::new(file, text, errors);
+    let spec = super::parse_document::<ProfileSpec>(text, &mut cx)?;
     check_profile(&spec, &mut cx);
     let cross_vendor = super::cross_vendor::lower_section(&spec, &mut cx);
     if cx.errors.len() != before {

@@ -18,7 +18,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use super::{parse_yaml, read_file, FileContext, LoadError, LoadErrorKind, LoadErrors};
+use super::{read_file, FileContext, LoadError, LoadErrorKind, LoadErrors};
 use crate::model::project::{
     Configured, ExternalSettings, Launch, ProjectBackends, DEFAULT_BATCH, DEFAULT_STARTUP_TIMEOUT,
     DEFAULT_TIMEOUT,
@@ -90,14 +90,16 @@ pub fn load_project(
 
 fn read_project(file: &Path, plc_conformance: &Path) -> Result<Vec<Configured>, LoadErrors> {
     let text = read_file(file).map_err(|e| LoadErrors(vec![e]))?;
-    let spec: ProjectFileSpec = parse_yaml(file, &text).map_err(|e| LoadErrors(vec![e]))?;
+    let mut errors = Vec::new();
+    let mut cx = FileContext::new(file, &text, &mut errors);
+    let Some(spec) = super::parse_document::<ProjectFileSpec>(&text, &mut cx) else {
+        return Err(LoadErrors(errors));
+    };
     let dir = file
         .parent()
         .map(Path::to_path_buf)
         .filter(|d| !d.as_os_str().is_empty())
         .unwrap_or_else(|| PathBuf::from("."));
-    let mut errors = Vec::new();
-    let mut cx = FileContext::new(file, &text, &mut errors);
     let mut out: Vec<Configured> = Vec::new();
     let mut seen: Vec<(String, Location)> = Vec::new();
     for (i, b) in spec.backends.into_iter().enumerate() {

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use super::checks::{check_cite, check_expect_optional, check_id, text_bytes, unknown};
-use super::{parse_yaml, read_file, yaml_files, FileContext, LoadError, LoadErrorKind, LoadErrors};
+use super::{read_file, yaml_files, FileContext, LoadError, LoadErrorKind, LoadErrors};
 use crate::device::Device;
 use crate::model::profile::{Profile, Profiles, SignalKind};
 use crate::model::{Case, Citation, Corpus, ErrorSignal, Expectation, Location, Operand};
@@ -60,14 +60,10 @@ impl CorpusBuilder {
             }
             return;
         }
-        let spec: VectorFileSpec = match parse_yaml(file, text) {
-            Ok(s) => s,
-            Err(e) => {
-                self.errors.push(e);
-                return;
-            }
-        };
         let mut cx = FileContext::new(file, text, &mut self.errors);
+        let Some(spec) = super::parse_document::<VectorFileSpec>(text, &mut cx) else {
+            return;
+        };
         let Some(header) = lower_header(&spec, profiles, &mut cx) else {
             return;
         };
@@ -351,10 +347,9 @@ fn lower_operands(
                     Operand::Constant(k)
                         if def.constant && def.constants.is_some_and(|r| !r.contains(*k)) =>
                     {
-                        let r = def.constants.unwrap_or(crate::spec::profile::ConstantRange {
-                            min: *k,
-                            max: *k,
-                        });
+                        let r = def
+                            .constants
+                            .unwrap_or(crate::spec::profile::ConstantRange { min: *k, max: *k });
                         cx.error(
                             &okey,
                             LoadErrorKind::Invalid(format!(

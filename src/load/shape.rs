@@ -1,0 +1,211 @@
+//! Checking a document's shape against its JSON Schema before deserialising it, so that every
+//! unknown key, missing key and misplaced list or mapping of a file is reported in one pass —
+//! the deserializer stops at the first — and an unknown key comes with the nearest known one.
+//!
+//! The schema is the one generated from the on-disk types ([`crate::spec`]), so this check and
+//! the deserializer agree on what a file may hold. Only the parts of draft-07 the generated
+//! schemas use for structure are read (`$ref`, `type`, `properties`, `required`,
+//! `additionalProperties`, `items`); alternatives (`anyOf`, `oneOf`) and scalar formats are left
+//! to the deserializer, which reports them with their own line.
+
+use serde_json::Value as Json;
+use serde_yaml::Value as Yaml;
+
+use super::{FileContext, LoadErrorKind};
+
+/// Reports every shape problem of `doc` against `schema`; true when there is none.
+pub(crate) fn check(doc: &Yaml, schema: &Json, cx: &mut FileContext<'_>) -> bool {
+    let before = cx.errors.len();
+    walk(doc, schema, schema, "", cx);
+    cx.errors.len() == before
+}
+
+fn resolve<'a>(node: &'a Json, root: &'a Json) -> &'a Json {
+    let mut node = node;
+    // `$ref`s point into `definitions`; a chain of them ends at a real schema.
+    for _ in 0..16 {
+        match node.get("$ref").and_then(Json::as_str) {
+            Some(r) => match r
+                .strip_prefix("#/definitions/")
+                .and_then(|name| root.get("definitions")?.get(name))
+            {
+                Some(target) => node = target,
+                None => return node,
+            },
+            None => return node,
+        }
+    }
+    node
+}
+
+fn types(schema: &Json) -> Vec<&str> {
+    match schema.get("type") {
+        Some(Json::String(t)) => vec![t.as_str()],
+        Some(Json::Array(ts)) => ts.iter().filter_map(Json::as_str).collect(),
+        _ => Vec::new(),
+    }
+}
+
+fn join(path: &str, key: &str) -> String {
+    if path.is_empty() {
+        key.to_string()
+    } else {
+        format!("{path}.{key}")
+    }
+}
+
+fn walk(doc: &Yaml, schema: &Json, root: &Json, path: &str, cx: &mut FileContext<'_>) {
+    let schema = resolve(schema, root);
+    if let Some(branches) = schema
+        .get("anyOf")
+        .or_else(|| schema.get("oneOf"))
+        .and_then(Json::as_array)
+    {
+        // An optional field is "this or null": its one other branch is the shape to check.
+        // Real alternatives are the deserializer's to decide.
+        let others: Vec<&Json> = branches
+            .iter()
+            .filter(|b| resolve(b, root).get("type") != Some(&Json::String("null".into())))
+            .collect();
+        if let ([only], false) = (others.as_slice(), doc.is_null()) {
+            walk(doc, only, root, path, cx);
+        }
+        return;
+    }
+    let kinds = types(schema);
+    match doc {
+        Yaml::Mapping(map) if kinds.is_empty() || kinds.contains(&"object") => {
+            let properties = schema.get("properties").and_then(Json::as_object);
+            let closed = schema.get("additionalProperties") == Some(&Json::Bool(false));
+            let extra = schema.get("additionalProperties").filter(|a| a.is_object());
+            for (k, v) in map {
+                let key = yaml_key(k);
+                let here = join(path, &key);
+                match properties.and_then(|p| p.get(&key)) {
+                    Some(sub) => walk(v, sub, root, &here, cx),
+                    None if closed => {
+                        let known: Vec<&str> = properties
+                            .map(|p| p.keys().map(String::as_str).collect())
+                            .unwrap_or_default();
+                        cx.error(here, unknown_key(&key, &known));
+                    }
+                    None => {
+                        if let Some(sub) = extra {
+                            walk(v, sub, root, &here, cx);
+                        }
+                    }
+                }
+            }
+            for required in schema
+                .get("required")
+                .and_then(Json::as_array)
+                .into_iter()
+                .flatten()
+                .filter_map(Json::as_str)
+            {
+                let present = map.keys().any(|k| yaml_key(k) == required);
+                if !present {
+                    cx.error(
+                        path.to_string(),
+                        LoadErrorKind::Shape(format!("missing field `{required}`")),
+                    );
+                }
+            }
+        }
+        Yaml::Sequence(items) if kinds.is_empty() || kinds.contains(&"array") => {
+            if let Some(item) = schema.get("items") {
+                for (i, v) in items.iter().enumerate() {
+                    walk(v, item, root, &format!("{path}[{i}]"), cx);
+                }
+            }
+        }
+        Yaml::Tagged(t) => walk(&t.value, schema, root, path, cx),
+        _ => {
+            let wanted = if kinds.contains(&"object") {
+                Some("a mapping (`key: value` lines)")
+            } else if kinds.contains(&"array") {
+                Some("a list (`[a, b]` or `- a` lines)")
+            } else {
+                None
+            };
+            let got = match doc {
+                Yaml::Mapping(_) => Some("a mapping"),
+                Yaml::Sequence(_) => Some("a list"),
+                Yaml::Null if kinds.contains(&"null") => None,
+                _ => {
+                    if wanted.is_some() {
+                        Some("a single value")
+                    } else {
+                        None
+                    }
+                }
+            };
+            if let (Some(wanted), Some(got)) = (wanted, got) {
+                cx.error(
+                    path.to_string(),
+                    LoadErrorKind::Shape(format!("expected {wanted}, found {got}")),
+                );
+            }
+        }
+    }
+}
+
+fn yaml_key(k: &Yaml) -> String {
+    match k {
+        Yaml::String(s) => s.clone(),
+        Yaml::Number(n) => n.to_string(),
+        Yaml::Bool(b) => b.to_string(),
+        other => serde_yaml::to_string(other)
+            .unwrap_or_default()
+            .trim()
+            .to_string(),
+    }
+}
+
+/// An unknown key, with the nearest known one when it is a likely typo.
+fn unknown_key(key: &str, known: &[&str]) -> LoadErrorKind {
+    let nearest = known
+        .iter()
+        .map(|k| (distance(key, k), *k))
+        .filter(|(d, k)| *d <= 2.max(k.len() / 4))
+        .min();
+    let listed = known
+        .iter()
+        .map(|k| format!("`{k}`"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    LoadErrorKind::Shape(match nearest {
+        Some((_, k)) => {
+            format!("unknown field `{key}`: did you mean `{k}`? (expected one of {listed})")
+        }
+        None => format!("unknown field `{key}`, expected one of {listed}"),
+    })
+}
+
+/// Levenshtein distance, for "did you mean".
+fn distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut prev = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let cur = row[j + 1];
+            row[j + 1] = (prev + usize::from(ca != *cb)).min(row[j] + 1).min(cur + 1);
+            prev = cur;
+        }
+    }
+    row[b.len()]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn distance_counts_edits() {
+        assert_eq!(distance("oprands", "operands"), 1);
+        assert_eq!(distance("basis", "basis"), 0);
+        assert_eq!(distance("", "abc"), 3);
+    }
+}
