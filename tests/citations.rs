@@ -40,7 +40,9 @@ fn dangling(text: &str, anchors: &BTreeSet<String>, manuals: &BTreeSet<String>) 
     for (n, line) in text.lines().enumerate() {
         let n = n + 1;
         if line.contains("shared/") {
-            out.push(format!("{n}: cites material outside the repository: {line}"));
+            out.push(format!(
+                "{n}: cites material outside the repository: {line}"
+            ));
         }
         for (at, m) in line.match_indices("semantics.md") {
             let rest = &line[at + m.len()..];
@@ -55,9 +57,12 @@ fn dangling(text: &str, anchors: &BTreeSet<String>, manuals: &BTreeSet<String>) 
             if anchor.is_empty() {
                 // A link to the file as a whole (`[docs/semantics.md](docs/semantics.md)`) is
                 // not a citation; a citation names its section.
-                let linked = rest.starts_with(')') || rest.starts_with('`') || rest.starts_with(']');
+                let linked =
+                    rest.starts_with(')') || rest.starts_with('`') || rest.starts_with(']');
                 if !linked {
-                    out.push(format!("{n}: `semantics.md` without a section anchor: {line}"));
+                    out.push(format!(
+                        "{n}: `semantics.md` without a section anchor: {line}"
+                    ));
                 }
             } else if !anchors.contains(&anchor) {
                 out.push(format!("{n}: no anchor `{anchor}` in docs/semantics.md"));
@@ -112,8 +117,14 @@ fn every_citation_points_inside_the_repository() {
     let (anchors, manuals) = (anchors(), manuals());
     assert!(anchors.len() > 10 && !manuals.is_empty());
     let mut all = Vec::new();
-    for dir in ["vectors", "vendors", "docs", "adapters", "examples", "src", "schema"] {
-        files(&root().join(dir), &[".yaml", ".md", ".rs", ".json"], &mut all);
+    for dir in [
+        "vectors", "vendors", "docs", "adapters", "examples", "src", "schema",
+    ] {
+        files(
+            &root().join(dir),
+            &[".yaml", ".md", ".rs", ".json"],
+            &mut all,
+        );
     }
     all.push(root().join("README.md"));
     all.push(root().join("plc-conformance.yaml"));

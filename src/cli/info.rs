@@ -8,7 +8,7 @@ use anstream::{eprintln, println};
 use super::backends::{load, paths, project_file, report_load_errors};
 use super::{Cli, SchemaKind, EXIT_BAD_INPUT, EXIT_OK};
 use crate::backend::external::{protocol, serve as protocol_serve};
-use crate::load::{load_corpus, load_profiles};
+use crate::load::{load_corpus, load_open_questions, load_profiles, OPEN_QUESTIONS};
 use crate::report::text::case_line;
 use crate::spec;
 
@@ -20,6 +20,14 @@ pub fn validate(cli: &Cli, given: &[PathBuf]) -> u8 {
     };
     match load_corpus(&paths.vectors, &profiles) {
         Ok(corpus) => {
+            let questions = cli.root.join(OPEN_QUESTIONS);
+            let mut open = 0;
+            if given.is_empty() && questions.exists() {
+                match load_open_questions(&questions, &profiles, &corpus) {
+                    Ok(q) => open = q.len(),
+                    Err(e) => return report_load_errors(&e),
+                }
+            }
             let files: BTreeSet<&PathBuf> = corpus
                 .cases
                 .iter()
@@ -27,7 +35,8 @@ pub fn validate(cli: &Cli, given: &[PathBuf]) -> u8 {
                 .chain(corpus.cross_vendor.iter().map(|c| &c.location.file))
                 .collect();
             println!(
-                "ok: {} cases and {} cross-vendor cases in {} files, {} profiles",
+                "ok: {} cases and {} cross-vendor cases in {} files, {} profiles, {open} open \
+                 questions",
                 corpus.cases.len(),
                 corpus.cross_vendor.len(),
                 files.len(),
@@ -117,6 +126,7 @@ pub fn schema(kind: SchemaKind) -> u8 {
         SchemaKind::CrossVendor => spec::schema(spec::SchemaKind::CrossVendor),
         SchemaKind::Project => spec::schema(spec::SchemaKind::Project),
         SchemaKind::Known => spec::schema(spec::SchemaKind::Known),
+        SchemaKind::OpenQuestions => spec::schema(spec::SchemaKind::OpenQuestions),
         SchemaKind::Protocol => protocol::protocol_schema(),
     };
     println!(

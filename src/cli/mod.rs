@@ -97,6 +97,10 @@ pub struct RunArgs {
     /// Also print what each backend did on `unspecified` cases (text format).
     #[arg(long)]
     pub show_recorded: bool,
+    /// Only the probes of the open questions (docs/open-questions.yaml): the cases whose
+    /// outcome on a real CPU settles a question; give a question id for its probes alone.
+    #[arg(long, value_name = "QUESTION", num_args = 0..=1, default_missing_value = "")]
+    pub probes: Option<String>,
 }
 
 #[derive(Debug, clap::Args)]
@@ -182,6 +186,8 @@ pub enum SchemaKind {
     Project,
     /// A known-differences file.
     Known,
+    /// The open-questions file, `docs/open-questions.yaml`.
+    OpenQuestions,
 }
 
 /// Parses the arguments, runs the command and returns its exit status.

@@ -33,6 +33,7 @@ pub fn run(cli: &Cli, args: &RunArgs) -> u8 {
         &args.report,
         args.format,
         args.show_recorded,
+        args.probes.as_deref(),
     )
 }
 
@@ -44,7 +45,7 @@ pub fn diff(cli: &Cli, args: &DiffArgs) -> u8 {
         Format::Text => Format::Matrix,
         f => f,
     };
-    execute_command(cli, &args.backends, &args.report, format, false)
+    execute_command(cli, &args.backends, &args.report, format, false, None)
 }
 
 fn execute_command(
@@ -53,6 +54,7 @@ fn execute_command(
     report: &ReportArgs,
     format: Format,
     show_recorded: bool,
+    probes: Option<&str>,
 ) -> u8 {
     // The baseline is read before anything is written, so that `--save F --baseline F`
     // compares with the run saved before, not with this one.
@@ -74,7 +76,13 @@ fn execute_command(
         Ok(p) => p,
         Err(code) => return code,
     };
-    let trials = planned(&project, &backends, backend_args.filter.as_deref());
+    let mut trials = planned(&project, &backends, backend_args.filter.as_deref());
+    if let Some(question) = probes {
+        match probe_cases(cli, &project, question) {
+            Ok(cases) => trials.retain(|t| cases.contains(t.case_id())),
+            Err(code) => return code,
+        }
+    }
     if trials.is_empty() {
         eprintln!(
             "error: no trial matches (check --backend and --filter; `plc-conformance list` shows \
@@ -160,6 +168,34 @@ fn execute_command(
     } else {
         EXIT_OK
     }
+}
+
+/// The case ids that probe an open question (every question's when `question` is empty).
+fn probe_cases(
+    cli: &Cli,
+    project: &Project,
+    question: &str,
+) -> Result<std::collections::BTreeSet<String>, u8> {
+    let file = cli.root.join(crate::load::OPEN_QUESTIONS);
+    let questions = crate::load::load_open_questions(&file, &project.profiles, &project.corpus)
+        .map_err(|e| super::backends::report_load_errors(&e))?;
+    let chosen: Vec<_> = questions
+        .iter()
+        .filter(|q| question.is_empty() || q.id == question)
+        .collect();
+    if chosen.is_empty() {
+        let ids: Vec<&str> = questions.iter().map(|q| q.id.as_str()).collect();
+        eprintln!(
+            "error: no open question `{question}` in {}; the questions are: {}",
+            file.display(),
+            ids.join(", ")
+        );
+        return Err(EXIT_BAD_INPUT);
+    }
+    Ok(chosen
+        .into_iter()
+        .flat_map(|q| q.probes.iter().cloned())
+        .collect())
 }
 
 /// The planned trials whose names contain `filter`.

@@ -10,6 +10,7 @@ mod cross_vendor;
 mod error;
 mod known;
 mod locate;
+mod open_questions;
 mod profiles;
 mod project;
 mod shape;
@@ -22,6 +23,7 @@ use serde::de::DeserializeOwned;
 pub use error::{LoadError, LoadErrorKind, LoadErrors};
 pub use known::load_known;
 pub use locate::LineIndex;
+pub use open_questions::{load_open_questions, OPEN_QUESTIONS};
 pub use profiles::{load_profiles, parse_profile};
 pub use project::{
     load_project, locate_project, requirements_enforced, valid_name, ENV_CONFIG, ENV_REQUIRE,

@@ -5,6 +5,7 @@
 
 pub mod cross_vendor;
 pub mod known;
+pub mod open_questions;
 pub mod profile;
 pub mod project;
 

@@ -8,6 +8,7 @@
 
 pub mod cross_vendor;
 pub mod known;
+pub mod open_questions;
 pub mod profile;
 pub mod project;
 pub mod vectors;
@@ -27,6 +28,8 @@ pub enum SchemaKind {
     Project,
     /// A known-differences file.
     Known,
+    /// The open-questions file, `docs/open-questions.yaml`.
+    OpenQuestions,
 }
 
 /// The JSON Schema (draft-07) of one on-disk format.
@@ -37,6 +40,7 @@ pub fn schema(kind: SchemaKind) -> serde_json::Value {
         SchemaKind::CrossVendor => schema_of::<cross_vendor::CrossVendorFileSpec>(),
         SchemaKind::Project => schema_of::<project::ProjectFileSpec>(),
         SchemaKind::Known => schema_of::<known::KnownFileSpec>(),
+        SchemaKind::OpenQuestions => schema_of::<open_questions::OpenQuestionsSpec>(),
     }
 }
 

@@ -1,0 +1,120 @@
+//! Loading `docs/open-questions.yaml` and checking it against the profiles and the corpus: a
+//! question whose probe is not a case of the corpus could never be settled.
+
+use std::collections::BTreeSet;
+use std::path::Path;
+
+use super::{read_file, FileContext, LoadErrorKind, LoadErrors};
+use crate::model::open_questions::OpenQuestion;
+use crate::model::profile::Profiles;
+use crate::model::Corpus;
+use crate::spec::open_questions::OpenQuestionsSpec;
+
+/// Where a project keeps its open questions.
+pub const OPEN_QUESTIONS: &str = "docs/open-questions.yaml";
+
+pub fn load_open_questions(
+    file: &Path,
+    profiles: &Profiles,
+    corpus: &Corpus,
+) -> Result<Vec<OpenQuestion>, LoadErrors> {
+    let text = read_file(file).map_err(|e| LoadErrors(vec![e]))?;
+    let mut errors = Vec::new();
+    let mut cx = FileContext::new(file, &text, &mut errors);
+    let Some(spec) = super::parse_document::<OpenQuestionsSpec>(&text, &mut cx) else {
+        return Err(LoadErrors(errors));
+    };
+    let case_ids: BTreeSet<&str> = corpus
+        .cases
+        .iter()
+        .map(|c| c.id.as_str())
+        .chain(corpus.cross_vendor.iter().map(|c| c.id.as_str()))
+        .collect();
+    let mut seen = BTreeSet::new();
+    let mut out = Vec::new();
+    for (i, q) in spec.questions.into_iter().enumerate() {
+        let key = |k: &str| format!("questions[{i}].{k}");
+        let invalid = |m: String| LoadErrorKind::Invalid(m);
+        if !seen.insert(q.id.clone()) {
+            cx.error(
+                key("id"),
+                invalid(format!("question `{}` is listed twice", q.id)),
+            );
+        }
+        match profiles.get(&q.profile) {
+            None => cx.error(
+                key("profile"),
+                super::checks::unknown("profile", &q.profile, &profiles.ids()),
+            ),
+            Some(p) => {
+                for (j, instr) in q.instructions.iter().enumerate() {
+                    if !p.instructions.contains_key(instr) {
+                        let known: Vec<String> = p.instructions.keys().cloned().collect();
+                        cx.error(
+                            format!("questions[{i}].instructions[{j}]"),
+                            super::checks::unknown("instruction", instr, &known),
+                        );
+                    }
+                }
+                for (j, v) in q.variants.iter().flatten().enumerate() {
+                    if p.variant(v).is_none() {
+                        let known: Vec<String> = p.variants.iter().map(|v| v.id.clone()).collect();
+                        cx.error(
+                            format!("questions[{i}].variants[{j}]"),
+                            super::checks::unknown("variant", v, &known),
+                        );
+                    }
+                }
+            }
+        }
+        let readings: Vec<String> = q.readings.iter().map(|r| r.id.clone()).collect();
+        if readings.len() < 2 {
+            cx.error(
+                key("readings"),
+                invalid("a question has at least two readings to tell apart".into()),
+            );
+        }
+        if q.model_takes != "none" && !readings.contains(&q.model_takes) {
+            cx.error(
+                key("model_takes"),
+                super::checks::unknown("reading", &q.model_takes, &readings),
+            );
+        }
+        for (j, o) in q.observed.iter().enumerate() {
+            if !readings.contains(&o.reading) {
+                cx.error(
+                    format!("questions[{i}].observed[{j}].reading"),
+                    super::checks::unknown("reading", &o.reading, &readings),
+                );
+            }
+        }
+        if q.probes.is_empty() {
+            cx.error(
+                key("probes"),
+                invalid("a question needs a probe: a case whose outcome settles it".into()),
+            );
+        }
+        for (j, probe) in q.probes.iter().enumerate() {
+            if !case_ids.contains(probe.as_str()) {
+                cx.error(
+                    format!("questions[{i}].probes[{j}]"),
+                    invalid(format!("`{probe}` is not a case id of the corpus")),
+                );
+            }
+        }
+        out.push(OpenQuestion {
+            location: cx.location(&format!("questions[{i}]")),
+            id: q.id,
+            title: q.title,
+            profile: q.profile,
+            readings,
+            model_takes: q.model_takes,
+            probes: q.probes,
+        });
+    }
+    if errors.is_empty() {
+        Ok(out)
+    } else {
+        Err(LoadErrors(errors))
+    }
+}

@@ -1,0 +1,67 @@
+//! The open-questions file, `docs/open-questions.yaml`, as written on disk: the facts no cited
+//! manual page settles, each with its competing readings and the probe vectors whose outcome on
+//! a real CPU tells them apart.
+
+use schemars::JsonSchema;
+use serde::Deserialize;
+
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+#[schemars(title = "plc-conformance open questions")]
+pub struct OpenQuestionsSpec {
+    pub questions: Vec<QuestionSpec>,
+}
+
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct QuestionSpec {
+    /// Stable id: lowercase letters, digits and `-`.
+    #[schemars(regex(pattern = r"^[a-z0-9]+(-[a-z0-9]+)*$"))]
+    pub id: String,
+    /// The question, in one line.
+    pub title: String,
+    /// The profile it is about.
+    pub profile: String,
+    /// The instructions it is about, as the profile spells them.
+    pub instructions: Vec<String>,
+    /// The profile variants it is about; all when absent.
+    #[serde(default)]
+    pub variants: Option<Vec<String>>,
+    /// The competing answers, at least two.
+    pub readings: Vec<ReadingSpec>,
+    /// The reading the reference model implements, or `none`.
+    pub model_takes: String,
+    /// What the sources say: each a citation and its gist.
+    pub evidence: Vec<String>,
+    /// Case ids whose outcome on a real CPU tells the readings apart.
+    pub probes: Vec<String>,
+    #[serde(default)]
+    pub note: Option<String>,
+    /// What CPUs on the bench answered.
+    #[serde(default)]
+    pub observed: Vec<ObservationSpec>,
+}
+
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ReadingSpec {
+    #[schemars(regex(pattern = r"^[a-z0-9]+(-[a-z0-9]+)*$"))]
+    pub id: String,
+    pub text: String,
+}
+
+/// One CPU's answer to a question.
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ObservationSpec {
+    /// The reading the CPU's outcome matched.
+    pub reading: String,
+    pub variant: String,
+    pub firmware: String,
+    /// `YYYY-MM-DD`.
+    #[schemars(regex(pattern = r"^[0-9]{4}-[0-9]{2}-[0-9]{2}$"))]
+    pub date: String,
+    pub by: String,
+    #[serde(default)]
+    pub note: Option<String>,
+}
