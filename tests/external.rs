@@ -734,3 +734,73 @@ fn each_project_backend_fails_exactly_its_known_differences_without_the_file() {
         "no project backend with a known-differences file ran"
     );
 }
+
+/// A codec written with each helper (Python and JavaScript), run by the harness over the
+/// cross-vendor corpus: the strict one conforms wherever it answers, the deliberately wrong one
+/// (lowercase accepted) differs on the lowercase case, and an exception the adapter does not map
+/// is a crash of that trial only.
+#[test]
+fn codecs_written_with_the_helpers_are_judged_by_the_harness() {
+    if !python() {
+        return;
+    }
+    let node = Command::new("node").arg("--version").output().is_ok();
+    let mut helpers = vec![(
+        "py",
+        interpreter().unwrap_or("python3").to_string(),
+        root().join("adapters/python/tests/fixtures/codec.py"),
+    )];
+    if node {
+        helpers.push((
+            "js",
+            "node".to_string(),
+            root().join("adapters/js/examples/codec.js"),
+        ));
+    } else {
+        assert!(
+            std::env::var_os("PLC_CONFORMANCE_REQUIRE_BACKENDS").is_none(),
+            "node is required for the JavaScript helper"
+        );
+        eprintln!("skipped: node is not installed; the JavaScript helper needs it");
+    }
+    for (lang, program, script) in helpers {
+        let verdicts = |mode: &str| {
+            let mut s = corpus_session();
+            let name = format!("{lang}-{mode}");
+            let launch = Launch::Exec(vec![
+                program.clone(),
+                script.display().to_string(),
+                mode.to_string(),
+            ]);
+            let mut settings = ExternalSettings::new(name.clone(), launch);
+            settings.timeout = Duration::from_secs(5);
+            s.add_external(settings, true)
+                .unwrap_or_else(|e| panic!("{name} starts: {e}"));
+            let trials = trials_of(&s, &name);
+            assert!(
+                trials.iter().all(|t| t.is_cross_vendor()),
+                "a codec runs cross-vendor cases only"
+            );
+            trials
+                .iter()
+                .map(|t| t.case_id().to_string())
+                .zip(run_all(&trials))
+                .collect::<Vec<_>>()
+        };
+        let strict = verdicts("strict");
+        assert!(strict.iter().any(|(_, v)| v.label() == "conforms"), "{lang}");
+        let lowercase = |vs: &[(String, Verdict)]| {
+            vs.iter()
+                .find(|(c, _)| c == "xv-h2v-lowercase")
+                .map(|(_, v)| v.clone())
+                .expect("the lowercase case runs")
+        };
+        assert_eq!(lowercase(&strict).label(), "conforms", "{lang} strict");
+        let wrong = verdicts("lowercase");
+        let v = lowercase(&wrong);
+        assert!(
+            matches!(&v, Verdict::Differs { .. }),
+            "{lang}: the wrong codec passes the lowercase case: {v:?}"
+        );
+    }
+}
