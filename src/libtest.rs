@@ -284,7 +284,7 @@ fn test(trial: Trial, lazy: Option<Arc<LazyStart>>) -> Test {
 fn outcome(mut trial: Trial, lazy: Option<Arc<LazyStart>>) -> Result<Completion, Failed> {
     if let Some(lazy) = lazy {
         let real = lazy.get().map_err(Failed::from)?;
-        trial.skip = real_skip(&trial, real.as_ref());
+        trial.skip = crate::plan::skip_reason(&trial, real.as_ref());
         trial.backend = real;
     }
     let verdict = run_one(&trial);
@@ -314,20 +314,6 @@ fn ignored_text(verdict: &Verdict) -> String {
         Verdict::Skipped { reason } => reason.clone(),
         other => other.label().to_string(),
     }
-}
-
-/// Why the started backend does not run a trial planned for its placeholder.
-fn real_skip(trial: &Trial, real: &dyn Backend) -> Option<String> {
-    let instruction = &trial.input.instruction;
-    if !real.claims(instruction, &trial.variant) {
-        return Some(format!(
-            "{} does not implement {instruction} on {}",
-            real.name(),
-            trial.variant
-        ));
-    }
-    let variant = trial.profile.as_ref()?.variant(&trial.variant)?;
-    real.declines(&trial.input.flags, instruction, variant)
 }
 
 /// An external backend started on first use, once per process.

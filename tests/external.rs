@@ -788,7 +788,10 @@ fn codecs_written_with_the_helpers_are_judged_by_the_harness() {
                 .collect::<Vec<_>>()
         };
         let strict = verdicts("strict");
-        assert!(strict.iter().any(|(_, v)| v.label() == "conforms"), "{lang}");
+        assert!(
+            strict.iter().any(|(_, v)| v.label() == "conforms"),
+            "{lang}"
+        );
         let lowercase = |vs: &[(String, Verdict)]| {
             vs.iter()
                 .find(|(c, _)| c == "xv-h2v-lowercase")
@@ -802,5 +805,42 @@ fn codecs_written_with_the_helpers_are_judged_by_the_harness() {
             matches!(&v, Verdict::Differs { .. }),
             "{lang}: the wrong codec passes the lowercase case: {v:?}"
         );
+    }
+}
+
+/// A backend that declares what it really implements — no device ranges of its own, `s` only
+/// as a D device — is not failed for what it never claimed: those trials are skipped with the
+/// reason, and every trial it does claim still runs and conforms.
+#[test]
+fn capabilities_skip_what_a_backend_does_not_model() {
+    if !python() {
+        return;
+    }
+    let mut session = corpus_session();
+    let spec = python_backend(
+        "limited",
+        &fixtures().join("faulty_adapter.py"),
+        &["limited", "none"],
+    );
+    session.add_external(spec, true).expect("starts");
+    let trials = trials_of(&session, "limited");
+    let reasons: Vec<&str> = trials.iter().filter_map(|t| t.skip.as_deref()).collect();
+    assert!(
+        reasons
+            .iter()
+            .any(|r| r.contains("does not check device ranges")),
+        "{reasons:?}"
+    );
+    assert!(
+        reasons
+            .iter()
+            .any(|r| r.contains("does not implement operand s as K")),
+        "{reasons:?}"
+    );
+    let verdicts = run_all(&trials);
+    let ran = verdicts.iter().filter(|v| v.label() != "skipped").count();
+    assert!(ran > 0);
+    for (t, v) in trials.iter().zip(&verdicts) {
+        assert!(!v.is_failure(), "{}: {v:?}", t.name());
     }
 }

@@ -260,7 +260,7 @@ def _serving(loop, stdin, stdout):
 
 
 def serve(run, name, version, profile, instructions, variants=None, flags=None,
-          stdin=None, stdout=None):
+          operands=None, device_ranges=None, stdin=None, stdout=None):
     """Answers the harness as an instruction-level backend until it says shutdown or closes
     stdin. Speaks protocol version 1 or 2, whichever the harness asks for.
 
@@ -268,12 +268,20 @@ def serve(run, name, version, profile, instructions, variants=None, flags=None,
     profile: the vendor profile id implemented, e.g. "mitsubishi-iqr".
     instructions: the instructions implemented; variants: the profile variants (None: all).
     flags: {flag: [settings implemented]} for flags implemented in one setting only.
+    operands: {operand: {"devices": [codes], "constants": [values]}} for operands implemented
+      in some forms only (a form left out is all of its kind), e.g. {"n": {"constants": [4]}}.
+    device_ranges: False for a backend with no device ranges of its own: the cases expecting a
+      device-range error are skipped for it instead of failed.
     """
     capabilities = {"profile": profile, "instructions": list(instructions)}
     if variants is not None:
         capabilities["variants"] = list(variants)
     if flags:
         capabilities["flags"] = {k: [bool(v) for v in vs] for k, vs in flags.items()}
+    if operands:
+        capabilities["operands"] = operands
+    if device_ranges is not None:
+        capabilities["device_ranges"] = bool(device_ranges)
 
     def hello(message):
         return {"type": "hello", "protocol": _negotiate(message, PROTOCOL_VERSIONS),

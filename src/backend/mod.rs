@@ -78,6 +78,16 @@ impl Request<'_> {
     }
 }
 
+/// What a trial asks of a backend, before any memory: for [`Backend::declines`].
+#[derive(Debug, Clone, Copy)]
+pub struct Setting<'a> {
+    pub instruction: &'a str,
+    pub variant: &'a Variant,
+    /// The flags set (the rest hold the profile default).
+    pub flags: &'a BTreeMap<String, bool>,
+    pub operands: &'a BTreeMap<String, Operand>,
+}
+
 /// What an instruction did.
 #[derive(Debug, Clone, PartialEq, Eq, Default, Serialize)]
 pub struct Outcome {
@@ -185,13 +195,14 @@ pub trait Backend: Send + Sync {
     /// Why the backend declines to run an instruction it claims with these flags (as a case or
     /// a cross-vendor lowering sets them), e.g. a flag setting it does not implement; the trial
     /// is then skipped with this reason, like an unclaimed one.
-    fn declines(
-        &self,
-        _flags: &BTreeMap<String, bool>,
-        _instruction: &str,
-        _variant: &Variant,
-    ) -> Option<String> {
+    fn declines(&self, _setting: &Setting<'_>) -> Option<String> {
         None
+    }
+    /// Whether the backend checks device ranges (an operand past the last device is an error):
+    /// a codec-like library that has no devices says no, and the cases that expect such an
+    /// error are skipped for it rather than failed.
+    fn checks_device_ranges(&self) -> bool {
+        true
     }
     fn execute(&self, request: &Request<'_>) -> Result<Response, Fault>;
     /// Executes several requests, answers in order. A backend in another process answers a

@@ -13,9 +13,9 @@ mod lowering;
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
-use crate::backend::Backend;
+use crate::backend::{Backend, Setting};
 use crate::device::Device;
-use crate::model::cross_vendor::{CrossVendorCase, Lowering};
+use crate::model::cross_vendor::{Answer, CrossVendorCase, ErrorClass, Lowering};
 use crate::model::known::{Entry, KnownDifferences};
 use crate::model::profile::{Profile, Profiles};
 use crate::model::{Basis, Case, Citation, Corpus, Location, Operand};
@@ -266,23 +266,52 @@ fn trial(
         skip: None,
         known: None,
     };
-    t.skip = skip_reason(&t);
+    t.skip = skip_reason(&t, backend.as_ref());
     t.known = known
         .and_then(|k| k.entry(t.case_id(), t.check_name(), &t.variant))
         .cloned();
     t
 }
 
-/// Why the backend will not run a trial, if it will not.
-fn skip_reason(t: &Trial) -> Option<String> {
+/// Why a backend will not run a trial, if it will not: it does not claim the instruction on the
+/// variant, declines the setting (a flag value, an operand form), or does not check device
+/// ranges and the trial expects a device-range error.
+pub fn skip_reason(t: &Trial, backend: &dyn Backend) -> Option<String> {
     let instruction = &t.input.instruction;
-    if !t.backend.claims(instruction, &t.variant) {
+    if !backend.claims(instruction, &t.variant) {
         return Some(format!(
             "{} does not implement {instruction} on {}",
-            t.backend.name(),
+            backend.name(),
             t.variant
         ));
     }
-    let variant = t.profile.as_ref()?.variant(&t.variant)?;
-    t.backend.declines(&t.input.flags, instruction, variant)
+    let profile = t.profile.as_ref()?;
+    let variant = profile.variant(&t.variant)?;
+    if let Some(why) = backend.declines(&Setting {
+        instruction,
+        variant,
+        flags: &t.input.flags,
+        operands: &t.input.operands,
+    }) {
+        return Some(why);
+    }
+    let expects_range_error = match &t.check {
+        Check::Native { case, .. } => case
+            .expect
+            .as_ref()
+            .and_then(|e| e.error.as_ref())
+            .is_some_and(|e| {
+                profile.cross_vendor.classify(e) == Answer::Error(ErrorClass::DeviceRange)
+            }),
+        Check::CrossVendor { case, lowering } => {
+            case.expected_for(&lowering.key) == Some(&Answer::Error(ErrorClass::DeviceRange))
+        }
+        Check::Codec { .. } => false,
+    };
+    (expects_range_error && !backend.checks_device_ranges()).then(|| {
+        format!(
+            "{} does not check device ranges, and the case expects a device-range error",
+            backend.name()
+        )
+    })
 }

@@ -28,11 +28,11 @@ use protocol::{
     SUPPORTED_VERSIONS,
 };
 
-use super::{Backend, Fault, Outcome, Question, Request, Response};
+use super::{Backend, Fault, Outcome, Question, Request, Response, Setting};
 use crate::device::Device;
 use crate::memory::Fill;
 use crate::model::cross_vendor::{Answer, CodecAbilities, OperationAbilities};
-use crate::model::profile::{Profile, Profiles, Variant};
+use crate::model::profile::{Profile, Profiles};
 use crate::model::project::ExternalSettings;
 use crate::model::{ErrorSignal, Operand};
 
@@ -387,28 +387,50 @@ impl Backend for ExternalBackend {
                 .is_some_and(|v| profile.has_instruction(v, instruction))
     }
 
-    fn declines(
-        &self,
-        flags: &BTreeMap<String, bool>,
-        instruction: &str,
-        variant: &Variant,
-    ) -> Option<String> {
+    fn declines(&self, setting: &Setting<'_>) -> Option<String> {
         let profile = self.profile.as_ref()?;
-        let reads = &profile.instructions.get(instruction)?.flags;
-        self.capabilities
+        let reads = &profile.instructions.get(setting.instruction)?.flags;
+        let name = &self.settings.name;
+        let flag = self
+            .capabilities
             .flags
             .iter()
             .filter(|(flag, _)| reads.contains(flag))
             .find_map(|(flag, settings)| {
-                let value = profile.flag_seen(variant, flags, flag);
+                let value = profile.flag_seen(setting.variant, setting.flags, flag);
                 (!settings.contains(&value)).then(|| {
                     format!(
-                        "{} does not implement {flag} {}",
-                        self.settings.name,
+                        "{name} does not implement {flag} {}",
                         if value { "on" } else { "off" }
                     )
                 })
+            });
+        flag.or_else(|| {
+            setting.operands.iter().find_map(|(op, value)| {
+                let caps = self.capabilities.operands.get(op)?;
+                match value {
+                    Operand::Constant(k) => caps
+                        .constants
+                        .as_ref()
+                        .filter(|list| !list.contains(k))
+                        .map(|_| format!("{name} does not implement operand {op} as K{k}")),
+                    Operand::Device(d) => caps
+                        .devices
+                        .as_ref()
+                        .filter(|list| !list.contains(&d.code))
+                        .map(|_| {
+                            format!(
+                                "{name} does not implement operand {op} as a {} device",
+                                d.code
+                            )
+                        }),
+                }
             })
+        })
+    }
+
+    fn checks_device_ranges(&self) -> bool {
+        self.capabilities.device_ranges.unwrap_or(true)
     }
 
     fn execute(&self, request: &Request<'_>) -> Result<Response, Fault> {
@@ -560,6 +582,8 @@ fn check_codec(
         || !caps.instructions.is_empty()
         || caps.variants.is_some()
         || !caps.flags.is_empty()
+        || !caps.operands.is_empty()
+        || caps.device_ranges.is_some()
     {
         return Err(
             "claims the codec level and instruction-level capabilities at once; give either \
@@ -637,6 +661,28 @@ fn check_capabilities(
                 v,
                 profile.variants.iter().map(|v| v.id.clone()).collect(),
             ));
+        }
+    }
+    for (op, forms) in &caps.operands {
+        let claimed = caps.instructions.iter().any(|i| {
+            profile
+                .instructions
+                .get(i)
+                .is_some_and(|d| d.operands.contains_key(op))
+        });
+        if !claimed {
+            return Err(format!(
+                "claims forms of operand `{op}`, which no instruction it claims has"
+            ));
+        }
+        for code in forms.devices.iter().flatten() {
+            if !profile.devices.contains_key(code) {
+                return Err(unknown(
+                    "device",
+                    code,
+                    profile.devices.keys().cloned().collect(),
+                ));
+            }
         }
     }
     for (f, settings) in &caps.flags {

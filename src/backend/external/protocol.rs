@@ -200,6 +200,14 @@ pub struct Capabilities {
     /// Codec level: the cross-vendor operations it implements.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub codec: Option<CodecCapabilities>,
+    /// Operands of which it implements only some forms, by the manual's operand name: a trial
+    /// with another form is skipped, not failed (`{"n": {"constants": [4]}}`).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub operands: BTreeMap<String, OperandCapabilities>,
+    /// Whether it checks device ranges (default true). A library with no devices of its own says
+    /// false, and the cases expecting a device-range error are skipped for it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub device_ranges: Option<bool>,
     /// The variants it implements; every variant of the profile when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub variants: Option<Vec<String>>,
@@ -207,6 +215,18 @@ pub struct Capabilities {
     /// the variant sees them. Flags not listed are implemented in both settings.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub flags: BTreeMap<String, Vec<bool>>,
+}
+
+/// The forms of one operand a backend implements; a form not listed is all of its kind.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct OperandCapabilities {
+    /// The device codes implemented; empty for none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub devices: Option<Vec<String>>,
+    /// The constants implemented; empty for none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub constants: Option<Vec<i64>>,
 }
 
 /// The operations of a codec-level backend.
@@ -422,6 +442,8 @@ impl BackendMessage {
     description = "One JSON object per line. The harness sends HarnessMessage lines on the \
                    backend's stdin; the backend answers with BackendMessage lines on stdout."
 )]
+// The root of the schema only: no message is kept in this type, so its size does not matter.
+#[allow(clippy::large_enum_variant)]
 pub enum ProtocolMessage {
     Harness(HarnessMessage),
     Backend(BackendMessage),

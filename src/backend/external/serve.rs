@@ -95,6 +95,8 @@ fn hello(backend: &dyn Backend, profile: &Profile, protocol: u32) -> BackendMess
             profile: profile.id.clone(),
             instructions,
             codec: None,
+            operands: BTreeMap::new(),
+            device_ranges: None,
             variants: None,
             flags: BTreeMap::new(),
         },
