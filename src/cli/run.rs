@@ -54,6 +54,12 @@ fn execute_command(
     format: Format,
     show_recorded: bool,
 ) -> u8 {
+    for path in [&report.output, &report.save].into_iter().flatten() {
+        if let Err(e) = crate::load::check_output(path) {
+            eprintln!("error: cannot write {}: {e}", path.display());
+            return EXIT_BAD_INPUT;
+        }
+    }
     // The baseline is read before anything is written, so that `--save F --baseline F`
     // compares with the run saved before, not with this one.
     let before = match &report.baseline {
