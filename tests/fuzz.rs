@@ -56,6 +56,7 @@ fn load(text: &str) {
 }
 
 /// Bits of YAML and of the formats' vocabulary, so that random text reaches past the parser.
+#[rustfmt::skip]
 const TOKENS: &[&str] = &[
     "\n", "  ", "- ", ": ", "[", "]", "{", "}", ", ", "&a ", "*a", "!!str ", "? ", "|", ">",
     "'", "\"", "#", "---\n", "...\n", "~", "\t", "\\", "\u{0}", "\u{1b}", "\u{feff}", "\u{fffe}",
@@ -90,7 +91,13 @@ fn edit() -> impl Strategy<Value = Edit> {
 fn damage(text: &str, edits: &[Edit]) -> String {
     let mut chars: Vec<char> = text.chars().collect();
     for e in edits {
-        let at = |n: usize| if chars.is_empty() { 0 } else { n % (chars.len() + 1) };
+        let at = |n: usize| {
+            if chars.is_empty() {
+                0
+            } else {
+                n % (chars.len() + 1)
+            }
+        };
         match e {
             Edit::Delete { at: a, len } => {
                 let start = at(*a);
@@ -140,9 +147,31 @@ const MESSAGES: &[&str] = &[
 /// Random JSON with the protocol's keys, nested a few levels.
 fn json() -> impl Strategy<Value = serde_json::Value> {
     let keys = prop::sample::select(vec![
-        "type", "id", "protocol", "backend", "capabilities", "writes", "memory", "error", "value",
-        "text", "reason", "cases", "harness", "start", "words", "code", "flag", "codec",
-        "instructions", "profile", "variant", "operands", "fill", "D200", "D0200",
+        "type",
+        "id",
+        "protocol",
+        "backend",
+        "capabilities",
+        "writes",
+        "memory",
+        "error",
+        "value",
+        "text",
+        "reason",
+        "cases",
+        "harness",
+        "start",
+        "words",
+        "code",
+        "flag",
+        "codec",
+        "instructions",
+        "profile",
+        "variant",
+        "operands",
+        "fill",
+        "D200",
+        "D0200",
     ]);
     let leaf = prop_oneof![
         Just(serde_json::Value::Null),
@@ -150,8 +179,17 @@ fn json() -> impl Strategy<Value = serde_json::Value> {
         any::<i64>().prop_map(serde_json::Value::from),
         any::<u64>().prop_map(serde_json::Value::from),
         prop::sample::select(vec![
-            "hello", "result", "unsupported", "run", "shutdown", "D200", "A", "invalid-digit",
-            "mitsubishi-iqr", "HABIN", "",
+            "hello",
+            "result",
+            "unsupported",
+            "run",
+            "shutdown",
+            "D200",
+            "A",
+            "invalid-digit",
+            "mitsubishi-iqr",
+            "HABIN",
+            "",
         ])
         .prop_map(serde_json::Value::from),
     ];
@@ -160,10 +198,7 @@ fn json() -> impl Strategy<Value = serde_json::Value> {
             prop::collection::vec(inner.clone(), 0..6).prop_map(serde_json::Value::Array),
             prop::collection::vec((keys.clone(), inner), 0..8).prop_map(|pairs| {
                 serde_json::Value::Object(
-                    pairs
-                        .into_iter()
-                        .map(|(k, v)| (k.to_string(), v))
-                        .collect(),
+                    pairs.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
                 )
             }),
         ]
