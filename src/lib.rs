@@ -13,13 +13,15 @@
 //! - [`report`]: reporters fed by events render text, JSON, JUnit, HTML and matrices.
 //!
 //! [`runner`] drives the stages for a project, [`libtest`] maps them onto libtest trials for
-//! `cargo test` (and for emulators written in Rust), and [`cli`] is the command line.
+//! `cargo test` (and for emulators written in Rust), and [`cli`] is the command line;
+//! [`interrupt`] makes SIGINT and SIGTERM end a run with what it has and no backend running.
 //! [`device`], [`value`], [`memory`] and [`text`] are shared leaves.
 
 pub mod backend;
 pub mod cli;
 pub mod device;
 pub mod execute;
+pub mod interrupt;
 pub mod judge;
 pub mod libtest;
 pub mod load;

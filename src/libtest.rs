@@ -103,6 +103,11 @@ impl Harness {
     /// Parses libtest's arguments, plans, runs and reports; the exit code libtest gives.
     pub fn run(self) -> ExitCode {
         let args = Arguments::from_args();
+        // Ctrl-C reaches this process but not the backends, which run in process groups of
+        // their own: a signal kills them all before the harness exits.
+        if let Err(e) = crate::interrupt::install(crate::interrupt::OnSignal::Exit) {
+            eprintln!("warning: SIGINT and SIGTERM are not handled: {e}");
+        }
         let mut paths = Paths::under(&self.root);
         // A corpus cut down to one trial's file need not hold every case a known-differences
         // file names.
@@ -256,7 +261,7 @@ fn exact_files(args: &Arguments, paths: &Paths) -> Option<Vec<std::path::PathBuf
     let mut files = Vec::new();
     for dir in &paths.vectors {
         for file in crate::load::yaml_files(dir).ok()? {
-            let text = std::fs::read_to_string(&file).ok()?;
+            let text = String::from_utf8(crate::load::read_regular(&file).ok()?).ok()?;
             let holds = text.match_indices(&needle).any(|(at, _)| {
                 text[at + needle.len()..]
                     .chars()

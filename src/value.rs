@@ -20,34 +20,42 @@ impl fmt::Display for ValueError {
                 f,
                 "`{text}` is not a value; expected hex like `4135H` or `H0ABC`, decimal like `K100` or `100`"
             ),
-            ValueError::TooWide { text, bits } => write!(
-                f,
-                "`{text}` does not fit in {bits} bits (expected {} to {})",
-                -(1i64 << (bits - 1)),
-                (1i64 << bits) - 1
-            ),
+            ValueError::TooWide { text, bits } => {
+                let bits = (*bits).clamp(1, 64);
+                write!(
+                    f,
+                    "`{text}` is too wide for {bits} bits (expected {} to {})",
+                    -(1i128 << (bits - 1)),
+                    (1i128 << bits) - 1
+                )
+            }
         }
     }
 }
 
 impl std::error::Error for ValueError {}
 
-/// Reads a number in any of the accepted notations, without a width check.
+/// Reads a number in any of the accepted notations, without a width check (a number past 64
+/// bits is too wide for any).
 pub fn parse_number(text: &str) -> Result<i64, ValueError> {
     let syntax = || ValueError::Syntax(text.to_string());
+    let too_wide = || ValueError::TooWide {
+        text: text.to_string(),
+        bits: 64,
+    };
     let t = text.trim();
     let hex = |digits: &str| {
         if digits.is_empty() || !digits.chars().all(|c| c.is_ascii_hexdigit()) {
             return Err(syntax());
         }
-        i64::from_str_radix(digits, 16).map_err(|_| syntax())
+        i64::from_str_radix(digits, 16).map_err(|_| too_wide())
     };
     let dec = |digits: &str| {
         let unsigned = digits.strip_prefix('-').unwrap_or(digits);
         if unsigned.is_empty() || !unsigned.chars().all(|c| c.is_ascii_digit()) {
             return Err(syntax());
         }
-        digits.parse::<i64>().map_err(|_| syntax())
+        digits.parse::<i64>().map_err(|_| too_wide())
     };
     if let Some(rest) = t.strip_prefix('K') {
         dec(rest)
@@ -84,7 +92,10 @@ pub fn to_bits(text: &str, value: i64, bits: u32) -> Result<u64, ValueError> {
 
 /// Reads a 16-bit word.
 pub fn parse_word(text: &str) -> Result<u16, ValueError> {
-    let value = parse_number(text)?;
+    let value = parse_number(text).map_err(|e| match e {
+        ValueError::TooWide { text, .. } => ValueError::TooWide { text, bits: 16 },
+        e => e,
+    })?;
     Ok(to_bits(text, value, 16)? as u16)
 }
 
@@ -117,8 +128,23 @@ mod tests {
     #[case("K65536")]
     #[case("K-32769")]
     #[case("70000")]
+    #[case("99999999999999999999H")]
+    #[case("K-99999999999999999999")]
     fn rejects_wide(#[case] text: &str) {
-        assert!(matches!(parse_word(text), Err(ValueError::TooWide { .. })));
+        let e = parse_word(text).expect_err("too wide");
+        assert!(matches!(e, ValueError::TooWide { bits: 16, .. }), "{e:?}");
+        assert!(e.to_string().contains("is too wide for 16 bits"), "{e}");
+    }
+
+    #[test]
+    fn every_width_has_a_message() {
+        for bits in [1, 16, 32, 63, 64] {
+            let e = ValueError::TooWide {
+                text: "x".into(),
+                bits,
+            };
+            assert!(e.to_string().contains(&format!("{bits} bits")));
+        }
     }
 
     #[rstest]

@@ -53,7 +53,7 @@ fn validate_rejects_a_bad_vector_with_file_and_line() {
     assert_eq!(out.status.code(), Some(2));
     let err = text(&out.stderr);
     assert!(
-        err.contains("case.yaml:12: cases[0].expect.after.D200: `15A8DH` does not fit in 16 bits"),
+        err.contains("case.yaml:12: cases[0].expect.after.D200: `15A8DH` is too wide for 16 bits"),
         "{err}"
     );
     assert!(err.trim_end().ends_with("1 error found"), "{err}");

@@ -114,21 +114,21 @@ fn the_good_case_loads() {
     "D100: 14135H",
     11,
     "cases[0].before.D100",
-    "does not fit in 16 bits"
+    "is too wide for 16 bits"
 )]
 #[case::plain_value_too_wide(
     "D100: 4135H",
     "D100: 70000",
     11,
     "cases[0].before.D100",
-    "does not fit in 16 bits"
+    "is too wide for 16 bits"
 )]
 #[case::list_value_too_wide(
     "D100: 4135H",
     "D100: [4135H, K70000]",
     11,
     "cases[0].before.D100[1]",
-    "does not fit in 16 bits"
+    "is too wide for 16 bits"
 )]
 #[case::non_byte_text(
     "D100: 4135H",
@@ -214,6 +214,70 @@ fn the_good_case_loads() {
     14,
     "cases[0].expect.error",
     "`3401` is a decimal number, but error codes are written in hex as the manuals write them: did you mean `3401H`?"
+)]
+// Nothing that silently means nothing.
+#[case::no_variant(
+    "    basis: manual",
+    "    basis: manual\n    variants: []",
+    7,
+    "cases[0].variants",
+    "an empty list runs the case on no variant"
+)]
+#[case::error_zero(
+    "after: {D200: 5A8DH}",
+    "error: 0",
+    14,
+    "cases[0].expect.error",
+    "`0` is not an error code: mitsubishi-iqr reports no error as 0 in SD0; write `none`"
+)]
+#[case::error_k0(
+    "after: {D200: 5A8DH}",
+    "error: K0",
+    14,
+    "cases[0].expect.error",
+    "`K0` is not an error code"
+)]
+#[case::error_null(
+    "after: {D200: 5A8DH}",
+    "error: ~",
+    14,
+    "cases[0].expect",
+    "an empty `error:` says nothing: write `none` for no error"
+)]
+#[case::error_empty(
+    "after: {D200: 5A8DH}",
+    "error:",
+    14,
+    "cases[0].expect",
+    "an empty `error:` says nothing"
+)]
+#[case::ascii_number(
+    "D100: 4135H",
+    "D100: {ascii: 5}",
+    11,
+    "cases[0].before.D100.ascii",
+    "expected a YAML string"
+)]
+#[case::value_far_too_wide(
+    "D100: 4135H",
+    "D100: 99999999999999999999H",
+    11,
+    "cases[0].before.D100",
+    "`99999999999999999999H` is too wide for 16 bits"
+)]
+#[case::control_character(
+    "cite: example",
+    "cite: exa\u{1b}[31mmple",
+    7,
+    "",
+    "control character U+001B"
+)]
+#[case::second_document(
+    "      after: {D200: 5A8DH}\n",
+    "      after: {D200: 5A8DH}\n---\ncases: []\n",
+    15,
+    "",
+    "a second YAML document"
 )]
 // Rules of the format.
 #[case::manual_without_cite(
@@ -422,4 +486,79 @@ fn three_shape_errors_are_reported_in_one_pass() {
             .unwrap_or_else(|| panic!("no error says `{needle}`: {rendered:#?}"));
         assert_eq!(e.line, Some(line), "{e}");
     }
+}
+
+#[test]
+fn a_file_without_cases_is_an_error() {
+    let errors = load(&format!("{HEADER}  []\n")).expect_err("no case loaded");
+    let rendered: Vec<String> = errors.iter().map(ToString::to_string).collect();
+    assert_eq!(
+        rendered,
+        vec!["bad.yaml:4: cases: missing case: a vector file holds at least one"]
+    );
+    let cross_vendor = "operation: hex-to-value\nsource: x\ncases: []\n";
+    let errors = load(cross_vendor).expect_err("no cross-vendor case loaded");
+    assert!(
+        errors[0]
+            .to_string()
+            .starts_with("bad.yaml:3: cases: missing case"),
+        "{errors:?}"
+    );
+}
+
+#[test]
+fn deep_nesting_is_refused_in_bounded_time() {
+    for deep in [
+        format!("{HEADER}{}1{}\n", "[".repeat(100_000), "]".repeat(100_000)),
+        format!("{HEADER}  - {}1\n", "- ".repeat(100_000)),
+        format!("{HEADER}  - {}1\n", "{a: ".repeat(100_000)),
+    ] {
+        let started = std::time::Instant::now();
+        let errors = load(&deep).expect_err("a deep document loaded");
+        assert!(
+            started.elapsed() < std::time::Duration::from_secs(1),
+            "took {:?}",
+            started.elapsed()
+        );
+        assert!(
+            errors[0]
+                .to_string()
+                .contains("nested more than 64 levels deep"),
+            "{errors:?}"
+        );
+    }
+}
+
+#[test]
+fn a_lowering_on_a_device_the_variant_lacks_is_a_profile_error() {
+    let dir = std::env::temp_dir().join(format!("plc-conformance-lowering-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let vendors = Path::new(env!("CARGO_MANIFEST_DIR")).join("vendors");
+    let iqr = std::fs::read_to_string(vendors.join("mitsubishi-iqr.yaml")).expect("profile");
+    let lowering = "      operands: {s: D100, d: D200}\n      source: s\n      destination: d\n      text: packed\n      width: 4\n    - name: habin-terminated";
+    assert!(iqr.contains(lowering), "the iQ-R profile changed");
+    for (operands, message) in [
+        (
+            "{s: D99999, d: D200}",
+            "neutral.lowerings[0].operands.s: D99999 does not exist on variant `rcpu`, which the lowering runs on",
+        ),
+        (
+            "{s: D100, d: W200}",
+            "neutral.lowerings[0].operands.d: unknown device `W`",
+        ),
+    ] {
+        let changed = iqr.replacen(
+            lowering,
+            &lowering.replacen("{s: D100, d: D200}", operands, 1),
+            1,
+        );
+        std::fs::write(dir.join("mitsubishi-iqr.yaml"), changed).expect("write");
+        let errors = load_profiles(&dir).expect_err("the profile loaded").to_string();
+        assert!(
+            errors.contains(&format!("mitsubishi-iqr.yaml:99: {message}")),
+            "{message}\nin:\n{errors}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }

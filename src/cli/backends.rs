@@ -74,8 +74,12 @@ fn command_line_external(
             args.timeout
         ));
     }
+    if args.max_faults == 0 {
+        return Err("--max-faults 0: give at least 1".into());
+    }
     let mut settings = ExternalSettings::new(name, Launch::Shell(command.to_string()));
     settings.timeout = std::time::Duration::from_secs_f64(args.timeout);
+    settings.max_consecutive_faults = args.max_faults;
     settings.env = vec![(ENV_SELF.into(), this_binary().display().to_string())];
     Ok(Some(settings))
 }
@@ -163,7 +167,8 @@ pub fn start(
     args: &BackendArgs,
 ) -> Result<Vec<Arc<dyn Backend>>, u8> {
     select(project, file, args).map_err(|message| {
-        eprintln!("error: {message}");
+        // The message may quote a backend's stderr: nothing in it reaches the terminal raw.
+        eprintln!("error: {}", crate::report::sanitize::terminal(&message));
         EXIT_BAD_INPUT
     })
 }

@@ -2,7 +2,8 @@
 //! of them calling into the library. Errors are rendered once, at this edge.
 //!
 //! Exit codes: 0 when everything ran conforms (or the input is valid), 1 when a backend differs
-//! from the corpus, 2 for bad input or usage.
+//! from the corpus, 2 for bad input or usage, 128 + the signal when SIGINT (130) or SIGTERM
+//! (143) interrupted a run.
 
 mod backends;
 mod info;
@@ -128,6 +129,13 @@ pub struct BackendArgs {
     /// Seconds an `external:` backend given here may take to answer one case.
     #[arg(long, value_name = "SECONDS", default_value_t = 5.0)]
     pub timeout: f64,
+    /// Faults (crash, timeout, protocol error) in a row after which an `external:` backend
+    /// given here is not asked any more: its remaining trials fail as not run.
+    #[arg(long, value_name = "N", default_value_t = crate::model::project::DEFAULT_MAX_CONSECUTIVE_FAULTS)]
+    pub max_faults: usize,
+    /// Let a named or configured backend run no trial (every one skipped) without failing.
+    #[arg(long)]
+    pub allow_empty: bool,
     /// A known-differences file for an `external:` backend given here.
     #[arg(long = "known-differences", value_name = "NAME=FILE")]
     pub known_differences: Vec<String>,
@@ -198,6 +206,11 @@ pub fn main() -> ExitCode {
         Color::Never => anstream::ColorChoice::Never.write_global(),
         Color::Auto => {}
     }
+    if matches!(cli.command, Command::Run(_) | Command::Diff(_)) {
+        if let Err(e) = crate::interrupt::install(crate::interrupt::OnSignal::Finish) {
+            anstream::eprintln!("warning: SIGINT and SIGTERM are not handled: {e}");
+        }
+    }
     let code = match &cli.command {
         Command::Run(args) => run::run(&cli, args),
         Command::Diff(args) => run::diff(&cli, args),
@@ -206,5 +219,6 @@ pub fn main() -> ExitCode {
         Command::Schema { kind } => info::schema(*kind),
         Command::Serve { profile } => info::serve(&cli, profile),
     };
-    ExitCode::from(code)
+    // An interrupted run ends as an interruption, whatever it found before.
+    ExitCode::from(crate::interrupt::exit_status().unwrap_or(code))
 }

@@ -3,7 +3,6 @@
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 use anstream::{eprintln, print, println};
@@ -56,6 +55,12 @@ fn execute_command(
     show_recorded: bool,
     probes: Option<&str>,
 ) -> u8 {
+    for path in [&report.output, &report.save].into_iter().flatten() {
+        if let Err(e) = crate::load::check_output(path) {
+            eprintln!("error: cannot write {}: {e}", path.display());
+            return EXIT_BAD_INPUT;
+        }
+    }
     // The baseline is read before anything is written, so that `--save F --baseline F`
     // compares with the run saved before, not with this one.
     let before = match &report.baseline {
@@ -93,7 +98,7 @@ fn execute_command(
     let jobs = backend_args.jobs.unwrap_or_else(|| {
         std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
     });
-    let stop = AtomicBool::new(false);
+    let stop = crate::interrupt::stop_flag();
     let mut collector = Collector::default();
     if format == Format::Text {
         let notes = if backend_args.backends.is_empty() {
@@ -112,9 +117,9 @@ fn execute_command(
             None => (Box::new(anstream::stdout()), Palette::coloured()),
         };
         let mut text = TextReporter::new(out, palette, show_recorded, notes);
-        runner::run(&trials, jobs, &stop, &mut Tee(&mut text, &mut collector));
+        runner::run(&trials, jobs, stop, &mut Tee(&mut text, &mut collector));
     } else {
-        runner::run(&trials, jobs, &stop, &mut collector as &mut dyn Reporter);
+        runner::run(&trials, jobs, stop, &mut collector as &mut dyn Reporter);
     }
     let (records, summary, interrupted) = collector.finish();
     let info = RunInfo {
@@ -153,20 +158,48 @@ fn execute_command(
             );
         }
     }
-    if let Some(path) = &report.save {
+    if let (Some(path), true) = (&report.save, interrupted) {
+        eprintln!(
+            "note: the run was interrupted; {} is left as it was",
+            path.display()
+        );
+    } else if let Some(path) = &report.save {
         let saved = document::render(document::Format::Json, &records, &summary, &info, false);
         if let Err(e) = write_atomically(path, &saved) {
             eprintln!("error: cannot save the run to {}: {e}", path.display());
             return EXIT_BAD_INPUT;
         }
     }
+    // A backend the run was asked for that ran nothing passed nothing: that is no pass.
+    let idle = if interrupted || backend_args.allow_empty {
+        Vec::new()
+    } else {
+        let asked: Vec<&str> = if backend_args.backends.is_empty() {
+            file.configured
+                .iter()
+                .filter(|c| !c.on_request)
+                .map(|c| c.settings.name.as_str())
+                .collect()
+        } else {
+            backends.iter().map(|b| b.name()).collect()
+        };
+        idle_backends(&trials, &asked, backend_args.filter.is_some())
+    };
+    for (name, why) in &idle {
+        eprintln!("error: backend `{name}` ran no trial: {why} (--allow-empty accepts such a run)");
+    }
+    let idle = if idle.is_empty() {
+        EXIT_OK
+    } else {
+        EXIT_DIFFERENCES
+    };
     if let Some(before) = before {
-        return compare_with(report.baseline.as_deref(), &before, &records);
+        return compare_with(report.baseline.as_deref(), &before, &records).max(idle);
     }
     if summary.failed > 0 {
         EXIT_DIFFERENCES
     } else {
-        EXIT_OK
+        idle
     }
 }
 
@@ -196,6 +229,40 @@ fn probe_cases(
         .into_iter()
         .flat_map(|q| q.probes.iter().cloned())
         .collect())
+}
+
+/// The backends among `asked` that ran no trial, with why: every trial of theirs skipped (the
+/// most frequent reason is given), or, when no filter narrows the run, no trial at all.
+fn idle_backends(trials: &[Trial], asked: &[&str], filtered: bool) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    for name in asked {
+        let theirs: Vec<&Trial> = trials
+            .iter()
+            .filter(|t| t.backend.name() == *name)
+            .collect();
+        if theirs.iter().any(|t| t.skip.is_none()) {
+            continue;
+        }
+        if theirs.is_empty() {
+            if !filtered {
+                out.push((name.to_string(), "the corpus has no trial for it".into()));
+            }
+            continue;
+        }
+        let mut reasons: std::collections::BTreeMap<&str, usize> = Default::default();
+        for t in &theirs {
+            *reasons.entry(t.skip.as_deref().unwrap_or("")).or_default() += 1;
+        }
+        let (reason, _) = reasons
+            .iter()
+            .max_by_key(|(_, n)| **n)
+            .map_or(("", &0), |(r, n)| (*r, n));
+        out.push((
+            name.to_string(),
+            format!("all {} of its trials were skipped ({reason})", theirs.len()),
+        ));
+    }
+    out
 }
 
 /// The planned trials whose names contain `filter`.
@@ -311,6 +378,9 @@ fn against(cli: &Cli, args: &BackendArgs, other: &str) -> u8 {
     let palette = Palette::coloured();
     let (mut compared, mut differing, mut faulty) = (0, 0, 0);
     for ta in trials_a.iter().filter(|t| t.skip.is_none()) {
+        if crate::interrupt::stop_flag().load(std::sync::atomic::Ordering::SeqCst) {
+            break;
+        }
         let tb = if same_family {
             trials_b
                 .iter()

@@ -37,6 +37,12 @@ pub(crate) fn lower_file(
         .map(|l| l.key.clone())
         .collect();
     let known: Vec<String> = keys.iter().cloned().collect();
+    if spec.cases.is_empty() {
+        cx.error(
+            "cases",
+            LoadErrorKind::Missing("case: a vector file holds at least one"),
+        );
+    }
     spec.cases
         .iter()
         .enumerate()
@@ -274,6 +280,7 @@ pub(crate) fn lower_section(p: &ProfileSpec, cx: &mut FileContext<'_>) -> CrossV
             }
             None => p.variants.first().map(|v| v.id.clone()).unwrap_or_default(),
         };
+        let runs_on = p.variants.iter().find(|v| v.id == variant);
         for flag in l.flags.keys() {
             if !def.flags.contains(flag) {
                 cx.error(
@@ -294,6 +301,12 @@ pub(crate) fn lower_section(p: &ProfileSpec, cx: &mut FileContext<'_>) -> CrossV
             }
             match parse_operand(text) {
                 Ok(o) => {
+                    if let Operand::Device(d) = &o {
+                        let allowed = def.operands.get(name).map(|o| &o.devices);
+                        if let Some(problem) = lowering_device(p, runs_on, allowed, d) {
+                            cx.error(format!("{key}.operands.{name}"), problem);
+                        }
+                    }
                     operands.insert(name.clone(), o);
                 }
                 Err(e) => cx.error(format!("{key}.operands.{name}"), LoadErrorKind::Invalid(e)),
@@ -403,6 +416,31 @@ pub(crate) fn lower_section(p: &ProfileSpec, cx: &mut FileContext<'_>) -> CrossV
         }));
     }
     out
+}
+
+/// Why a device a lowering names cannot be used on the variant it runs on: a device the profile
+/// does not have or the operand does not take, or a word past the variant's range. Found when
+/// the profile loads rather than as a failure of every trial through the lowering.
+fn lowering_device(
+    p: &ProfileSpec,
+    variant: Option<&crate::model::profile::Variant>,
+    allowed: Option<&Vec<String>>,
+    d: &Device,
+) -> Option<LoadErrorKind> {
+    if !p.devices.contains_key(&d.code) {
+        let known: Vec<String> = p.devices.keys().cloned().collect();
+        return Some(unknown("device", &d.code, &known));
+    }
+    if let Some(allowed) = allowed.filter(|a| !a.contains(&d.code)) {
+        return Some(unknown("device for this operand", &d.code, allowed));
+    }
+    let variant = variant?;
+    (!crate::model::profile::words_exist(&p.devices, variant, d, 1)).then(|| {
+        LoadErrorKind::Invalid(format!(
+            "{d} does not exist on variant `{}`, which the lowering runs on",
+            variant.id
+        ))
+    })
 }
 
 /// Reads a cross-vendor file into cases.

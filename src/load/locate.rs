@@ -10,6 +10,75 @@ use std::collections::HashMap;
 
 use saphyr_parser::{Event, Parser};
 
+/// The deepest nesting of mappings and sequences a file may have. The formats need five; a
+/// pathological file of 100,000 levels would otherwise hold the deserializer for a minute.
+pub const MAX_DEPTH: usize = 64;
+
+/// Checks what the deserializer must never see, stopping at the first problem: a character
+/// YAML forbids (C0 and C1 controls other than tab and line breaks, DEL, U+FFFE, U+FFFF), a
+/// second document, or nesting deeper than [`MAX_DEPTH`]. Returns the line and the message.
+/// Syntax errors are left to the deserializer, which reports them with its own line.
+pub fn check_text(text: &str) -> Result<(), (usize, String)> {
+    for (i, line) in text.split('\n').enumerate() {
+        if let Some(c) = line.chars().find(|c| forbidden(*c)) {
+            return Err((
+                i + 1,
+                format!(
+                    "control character U+{:04X} in the text: YAML allows only printable \
+                     characters, tabs and line breaks (write it as an escape in a \
+                     double-quoted string)",
+                    u32::from(c)
+                ),
+            ));
+        }
+    }
+    let mut depth = 0usize;
+    let mut documents = 0usize;
+    for item in Parser::new_from_str(text) {
+        let (event, span) = match item {
+            Ok(item) => item,
+            // The scanner counts flow levels in a byte: past 255 it gives up.
+            Err(e) if e.info().contains("recursion limit") => {
+                return Err((e.marker().line(), too_deep()))
+            }
+            Err(_) => return Ok(()),
+        };
+        match event {
+            Event::DocumentStart(_) => {
+                documents += 1;
+                if documents > 1 {
+                    return Err((
+                        span.start.line(),
+                        "a second YAML document: a file holds exactly one (remove the `---` \
+                         line and merge the documents, or make a second file)"
+                            .into(),
+                    ));
+                }
+            }
+            Event::MappingStart(..) | Event::SequenceStart(..) => {
+                depth += 1;
+                if depth > MAX_DEPTH {
+                    return Err((span.start.line(), too_deep()));
+                }
+            }
+            Event::MappingEnd | Event::SequenceEnd => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+fn too_deep() -> String {
+    format!("nested more than {MAX_DEPTH} levels deep; no format of this tool nests that far")
+}
+
+fn forbidden(c: char) -> bool {
+    matches!(c, '\u{0}'..='\u{8}' | '\u{b}' | '\u{c}' | '\u{e}'..='\u{1f}' | '\u{7f}')
+        || ('\u{80}'..='\u{9f}').contains(&c) && c != '\u{85}'
+        || c == '\u{fffe}'
+        || c == '\u{ffff}'
+}
+
 /// Lines of key paths in one document.
 #[derive(Debug, Default)]
 pub struct LineIndex {
@@ -140,6 +209,30 @@ cases:
     fn reports_repeated_keys() {
         let index = LineIndex::new("a:\n  D1: 1\n  D1: 2\nb: [1]\n");
         assert_eq!(index.duplicates(), &[("a.D1".to_string(), 3)]);
+    }
+
+    #[test]
+    fn refuses_what_the_deserializer_must_not_see() {
+        assert_eq!(check_text(DOC), Ok(()));
+        let (line, message) = check_text("a: 1\nb: \"x\u{1b}[31m\"\n").expect_err("ESC");
+        assert_eq!(line, 2);
+        assert!(message.contains("U+001B"), "{message}");
+        let (line, message) = check_text("a: 1\n---\nb: 2\n").expect_err("two documents");
+        assert_eq!(line, 2);
+        assert!(message.contains("second YAML document"), "{message}");
+        let deep = format!("a: {}1{}\n", "[".repeat(100_000), "]".repeat(100_000));
+        let started = std::time::Instant::now();
+        let (line, message) = check_text(&deep).expect_err("deep");
+        assert!(started.elapsed() < std::time::Duration::from_secs(1));
+        assert_eq!(line, 1);
+        assert!(message.contains("more than 64 levels"), "{message}");
+        let ok = format!("a: {}1{}\n", "[".repeat(60), "]".repeat(60));
+        assert_eq!(check_text(&ok), Ok(()));
+        let deep = format!("{}1\n", "- ".repeat(100_000));
+        let started = std::time::Instant::now();
+        let (_, message) = check_text(&deep).expect_err("deep block nesting");
+        assert!(started.elapsed() < std::time::Duration::from_secs(1));
+        assert!(message.contains("more than 64 levels"), "{message}");
     }
 
     #[test]

@@ -33,27 +33,65 @@ pub use vectors::{load_corpus, CorpusBuilder};
 
 /// The YAML files under a path: the file itself, or every `.yaml`/`.yml` below a folder, in a
 /// stable order. Other files in a corpus folder (READMEs) are not vectors.
+///
+/// Symbolic links are followed, to folders as to files: a linked folder of vectors is part of the
+/// corpus, never silently left out. A link that leads back to a folder it is in (a loop) and a
+/// link to nothing are errors; a file reached twice through links is read once.
 pub fn yaml_files(path: &Path) -> Result<Vec<PathBuf>, LoadError> {
-    let io_error = |e: std::io::Error| LoadError {
-        file: path.to_path_buf(),
+    let error = |at: &Path, message: String| LoadError {
+        file: at.to_path_buf(),
         line: None,
         key: None,
-        kind: LoadErrorKind::Io(e.to_string()).into(),
+        kind: LoadErrorKind::Io(message).into(),
     };
-    let meta = std::fs::metadata(path).map_err(io_error)?;
-    if meta.is_file() {
+    fn io_error(at: &Path) -> impl Fn(std::io::Error) -> LoadError + '_ {
+        move |e| LoadError {
+            file: at.to_path_buf(),
+            line: None,
+            key: None,
+            kind: LoadErrorKind::Io(e.to_string()).into(),
+        }
+    }
+    let meta = std::fs::metadata(path).map_err(io_error(path))?;
+    if !meta.is_dir() {
+        // A file, or something that is not one: `read_file` says which.
         return Ok(vec![path.to_path_buf()]);
     }
     let mut files = Vec::new();
-    let mut folders = vec![path.to_path_buf()];
-    while let Some(folder) = folders.pop() {
-        for entry in std::fs::read_dir(&folder).map_err(io_error)? {
-            let entry = entry.map_err(io_error)?;
+    let mut seen = std::collections::HashSet::new();
+    let top = std::fs::canonicalize(path).map_err(io_error(path))?;
+    // Each folder with the real paths of the folders it is in, to tell a loop from a link to a
+    // folder elsewhere.
+    let mut folders = vec![(path.to_path_buf(), vec![top])];
+    while let Some((folder, above)) = folders.pop() {
+        for entry in std::fs::read_dir(&folder).map_err(io_error(&folder))? {
+            let entry = entry.map_err(io_error(&folder))?;
             let p = entry.path();
-            if entry.file_type().map_err(io_error)?.is_dir() {
-                folders.push(p);
+            let mut kind = entry.file_type().map_err(io_error(&p))?;
+            if kind.is_symlink() {
+                kind = std::fs::metadata(&p)
+                    .map_err(|e| error(&p, format!("a symbolic link to nothing readable: {e}")))?
+                    .file_type();
+            }
+            if kind.is_dir() {
+                let real = std::fs::canonicalize(&p).map_err(io_error(&p))?;
+                if above.contains(&real) {
+                    return Err(error(
+                        &p,
+                        format!(
+                            "a symbolic link loop: it leads back to {}, a folder it is in",
+                            real.display()
+                        ),
+                    ));
+                }
+                let mut chain = above.clone();
+                chain.push(real);
+                folders.push((p, chain));
             } else if matches!(p.extension().and_then(|e| e.to_str()), Some("yaml" | "yml")) {
-                files.push(p);
+                let real = std::fs::canonicalize(&p).unwrap_or_else(|_| p.clone());
+                if seen.insert(real) {
+                    files.push(p);
+                }
             }
         }
     }
@@ -131,6 +169,7 @@ pub(crate) fn parse_document<T: DeserializeOwned + schemars::JsonSchema>(
 /// Deserializes one YAML document, turning the deserializer's error into a [`LoadError`] with
 /// the line and key path it reports.
 pub(crate) fn parse_yaml<T: DeserializeOwned>(file: &Path, text: &str) -> Result<T, LoadError> {
+    check_text(file, text)?;
     serde_yaml::from_str(text).map_err(|e| {
         let line = e.location().map(|l| l.line());
         let mut message = e.to_string();
@@ -156,11 +195,106 @@ pub(crate) fn parse_yaml<T: DeserializeOwned>(file: &Path, text: &str) -> Result
     })
 }
 
-pub(crate) fn read_file(path: &Path) -> Result<String, LoadError> {
-    std::fs::read_to_string(path).map_err(|e| LoadError {
-        file: path.to_path_buf(),
-        line: None,
+/// Reads a YAML file: a regular file (a FIFO or a device would block or never end) holding
+/// UTF-8; invalid UTF-8 is reported on its line.
+/// What the deserializer must never see: characters YAML forbids, a second document, nesting
+/// deeper than [`locate::MAX_DEPTH`] (which the deserializer takes quadratic time over). Found
+/// in one pass that stops at the first problem, with its line.
+pub(crate) fn check_text(file: &Path, text: &str) -> Result<(), LoadError> {
+    locate::check_text(text).map_err(|(line, message)| LoadError {
+        file: file.to_path_buf(),
+        line: Some(line),
         key: None,
-        kind: LoadErrorKind::Io(e.to_string()).into(),
+        kind: LoadErrorKind::Invalid(message).into(),
     })
+}
+
+pub(crate) fn read_file(path: &Path) -> Result<String, LoadError> {
+    let error = |line: Option<usize>, kind: LoadErrorKind| LoadError {
+        file: path.to_path_buf(),
+        line,
+        key: None,
+        kind: kind.into(),
+    };
+    let bytes = read_regular(path).map_err(|e| error(None, LoadErrorKind::Io(e.to_string())))?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let bytes = e.as_bytes();
+        let line = bytes[..at].iter().filter(|b| **b == b'\n').count() + 1;
+        error(
+            Some(line),
+            LoadErrorKind::Invalid(format!(
+                "invalid UTF-8 (byte {:02X}H): a file must be UTF-8 text",
+                bytes.get(at).copied().unwrap_or(0)
+            )),
+        )
+    })?;
+    Ok(text)
+}
+
+/// The bytes of a regular file. Anything else — a FIFO, a device, a socket, a folder — is
+/// refused without being opened for long: reading a FIFO blocks until a writer comes, and a
+/// device may never end.
+pub fn read_regular(path: &Path) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    not_special(&std::fs::metadata(path)?)?;
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        // Opening a FIFO that appeared since the check must not wait for a writer.
+        options.custom_flags(libc::O_NONBLOCK);
+    }
+    let mut file = options.open(path)?;
+    not_special(&file.metadata()?)?;
+    let mut bytes = Vec::new();
+    file.read_to_end(&mut bytes)?;
+    Ok(bytes)
+}
+
+/// Refuses a path that exists and is not a regular file, before a report or a saved run is
+/// written there: writing to a FIFO blocks, and replacing a device by renaming over it would
+/// break the system.
+pub fn check_output(path: &Path) -> std::io::Result<()> {
+    match std::fs::metadata(path) {
+        Ok(meta) => not_special(&meta),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(e),
+    }
+}
+
+fn not_special(meta: &std::fs::Metadata) -> std::io::Result<()> {
+    if meta.is_file() {
+        return Ok(());
+    }
+    let kind = meta.file_type();
+    let what = if kind.is_dir() {
+        "a folder"
+    } else {
+        special_kind(&kind)
+    };
+    Err(std::io::Error::new(
+        std::io::ErrorKind::InvalidInput,
+        format!("{what}, not a regular file"),
+    ))
+}
+
+#[cfg(unix)]
+fn special_kind(kind: &std::fs::FileType) -> &'static str {
+    use std::os::unix::fs::FileTypeExt;
+    if kind.is_fifo() {
+        "a FIFO (named pipe)"
+    } else if kind.is_char_device() || kind.is_block_device() {
+        "a device"
+    } else if kind.is_socket() {
+        "a socket"
+    } else {
+        "not a file"
+    }
+}
+
+#[cfg(not(unix))]
+fn special_kind(_: &std::fs::FileType) -> &'static str {
+    "not a file"
 }

@@ -20,8 +20,8 @@ use std::time::Duration;
 
 use super::{read_file, FileContext, LoadError, LoadErrorKind, LoadErrors};
 use crate::model::project::{
-    Configured, ExternalSettings, Launch, ProjectBackends, DEFAULT_BATCH, DEFAULT_STARTUP_TIMEOUT,
-    DEFAULT_TIMEOUT,
+    Configured, ExternalSettings, Launch, ProjectBackends, DEFAULT_BATCH,
+    DEFAULT_MAX_CONSECUTIVE_FAULTS, DEFAULT_STARTUP_TIMEOUT, DEFAULT_TIMEOUT,
 };
 use crate::model::Location;
 use crate::spec::project::{CommandSpec, ProjectFileSpec};
@@ -154,6 +154,16 @@ fn read_project(file: &Path, plc_conformance: &Path) -> Result<Vec<Configured>, 
             b.startup_timeout,
             DEFAULT_STARTUP_TIMEOUT,
         );
+        if b.max_consecutive_faults == Some(0) {
+            cx.error(
+                key("max_consecutive_faults"),
+                LoadErrorKind::Invalid(
+                    "give at least 1: the number of faults in a row after which the \
+                     backend's remaining trials are not run"
+                        .into(),
+                ),
+            );
+        }
         if b.batch == Some(0) {
             cx.error(
                 key("batch"),
@@ -168,6 +178,10 @@ fn read_project(file: &Path, plc_conformance: &Path) -> Result<Vec<Configured>, 
         settings.cwd = Some(dir.clone());
         settings.env = vec![(ENV_SELF.into(), plc_conformance.display().to_string())];
         settings.batch = b.batch.unwrap_or(DEFAULT_BATCH).max(1);
+        settings.max_consecutive_faults = b
+            .max_consecutive_faults
+            .unwrap_or(DEFAULT_MAX_CONSECUTIVE_FAULTS)
+            .max(1);
         out.push(Configured {
             on_request: b.on_request,
             settings,
@@ -243,7 +257,7 @@ mod tests {
         let file = write(
             "bad",
             "backends:\n  - name: Emu\n    command: x\n  - name: ok\n    command: []\n  \
-             - name: ok\n    command: y\n    timeout: 0\n",
+             - name: ok\n    command: y\n    timeout: 0\n    max_consecutive_faults: 0\n",
         );
         let errors = read_project(&file, Path::new("p"))
             .expect_err("invalid")
@@ -254,6 +268,7 @@ mod tests {
             at(5, "backends[1].command: empty command"),
             at(6, "backends[2].name: backend name `ok` is already used at"),
             at(8, "backends[2].timeout: 0 is not a time limit"),
+            at(9, "backends[2].max_consecutive_faults: give at least 1"),
         ] {
             assert!(errors.contains(&expected), "{expected}\nin:\n{errors}");
         }

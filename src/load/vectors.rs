@@ -51,6 +51,10 @@ pub struct CorpusBuilder {
 impl CorpusBuilder {
     /// Adds one vector file given as text; `file` is the name errors will show.
     pub fn add_file(&mut self, file: &Path, text: &str, profiles: &Profiles) {
+        if let Err(e) = super::check_text(file, text) {
+            self.errors.push(e);
+            return;
+        }
         if super::cross_vendor::is_cross_vendor(&super::LineIndex::new(text)) {
             let cases = super::cross_vendor::add_file(file, text, profiles, &mut self.errors);
             for (key, case) in cases {
@@ -67,6 +71,12 @@ impl CorpusBuilder {
         let Some(header) = lower_header(&spec, profiles, &mut cx) else {
             return;
         };
+        if spec.cases.is_empty() {
+            cx.error(
+                "cases",
+                LoadErrorKind::Missing("case: a vector file holds at least one"),
+            );
+        }
         let mut lowered_cases = Vec::new();
         for (i, case) in spec.cases.iter().enumerate() {
             let key = format!("cases[{i}]");
@@ -199,6 +209,16 @@ fn lower_case(
     let source = spec.source.as_ref().unwrap_or(&h.source);
 
     let variants = spec.variants.as_ref().map(|list| {
+        if list.is_empty() {
+            cx.error(
+                format!("{key}.variants"),
+                LoadErrorKind::Invalid(
+                    "an empty list runs the case on no variant; name at least one, or leave \
+                     `variants` out to run it on every variant"
+                        .into(),
+                ),
+            );
+        }
         let known: Vec<String> = h
             .profiles
             .iter()
@@ -557,7 +577,8 @@ fn lower_error(
             let code = match value {
                 // The manuals write every code in hex (3401H); a bare number is almost always
                 // that code without its H, and as decimal it would be another code entirely.
-                ScalarSpec::Number(n) => {
+                // (0 is no code at all: said below.)
+                ScalarSpec::Number(n) if *n != 0 => {
                     cx.error(
                         key,
                         LoadErrorKind::Invalid(format!(
@@ -567,9 +588,21 @@ fn lower_error(
                     );
                     return None;
                 }
+                ScalarSpec::Number(_) => Ok(0),
                 ScalarSpec::Text(t) => parse_word(t),
             };
             match code {
+                Ok(0) => {
+                    cx.error(
+                        key,
+                        LoadErrorKind::Invalid(format!(
+                            "`{value}` is not an error code: {} reports no error as 0 in \
+                             {register}; write `none` for no error",
+                            p.id
+                        )),
+                    );
+                    None
+                }
                 Ok(c) => Some(ErrorSignal::Code(c)),
                 Err(_) => {
                     cx.error(

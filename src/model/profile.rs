@@ -63,26 +63,7 @@ impl Profile {
     /// Whether `count` consecutive word operands from `head` all exist on the variant: every
     /// point they take lies in one range (a span across a gap does not exist).
     pub fn words_exist(&self, variant: &Variant, head: &Device, count: u32) -> bool {
-        let (Some(def), Some(ranges)) = (
-            self.devices.get(&head.code),
-            self.ranges(variant, &head.code),
-        ) else {
-            return false;
-        };
-        let Some(first) = def.numbering.point(head.index) else {
-            return false;
-        };
-        if count == 0 {
-            return true;
-        }
-        let last = first + u64::from(count) * u64::from(def.points_per_word.max(1)) - 1;
-        let fits = ranges.iter().any(|r| {
-            match (def.numbering.point(r.first), def.numbering.point(r.last)) {
-                (Some(lo), Some(hi)) => lo <= first && last <= hi,
-                _ => false,
-            }
-        });
-        fits
+        words_exist(&self.devices, variant, head, count)
     }
 
     /// Whether any variant has this word; memory a vector sets must exist somewhere.
@@ -145,6 +126,39 @@ impl Profile {
             SignalKind::Flag => ErrorSignal::Flag(self.errors.flag.clone()),
         }
     }
+}
+
+/// [`Profile::words_exist`] over a profile's device table, for the loader, which checks a
+/// profile before it is one.
+pub fn words_exist(
+    devices: &BTreeMap<String, DeviceDef>,
+    variant: &Variant,
+    head: &Device,
+    count: u32,
+) -> bool {
+    let Some(def) = devices.get(&head.code) else {
+        return false;
+    };
+    let ranges = variant
+        .devices
+        .get(&head.code)
+        .cloned()
+        .unwrap_or_else(|| def.ranges());
+    let Some(first) = def.numbering.point(head.index) else {
+        return false;
+    };
+    if count == 0 {
+        return true;
+    }
+    let last = first + u64::from(count) * u64::from(def.points_per_word.max(1)) - 1;
+    let fits =
+        ranges.iter().any(
+            |r| match (def.numbering.point(r.first), def.numbering.point(r.last)) {
+                (Some(lo), Some(hi)) => lo <= first && last <= hi,
+                _ => false,
+            },
+        );
+    fits
 }
 
 /// The loaded profiles, by id.

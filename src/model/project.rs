@@ -13,6 +13,8 @@ pub const DEFAULT_TIMEOUT: Duration = Duration::from_secs(5);
 pub const DEFAULT_STARTUP_TIMEOUT: Duration = Duration::from_secs(20);
 /// Cases per `run` message unless configured.
 pub const DEFAULT_BATCH: usize = 256;
+/// Faults in a row after which a backend's remaining trials are not run, unless configured.
+pub const DEFAULT_MAX_CONSECUTIVE_FAULTS: usize = 5;
 
 /// How to start a backend.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -53,6 +55,10 @@ pub struct ExternalSettings {
     pub env: Vec<(String, String)>,
     /// Cases per `run` message.
     pub batch: usize,
+    /// Faults (crash, timeout, protocol error) in a row after which the backend's remaining
+    /// trials are reported as not run, failures with the reason, instead of costing each its
+    /// time limit: the circuit breaker. At least 1.
+    pub max_consecutive_faults: usize,
     /// Whether the process stays up between cases (the normal way), or is started for each
     /// case and shut down after it (for measuring what persistence buys).
     pub persistent: bool,
@@ -70,6 +76,7 @@ impl ExternalSettings {
             cwd: None,
             env: Vec::new(),
             batch: DEFAULT_BATCH,
+            max_consecutive_faults: DEFAULT_MAX_CONSECUTIVE_FAULTS,
             persistent: true,
         }
     }

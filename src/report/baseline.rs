@@ -42,7 +42,10 @@ pub fn load(path: &Path) -> Result<SavedRun, BaselineError> {
         path: path.display().to_string(),
         message,
     };
-    let text = std::fs::read_to_string(path).map_err(|e| error(e.to_string()))?;
+    // A FIFO or a device given as a baseline is refused rather than read (it could block or
+    // never end).
+    let bytes = crate::load::read_regular(path).map_err(|e| error(e.to_string()))?;
+    let text = String::from_utf8(bytes).map_err(|e| error(format!("not a saved run: {e}")))?;
     // The format and version are read first, so that a run saved by another version is told
     // apart from a damaged file.
     let head: serde_json::Value = serde_json::from_str(&text).map_err(|e| {

@@ -29,8 +29,10 @@ fn escape(text: &str) -> String {
             '>' => out.push_str("&gt;"),
             '"' => out.push_str("&quot;"),
             '\'' => out.push_str("&#39;"),
-            c if (c as u32) < 0x20 && c != '\n' && c != '\t' => {
-                let _ = write!(out, "\\x{:02X}", c as u32);
+            c if super::sanitize::forbidden_in_xml(c)
+                || c.is_control() && c != '\n' && c != '\t' =>
+            {
+                out.push_str(&super::sanitize::escaped(c));
             }
             c => out.push(c),
         }

@@ -7,6 +7,7 @@ use std::collections::BTreeMap;
 use quick_junit::{NonSuccessKind, Report, TestCase, TestCaseStatus, TestSuite};
 
 use super::record::Record;
+use super::sanitize::xml;
 use crate::judge::Status;
 
 pub fn render(records: &[Record]) -> String {
@@ -19,25 +20,25 @@ pub fn render(records: &[Record]) -> String {
     }
     let mut report = Report::new("plc-conformance");
     for ((section, column), cells) in suites {
-        let mut suite = TestSuite::new(format!("{section} / {column}"));
+        let mut suite = TestSuite::new(xml(&format!("{section} / {column}")).into_owned());
         for r in cells {
             let status = match r.status {
                 Status::Pass => TestCaseStatus::success(),
                 Status::Skipped | Status::Ignored => {
                     let mut s = TestCaseStatus::skipped();
-                    s.set_message(format!("{}: {}", r.label, r.shown));
+                    s.set_message(xml(&format!("{}: {}", r.label, r.shown)).into_owned());
                     s
                 }
                 Status::Fail => {
                     let mut s = TestCaseStatus::non_success(NonSuccessKind::Failure);
-                    s.set_message(format!("{}: {}", r.label, r.shown));
-                    s.set_type(r.label.clone());
-                    s.set_description(r.detail.clone());
+                    s.set_message(xml(&format!("{}: {}", r.label, r.shown)).into_owned());
+                    s.set_type(xml(&r.label).into_owned());
+                    s.set_description(xml(&r.detail).into_owned());
                     s
                 }
             };
-            let mut case = TestCase::new(r.trial.clone(), status);
-            case.set_classname(format!("{}:{}", r.file, r.line));
+            let mut case = TestCase::new(xml(&r.trial).into_owned(), status);
+            case.set_classname(xml(&format!("{}:{}", r.file, r.line)).into_owned());
             suite.add_test_case(case);
         }
         report.add_test_suite(suite);

@@ -13,6 +13,7 @@ pub mod junit;
 pub mod matrix;
 pub mod matrix_text;
 pub mod record;
+pub mod sanitize;
 pub mod text;
 pub mod text_reporter;
 

@@ -6,6 +6,7 @@ use std::fmt::Write;
 use anstyle::{AnsiColor, Style};
 use similar::{ChangeTag, TextDiff};
 
+use super::sanitize::terminal;
 use crate::judge::{Difference, Mismatch, Verdict, WordRow};
 use crate::model::cross_vendor::Operation;
 use crate::model::{error_text, Case};
@@ -173,11 +174,12 @@ pub fn render(trial: &Trial, verdict: &Verdict, palette: Palette) -> String {
     let _ = writeln!(
         out,
         "{h}{}: {} {}{h:#}",
-        trial.location(),
+        terminal(&trial.location().to_string()),
         trial.name(),
         verdict.label()
     );
-    out.push_str(&describe_setting(trial));
+    // A cite, a note or a backend's output may hold escape sequences: none reaches a terminal.
+    out.push_str(&terminal(&describe_setting(trial)));
     render_body(&mut out, verdict, palette);
     out
 }
@@ -189,7 +191,8 @@ fn render_body(out: &mut String, verdict: &Verdict, palette: Palette) {
             let _ = writeln!(
                 out,
                 "  known difference ({}): {}",
-                entry.location, entry.reason
+                terminal(&entry.location.to_string()),
+                terminal(&entry.reason)
             );
             render_body(out, difference, palette);
         }
@@ -197,7 +200,8 @@ fn render_body(out: &mut String, verdict: &Verdict, palette: Palette) {
             let _ = writeln!(
                 out,
                 "  listed as a known difference at {} ({}), but conforms: remove the entry",
-                entry.location, entry.reason
+                terminal(&entry.location.to_string()),
+                terminal(&entry.reason)
             );
         }
         Verdict::Differs {
@@ -245,14 +249,20 @@ fn render_body(out: &mut String, verdict: &Verdict, palette: Palette) {
         Verdict::Unsupported { reason } => {
             let _ = writeln!(
                 out,
-                "  the backend claims this trial but answered unsupported: {reason}"
+                "  the backend claims this trial but answered unsupported: {}",
+                terminal(reason)
             );
         }
         Verdict::Fault { fill, fault } => {
-            let _ = writeln!(out, "  fill {}: {fault}", fill.name());
+            let _ = writeln!(
+                out,
+                "  fill {}: {}",
+                fill.name(),
+                terminal(&fault.to_string())
+            );
         }
         Verdict::Skipped { reason } => {
-            let _ = writeln!(out, "  skipped: {reason}");
+            let _ = writeln!(out, "  skipped: {}", terminal(reason));
         }
         Verdict::Recorded {
             observed,
@@ -260,8 +270,10 @@ fn render_body(out: &mut String, verdict: &Verdict, palette: Palette) {
         } => {
             let _ = writeln!(
                 out,
-                "  {}observed:{:#} {observed}",
-                palette.note, palette.note
+                "  {}observed:{:#} {}",
+                palette.note,
+                palette.note,
+                terminal(&observed.to_string())
             );
             if *fill_dependent {
                 let _ = writeln!(

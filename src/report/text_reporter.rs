@@ -4,6 +4,7 @@
 use std::collections::BTreeMap;
 use std::io::Write;
 
+use super::sanitize::terminal;
 use super::text::{render, Palette};
 use super::{Event, Reporter, Summary};
 use crate::judge::Verdict;
@@ -49,18 +50,23 @@ impl<W: Write> TextReporter<W> {
         let mut known: Vec<(&String, &KnownGroup)> = self.known.iter().collect();
         known.sort_by_key(|(_, g)| g.first);
         for (entry, group) in known {
-            let _ = writeln!(out, "known difference ({entry}): {}", group.reason);
+            let _ = writeln!(
+                out,
+                "known difference ({}): {}",
+                terminal(entry),
+                terminal(&group.reason)
+            );
             let mut trials = group.trials.clone();
             trials.sort();
             for (_, line) in trials {
-                let _ = writeln!(out, "  {line}");
+                let _ = writeln!(out, "  {}", terminal(&line));
             }
         }
         for (reason, count) in &self.skipped {
-            let _ = writeln!(out, "skipped {count} trial(s): {reason}");
+            let _ = writeln!(out, "skipped {count} trial(s): {}", terminal(reason));
         }
         for note in &self.notes {
-            let _ = writeln!(out, "skipped: {note}");
+            let _ = writeln!(out, "skipped: {}", terminal(note));
         }
         for (backend, n) in &self.restarts {
             let _ = writeln!(

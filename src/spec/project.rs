@@ -41,6 +41,10 @@ pub struct BackendSpec {
     /// Cases per `run` message.
     #[serde(default)]
     pub batch: Option<usize>,
+    /// Faults (crash, timeout, protocol error) in a row after which the backend's remaining
+    /// trials are reported as not run, as failures with the reason (default 5).
+    #[serde(default)]
+    pub max_consecutive_faults: Option<usize>,
     /// Run only when named with `--backend`: for a check of the harness itself (the built-in
     /// models served through the protocol) rather than an implementation under test. Such a
     /// backend is in no `run`, `diff` or `cargo test` trial unless asked for.

@@ -129,9 +129,21 @@ pub struct ExpectSpec {
     #[schemars(extend("propertyNames" = {"pattern": "^[A-Z]+[0-9]+$"}))]
     pub after: BTreeMap<String, ValueSpec>,
     /// `none`, the vendor's error code (`3401H`), or the error flag the profile signals with
-    /// (`M8004`).
-    #[serde(default)]
+    /// (`M8004`). An empty `error:` is refused: `none` is the one way to say "no error".
+    #[serde(default, deserialize_with = "given_error")]
+    #[schemars(with = "ScalarSpec")]
     pub error: Option<ScalarSpec>,
+}
+
+/// `error:` when the key is there: a value, never null or empty.
+fn given_error<'de, D: Deserializer<'de>>(d: D) -> Result<Option<ScalarSpec>, D::Error> {
+    match Option::<ScalarSpec>::deserialize(d)? {
+        Some(v) => Ok(Some(v)),
+        None => Err(de::Error::custom(
+            "an empty `error:` says nothing: write `none` for no error, or the error the profile \
+             signals (a code like `3401H`, or its error flag)",
+        )),
+    }
 }
 
 /// A flag setting: `on`/`off`, `true`/`false` or `1`/`0`.
@@ -232,7 +244,7 @@ impl<'de> Visitor<'de> for ValueVisitor {
         let key: String = map
             .next_key()?
             .ok_or_else(|| de::Error::custom(format!("empty map; expected {VALUE_EXPECTED}")))?;
-        let text: String = map.next_value()?;
+        let text = map.next_value::<Text>()?.0;
         let value = match key.as_str() {
             "ascii" => ValueSpec::Ascii(text),
             "ascii_words" => ValueSpec::AsciiWords(text),
@@ -244,6 +256,28 @@ impl<'de> Visitor<'de> for ValueVisitor {
             )));
         }
         Ok(value)
+    }
+}
+
+/// The text of `{ascii: ...}`: a YAML string only. `{ascii: 5}` is the number 5, not the
+/// character `5`; reading it as text would hide the author's slip.
+struct Text(String);
+
+impl<'de> Deserialize<'de> for Text {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct TextVisitor;
+        impl Visitor<'_> for TextVisitor {
+            type Value = Text;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str(
+                    "a YAML string, e.g. `{ascii: \"5A8D\"}` (quote text that reads as a number)",
+                )
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<Text, E> {
+                Ok(Text(v.to_string()))
+            }
+        }
+        deserializer.deserialize_any(TextVisitor)
     }
 }
 

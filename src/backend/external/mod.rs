@@ -20,7 +20,7 @@ use std::time::{Duration, Instant};
 
 use serde::Serialize;
 
-pub use process::MAX_LINE;
+pub use process::{closing, kill_all, shell_line, MAX_LINE};
 use process::{describe_exit, Next, Process};
 use protocol::{
     BackendInfo, BackendMessage, Capabilities, CaseRequest, CodecRequest, ErrorReport, FillName,
@@ -97,10 +97,16 @@ pub struct ExternalBackend {
 struct State {
     process: Option<Process>,
     next_id: u64,
-    /// Set when the process could not be started again after a fault: every later case gets
+    /// Set when the process could not be started again after a fault, or after
+    /// `max_consecutive_faults` faults in a row (the circuit breaker): every later case gets
     /// this as its fault without another attempt.
     down: Option<String>,
+    /// Cases that ended in a fault since the last one answered.
+    faults_in_a_row: usize,
 }
+
+/// Why the remaining trials of an interrupted run are not run.
+const INTERRUPTED: &str = "not run: the run was interrupted";
 
 impl ExternalBackend {
     /// Starts the process and completes the handshake; checks the capabilities against the
@@ -148,6 +154,7 @@ impl ExternalBackend {
                 process,
                 next_id: 1,
                 down: None,
+                faults_in_a_row: 0,
             }),
         })
     }
@@ -192,6 +199,10 @@ impl ExternalBackend {
                         }
                         state.process = Some(p)
                     }
+                    Err(_) if closing() => {
+                        state.down = Some(INTERRUPTED.into());
+                        continue;
+                    }
                     Err(kind) => {
                         let why = format!(
                             "could not be started again: {}",
@@ -216,6 +227,7 @@ impl ExternalBackend {
                 match self.answer(process, case, deadline) {
                     Ok(response) => {
                         results.push(Ok(response));
+                        state.faults_in_a_row = 0;
                         deadline = Instant::now() + self.settings.timeout;
                     }
                     Err(fault) => {
@@ -224,6 +236,12 @@ impl ExternalBackend {
                             p.kill();
                             p.stderr_since(mark, Duration::from_millis(300))
                         });
+                        state.faults_in_a_row += 1;
+                        if closing() {
+                            state.down = Some(INTERRUPTED.into());
+                        } else if state.faults_in_a_row >= self.settings.max_consecutive_faults {
+                            state.down = Some(self.breaker(&fault));
+                        }
                         results.push(Err(with_stderr(fault, &stderr)));
                         break;
                     }
@@ -238,6 +256,19 @@ impl ExternalBackend {
         results
     }
 
+    /// Why the rest of the trials are not run once the circuit breaker trips: a backend that
+    /// hangs or crashes on every case would otherwise cost each case its time limit.
+    fn breaker(&self, last: &Fault) -> String {
+        format!(
+            "not run: {} failed {} requests in a row (the last: {}), so its remaining trials \
+             are not run (max_consecutive_faults: {})",
+            self.settings.name,
+            self.settings.max_consecutive_faults,
+            last.kind(),
+            self.settings.max_consecutive_faults
+        )
+    }
+
     /// Reads the answer to one case.
     fn answer(
         &self,
@@ -246,7 +277,7 @@ impl ExternalBackend {
         deadline: Instant,
     ) -> Result<Response, Fault> {
         let which = || format!("request {} (case {})", case.id(), case.case());
-        let line = match process.next_line(deadline) {
+        let line = match next_message(process, deadline) {
             Next::Line(line) => line,
             Next::Oversized { head, length } => {
                 return Err(Fault::Protocol(format!(
@@ -256,6 +287,9 @@ impl ExternalBackend {
                     MAX_LINE / 1024,
                     quote(&head)
                 )))
+            }
+            Next::Timeout | Next::Closed(_) if closing() => {
+                return Err(Fault::Unreachable(INTERRUPTED.into()))
             }
             Next::Timeout => {
                 return Err(Fault::Timeout(format!(
@@ -492,8 +526,12 @@ fn handshake(
         let stderr = process.stderr_since(0, Duration::from_millis(300));
         ExternalErrorKind::Handshake(append_stderr(what, &stderr))
     };
-    let line = match process.next_line(deadline) {
-        Next::Line(line) => line,
+    let line = match next_message(&mut process, deadline) {
+        // A byte-order mark before hello (some runtimes write one) is not part of the message.
+        Next::Line(line) => match line.strip_prefix(b"\xEF\xBB\xBF") {
+            Some(rest) => rest.to_vec(),
+            None => line,
+        },
         Next::Oversized { head, length } => {
             return Err(failed(
                 &mut process,
@@ -501,6 +539,12 @@ fn handshake(
                 "the answer to hello is a line of {length} bytes, over the limit; it starts: {}",
                 quote(&head)
             ),
+            ))
+        }
+        Next::Timeout | Next::Closed(_) if closing() => {
+            return Err(failed(
+                &mut process,
+                "interrupted before it answered hello".into(),
             ))
         }
         Next::Timeout => {
@@ -563,6 +607,17 @@ fn handshake(
                 quote(&line)
             ),
         )),
+    }
+}
+
+/// The next line that is not blank: blank lines between messages are tolerated, as `serve`
+/// tolerates them from the harness.
+fn next_message(process: &mut Process, deadline: Instant) -> Next {
+    loop {
+        match process.next_line(deadline) {
+            Next::Line(line) if line.iter().all(u8::is_ascii_whitespace) => continue,
+            next => return next,
+        }
     }
 }
 
@@ -761,19 +816,34 @@ fn outcome(
             .collect()
     };
     let mut out = Outcome::default();
+    // One word given two values in one answer is no answer: which one would count?
+    let mut in_memory: BTreeMap<Device, String> = BTreeMap::new();
     for range in memory {
         let start = device(&range.start)?;
         for (i, word) in range.words.into_iter().enumerate() {
             let d = start
                 .offset(i as u32)
                 .ok_or_else(|| format!("memory from {start} runs past the last device number"))?;
+            if let Some(first) = in_memory.insert(d.clone(), range.start.clone()) {
+                return Err(format!(
+                    "{d} is given twice in `memory` (in the ranges from {first} and from {})",
+                    range.start
+                ));
+            }
             if before.get(&d) != Some(&word) {
                 out.writes.insert(d, word);
             }
         }
     }
+    let mut in_writes: BTreeMap<Device, String> = BTreeMap::new();
     for (name, word) in writes {
-        out.writes.insert(device(&name)?, word);
+        let d = device(&name)?;
+        if let Some(first) = in_writes.insert(d.clone(), name.clone()) {
+            return Err(format!(
+                "`{first}` and `{name}` in `writes` are the same word, {d}"
+            ));
+        }
+        out.writes.insert(d, word);
     }
     out.error = match error {
         None => None,
@@ -868,5 +938,54 @@ fn with_stderr(fault: Fault, stderr: &str) -> Fault {
         Fault::Timeout(s) => Fault::Timeout(append_stderr(s, stderr)),
         Fault::Protocol(s) => Fault::Protocol(append_stderr(s, stderr)),
         Fault::Unreachable(s) => Fault::Unreachable(append_stderr(s, stderr)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn request() -> CaseRequest {
+        CaseRequest {
+            id: 1,
+            case: "c".into(),
+            instruction: "HABIN".into(),
+            profile: "mitsubishi-iqr".into(),
+            variant: "rcpu".into(),
+            flags: BTreeMap::new(),
+            ignored_flags: BTreeMap::new(),
+            operands: BTreeMap::new(),
+            fill: FillName::A,
+            memory: vec![MemoryRange {
+                start: "D200".into(),
+                words: vec![0, 0],
+            }],
+        }
+    }
+
+    #[test]
+    fn one_word_given_two_values_is_no_answer() {
+        let range = |start: &str, words: Vec<u16>| MemoryRange {
+            start: start.into(),
+            words,
+        };
+        let e = outcome(
+            &request(),
+            vec![range("D200", vec![1, 2]), range("D201", vec![3])],
+            BTreeMap::new(),
+            None,
+        )
+        .expect_err("two ranges over D201");
+        assert!(e.contains("D201 is given twice in `memory`"), "{e}");
+        let writes = BTreeMap::from([("D200".to_string(), 1), ("D0200".to_string(), 2)]);
+        let e = outcome(&request(), Vec::new(), writes, None).expect_err("D200 and D0200");
+        assert!(
+            e.contains("`D0200` and `D200` in `writes` are the same word, D200"),
+            "{e}"
+        );
+        // `writes` wins over `memory` for a word in both, as documented.
+        let writes = BTreeMap::from([("D200".to_string(), 7)]);
+        let o = outcome(&request(), vec![range("D200", vec![1])], writes, None).expect("ok");
+        assert_eq!(o.writes.values().copied().collect::<Vec<_>>(), vec![7]);
     }
 }

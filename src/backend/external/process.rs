@@ -4,15 +4,22 @@
 //! lines at [`MAX_LINE`] bytes (the rest of an oversized line is read and dropped, never
 //! stored) and hands them over a bounded channel, so that waiting for an answer can time out.
 //! Stdin is written by a thread too: a backend that stops reading cannot block the harness.
-//! Stderr is kept as a bounded tail to show with a failing case. The process runs in its own
-//! process group, so that killing it also kills what a `sh -c` wrapper started.
+//! Stderr is kept as a bounded tail to show with a failing case.
+//!
+//! The process runs in its own process group, so that killing it also kills what it started (a
+//! wrapper's interpreter, an emulator's helpers). The group is killed before the process is
+//! reaped, on every path — a crash, a timeout, a shutdown, a drop — while its id still names
+//! it, and every live group is in a registry so that an interruption ([`kill_all`]) ends them
+//! all, also during a handshake. A command line run by `sh -c` is `exec`'d when it is a single
+//! command, so that the backend itself holds its stdout: closing it is then seen at once.
 
-use std::collections::VecDeque;
+use std::collections::{BTreeSet, VecDeque};
 use std::io::{Read, Write};
 use std::path::PathBuf;
 use std::process::{Child, ChildStdin, Command, ExitStatus, Stdio};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, SyncSender};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -24,6 +31,83 @@ pub const MAX_LINE: usize = 1 << 20;
 const STDERR_TAIL: usize = 16 * 1024;
 /// How long a backend has to exit after `shutdown` before it is killed.
 const GRACE: Duration = Duration::from_millis(1000);
+/// How often a wait for an answer checks whether the process has exited.
+const POLL: Duration = Duration::from_millis(50);
+/// How long the lines of a process that has exited may take to arrive.
+const SETTLE: Duration = Duration::from_millis(100);
+
+/// The process groups of the backend processes not yet reaped.
+static GROUPS: Mutex<BTreeSet<i32>> = Mutex::new(BTreeSet::new());
+/// Set once the harness is shutting down: no backend process starts any more.
+static CLOSING: AtomicBool = AtomicBool::new(false);
+
+fn groups() -> MutexGuard<'static, BTreeSet<i32>> {
+    GROUPS
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+/// Kills every backend process group and refuses to start another: what an interruption does.
+/// The processes are reaped by their owners, which see their backends' stdout close.
+pub fn kill_all() {
+    CLOSING.store(true, Ordering::SeqCst);
+    for &pgid in groups().iter() {
+        signal_group(pgid);
+    }
+}
+
+/// Whether [`kill_all`] has been called.
+pub fn closing() -> bool {
+    CLOSING.load(Ordering::SeqCst)
+}
+
+/// SIGKILL to a process group.
+fn signal_group(pgid: i32) {
+    #[cfg(unix)]
+    // SAFETY: kill(2) takes no pointers. Only ids of groups whose leader has not been reaped
+    // are passed (see `GROUPS`), so the id still names the group the backend created.
+    unsafe {
+        libc::kill(-pgid, libc::SIGKILL);
+    }
+    #[cfg(not(unix))]
+    let _ = pgid;
+}
+
+/// `sh -c` runs a single command in a child of the shell, which keeps the backend's stdout open
+/// after the backend closes it; `exec` makes the backend the process itself. A command line
+/// with operators (`a && b`, `a | b`, `a; b`), an assignment or a reserved word first is left as
+/// it is.
+pub fn shell_line(line: &str) -> String {
+    const RESERVED: [&str; 13] = [
+        "if", "then", "else", "elif", "fi", "do", "done", "case", "esac", "while", "until", "for",
+        "exec",
+    ];
+    let first = line.split_whitespace().next().unwrap_or("");
+    let assignment = first
+        .split_once('=')
+        .is_some_and(|(name, _)| !name.is_empty() && !name.contains(['"', '\'', '$']));
+    if first.is_empty()
+        || assignment
+        || RESERVED.contains(&first)
+        || matches!(first, "{" | "}" | "!" | "function" | "select")
+    {
+        return line.to_string();
+    }
+    let (mut single, mut double, mut escaped) = (false, false, false);
+    for c in line.chars() {
+        match c {
+            _ if escaped => escaped = false,
+            '\\' if !single => escaped = true,
+            '\'' if !double => single = !single,
+            '"' if !single => double = !double,
+            ';' | '&' | '|' | '(' | ')' | '\n' | '`' if !single && !double => {
+                return line.to_string();
+            }
+            _ => {}
+        }
+    }
+    format!("exec {line}")
+}
 
 /// What came out of a backend's stdout.
 #[derive(Debug)]
@@ -42,6 +126,8 @@ pub enum Next {
 
 pub struct Process {
     child: Child,
+    /// The process group the child leads, while it is registered in `GROUPS`.
+    group: Option<i32>,
     to_stdin: Option<SyncSender<Vec<u8>>>,
     lines: Receiver<Vec<Next>>,
     /// Lines received and not yet asked for.
@@ -69,7 +155,7 @@ impl Process {
         let mut command = match launch {
             Launch::Shell(line) => {
                 let mut c = Command::new("sh");
-                c.arg("-c").arg(line);
+                c.arg("-c").arg(shell_line(line));
                 c
             }
             Launch::Exec(args) => {
@@ -94,7 +180,19 @@ impl Process {
             use std::os::unix::process::CommandExt;
             command.process_group(0);
         }
+        // Registered before anyone can signal: `kill_all` waits for the registry, and after it
+        // nothing starts.
+        let mut registry = groups();
+        if closing() {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::Interrupted,
+                "the run is interrupted: no backend starts any more",
+            ));
+        }
         let mut child = command.spawn()?;
+        let group = i32::try_from(child.id()).ok();
+        registry.extend(group);
+        drop(registry);
         let missing = || std::io::Error::other("a pipe of the child is missing");
         let stdin = child.stdin.take().ok_or_else(missing)?;
         let stdout = child.stdout.take().ok_or_else(missing)?;
@@ -113,6 +211,7 @@ impl Process {
         ];
         Ok(Process {
             child,
+            group,
             to_stdin: Some(to_stdin),
             lines,
             stderr,
@@ -131,19 +230,36 @@ impl Process {
         }
     }
 
-    /// The next line, waiting until `deadline`.
+    /// The next line, waiting until `deadline`. A process that has exited while a process it
+    /// started still holds its stdout open is seen as closed, not waited for until the
+    /// deadline.
     pub fn next_line(&mut self, deadline: Instant) -> Next {
         if let Some(next) = self.pending.pop_front() {
             return next;
         }
-        let wait = deadline.saturating_duration_since(Instant::now());
-        match self.lines.recv_timeout(wait) {
-            Ok(batch) => {
-                self.pending.extend(batch);
-                self.pending.pop_front().unwrap_or(Next::Closed(None))
+        let mut exited = false;
+        loop {
+            let wait = deadline.saturating_duration_since(Instant::now());
+            match self
+                .lines
+                .recv_timeout(if exited { SETTLE } else { wait.min(POLL) })
+            {
+                Ok(batch) => {
+                    self.pending.extend(batch);
+                    return self.pending.pop_front().unwrap_or(Next::Closed(None));
+                }
+                Err(RecvTimeoutError::Disconnected) => return Next::Closed(None),
+                Err(RecvTimeoutError::Timeout) if exited => {
+                    return Next::Closed(Some(
+                        "it exited, but a process it started still holds its stdout".into(),
+                    ))
+                }
+                Err(RecvTimeoutError::Timeout) if Instant::now() >= deadline => {
+                    return Next::Timeout
+                }
+                // Lines written before the exit are still read: one more short wait.
+                Err(RecvTimeoutError::Timeout) => exited = self.has_exited() == Some(true),
             }
-            Err(RecvTimeoutError::Timeout) => Next::Timeout,
-            Err(RecvTimeoutError::Disconnected) => Next::Closed(None),
         }
     }
 
@@ -179,39 +295,74 @@ impl Process {
         text
     }
 
-    /// The exit status, waiting up to `wait` for the process to end.
+    /// The exit status, waiting up to `wait` for the process to end. Once it has ended, its
+    /// process group is killed before it is reaped: helpers it started do not outlive it.
     pub fn exit_status(&mut self, wait: Duration) -> Option<ExitStatus> {
         let until = Instant::now() + wait;
         loop {
-            match self.child.try_wait() {
-                Ok(Some(status)) => {
+            match self.has_exited() {
+                Some(true) => {
+                    self.end_group();
+                    let status = self.child.wait().ok();
                     self.reaped = true;
-                    return Some(status);
+                    return status;
                 }
-                Ok(None) if Instant::now() < until => std::thread::sleep(Duration::from_millis(2)),
+                Some(false) if Instant::now() < until => {
+                    std::thread::sleep(Duration::from_millis(2));
+                }
                 _ => return None,
             }
         }
     }
 
-    /// Kills the process (with its process group while the group id is still its own) and
-    /// reaps it.
+    /// Whether the child has exited, without reaping it (so that its process group id still
+    /// names its group); `None` when that cannot be told.
+    #[cfg(unix)]
+    fn has_exited(&mut self) -> Option<bool> {
+        if self.reaped {
+            return Some(true);
+        }
+        let pid = libc::id_t::try_from(self.child.id()).ok()?;
+        // SAFETY: waitid(2) writes into the zeroed siginfo_t it is given and into nothing else;
+        // WNOWAIT leaves the child waitable, so `Child::wait` still reaps it.
+        unsafe {
+            let mut info: libc::siginfo_t = std::mem::zeroed();
+            let flags = libc::WEXITED | libc::WNOHANG | libc::WNOWAIT;
+            if libc::waitid(libc::P_PID, pid, &mut info, flags) != 0 {
+                return None;
+            }
+            Some(info.si_pid() != 0)
+        }
+    }
+
+    #[cfg(not(unix))]
+    fn has_exited(&mut self) -> Option<bool> {
+        match self.child.try_wait() {
+            Ok(Some(_)) => {
+                self.reaped = true;
+                Some(true)
+            }
+            Ok(None) => Some(false),
+            Err(_) => None,
+        }
+    }
+
+    /// Kills the process group and takes it out of the registry; the child is not reaped yet.
+    fn end_group(&mut self) {
+        if let Some(pgid) = self.group.take() {
+            let mut registry = groups();
+            signal_group(pgid);
+            registry.remove(&pgid);
+        }
+    }
+
+    /// Kills the process with its process group and reaps it.
     pub fn kill(&mut self) {
         self.to_stdin = None;
         if self.reaped {
             return;
         }
-        #[cfg(unix)]
-        {
-            if let Ok(pgid) = i32::try_from(self.child.id()) {
-                // SAFETY: kill(2) takes no pointers. The child leads its own process group
-                // (spawned with process_group(0)) and has not been reaped, so the group id is
-                // still the one it created.
-                unsafe {
-                    libc::kill(-pgid, libc::SIGKILL);
-                }
-            }
-        }
+        self.end_group();
         let _ = self.child.kill();
         let _ = self.child.wait();
         self.reaped = true;

@@ -159,8 +159,13 @@ pub enum BackendMessage {
         #[serde(default, skip_serializing_if = "Vec::is_empty")]
         memory: Vec<MemoryRange>,
         /// The words written, by device name: an alternative to `memory` for backends that
-        /// track writes. Both may be given; `writes` wins for a word in both.
-        #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+        /// track writes. Both may be given; `writes` wins for a word in both. A name given
+        /// twice is an error.
+        #[serde(
+            default,
+            skip_serializing_if = "BTreeMap::is_empty",
+            deserialize_with = "unique_writes"
+        )]
         writes: BTreeMap<String, u16>,
         /// The operation error signalled, or null for none.
         #[serde(default)]
@@ -281,6 +286,42 @@ pub enum SignalReport {
     Flag(#[schemars(regex(pattern = r"^[A-Z]+[0-9]+$"))] String),
 }
 
+/// `writes` with every name once: JSON lets a key repeat, and a map would keep the last value
+/// without a word.
+fn unique_writes<'de, D: serde::Deserializer<'de>>(
+    deserializer: D,
+) -> Result<BTreeMap<String, u16>, D::Error> {
+    struct Unique;
+    impl<'de> serde::de::Visitor<'de> for Unique {
+        type Value = BTreeMap<String, u16>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("a map of device names to 16-bit words")
+        }
+        fn visit_map<A: serde::de::MapAccess<'de>>(
+            self,
+            mut map: A,
+        ) -> Result<Self::Value, A::Error> {
+            let mut out = BTreeMap::new();
+            while let Some((name, word)) = map.next_entry::<String, u16>()? {
+                if out.contains_key(&name) {
+                    return Err(serde::de::Error::custom(format!(
+                        "`{name}` is given twice in `writes`"
+                    )));
+                }
+                out.insert(name, word);
+            }
+            Ok(out)
+        }
+    }
+    deserializer.deserialize_map(Unique)
+}
+
+fn some_unique_writes<'de, D: serde::Deserializer<'de>>(
+    deserializer: D,
+) -> Result<Option<BTreeMap<String, u16>>, D::Error> {
+    unique_writes(deserializer).map(Some)
+}
+
 /// Refuses a field a message of this type does not have: decoding every type's fields into one
 /// struct would otherwise accept, say, `cases` on a `hello`.
 fn only_fields(
@@ -373,6 +414,7 @@ impl BackendMessage {
             kind: String,
             id: Option<u64>,
             memory: Option<Vec<MemoryRange>>,
+            #[serde(default, deserialize_with = "some_unique_writes")]
             writes: Option<BTreeMap<String, u16>>,
             // Present-and-null and absent both mean "no error".
             #[serde(default)]
@@ -567,6 +609,14 @@ mod tests {
         }
         // Stricter than serde, which lets a unit variant of a tagged enum carry extra fields.
         assert!(HarnessMessage::from_line(br#"{"type":"shutdown","cases":[]}"#).is_err());
+    }
+
+    #[test]
+    fn a_name_given_twice_in_writes_is_refused() {
+        let line = br#"{"type":"result","id":3,"writes":{"D200":1,"D200":2}}"#;
+        let e = BackendMessage::from_line(line).expect_err("a repeated name");
+        assert!(e.to_string().contains("`D200` is given twice"), "{e}");
+        assert!(serde_json::from_slice::<BackendMessage>(line).is_err());
     }
 
     #[test]
