@@ -274,3 +274,29 @@ fn a_bad_baseline_is_bad_input() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("is not `plc-conformance-results`"));
 }
+
+/// Cross-vendor cells show each vendor's answer, conforming or not: the matrix is where the
+/// vendors' differences are read.
+#[test]
+fn cross_vendor_cells_show_the_answers() {
+    let out = cli(&[
+        "diff",
+        "--filter",
+        "xv-h2v-5-digits",
+        "--backend",
+        "iqr",
+        "--backend",
+        "fx5",
+        "--backend",
+        "fc4a",
+    ]);
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8_lossy(&out.stdout);
+    let row = text
+        .lines()
+        .find(|l| l.contains("xv-h2v-5-digits"))
+        .unwrap_or_else(|| panic!("{text}"));
+    for answer in ["5A8DH", "5A8D1H", "error"] {
+        assert!(row.contains(answer), "{row}");
+    }
+}

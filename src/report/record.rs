@@ -151,11 +151,10 @@ impl Record {
                 format!("{}/codec", trial.backend.name()),
             ),
         };
-        let answer = answer_of(verdict);
-        let shown = match (answer, verdict) {
-            (Some(a), _) if trial.is_cross_vendor() => a.to_string(),
-            (_, Verdict::Conforms) => "ok".to_string(),
-            (_, v) => behaviour(trial, v).short(v),
+        let shown = match (cross_vendor_answer(trial, verdict), verdict) {
+            (Some(a), _) => a.to_string(),
+            (None, Verdict::Conforms) => "ok".to_string(),
+            (None, v) => behaviour(trial, v).short(v),
         };
         let detail = match verdict {
             Verdict::Conforms => String::new(),
@@ -211,16 +210,22 @@ fn answer_of(verdict: &Verdict) -> Option<&Answer> {
     }
 }
 
+/// What a cross-vendor trial answered: the answer a verdict carries, or for a trial that
+/// conforms, the answer it was expected to give.
+fn cross_vendor_answer<'a>(trial: &'a Trial, verdict: &'a Verdict) -> Option<&'a Answer> {
+    let case = trial.cross_vendor_case()?;
+    match (verdict, &trial.check) {
+        (Verdict::Conforms, Check::CrossVendor { lowering, .. }) => {
+            case.expected_for(&lowering.key)
+        }
+        (Verdict::Conforms, _) => case.expect.as_ref(),
+        (v, _) => answer_of(v),
+    }
+}
+
 fn behaviour(trial: &Trial, verdict: &Verdict) -> Behaviour {
     if let Some(case) = trial.cross_vendor_case() {
-        let answer = match (verdict, &trial.check) {
-            (Verdict::Conforms, Check::CrossVendor { lowering, .. }) => {
-                case.expected_for(&lowering.key)
-            }
-            (Verdict::Conforms, _) => case.expect.as_ref(),
-            (v, _) => answer_of(v),
-        };
-        if let Some(a) = answer {
+        if let Some(a) = cross_vendor_answer(trial, verdict) {
             let class = match a {
                 Answer::Error(c) => AnswerClass::Error(c.clone()),
                 Answer::OtherError(e) => AnswerClass::OtherError(e.clone()),
