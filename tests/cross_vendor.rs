@@ -289,7 +289,7 @@ const GOOD: &str = "  - id: xv-good
     "unknown variant `overflow`"
 )]
 #[case::no_cite("    cite: a reading\n", "", 4, "cases[0]", "missing cite")]
-fn bad_neutral_case_is_reported(
+fn bad_cross_vendor_case_is_reported(
     #[case] find: &str,
     #[case] replace: &str,
     #[case] line: usize,

@@ -541,11 +541,11 @@ fn a_lowering_on_a_device_the_variant_lacks_is_a_profile_error() {
     for (operands, message) in [
         (
             "{s: D99999, d: D200}",
-            "neutral.lowerings[0].operands.s: D99999 does not exist on variant `rcpu`, which the lowering runs on",
+            "cross_vendor.lowerings[0].operands.s: D99999 does not exist on variant `rcpu`, which the lowering runs on",
         ),
         (
             "{s: D100, d: W200}",
-            "neutral.lowerings[0].operands.d: unknown device `W`",
+            "cross_vendor.lowerings[0].operands.d: unknown device `W`",
         ),
     ] {
         let changed = iqr.replacen(

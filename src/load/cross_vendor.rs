@@ -1,4 +1,4 @@
-//! Loading cross-vendor vector files and the `neutral` sections of profiles.
+//! Loading cross-vendor vector files and the `cross_vendor` sections of profiles.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
@@ -17,7 +17,7 @@ use crate::spec::profile::ProfileSpec;
 use crate::spec::ScalarSpec;
 use crate::value::{parse_number, parse_word, to_bits};
 
-/// The most digits a neutral case may ask for: results are lifted into 64 bits.
+/// The most digits a cross-vendor case may ask for: results are lifted into 64 bits.
 const MAX_DIGITS: u32 = 16;
 
 /// Whether a vector file is a cross-vendor one (it names an `operation`, not `instructions`).
@@ -25,7 +25,7 @@ pub fn is_cross_vendor(index: &super::LineIndex) -> bool {
     index.line("operation").is_some() && index.line("instructions").is_none()
 }
 
-pub(crate) fn lower_file(
+pub(crate) fn read_cases(
     spec: &CrossVendorFileSpec,
     profiles: &Profiles,
     cx: &mut FileContext<'_>,
@@ -48,12 +48,12 @@ pub(crate) fn lower_file(
         .enumerate()
         .filter_map(|(i, case)| {
             let key = format!("cases[{i}]");
-            lower_case(&key, case, spec, &known, cx).map(|c| (key, c))
+            read_case(&key, case, spec, &known, cx).map(|c| (key, c))
         })
         .collect()
 }
 
-fn lower_case(
+fn read_case(
     key: &str,
     spec: &CrossVendorCaseSpec,
     file: &CrossVendorFileSpec,
@@ -231,10 +231,10 @@ pub(crate) fn parse_operand(text: &str) -> Result<Operand, String> {
         .map_err(|e| e.to_string())
 }
 
-/// Checks a profile's `neutral` section against the rest of the profile and parses it.
-pub(crate) fn lower_section(p: &ProfileSpec, cx: &mut FileContext<'_>) -> CrossVendorSection {
+/// Checks a profile's `cross_vendor` section against the rest of the profile and parses it.
+pub(crate) fn read_section(p: &ProfileSpec, cx: &mut FileContext<'_>) -> CrossVendorSection {
     let mut out = CrossVendorSection::default();
-    let Some(section) = &p.neutral else {
+    let Some(section) = &p.cross_vendor else {
         return out;
     };
     for (key, class) in &section.errors {
@@ -247,14 +247,14 @@ pub(crate) fn lower_section(p: &ProfileSpec, cx: &mut FileContext<'_>) -> CrossV
         match signal {
             Some(s) => out.errors.push((s, class.clone())),
             None => cx.error(
-                format!("neutral.errors.{key}"),
+                format!("cross_vendor.errors.{key}"),
                 LoadErrorKind::Invalid(format!("`{key}` is not an error signal of this profile")),
             ),
         }
     }
     let mut names = BTreeSet::new();
     for (i, l) in section.lowerings.iter().enumerate() {
-        let key = format!("neutral.lowerings[{i}]");
+        let key = format!("cross_vendor.lowerings[{i}]");
         let before = cx.errors.len();
         if !names.insert(&l.name) {
             cx.error(
@@ -452,7 +452,7 @@ pub(crate) fn add_file(
 ) -> Vec<(String, CrossVendorCase)> {
     let mut cx = FileContext::new(file, text, errors);
     match super::parse_document::<CrossVendorFileSpec>(text, &mut cx) {
-        Some(spec) => lower_file(&spec, profiles, &mut cx),
+        Some(spec) => read_cases(&spec, profiles, &mut cx),
         None => Vec::new(),
     }
 }

@@ -99,7 +99,7 @@ pub fn yaml_files(path: &Path) -> Result<Vec<PathBuf>, LoadError> {
     Ok(files)
 }
 
-/// Per-file state while lowering: where errors go and how their lines are found.
+/// Per-file state while reading: where errors go and how their lines are found.
 pub(crate) struct FileContext<'a> {
     pub file: PathBuf,
     pub index: LineIndex,
@@ -107,7 +107,7 @@ pub(crate) struct FileContext<'a> {
 }
 
 impl<'a> FileContext<'a> {
-    /// Starts lowering a file, reporting keys repeated within a mapping.
+    /// Starts reading a file, reporting keys repeated within a mapping.
     pub fn new(file: &Path, text: &str, errors: &'a mut Vec<LoadError>) -> Self {
         let cx = FileContext {
             file: file.to_path_buf(),

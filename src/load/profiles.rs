@@ -59,7 +59,7 @@ pub fn parse_profile(file: &Path, text: &str, errors: &mut Vec<LoadError>) -> Op
     let mut cx = FileContext::new(file, text, errors);
     let spec = super::parse_document::<ProfileSpec>(text, &mut cx)?;
     check_profile(&spec, &mut cx);
-    let cross_vendor = super::cross_vendor::lower_section(&spec, &mut cx);
+    let cross_vendor = super::cross_vendor::read_section(&spec, &mut cx);
     if cx.errors.len() != before {
         return None;
     }

@@ -1,4 +1,4 @@
-//! Lowering vector files into the validated corpus, checked against their profiles.
+//! Reading vector files into the validated corpus, checked against their profiles.
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
@@ -68,7 +68,7 @@ impl CorpusBuilder {
         let Some(spec) = super::parse_document::<VectorFileSpec>(text, &mut cx) else {
             return;
         };
-        let Some(header) = lower_header(&spec, profiles, &mut cx) else {
+        let Some(header) = read_header(&spec, profiles, &mut cx) else {
             return;
         };
         if spec.cases.is_empty() {
@@ -77,14 +77,14 @@ impl CorpusBuilder {
                 LoadErrorKind::Missing("case: a vector file holds at least one"),
             );
         }
-        let mut lowered_cases = Vec::new();
+        let mut cases = Vec::new();
         for (i, case) in spec.cases.iter().enumerate() {
             let key = format!("cases[{i}]");
-            if let Some(lowered) = lower_case(&key, case, &header, &mut cx) {
-                lowered_cases.push((key, lowered));
+            if let Some(read) = read_case(&key, case, &header, &mut cx) {
+                cases.push((key, read));
             }
         }
-        for (key, case) in lowered_cases {
+        for (key, case) in cases {
             if self.claim_id(&key, &case.id, &case.location) {
                 self.cases.push(Arc::new(case));
             }
@@ -134,7 +134,7 @@ struct Header<'p> {
     source: SourceSpec,
 }
 
-fn lower_header<'p>(
+fn read_header<'p>(
     spec: &VectorFileSpec,
     profiles: &'p Profiles,
     cx: &mut FileContext<'_>,
@@ -194,12 +194,7 @@ fn check_source(key: &str, source: &SourceSpec, profiles: &[&Profile], cx: &mut 
     }
 }
 
-fn lower_case(
-    key: &str,
-    spec: &CaseSpec,
-    h: &Header<'_>,
-    cx: &mut FileContext<'_>,
-) -> Option<Case> {
+fn read_case(key: &str, spec: &CaseSpec, h: &Header<'_>, cx: &mut FileContext<'_>) -> Option<Case> {
     let before_count = cx.errors.len();
     check_id(key, &spec.id, cx);
     let cite = check_cite(key, spec.basis, spec.cite.as_deref(), cx);
@@ -235,11 +230,11 @@ fn lower_case(
         list.iter().cloned().collect::<BTreeSet<String>>()
     });
 
-    let flags = lower_flags(key, &spec.flags, h, cx);
-    let operands = lower_operands(key, &spec.operands, h, cx);
-    let before = lower_memory(&format!("{key}.before"), &spec.before, h, cx);
+    let flags = read_flags(key, &spec.flags, h, cx);
+    let operands = read_operands(key, &spec.operands, h, cx);
+    let before = read_memory(&format!("{key}.before"), &spec.before, h, cx);
     let expect = match &spec.expect {
-        Some(e) => Some(lower_expect(&format!("{key}.expect"), e, h, cx)),
+        Some(e) => Some(read_expect(&format!("{key}.expect"), e, h, cx)),
         None => {
             check_expect_optional(key, spec.basis, cx);
             None
@@ -266,7 +261,7 @@ fn lower_case(
     })
 }
 
-fn lower_flags(
+fn read_flags(
     key: &str,
     spec: &BTreeMap<String, FlagSpec>,
     h: &Header<'_>,
@@ -316,7 +311,7 @@ fn lower_flags(
     out
 }
 
-fn lower_operands(
+fn read_operands(
     key: &str,
     spec: &BTreeMap<String, ScalarSpec>,
     h: &Header<'_>,
@@ -419,7 +414,7 @@ fn lower_operands(
 }
 
 /// Expands `device: value` entries into single words, rejecting a word set twice.
-fn lower_memory(
+fn read_memory(
     key: &str,
     spec: &BTreeMap<String, ValueSpec>,
     h: &Header<'_>,
@@ -537,30 +532,30 @@ fn expand(key: &str, value: &ValueSpec, cx: &mut FileContext<'_>) -> Option<Vec<
     Some(words)
 }
 
-fn lower_expect(
+fn read_expect(
     key: &str,
     spec: &ExpectSpec,
     h: &Header<'_>,
     cx: &mut FileContext<'_>,
 ) -> Expectation {
-    let after = lower_memory(&format!("{key}.after"), &spec.after, h, cx);
+    let after = read_memory(&format!("{key}.after"), &spec.after, h, cx);
     let ekey = format!("{key}.error");
     let error = match &spec.error {
         None => None,
         Some(ScalarSpec::Text(t)) if t == "none" => None,
         Some(value) => {
-            let mut lowered = None;
+            let mut read = None;
             for p in &h.profiles {
-                lowered = lower_error(&ekey, value, p, cx);
+                read = read_error(&ekey, value, p, cx);
             }
-            lowered
+            read
         }
     };
     Expectation { after, error }
 }
 
 /// Reads an error expectation the way the profile signals errors.
-fn lower_error(
+fn read_error(
     key: &str,
     value: &ScalarSpec,
     p: &Profile,

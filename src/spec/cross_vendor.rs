@@ -1,4 +1,4 @@
-//! Cross-vendor vector files, and the `neutral` section of a profile, as written on disk.
+//! Cross-vendor vector files, and the `cross_vendor` section of a profile, as written on disk.
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -66,7 +66,7 @@ pub enum TextLayout {
     Words,
 }
 
-/// A profile's `neutral` section: how its instructions answer the cross-vendor operations.
+/// A profile's `cross_vendor` section: how its instructions answer the cross-vendor operations.
 #[derive(Debug, Clone, Default, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CrossVendorSectionSpec {

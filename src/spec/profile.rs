@@ -41,7 +41,7 @@ pub struct ProfileSpec {
     pub variants: Vec<Variant>,
     /// How the profile answers the cross-vendor operations.
     #[serde(default)]
-    pub neutral: Option<CrossVendorSectionSpec>,
+    pub cross_vendor: Option<CrossVendorSectionSpec>,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]

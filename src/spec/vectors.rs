@@ -1,7 +1,7 @@
 //! The vector files as written on disk: the corpus authors' format.
 //!
 //! These types mirror the YAML one to one and check only its shape (known keys, scalar vs list vs
-//! map); what the values mean is checked when they are lowered into [`crate::model`] against the
+//! map); what the values mean is checked when they are read into [`crate::model`] against the
 //! vendor profile, so that a message can say which profile rule a value breaks. The JSON Schema
 //! shipped for editors is generated from these types, so the schema and the loader cannot drift.
 
