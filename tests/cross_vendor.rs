@@ -105,18 +105,7 @@ fn an_idec_model_reporting_a_code_is_not_an_idec_error() {
 #[test]
 fn an_outcome_that_depends_on_unset_memory_is_caught() {
     let s = session();
-    let fx5 = reference(&s, "mitsubishi-fx5");
-    // Converts, then copies a word the lowering never sets into the result.
-    let mutant = Mutant::new("reads-unset-memory", &fx5, |req, base| {
-        base.execute(req).map(|r| match r {
-            Response::Done(mut o) if o.error.is_none() => {
-                let stray = req.memory.read(&Device::new("D", 150));
-                o.writes.insert(Device::new("D", 200), stray);
-                Response::Done(o)
-            }
-            other => other,
-        })
-    });
+    let mutant = reads_unset_memory(&s);
     let v = verdicts(&s, &mutant);
     assert!(
         v.iter().any(|(_, v)| matches!(
@@ -129,7 +118,8 @@ fn an_outcome_that_depends_on_unset_memory_is_caught() {
     );
 }
 
-/// The mutant that copies an unset word into the result: its answer depends on the fill.
+/// The FX5 model, except that after converting it copies a word the lowering never sets into
+/// the result: its answer depends on the fill.
 fn reads_unset_memory(s: &Project) -> Arc<dyn Backend> {
     let fx5 = reference(s, "mitsubishi-fx5");
     Mutant::new("reads-unset-memory", &fx5, |req, base| {
