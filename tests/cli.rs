@@ -2,18 +2,17 @@
 
 mod common;
 
-use std::path::PathBuf;
-
 use common::{cli, scratch};
+use tempfile::TempDir;
 
 fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
 }
 
 /// A scratch folder holding one vector file.
-fn scratch_vectors(test: &str, yaml: &str) -> PathBuf {
-    let dir = scratch(&format!("cli-{test}"));
-    std::fs::write(dir.join("case.yaml"), yaml).expect("write vector");
+fn scratch_vectors(yaml: &str) -> TempDir {
+    let dir = scratch();
+    std::fs::write(dir.path().join("case.yaml"), yaml).expect("write vector");
     dir
 }
 
@@ -45,11 +44,8 @@ fn validate_accepts_the_corpus() {
 
 #[test]
 fn validate_rejects_a_bad_vector_with_file_and_line() {
-    let dir = scratch_vectors(
-        "validate-bad",
-        &ONE_CASE.replace("D200: 5A8DH", "D200: 15A8DH"),
-    );
-    let out = cli(&["validate", dir.to_str().unwrap_or_default()]);
+    let dir = scratch_vectors(&ONE_CASE.replace("D200: 5A8DH", "D200: 15A8DH"));
+    let out = cli(&["validate", dir.path().to_str().unwrap_or_default()]);
     assert_eq!(out.status.code(), Some(2));
     let err = text(&out.stderr);
     assert!(
@@ -82,11 +78,8 @@ fn run_exits_zero_when_everything_conforms() {
 
 #[test]
 fn run_exits_one_and_shows_a_diff_on_a_difference() {
-    let dir = scratch_vectors(
-        "run-differs",
-        &ONE_CASE.replace("D200: 5A8DH", "D200: 5A8EH"),
-    );
-    let out = cli(&["run", "--vectors", dir.to_str().unwrap_or_default()]);
+    let dir = scratch_vectors(&ONE_CASE.replace("D200: 5A8DH", "D200: 5A8EH"));
+    let out = cli(&["run", "--vectors", dir.path().to_str().unwrap_or_default()]);
     assert_eq!(out.status.code(), Some(1));
     let stdout = text(&out.stdout);
     assert!(

@@ -23,7 +23,7 @@ use crate::report::document::{self, Collector};
 use crate::report::json::{BackendInfo, RunInfo};
 use crate::report::text::{memory_diff, Palette};
 use crate::report::text_reporter::TextReporter;
-use crate::report::{Reporter, Tee};
+use crate::report::{All, Event, Reporter};
 use crate::runner::{self, Project};
 
 pub fn run(cli: &Cli, args: &RunArgs) -> u8 {
@@ -87,6 +87,8 @@ fn execute_command(
     });
     let stop = AtomicBool::new(false);
     let mut collector = Collector::default();
+    let mut stopper = StopAtFailure { stop: &stop };
+    let mut text = None;
     if format == Format::Text {
         let notes = if backend_args.backends.is_empty() {
             file.skipped.iter().map(ToString::to_string).collect()
@@ -103,10 +105,17 @@ fn execute_command(
             },
             None => (Box::new(anstream::stdout()), Palette::coloured()),
         };
-        let mut text = TextReporter::new(out, palette, show_recorded, notes);
-        runner::run(&trials, jobs, &stop, &mut Tee(&mut text, &mut collector));
-    } else {
-        runner::run(&trials, jobs, &stop, &mut collector as &mut dyn Reporter);
+        text = Some(TextReporter::new(out, palette, show_recorded, notes).quiet(cli.quiet));
+    }
+    {
+        let mut reporters: Vec<&mut dyn Reporter> = vec![&mut collector];
+        if let Some(text) = &mut text {
+            reporters.push(text);
+        }
+        if backend_args.fail_fast {
+            reporters.push(&mut stopper);
+        }
+        runner::run(&trials, jobs, &stop, &mut All(reporters));
     }
     let (records, summary, interrupted) = collector.finish();
     let info = RunInfo {
@@ -135,7 +144,7 @@ fn execute_command(
         }
     }
     for (name, known) in &project.known {
-        if !known.ignored.is_empty() {
+        if !known.ignored.is_empty() && !cli.quiet {
             eprintln!(
                 "note: {} entr{} of {} (backend {name}) name cases not in this corpus and were \
                  not used",
@@ -159,6 +168,21 @@ fn execute_command(
         EXIT_DIFFERENCES
     } else {
         EXIT_OK
+    }
+}
+
+/// Stops the run at the first failing trial (`--fail-fast`): no further batch starts.
+struct StopAtFailure<'a> {
+    stop: &'a AtomicBool,
+}
+
+impl Reporter for StopAtFailure<'_> {
+    fn event(&mut self, event: &Event<'_>) {
+        if let Event::TrialFinished { verdict, .. } = event {
+            if verdict.is_failure() {
+                self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
+            }
+        }
     }
 }
 

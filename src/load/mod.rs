@@ -12,6 +12,7 @@ mod known;
 mod locate;
 mod profiles;
 mod project;
+mod source;
 mod vectors;
 
 use std::path::{Path, PathBuf};
@@ -26,10 +27,15 @@ pub use project::{
     load_project, locate_project, requirements_enforced, valid_name, ENV_CONFIG, ENV_REQUIRE,
     ENV_SELF, FILE_NAME,
 };
+pub use source::{
+    embedded_files, embedded_text, embedded_vectors, embedded_vendors, find_project_root,
+    is_project_root, EMBEDDED,
+};
 pub use vectors::{load_corpus, CorpusBuilder};
 
 /// The YAML files under a path: the file itself, or every `.yaml`/`.yml` below a folder, in a
-/// stable order. Other files in a corpus folder (READMEs) are not vectors.
+/// stable order. Other files in a corpus folder (READMEs) are not vectors. A path under
+/// `<embedded>` lists the files shipped in the binary.
 pub fn yaml_files(path: &Path) -> Result<Vec<PathBuf>, LoadError> {
     let io_error = |e: std::io::Error| LoadError {
         file: path.to_path_buf(),
@@ -37,6 +43,12 @@ pub fn yaml_files(path: &Path) -> Result<Vec<PathBuf>, LoadError> {
         key: None,
         kind: LoadErrorKind::Io(e.to_string()).into(),
     };
+    if let Some(files) = embedded_files(path) {
+        if files.is_empty() {
+            return Err(io_error(std::io::ErrorKind::NotFound.into()));
+        }
+        return Ok(files);
+    }
     let meta = std::fs::metadata(path).map_err(io_error)?;
     if meta.is_file() {
         return Ok(vec![path.to_path_buf()]);
@@ -134,7 +146,11 @@ pub(crate) fn parse_yaml<T: DeserializeOwned>(file: &Path, text: &str) -> Result
     })
 }
 
+/// The text of a file, or of a file shipped in the binary (a path under `<embedded>`).
 pub(crate) fn read_file(path: &Path) -> Result<String, LoadError> {
+    if let Some(text) = embedded_text(path) {
+        return Ok(text.to_string());
+    }
     std::fs::read_to_string(path).map_err(|e| LoadError {
         file: path.to_path_buf(),
         line: None,

@@ -46,7 +46,14 @@ impl Reporter for Collector {
                 index,
                 trial,
                 verdict,
-            } => self.records.push((*index, Record::of(trial, verdict))),
+                elapsed,
+            } => self.records.push((
+                *index,
+                Record {
+                    seconds: *elapsed,
+                    ..Record::of(trial, verdict)
+                },
+            )),
             Event::RunFinished {
                 summary,
                 interrupted,
