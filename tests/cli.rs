@@ -181,3 +181,82 @@ fn run_reports_cross_vendor_trials_too() {
     assert_eq!(xv[0]["verdict"]["verdict"], "conforms");
     assert_eq!(report["summary"]["passed"], 1);
 }
+
+#[test]
+fn quiet_prints_only_failures_and_the_counts() {
+    let out = cli(&["-q", "run", "--backend", "iqr"]);
+    assert_eq!(out.status.code(), Some(0));
+    let stdout = text(&out.stdout);
+    assert_eq!(stdout.lines().count(), 1, "{stdout}");
+    assert!(stdout.contains(" passed, 0 failed"), "{stdout}");
+    let dir = scratch_vectors(&ONE_CASE.replace("D200: 5A8DH", "D200: 5A8EH"));
+    let out = cli(&[
+        "run",
+        "--quiet",
+        "--vectors",
+        dir.path().to_str().unwrap_or_default(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let stdout = text(&out.stdout);
+    assert!(
+        stdout.contains("iqr::habin::cli-example::rcpu differs"),
+        "{stdout}"
+    );
+    assert!(
+        stdout
+            .lines()
+            .last()
+            .is_some_and(|l| l.starts_with("0 passed, ") && l.contains(" failed")),
+        "{stdout}"
+    );
+    assert!(!stdout.contains("iqr: "), "no per-backend counts: {stdout}");
+}
+
+#[test]
+fn fail_fast_stops_after_the_first_failing_batch() {
+    // The iQ-R and FX5 corpus with the first ASCI case wrong: without --fail-fast every trial
+    // runs; with it, no batch starts after the first failure (with one job, fx5 runs first).
+    let scratch = scratch();
+    let vectors = scratch.path().join("vectors");
+    for family in ["mitsubishi-iqr", "mitsubishi-fx5"] {
+        std::fs::create_dir_all(vectors.join(family)).expect("dir");
+        for entry in std::fs::read_dir(common::root().join("vectors").join(family)).expect("dir") {
+            let path = entry.expect("entry").path();
+            let text = std::fs::read_to_string(&path).expect("read");
+            let name = path.file_name().expect("name");
+            std::fs::write(
+                vectors.join(family).join(name),
+                text.replacen("D200: {ascii: \"CZ\"}", "D200: {ascii: \"DZ\"}", 1),
+            )
+            .expect("write");
+        }
+    }
+    let counted = |args: &[&str]| {
+        let mut all = vec![
+            "-q",
+            "run",
+            "-j",
+            "1",
+            "--backend",
+            "iqr",
+            "--backend",
+            "fx5",
+            "--vectors",
+            vectors.to_str().unwrap_or_default(),
+        ];
+        all.extend(args);
+        let out = cli(&all);
+        assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
+        let stdout = text(&out.stdout);
+        let last = stdout.lines().last().unwrap_or_default().to_string();
+        let numbers: Vec<usize> = last
+            .split(|c: char| !c.is_ascii_digit())
+            .filter_map(|n| n.parse().ok())
+            .collect();
+        (numbers.iter().take(4).sum::<usize>(), stdout)
+    };
+    let (all, _) = counted(&[]);
+    let (stopped, stdout) = counted(&["--fail-fast"]);
+    assert!(stopped < all, "{stopped} of {all} trials:\n{stdout}");
+    assert!(stdout.contains("interrupted: "), "{stdout}");
+}

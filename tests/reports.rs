@@ -1,0 +1,193 @@
+//! Every report format from both `run` and `diff`, checked the way its readers check it: JUnit
+//! XML against a JUnit schema, grouped by backend and instruction.
+
+mod common;
+
+use std::collections::BTreeSet;
+use std::path::Path;
+
+use common::{cli, root, scratch};
+use quick_xml::events::Event;
+use quick_xml::Reader;
+
+/// A vector file whose only case expects 5A8EH where HABIN gives 5A8DH.
+const WRONG: &str = "\
+instructions: [HABIN]
+profiles: [mitsubishi-iqr]
+source: {manual: iqr-instructions-ja, page: 478}
+cases:
+  - id: report-wrong
+    basis: manual
+    cite: example on p.478
+    operands: {s: D100, d: D200}
+    before:
+      D100: {ascii: \"5A8D\"}
+    expect:
+      after: {D200: 5A8EH}
+";
+
+/// Test cases as (classname, name, attributes, child element names).
+type Case = (String, String, Vec<(String, String)>, Vec<String>);
+
+fn junit_cases(xml: &str) -> Vec<Case> {
+    let mut reader = Reader::from_str(xml);
+    let mut cases: Vec<Case> = Vec::new();
+    let mut inside = false;
+    loop {
+        let event = reader.read_event().expect("well-formed XML");
+        let (element, empty) = match &event {
+            Event::Start(e) => (e, false),
+            Event::Empty(e) => (e, true),
+            Event::End(e) if e.name().as_ref() == b"testcase" => {
+                inside = false;
+                continue;
+            }
+            Event::Eof => break,
+            _ => continue,
+        };
+        let name = String::from_utf8_lossy(element.name().as_ref()).into_owned();
+        let attrs: Vec<(String, String)> = element
+            .attributes()
+            .filter_map(Result::ok)
+            .map(|a| {
+                (
+                    String::from_utf8_lossy(a.key.as_ref()).into_owned(),
+                    a.unescape_value()
+                        .map(|v| v.into_owned())
+                        .unwrap_or_default(),
+                )
+            })
+            .collect();
+        let get = |k: &str| {
+            attrs
+                .iter()
+                .find(|(key, _)| key == k)
+                .map(|(_, v)| v.clone())
+                .unwrap_or_default()
+        };
+        if name == "testcase" {
+            cases.push((get("classname"), get("name"), attrs.clone(), Vec::new()));
+            inside = !empty;
+        } else if inside {
+            if let Some(last) = cases.last_mut() {
+                last.3.push(name);
+            }
+        }
+    }
+    cases
+}
+
+/// Validates with `xmllint` against the JUnit schema; CI has xmllint, elsewhere the check is
+/// skipped with a note.
+fn validate_with_xmllint(xml: &Path) {
+    let schema = root().join("tests/fixtures/junit/junit.xsd");
+    let out = std::process::Command::new("xmllint")
+        .args(["--noout", "--schema"])
+        .arg(&schema)
+        .arg(xml)
+        .output();
+    match out {
+        Ok(out) => assert!(
+            out.status.success(),
+            "the JUnit report does not validate:\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        ),
+        Err(_) if std::env::var_os("CI").is_none() => {
+            eprintln!("xmllint is not installed: the JUnit schema check is skipped");
+        }
+        Err(e) => panic!("CI must have xmllint (libxml2-utils): {e}"),
+    }
+}
+
+#[test]
+fn junit_from_run_validates_and_groups_by_backend_and_instruction() {
+    let dir = scratch();
+    let file = dir.path().join("run.xml");
+    let out = cli(&[
+        "run",
+        "--backend",
+        "iqr",
+        "--backend",
+        "fx5",
+        "--format",
+        "junit",
+        "--output",
+        file.to_str().unwrap_or_default(),
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    validate_with_xmllint(&file);
+    let xml = std::fs::read_to_string(&file).expect("written");
+    let cases = junit_cases(&xml);
+    let classes: BTreeSet<&str> = cases.iter().map(|c| c.0.as_str()).collect();
+    for class in [
+        "iqr.habin",
+        "iqr.dbinha",
+        "iqr.cross-vendor",
+        "fx5.hexa",
+        "fx5.asci",
+        "fx5.cross-vendor",
+    ] {
+        assert!(classes.contains(class), "no class {class} in {classes:?}");
+    }
+    assert!(
+        classes.iter().all(|c| c.split('.').count() == 2),
+        "{classes:?}"
+    );
+    let habin = cases
+        .iter()
+        .find(|c| c.0 == "iqr.habin" && c.1 == "habin-fixed-4-digits-example::rcpu")
+        .expect("the HABIN example on rcpu");
+    let attr = |k: &str| {
+        habin
+            .2
+            .iter()
+            .find(|(key, _)| key == k)
+            .map(|(_, v)| v.as_str())
+    };
+    assert!(
+        attr("file").is_some_and(|f| f.ends_with("/vectors/mitsubishi-iqr/habin.yaml")),
+        "{habin:?}"
+    );
+    assert!(attr("line").is_some_and(|l| l.parse::<usize>().is_ok_and(|l| l > 1)));
+    assert!(attr("time").is_some_and(|t| t.parse::<f64>().is_ok()));
+    let suites = xml.matches("<testsuite ").count();
+    assert_eq!(suites, 2, "one suite per backend");
+    // Unspecified cases are skipped with what was recorded, never passed.
+    assert!(cases.iter().any(|c| c.3 == ["skipped"]));
+}
+
+#[test]
+fn a_failing_trial_is_a_junit_failure_with_its_explanation() {
+    let dir = scratch();
+    std::fs::write(dir.path().join("wrong.yaml"), WRONG).expect("write");
+    let file = dir.path().join("run.xml");
+    for command in ["run", "diff"] {
+        let out = cli(&[
+            command,
+            "--backend",
+            "iqr",
+            "--vectors",
+            dir.path().join("wrong.yaml").to_str().unwrap_or_default(),
+            "--format",
+            "junit",
+            "--output",
+            file.to_str().unwrap_or_default(),
+        ]);
+        assert_eq!(out.status.code(), Some(1), "{command}");
+        validate_with_xmllint(&file);
+        let xml = std::fs::read_to_string(&file).expect("written");
+        let cases = junit_cases(&xml);
+        assert_eq!(cases.len(), 2, "{command}: rcpu and rcpu-no-sm705");
+        for case in &cases {
+            assert_eq!(case.0, "iqr.habin");
+            assert_eq!(case.3, ["failure"], "{command}: {case:?}");
+        }
+        assert!(xml.contains("-D200     5A8EH"), "{xml}");
+        assert!(xml.contains("line=\"5\""), "{xml}");
+    }
+}
