@@ -21,6 +21,7 @@ use crate::plan::Trial;
 use crate::report::baseline::{self, SavedRun};
 use crate::report::document::{self, Collector};
 use crate::report::json::{BackendInfo, RunInfo};
+use crate::report::matrix_text;
 use crate::report::text::{memory_diff, Palette};
 use crate::report::text_reporter::TextReporter;
 use crate::report::{All, Event, Reporter};
@@ -138,7 +139,14 @@ fn execute_command(
         };
         let coloured = report.output.is_none()
             && anstream::AutoStream::choice(&std::io::stdout()) != anstream::ColorChoice::Never;
-        let rendered = document::render(doc_format, &records, &summary, &info, coloured);
+        let rendered = document::render(
+            doc_format,
+            &records,
+            &summary,
+            &info,
+            coloured,
+            text_width(report.output.is_none()),
+        );
         if let Err(code) = write_out(report.output.as_deref(), &rendered) {
             return code;
         }
@@ -155,7 +163,14 @@ fn execute_command(
         }
     }
     if let Some(path) = &report.save {
-        let saved = document::render(document::Format::Json, &records, &summary, &info, false);
+        let saved = document::render(
+            document::Format::Json,
+            &records,
+            &summary,
+            &info,
+            false,
+            matrix_text::DEFAULT_WIDTH,
+        );
         if let Err(e) = write_atomically(path, &saved) {
             eprintln!("error: cannot save the run to {}: {e}", path.display());
             return EXIT_BAD_INPUT;
@@ -184,6 +199,21 @@ impl Reporter for StopAtFailure<'_> {
             }
         }
     }
+}
+
+/// The width text reports fit: the terminal's when writing to one, else `COLUMNS`, else
+/// [`matrix_text::DEFAULT_WIDTH`].
+fn text_width(to_stdout: bool) -> usize {
+    if to_stdout {
+        if let Some((terminal_size::Width(w), _)) = terminal_size::terminal_size() {
+            return usize::from(w);
+        }
+    }
+    std::env::var("COLUMNS")
+        .ok()
+        .and_then(|c| c.parse().ok())
+        .filter(|&c: &usize| c >= 20)
+        .unwrap_or(matrix_text::DEFAULT_WIDTH)
 }
 
 /// The planned trials whose names contain `filter`.

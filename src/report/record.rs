@@ -172,7 +172,7 @@ impl Record {
                 format!("{}/codec", trial.backend.name()),
             ),
         };
-        let answer = answer_of(verdict);
+        let answer = answer_of(verdict).or_else(|| expected_answer(trial, verdict));
         let shown = match (answer, verdict) {
             (Some(a), _) if trial.is_cross_vendor() => a.to_string(),
             (_, Verdict::Conforms) => "ok".to_string(),
@@ -213,6 +213,12 @@ impl Behaviour {
                 error_text(expected.as_ref())
             ),
             Behaviour::Recorded { observed } => observed.to_string(),
+            Behaviour::Known { difference } => match verdict {
+                Verdict::KnownDifference {
+                    difference: inner, ..
+                } => difference.short(inner),
+                _ => verdict.label().to_string(),
+            },
             _ => verdict.label().to_string(),
         }
     }
@@ -233,15 +239,21 @@ fn answer_of(verdict: &Verdict) -> Option<&Answer> {
     }
 }
 
+/// The answer a conforming cross-vendor trial gave: the one its case expects of it.
+fn expected_answer<'a>(trial: &'a Trial, verdict: &Verdict) -> Option<&'a Answer> {
+    let case = trial.cross_vendor_case()?;
+    match (verdict, &trial.check) {
+        (Verdict::Conforms, Check::CrossVendor { lowering, .. }) => {
+            case.expected_for(&lowering.key)
+        }
+        (Verdict::Conforms, _) => case.expect.as_ref(),
+        _ => None,
+    }
+}
+
 fn behaviour(trial: &Trial, verdict: &Verdict) -> Behaviour {
     if let Some(case) = trial.cross_vendor_case() {
-        let answer = match (verdict, &trial.check) {
-            (Verdict::Conforms, Check::CrossVendor { lowering, .. }) => {
-                case.expected_for(&lowering.key)
-            }
-            (Verdict::Conforms, _) => case.expect.as_ref(),
-            (v, _) => answer_of(v),
-        };
+        let answer = answer_of(verdict).or_else(|| expected_answer(trial, verdict));
         if let Some(a) = answer {
             let class = match a {
                 Answer::Error(c) => AnswerClass::Error(c.clone()),
