@@ -260,3 +260,35 @@ fn fail_fast_stops_after_the_first_failing_batch() {
     assert!(stopped < all, "{stopped} of {all} trials:\n{stdout}");
     assert!(stdout.contains("interrupted: "), "{stdout}");
 }
+
+#[test]
+fn progress_lines_show_on_a_terminal_and_nothing_when_piped() {
+    let out = cli(&["run", "--backend", "iqr", "--backend", "fx5"]);
+    assert_eq!(out.status.code(), Some(0));
+    assert!(out.stderr.is_empty(), "piped: {}", text(&out.stderr));
+    // `script` gives the command a terminal and records what it shows.
+    let dir = scratch();
+    let typescript = dir.path().join("typescript");
+    let command = format!(
+        "{} --root {} run --backend iqr --backend fx5 >/dev/null",
+        env!("CARGO_BIN_EXE_plc-conformance"),
+        common::root().display()
+    );
+    let Ok(recorded) = std::process::Command::new("script")
+        .args(["-qec", &command])
+        .arg(&typescript)
+        .env("TERM", "xterm")
+        .output()
+    else {
+        eprintln!("`script` is not installed: the terminal half is skipped");
+        return;
+    };
+    assert!(recorded.status.success(), "{}", text(&recorded.stderr));
+    let shown = std::fs::read_to_string(&typescript).unwrap_or_default();
+    for line in ["iqr ", "fx5 ", " cases, 0 failed"] {
+        assert!(
+            shown.contains(line),
+            "no {line:?} on the terminal:\n{shown}"
+        );
+    }
+}

@@ -22,6 +22,7 @@ use crate::report::baseline::{self, SavedRun};
 use crate::report::document::{self, Collector};
 use crate::report::json::{BackendInfo, RunInfo};
 use crate::report::matrix_text;
+use crate::report::progress::ProgressReporter;
 use crate::report::text::{memory_diff, Palette};
 use crate::report::text_reporter::TextReporter;
 use crate::report::{All, Event, Reporter};
@@ -116,7 +117,13 @@ fn execute_command(
         if backend_args.fail_fast {
             reporters.push(&mut stopper);
         }
-        runner::run(&trials, jobs, &stop, &mut All(reporters));
+        let mut all = All(reporters);
+        if cli.quiet {
+            runner::run(&trials, jobs, &stop, &mut all);
+        } else {
+            let mut progress = ProgressReporter::new(&trials, &mut all);
+            runner::run(&trials, jobs, &stop, &mut progress);
+        }
     }
     let (records, summary, interrupted) = collector.finish();
     let info = RunInfo {

@@ -12,6 +12,7 @@ pub mod json;
 pub mod junit;
 pub mod matrix;
 pub mod matrix_text;
+pub mod progress;
 pub mod record;
 pub mod text;
 pub mod text_reporter;
