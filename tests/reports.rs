@@ -52,9 +52,8 @@ fn junit_cases(xml: &str) -> Vec<Case> {
             .map(|a| {
                 (
                     String::from_utf8_lossy(a.key.as_ref()).into_owned(),
-                    a.unescape_value()
-                        .map(|v| v.into_owned())
-                        .unwrap_or_default(),
+                    // Raw: the attributes read here (names, classes, paths) hold no escapes.
+                    String::from_utf8_lossy(&a.value).into_owned(),
                 )
             })
             .collect();
@@ -189,5 +188,116 @@ fn a_failing_trial_is_a_junit_failure_with_its_explanation() {
         }
         assert!(xml.contains("-D200     5A8EH"), "{xml}");
         assert!(xml.contains("line=\"5\""), "{xml}");
+    }
+}
+
+/// Errors of a JSON report against `schema/results.schema.json`.
+fn schema_errors(report: &serde_json::Value) -> Vec<String> {
+    let text =
+        std::fs::read_to_string(root().join("schema/results.schema.json")).expect("the schema");
+    let schema: serde_json::Value = serde_json::from_str(&text).expect("the schema is JSON");
+    let validator = jsonschema::validator_for(&schema).expect("a valid draft-07 schema");
+    validator
+        .iter_errors(report)
+        .map(|e| format!("{}: {e}", e.instance_path()))
+        .take(10)
+        .collect()
+}
+
+fn json_of(args: &[&str]) -> serde_json::Value {
+    let out = cli(args);
+    assert!(
+        matches!(out.status.code(), Some(0 | 1)),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("JSON")
+}
+
+#[test]
+fn json_from_run_and_diff_follows_the_shipped_schema() {
+    let dir = scratch();
+    std::fs::write(dir.path().join("wrong.yaml"), WRONG).expect("write");
+    let wrong = dir.path().join("wrong.yaml");
+    let reports = [
+        json_of(&["run", "--format", "json"]),
+        json_of(&["diff", "--format", "json"]),
+        json_of(&[
+            "run",
+            "--backend",
+            "iqr",
+            "--vectors",
+            wrong.to_str().unwrap_or_default(),
+            "--format",
+            "json",
+        ]),
+    ];
+    for report in &reports {
+        let errors = schema_errors(report);
+        assert!(errors.is_empty(), "{errors:#?}");
+        assert_eq!(report["run"]["backends"][0]["name"], "iqr");
+        assert!(report["run"]["backends"][0]["version"]
+            .as_str()
+            .is_some_and(|v| v.starts_with("plc-conformance ")));
+    }
+    // The failing run's words are in hex, and the schema holds them to it.
+    let row = &reports[2]["records"][0]["verdict"]["difference"]["mismatches"][0]["rows"][0];
+    assert_eq!(row["expected"], "5A8EH");
+    assert_eq!(row["actual"], "5A8DH");
+    let mut decimal = reports[2].clone();
+    decimal["records"][0]["verdict"]["difference"]["mismatches"][0]["rows"][0]["actual"] =
+        serde_json::json!(23181);
+    assert!(!schema_errors(&decimal).is_empty());
+}
+
+#[test]
+fn html_from_run_lists_failures_with_links_metadata_and_places() {
+    let dir = scratch();
+    std::fs::write(dir.path().join("wrong.yaml"), WRONG).expect("write");
+    let file = dir.path().join("report.html");
+    let out = cli(&[
+        "run",
+        "--backend",
+        "iqr",
+        "--vectors",
+        dir.path().join("wrong.yaml").to_str().unwrap_or_default(),
+        "--format",
+        "html",
+        "--output",
+        file.to_str().unwrap_or_default(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let html = std::fs::read_to_string(&file).expect("written");
+    // The failures at the top, each linking to its explanation.
+    let list = html
+        .find("<ul id=\"failures\">")
+        .expect("a list of failures");
+    let first = html.find("<table class=\"matrix\"").expect("a matrix");
+    assert!(list < first, "the failures come before the matrices");
+    for i in 0..2 {
+        assert!(
+            html.contains(&format!("<a href=\"#failure-{i}\">")),
+            "{html}"
+        );
+        assert!(
+            html.contains(&format!("<section id=\"failure-{i}\">")),
+            "{html}"
+        );
+    }
+    // Run metadata, the legend, file:line of the cases, folded group members.
+    for needle in [
+        "<th>tool</th><td>plc-conformance ",
+        "<th>date</th><td>",
+        "<th>backend iqr</th><td>plc-conformance ",
+        "<p class=\"legend\">",
+        "wrong.yaml:5</span>",
+        "<details><summary>",
+        "<ul class=\"members\">",
+    ] {
+        assert!(html.contains(needle), "the report lacks {needle}:\n{html}");
+    }
+    // The project is a git checkout only where the repository is; then its commit shows.
+    if root().join(".git").exists() {
+        assert!(html.contains("<th>commit</th><td>"), "{html}");
     }
 }

@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use anstream::{eprintln, print, println};
 
-use super::backends::{prepare, start, Prepared};
+use super::backends::{prepare, project_root, start, Prepared};
 use super::{
     BackendArgs, Cli, DiffArgs, Format, ReportArgs, RunArgs, EXIT_BAD_INPUT, EXIT_DIFFERENCES,
     EXIT_OK,
@@ -87,6 +87,7 @@ fn execute_command(
     let jobs = backend_args.jobs.unwrap_or_else(|| {
         std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
     });
+    let date = utc_now();
     let stop = AtomicBool::new(false);
     let mut collector = Collector::default();
     let mut stopper = StopAtFailure { stop: &stop };
@@ -128,11 +129,17 @@ fn execute_command(
     let (records, summary, interrupted) = collector.finish();
     let info = RunInfo {
         tool: format!("plc-conformance {}", env!("CARGO_PKG_VERSION")),
+        commit: project_root(cli)
+            .ok()
+            .flatten()
+            .and_then(|r| git_commit(&r)),
+        date,
         backends: backends
             .iter()
             .map(|b| BackendInfo {
                 name: b.name().to_string(),
                 description: b.describe(),
+                version: b.version(),
             })
             .collect(),
         interrupted,
@@ -206,6 +213,48 @@ impl Reporter for StopAtFailure<'_> {
             }
         }
     }
+}
+
+/// The project's commit when its folder is in a git repository (`git describe --always
+/// --dirty`: the abbreviated hash, `-dirty` when files changed).
+fn git_commit(root: &Path) -> Option<String> {
+    let dir = if root.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        root
+    };
+    let out = std::process::Command::new("git")
+        .args(["describe", "--always", "--dirty", "--abbrev=12"])
+        .current_dir(dir)
+        .stderr(std::process::Stdio::null())
+        .output()
+        .ok()?;
+    let text = String::from_utf8(out.stdout).ok()?;
+    (out.status.success() && !text.trim().is_empty()).then(|| text.trim().to_string())
+}
+
+/// The current time, UTC, as RFC 3339 (`2026-11-22T13:24:34Z`).
+fn utc_now() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let (days, rest) = (secs / 86_400, secs % 86_400);
+    // Civil date from days since 1970-01-01 (Howard Hinnant's algorithm).
+    let z = days as i64 + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    format!(
+        "{year:04}-{month:02}-{day:02}T{:02}:{:02}:{:02}Z",
+        rest / 3600,
+        rest % 3600 / 60,
+        rest % 60
+    )
 }
 
 /// The width text reports fit: the terminal's when writing to one, else `COLUMNS`, else
