@@ -8,8 +8,9 @@
 //! backend is still running.
 
 use std::collections::BTreeMap;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc;
+use std::time::{Duration, Instant};
 
 use serde::Serialize;
 
@@ -31,8 +32,9 @@ pub struct Observation {
 /// What the executor reports while it runs.
 #[derive(Debug)]
 pub enum Progress {
-    /// The observations of the trial at this index of the planned list.
-    Observed(usize, Vec<Observation>),
+    /// The observations of the trial at this index of the planned list, and the time it took:
+    /// its batch's time shared equally among the batch's trials.
+    Observed(usize, Vec<Observation>, Duration),
     /// A backend's process was started again after a fault; `restarts` counts them so far.
     Restarted { backend: String, restarts: usize },
 }
@@ -120,19 +122,24 @@ pub fn execute_all(
         }
     }
     let groups: Vec<Vec<usize>> = by_backend.into_values().collect();
-    for wave in groups.chunks(jobs.max(1)) {
-        let (tx, rx) = mpsc::channel::<Progress>();
-        std::thread::scope(|scope| {
-            for group in wave {
-                let tx = tx.clone();
-                scope.spawn(move || run_backend(trials, group, stop, &tx));
-            }
-            drop(tx);
-            for p in rx {
-                progress(p);
-            }
-        });
-    }
+    // `jobs` workers take backends in turn: a backend starts as soon as a worker is free, so a
+    // slow backend holds up only its own worker.
+    let next = AtomicUsize::new(0);
+    let (tx, rx) = mpsc::channel::<Progress>();
+    std::thread::scope(|scope| {
+        for _ in 0..jobs.clamp(1, groups.len().max(1)) {
+            let (tx, groups, next) = (tx.clone(), &groups, &next);
+            scope.spawn(move || {
+                while let Some(group) = groups.get(next.fetch_add(1, Ordering::Relaxed)) {
+                    run_backend(trials, group, stop, &tx);
+                }
+            });
+        }
+        drop(tx);
+        for p in rx {
+            progress(p);
+        }
+    });
 }
 
 /// One backend's trials, chunk by chunk.
@@ -146,15 +153,21 @@ fn run_backend(trials: &[Trial], group: &[usize], stop: &AtomicBool, tx: &mpsc::
         if stop.load(Ordering::Relaxed) {
             return;
         }
+        let started = Instant::now();
+        let each = |started: Instant| started.elapsed() / chunk.len().max(1) as u32;
         if backend.codec().is_some() {
             let questions: Vec<Question<'_>> =
                 chunk.iter().filter_map(|&i| question(&trials[i])).collect();
             let mut answers = backend.convert_batch(&questions).into_iter();
+            let time = each(started);
             for &i in chunk {
                 let answer = answers.next().unwrap_or_else(|| {
                     Err(Fault::Protocol("no answer to a codec question".into()))
                 });
-                if tx.send(Progress::Observed(i, pair(vec![answer]))).is_err() {
+                if tx
+                    .send(Progress::Observed(i, pair(vec![answer]), time))
+                    .is_err()
+                {
                     return;
                 }
             }
@@ -168,9 +181,10 @@ fn run_backend(trials: &[Trial], group: &[usize], stop: &AtomicBool, tx: &mpsc::
                 all.extend(r);
             }
             let mut results = backend.execute_batch(&all).into_iter();
+            let time = each(started);
             for (i, len) in spans {
                 let answers: Vec<_> = results.by_ref().take(len).collect();
-                if tx.send(Progress::Observed(i, pair(answers))).is_err() {
+                if tx.send(Progress::Observed(i, pair(answers), time)).is_err() {
                     return;
                 }
             }

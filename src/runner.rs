@@ -6,12 +6,15 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
+use std::time::Duration;
 
 use crate::backend::external::{ExternalBackend, ExternalError};
 use crate::backend::{reference_backends, Backend};
 use crate::execute::{execute, execute_all, Progress};
 use crate::judge::{judge, skipped, Verdict};
-use crate::load::{load_corpus, load_known, load_profiles, LoadErrors};
+use crate::load::{
+    embedded_vectors, embedded_vendors, load_corpus, load_known, load_profiles, LoadErrors,
+};
 use crate::model::known::KnownDifferences;
 use crate::model::profile::Profiles;
 use crate::model::project::ExternalSettings;
@@ -32,6 +35,32 @@ impl Paths {
         Paths {
             vendors: root.join("vendors"),
             vectors: vec![root.join("vectors")],
+        }
+    }
+
+    /// The vendor profiles and corpus shipped inside the binary.
+    pub fn embedded() -> Self {
+        Paths {
+            vendors: embedded_vendors(),
+            vectors: vec![embedded_vectors()],
+        }
+    }
+
+    /// A project folder's `vendors/` and `vectors/`, each replaced by the shipped one where the
+    /// folder has none (a project that only lists its own backends runs the shipped corpus).
+    pub fn of_project(root: &Path) -> Self {
+        let (vendors, vectors) = (root.join("vendors"), root.join("vectors"));
+        Paths {
+            vendors: if vendors.is_dir() {
+                vendors
+            } else {
+                embedded_vendors()
+            },
+            vectors: vec![if vectors.is_dir() {
+                vectors
+            } else {
+                embedded_vectors()
+            }],
         }
     }
 }
@@ -138,14 +167,21 @@ pub fn run(
     });
     for (i, t) in trials.iter().enumerate() {
         if let Some(reason) = &t.skip {
-            finished(reporter, &mut summary, trials, i, skipped(reason));
+            finished(
+                reporter,
+                &mut summary,
+                trials,
+                i,
+                skipped(reason),
+                Duration::ZERO,
+            );
         }
     }
     let indices: Vec<usize> = (0..trials.len()).collect();
     execute_all(trials, &indices, jobs, stop, |progress| match progress {
-        Progress::Observed(i, observations) => {
+        Progress::Observed(i, observations, elapsed) => {
             let verdict = judge(&trials[i], &observations);
-            finished(reporter, &mut summary, trials, i, verdict);
+            finished(reporter, &mut summary, trials, i, verdict, elapsed);
         }
         Progress::Restarted { backend, restarts } => {
             reporter.event(&Event::BackendRestarted {
@@ -186,11 +222,13 @@ fn finished(
     trials: &[Trial],
     index: usize,
     verdict: Verdict,
+    elapsed: Duration,
 ) {
     summary.add(&verdict);
     reporter.event(&Event::TrialFinished {
         index,
         trial: &trials[index],
         verdict: &verdict,
+        elapsed,
     });
 }

@@ -2,18 +2,17 @@
 
 mod common;
 
-use std::path::PathBuf;
-
 use common::{cli, scratch};
+use tempfile::TempDir;
 
 fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
 }
 
 /// A scratch folder holding one vector file.
-fn scratch_vectors(test: &str, yaml: &str) -> PathBuf {
-    let dir = scratch(&format!("cli-{test}"));
-    std::fs::write(dir.join("case.yaml"), yaml).expect("write vector");
+fn scratch_vectors(yaml: &str) -> TempDir {
+    let dir = scratch();
+    std::fs::write(dir.path().join("case.yaml"), yaml).expect("write vector");
     dir
 }
 
@@ -45,11 +44,8 @@ fn validate_accepts_the_corpus() {
 
 #[test]
 fn validate_rejects_a_bad_vector_with_file_and_line() {
-    let dir = scratch_vectors(
-        "validate-bad",
-        &ONE_CASE.replace("D200: 5A8DH", "D200: 15A8DH"),
-    );
-    let out = cli(&["validate", dir.to_str().unwrap_or_default()]);
+    let dir = scratch_vectors(&ONE_CASE.replace("D200: 5A8DH", "D200: 15A8DH"));
+    let out = cli(&["validate", dir.path().to_str().unwrap_or_default()]);
     assert_eq!(out.status.code(), Some(2));
     let err = text(&out.stderr);
     assert!(
@@ -82,11 +78,8 @@ fn run_exits_zero_when_everything_conforms() {
 
 #[test]
 fn run_exits_one_and_shows_a_diff_on_a_difference() {
-    let dir = scratch_vectors(
-        "run-differs",
-        &ONE_CASE.replace("D200: 5A8DH", "D200: 5A8EH"),
-    );
-    let out = cli(&["run", "--vectors", dir.to_str().unwrap_or_default()]);
+    let dir = scratch_vectors(&ONE_CASE.replace("D200: 5A8DH", "D200: 5A8EH"));
+    let out = cli(&["run", "--vectors", dir.path().to_str().unwrap_or_default()]);
     assert_eq!(out.status.code(), Some(1));
     let stdout = text(&out.stdout);
     assert!(
@@ -187,4 +180,115 @@ fn run_reports_cross_vendor_trials_too() {
     assert_eq!(xv[0]["section"], "cross-vendor hex-to-value");
     assert_eq!(xv[0]["verdict"]["verdict"], "conforms");
     assert_eq!(report["summary"]["passed"], 1);
+}
+
+#[test]
+fn quiet_prints_only_failures_and_the_counts() {
+    let out = cli(&["-q", "run", "--backend", "iqr"]);
+    assert_eq!(out.status.code(), Some(0));
+    let stdout = text(&out.stdout);
+    assert_eq!(stdout.lines().count(), 1, "{stdout}");
+    assert!(stdout.contains(" passed, 0 failed"), "{stdout}");
+    let dir = scratch_vectors(&ONE_CASE.replace("D200: 5A8DH", "D200: 5A8EH"));
+    let out = cli(&[
+        "run",
+        "--quiet",
+        "--vectors",
+        dir.path().to_str().unwrap_or_default(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let stdout = text(&out.stdout);
+    assert!(
+        stdout.contains("iqr::habin::cli-example::rcpu differs"),
+        "{stdout}"
+    );
+    assert!(
+        stdout
+            .lines()
+            .last()
+            .is_some_and(|l| l.starts_with("0 passed, ") && l.contains(" failed")),
+        "{stdout}"
+    );
+    assert!(!stdout.contains("iqr: "), "no per-backend counts: {stdout}");
+}
+
+#[test]
+fn fail_fast_stops_after_the_first_failing_batch() {
+    // The iQ-R and FX5 corpus with the first ASCI case wrong: without --fail-fast every trial
+    // runs; with it, no batch starts after the first failure (with one job, fx5 runs first).
+    let scratch = scratch();
+    let vectors = scratch.path().join("vectors");
+    for family in ["mitsubishi-iqr", "mitsubishi-fx5"] {
+        std::fs::create_dir_all(vectors.join(family)).expect("dir");
+        for entry in std::fs::read_dir(common::root().join("vectors").join(family)).expect("dir") {
+            let path = entry.expect("entry").path();
+            let text = std::fs::read_to_string(&path).expect("read");
+            let name = path.file_name().expect("name");
+            std::fs::write(
+                vectors.join(family).join(name),
+                text.replacen("D200: {ascii: \"CZ\"}", "D200: {ascii: \"DZ\"}", 1),
+            )
+            .expect("write");
+        }
+    }
+    let counted = |args: &[&str]| {
+        let mut all = vec![
+            "-q",
+            "run",
+            "-j",
+            "1",
+            "--backend",
+            "iqr",
+            "--backend",
+            "fx5",
+            "--vectors",
+            vectors.to_str().unwrap_or_default(),
+        ];
+        all.extend(args);
+        let out = cli(&all);
+        assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
+        let stdout = text(&out.stdout);
+        let last = stdout.lines().last().unwrap_or_default().to_string();
+        let numbers: Vec<usize> = last
+            .split(|c: char| !c.is_ascii_digit())
+            .filter_map(|n| n.parse().ok())
+            .collect();
+        (numbers.iter().take(4).sum::<usize>(), stdout)
+    };
+    let (all, _) = counted(&[]);
+    let (stopped, stdout) = counted(&["--fail-fast"]);
+    assert!(stopped < all, "{stopped} of {all} trials:\n{stdout}");
+    assert!(stdout.contains("interrupted: "), "{stdout}");
+}
+
+#[test]
+fn progress_lines_show_on_a_terminal_and_nothing_when_piped() {
+    let out = cli(&["run", "--backend", "iqr", "--backend", "fx5"]);
+    assert_eq!(out.status.code(), Some(0));
+    assert!(out.stderr.is_empty(), "piped: {}", text(&out.stderr));
+    // `script` gives the command a terminal and records what it shows.
+    let dir = scratch();
+    let typescript = dir.path().join("typescript");
+    let command = format!(
+        "{} --root {} run --backend iqr --backend fx5 >/dev/null",
+        env!("CARGO_BIN_EXE_plc-conformance"),
+        common::root().display()
+    );
+    let Ok(recorded) = std::process::Command::new("script")
+        .args(["-qec", &command])
+        .arg(&typescript)
+        .env("TERM", "xterm")
+        .output()
+    else {
+        eprintln!("`script` is not installed: the terminal half is skipped");
+        return;
+    };
+    assert!(recorded.status.success(), "{}", text(&recorded.stderr));
+    let shown = std::fs::read_to_string(&typescript).unwrap_or_default();
+    for line in ["iqr ", "fx5 ", " cases, 0 failed"] {
+        assert!(
+            shown.contains(line),
+            "no {line:?} on the terminal:\n{shown}"
+        );
+    }
 }

@@ -3,15 +3,9 @@
 
 mod common;
 
-use std::path::PathBuf;
-
-use common::{cli, root};
+use common::{cli, root, scratch};
 use quick_xml::events::Event;
 use quick_xml::Reader;
-
-fn scratch(name: &str) -> PathBuf {
-    common::scratch(&format!("diff-{name}"))
-}
 
 /// Element names and the count of each, from a document that must be well-formed XML.
 fn xml_elements(text: &str) -> Vec<(String, Vec<(String, String)>)> {
@@ -120,7 +114,8 @@ fn junit_report_has_a_test_case_per_cell() {
 
 #[test]
 fn html_report_is_one_well_formed_file_with_the_matrices() {
-    let dir = scratch("html");
+    let scratch = scratch();
+    let dir = scratch.path();
     let file = dir.join("report.html");
     let out = cli(&[
         "diff",
@@ -152,7 +147,8 @@ fn html_report_is_one_well_formed_file_with_the_matrices() {
 
 #[test]
 fn a_saved_run_fails_only_on_new_differences() {
-    let dir = scratch("baseline");
+    let scratch = scratch();
+    let dir = scratch.path();
     let saved = dir.join("run.json");
     let out = cli(&[
         "diff",
@@ -263,7 +259,8 @@ fn against_shows_the_word_diff_where_two_backends_differ() {
 
 #[test]
 fn a_bad_baseline_is_bad_input() {
-    let dir = scratch("bad-baseline");
+    let scratch = scratch();
+    let dir = scratch.path();
     let file = dir.join("run.json");
     std::fs::write(
         &file,

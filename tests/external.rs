@@ -171,16 +171,14 @@ fn a_backend_that_cannot_restart_leaves_the_rest_unreachable() {
     if !python() {
         return;
     }
-    let marker =
-        std::env::temp_dir().join(format!("plc-conformance-marker-{}", std::process::id()));
-    let _ = std::fs::remove_file(&marker);
+    let scratch = tempfile::tempdir().expect("temp dir");
+    let marker = scratch.path().join("marker");
     let mut spec = faulty("crash-for-good");
     spec.env
         .push(("FAULTY_MARKER".into(), marker.display().to_string()));
     let mut session = fixture_session();
     session.add_external(spec, true).expect("starts");
     let v = verdicts(&session, "faulty", true);
-    let _ = std::fs::remove_file(&marker);
     assert_eq!(v[0].1, Verdict::Conforms);
     assert_eq!(v[1].1.label(), "crashed");
     assert_eq!(v[2].1.label(), "unreachable", "{:?}", v[2].1);
@@ -425,9 +423,7 @@ fn an_adapter_written_with_the_python_helper_conforms() {
     );
 }
 
-fn known_file(name: &str, yaml: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("plc-conformance-known-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+fn known_file(dir: &Path, name: &str, yaml: &str) -> PathBuf {
     let file = dir.join(name);
     std::fs::write(&file, yaml).expect("write known file");
     file
@@ -438,13 +434,18 @@ fn known_differences_pass_stale_entries_fail_and_faults_stay_faults() {
     if !python() {
         return;
     }
+    let scratch = tempfile::tempdir().expect("temp dir");
     let listing = |case: &str| {
         format!("differences:\n  - case: {case}\n    reason: \"the emulator rounds D200 down\"\n")
     };
     // Listed and differs: a known difference, not a failure.
     let mut session = fixture_session();
     let mut spec = faulty("differ");
-    spec.known_differences = Some(known_file("differ.yaml", &listing("ext-target")));
+    spec.known_differences = Some(known_file(
+        scratch.path(),
+        "differ.yaml",
+        &listing("ext-target"),
+    ));
     session.add_external(spec, true).expect("starts");
     let v = verdicts(&session, "faulty", true);
     assert_eq!(v[1].1.label(), "known-difference");
@@ -454,7 +455,11 @@ fn known_differences_pass_stale_entries_fail_and_faults_stay_faults() {
     // Listed but conforms: a stale entry, a failure.
     let mut session = fixture_session();
     let mut spec = faulty("differ");
-    spec.known_differences = Some(known_file("stale.yaml", &listing("ext-before")));
+    spec.known_differences = Some(known_file(
+        scratch.path(),
+        "stale.yaml",
+        &listing("ext-before"),
+    ));
     session.add_external(spec, true).expect("starts");
     let v = verdicts(&session, "faulty", false);
     assert_eq!(v[0].1.label(), "stale-entry");
@@ -468,7 +473,11 @@ fn known_differences_pass_stale_entries_fail_and_faults_stay_faults() {
     // A crash on a listed case is still a crash.
     let mut session = fixture_session();
     let mut spec = faulty("crash");
-    spec.known_differences = Some(known_file("crash.yaml", &listing("ext-target")));
+    spec.known_differences = Some(known_file(
+        scratch.path(),
+        "crash.yaml",
+        &listing("ext-target"),
+    ));
     session.add_external(spec, true).expect("starts");
     let v = verdicts(&session, "faulty", true);
     assert_eq!(v[1].1.label(), "crashed");
@@ -476,9 +485,11 @@ fn known_differences_pass_stale_entries_fail_and_faults_stay_faults() {
 
 #[test]
 fn a_known_differences_file_naming_an_unknown_case_is_an_error_with_its_line() {
+    let scratch = tempfile::tempdir().expect("temp dir");
     let mut session = fixture_session();
     let mut spec = served_reference();
     let file = known_file(
+        scratch.path(),
         "unknown.yaml",
         "differences:\n  - case: ext-target\n    reason: fine\n  - case: no-such-case\n    reason: typo\n    variant: rcpu\n",
     );
@@ -556,7 +567,7 @@ fn protocol_schema_is_current() {
 }
 
 fn cli(args: &[&str]) -> std::process::Output {
-    Command::new(BIN)
+    assert_cmd::Command::new(BIN)
         .args(["--root", root().to_str().unwrap_or(".")])
         .args(args)
         .env("NO_COLOR", "1")
@@ -616,7 +627,9 @@ fn the_command_line_runs_an_external_backend_and_labels_its_crash() {
 
 #[test]
 fn the_command_line_takes_a_known_differences_file_and_fails_a_stale_entry() {
+    let scratch = tempfile::tempdir().expect("temp dir");
     let file = known_file(
+        scratch.path(),
         "cli-stale.yaml",
         "differences:\n  - case: habin-fixed-text-form\n    reason: \"was wrong once\"\n",
     );

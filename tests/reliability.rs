@@ -84,7 +84,8 @@ fn mkfifo(at: &Path) {
 /// `--save F --baseline F`: the baseline is the run saved before, so a new difference is new.
 #[test]
 fn saving_over_the_baseline_compares_with_the_previous_run() {
-    let dir = scratch("rel-save-over-baseline");
+    let scratch_dir = scratch();
+    let dir = scratch_dir.path().to_path_buf();
     let saved = dir.join("run.json");
     let filter = "habin-fixed-4-digits-example";
     let first = cli(&[
@@ -172,7 +173,8 @@ fn saving_over_the_baseline_compares_with_the_previous_run() {
 
 #[test]
 fn a_fifo_is_refused_in_bounded_time_wherever_a_file_is_read_or_written() {
-    let dir = scratch("rel-fifo");
+    let scratch_dir = scratch();
+    let dir = scratch_dir.path().to_path_buf();
     let vectors = dir.join("vectors");
     std::fs::create_dir_all(&vectors).expect("dir");
     std::fs::write(vectors.join("good.yaml"), ONE_CASE).expect("write");
@@ -214,7 +216,8 @@ fn a_fifo_is_refused_in_bounded_time_wherever_a_file_is_read_or_written() {
 
 #[test]
 fn invalid_utf8_and_deep_nesting_are_reported_with_their_line() {
-    let dir = scratch("rel-bytes");
+    let scratch_dir = scratch();
+    let dir = scratch_dir.path().to_path_buf();
     let file = dir.join("case.yaml");
     let mut bytes = ONE_CASE.as_bytes().to_vec();
     let at = ONE_CASE.find("example on").expect("cite");
@@ -254,7 +257,8 @@ fn invalid_utf8_and_deep_nesting_are_reported_with_their_line() {
 #[test]
 fn a_linked_folder_of_vectors_is_followed_and_a_loop_is_an_error() {
     use std::os::unix::fs::symlink;
-    let dir = scratch("rel-links");
+    let scratch_dir = scratch();
+    let dir = scratch_dir.path().to_path_buf();
     let elsewhere = dir.join("elsewhere");
     std::fs::create_dir_all(&elsewhere).expect("dir");
     std::fs::write(elsewhere.join("linked.yaml"), ONE_CASE).expect("write");
@@ -291,7 +295,8 @@ fn a_linked_folder_of_vectors_is_followed_and_a_loop_is_an_error() {
 
 #[test]
 fn known_differences_for_a_backend_that_is_not_an_external_one_of_the_run_is_an_error() {
-    let dir = scratch("rel-known");
+    let scratch_dir = scratch();
+    let dir = scratch_dir.path().to_path_buf();
     let file = dir.join("known.yaml");
     std::fs::write(&file, "differences: []\n").expect("write");
     for backend in [
@@ -525,7 +530,8 @@ fn a_crashed_adapters_helpers_are_killed_with_it() {
     if !python() {
         return;
     }
-    let file = scratch("rel-helpers").join("pids");
+    let scratch_dir = scratch();
+    let file = scratch_dir.path().join("pids");
     let mut spec = faulty("crash", "ext-target");
     spec.env
         .push(("FAULTY_PIDS".into(), file.display().to_string()));
@@ -554,13 +560,13 @@ fn a_crashed_adapters_helpers_are_killed_with_it() {
 /// started them (and `settle` more), and returns its output with the adapter's processes.
 #[cfg(target_os = "linux")]
 fn interrupted_run(
-    test: &str,
     mode: &str,
     trigger: &str,
     signal: i32,
     settle: Duration,
 ) -> (Output, Vec<i32>, String) {
-    let dir = scratch(test);
+    let scratch_dir = scratch();
+    let dir = scratch_dir.path().to_path_buf();
     let file = dir.join("pids");
     let report = dir.join("report.json");
     let backend = format!("external:slow={}", faulty_command(mode, trigger));
@@ -610,7 +616,6 @@ fn sigint_ends_a_run_with_what_it_has_and_no_backend_process_survives() {
         return;
     }
     let (out, pids, report) = interrupted_run(
-        "rel-sigint",
         "hang",
         "ext-target",
         libc::SIGINT,
@@ -631,7 +636,6 @@ fn sigterm_during_the_handshake_kills_the_backend_and_its_helpers() {
         return;
     }
     let (out, pids, _) = interrupted_run(
-        "rel-sigterm",
         "hang-at-start",
         "ext-target",
         libc::SIGTERM,
@@ -700,7 +704,8 @@ fn hostile_text_never_reaches_a_terminal_or_breaks_xml() {
     if !python() {
         return;
     }
-    let dir = scratch("rel-hostile");
+    let scratch_dir = scratch();
+    let dir = scratch_dir.path().to_path_buf();
     let vectors = dir.join("vectors");
     std::fs::create_dir_all(&vectors).expect("dir");
     let fixture = std::fs::read_to_string(fixtures().join("vectors/habin.yaml")).expect("read");

@@ -188,6 +188,11 @@ pub trait Backend: Send + Sync {
     fn profile(&self) -> &str;
     /// One line for `plc-conformance list`.
     fn describe(&self) -> String;
+    /// What the backend is and its version, for a report's run metadata (`pymcprotocol 0.3.0`);
+    /// `None` when it does not say.
+    fn version(&self) -> Option<String> {
+        None
+    }
     /// Whether the backend claims to implement an instruction on a variant. Trials it does not
     /// claim are listed as skipped with a reason; a claimed trial answered "unsupported" is a
     /// difference.

@@ -59,6 +59,9 @@ impl<M: Model> Backend for Reference<M> {
     fn describe(&self) -> String {
         format!("reference model of {} (built in)", self.profile.name)
     }
+    fn version(&self) -> Option<String> {
+        Some(format!("plc-conformance {}", env!("CARGO_PKG_VERSION")))
+    }
     fn claims(&self, instruction: &str, variant: &str) -> bool {
         M::models(instruction)
             && self

@@ -1,27 +1,100 @@
 //! Loading a project for a command and starting the backends it names.
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use anstream::eprintln;
 
 use super::{BackendArgs, Cli, EXIT_BAD_INPUT};
 use crate::backend::Backend;
-use crate::load::{load_project, locate_project, valid_name, LoadErrors, ENV_SELF};
+use crate::load::{
+    embedded_files, find_project_root, is_project_root, load_project, locate_project, valid_name,
+    LoadErrors, ENV_SELF, FILE_NAME,
+};
 use crate::model::project::{ExternalSettings, Launch, ProjectBackends};
 use crate::runner::{Paths, Project};
 
-/// Where the command's data is: `--root`, `--vendors` and the given vector paths.
-pub fn paths(cli: &Cli, vectors: &[PathBuf]) -> Paths {
-    let mut paths = Paths::under(&cli.root);
+/// The project folder of the command: `--root`, else the nearest project folder at or above the
+/// current one (as a relative path, so that messages stay short), else none: the data built into
+/// the binary.
+pub fn project_root(cli: &Cli) -> Result<Option<PathBuf>, u8> {
+    if let Some(root) = &cli.root {
+        if is_project_root(root) {
+            return Ok(Some(root.clone()));
+        }
+        let shown = root.display();
+        eprintln!(
+            "error: --root {shown}: not a plc-conformance project (looked for {}, and for {} \
+             with {})\n  hint: pass the folder that holds them, or leave out --root: the nearest \
+             project folder at or above the current one is used, else the profiles and corpus \
+             built into plc-conformance",
+            root.join(FILE_NAME).display(),
+            root.join("vendors/").display(),
+            root.join("vectors/").display(),
+        );
+        return Err(EXIT_BAD_INPUT);
+    }
+    let Ok(here) = std::env::current_dir() else {
+        return Ok(None);
+    };
+    Ok(find_project_root(&here).map(|found| {
+        let up = here.components().count() - found.components().count();
+        if up == 0 {
+            // Paths below the current folder read as `vectors/...`.
+            PathBuf::new()
+        } else {
+            std::iter::repeat_n("..", up).collect()
+        }
+    }))
+}
+
+/// Where the command's data is: the project's (or the built-in) `vendors/` and `vectors/`,
+/// `--vendors`, and the given vector paths. A folder or file named but missing is reported
+/// here, with where it was looked for and what to pass instead.
+pub fn paths(cli: &Cli, vectors: &[PathBuf], flag: &str) -> Result<Paths, u8> {
+    let mut paths = match project_root(cli)? {
+        Some(root) => Paths::of_project(&root),
+        None => Paths::embedded(),
+    };
     if let Some(v) = &cli.vendors {
+        if !v.is_dir() && embedded_files(v).is_none_or(|f| f.is_empty()) {
+            eprintln!(
+                "error: --vendors {}: no such folder (looked at {})\n  hint: pass the folder \
+                 of vendor profiles (*.yaml), or leave out --vendors to use {}",
+                v.display(),
+                absolute(v).display(),
+                paths.vendors.display()
+            );
+            return Err(EXIT_BAD_INPUT);
+        }
         paths.vendors = v.clone();
+    }
+    for v in vectors {
+        if !v.exists() && embedded_files(v).is_none_or(|f| f.is_empty()) {
+            eprintln!(
+                "error: {flag} {}: no such file or folder (looked at {})\n  hint: pass a vector \
+                 file (*.yaml) or a folder of them, or leave it out to use {}",
+                v.display(),
+                absolute(v).display(),
+                paths
+                    .vectors
+                    .iter()
+                    .map(|p| p.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+            return Err(EXIT_BAD_INPUT);
+        }
     }
     if !vectors.is_empty() {
         paths.vectors = vectors.to_vec();
     }
-    paths
+    Ok(paths)
+}
+
+fn absolute(path: &Path) -> PathBuf {
+    std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf())
 }
 
 pub fn report_load_errors(errors: &LoadErrors) -> u8 {
@@ -38,13 +111,27 @@ pub fn this_binary() -> PathBuf {
     std::env::current_exe().unwrap_or_else(|_| PathBuf::from("plc-conformance"))
 }
 
+/// The project file, and whether it was named (then it must exist): `--config`,
+/// `$PLC_CONFORMANCE_CONFIG`, else the project folder's, else none.
+pub fn project_file_path(cli: &Cli) -> Result<Option<(PathBuf, bool)>, u8> {
+    if let Some(f) = &cli.config {
+        return Ok(Some((f.clone(), true)));
+    }
+    Ok(match project_root(cli)? {
+        Some(root) => Some(locate_project(&root)),
+        // Without a project folder only an explicitly named file counts.
+        None => Some(locate_project(Path::new("."))).filter(|(_, explicit)| *explicit),
+    })
+}
+
 /// The project file's backends; a bad file is reported here.
 pub fn project_file(cli: &Cli) -> Result<ProjectBackends, u8> {
-    let (file, explicit) = match &cli.config {
-        Some(f) => (f.clone(), true),
-        None => locate_project(&cli.root),
-    };
-    load_project(&file, explicit, &this_binary()).map_err(|e| report_load_errors(&e))
+    match project_file_path(cli)? {
+        Some((file, explicit)) => {
+            load_project(&file, explicit, &this_binary()).map_err(|e| report_load_errors(&e))
+        }
+        None => Ok(ProjectBackends::default()),
+    }
 }
 
 /// Reads `external:NAME=COMMAND`.
@@ -150,7 +237,7 @@ pub struct Prepared {
 }
 
 pub fn prepare(cli: &Cli, args: &BackendArgs) -> Result<Prepared, u8> {
-    let mut project = load(&paths(cli, &args.vectors))?;
+    let mut project = load(&paths(cli, &args.vectors, "--vectors")?)?;
     let file = project_file(cli)?;
     let backends = start(&mut project, &file, args)?;
     Ok(Prepared {

@@ -5,7 +5,9 @@ use std::path::PathBuf;
 
 use anstream::{eprintln, println};
 
-use super::backends::{load, paths, project_file, report_load_errors};
+use clap::CommandFactory;
+
+use super::backends::{load, paths, project_file, project_file_path, report_load_errors};
 use super::{Cli, SchemaKind, EXIT_BAD_INPUT, EXIT_OK};
 use crate::backend::external::{protocol, serve as protocol_serve};
 use crate::load::{load_corpus, load_open_questions, load_profiles, OPEN_QUESTIONS};
@@ -13,16 +15,22 @@ use crate::report::text::case_line;
 use crate::spec;
 
 pub fn validate(cli: &Cli, given: &[PathBuf]) -> u8 {
-    let paths = paths(cli, given);
+    let paths = match paths(cli, given, "validate") {
+        Ok(p) => p,
+        Err(code) => return code,
+    };
     let profiles = match load_profiles(&paths.vendors) {
         Ok(p) => p,
         Err(e) => return report_load_errors(&e),
     };
     match load_corpus(&paths.vectors, &profiles) {
         Ok(corpus) => {
-            let questions = cli.root.join(OPEN_QUESTIONS);
+            let questions = match super::backends::project_root(cli) {
+                Ok(root) => root.map(|r| r.join(OPEN_QUESTIONS)),
+                Err(code) => return code,
+            };
             let mut open = 0;
-            if given.is_empty() && questions.exists() {
+            if let (true, Some(questions)) = (given.is_empty(), questions.filter(|q| q.exists())) {
                 match load_open_questions(&questions, &profiles, &corpus) {
                     Ok(q) => open = q.len(),
                     Err(e) => return report_load_errors(&e),
@@ -49,14 +57,31 @@ pub fn validate(cli: &Cli, given: &[PathBuf]) -> u8 {
 }
 
 pub fn list(cli: &Cli, filter: Option<&str>) -> u8 {
-    let project = match load(&paths(cli, &[])) {
-        Ok(s) => s,
-        Err(code) => return code,
-    };
-    let file = match project_file(cli) {
+    let paths = match paths(cli, &[], "--vectors") {
         Ok(p) => p,
         Err(code) => return code,
     };
+    let project = match load(&paths) {
+        Ok(s) => s,
+        Err(code) => return code,
+    };
+    let (file, file_path) = match (project_file(cli), project_file_path(cli)) {
+        (Ok(p), Ok(path)) => (p, path),
+        (Err(code), _) | (_, Err(code)) => return code,
+    };
+    println!(
+        "data: profiles {}, vectors {}, project file {}",
+        paths.vendors.display(),
+        paths
+            .vectors
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
+        file_path
+            .filter(|(f, explicit)| *explicit || f.exists())
+            .map_or_else(|| "none".to_string(), |(f, _)| f.display().to_string())
+    );
     println!("backends:");
     let width = project
         .backends
@@ -138,7 +163,10 @@ pub fn schema(kind: SchemaKind) -> u8 {
 
 /// `serve`: the reference model of a profile, over the protocol on stdin/stdout.
 pub fn serve(cli: &Cli, profile_id: &str) -> u8 {
-    let paths = paths(cli, &[]);
+    let paths = match paths(cli, &[], "--vectors") {
+        Ok(p) => p,
+        Err(code) => return code,
+    };
     let profiles = match load_profiles(&paths.vendors) {
         Ok(p) => p,
         Err(e) => return report_load_errors(&e),
@@ -164,4 +192,28 @@ pub fn serve(cli: &Cli, profile_id: &str) -> u8 {
             EXIT_BAD_INPUT
         }
     }
+}
+
+/// `completions SHELL`: the completion script of every command and option.
+pub fn completions(shell: clap_complete::Shell) -> u8 {
+    let mut command = Cli::command();
+    clap_complete::generate(
+        shell,
+        &mut command,
+        "plc-conformance",
+        &mut std::io::stdout(),
+    );
+    EXIT_OK
+}
+
+/// `man`: the manual page, in roff.
+pub fn man() -> u8 {
+    let page = clap_mangen::Man::new(Cli::command());
+    let mut out = Vec::new();
+    if let Err(e) = page.render(&mut out) {
+        eprintln!("error: cannot write the manual page: {e}");
+        return EXIT_BAD_INPUT;
+    }
+    let _ = std::io::Write::write_all(&mut std::io::stdout(), &out);
+    EXIT_OK
 }

@@ -29,22 +29,31 @@ pub const EXIT_BAD_INPUT: u8 = 2;
                   Exit status: 0 conforms / valid, 1 differences found, 2 bad input or usage."
 )]
 pub struct Cli {
-    /// Project root holding `vendors/` and `vectors/`.
-    #[arg(long, global = true, default_value = ".", value_name = "DIR")]
-    pub root: PathBuf,
+    /// Project folder holding `plc-conformance.yaml`, or `vendors/` and `vectors/` [default: the
+    /// nearest such folder at or above the current one, else the profiles and corpus built into
+    /// plc-conformance].
+    #[arg(long, global = true, value_name = "DIR", help_heading = GLOBAL)]
+    pub root: Option<PathBuf>,
     /// Vendor profile folder [default: ROOT/vendors].
-    #[arg(long, global = true, value_name = "DIR")]
+    #[arg(long, global = true, value_name = "DIR", help_heading = GLOBAL)]
     pub vendors: Option<PathBuf>,
     /// Project file listing external backends [default: $PLC_CONFORMANCE_CONFIG, else
     /// ROOT/plc-conformance.yaml when it exists].
-    #[arg(long, global = true, value_name = "FILE")]
+    #[arg(long, global = true, value_name = "FILE", help_heading = GLOBAL)]
     pub config: Option<PathBuf>,
     /// When to colour the output.
-    #[arg(long, global = true, value_enum, default_value_t = Color::Auto)]
+    #[arg(long, global = true, value_enum, default_value_t = Color::Auto, help_heading = GLOBAL)]
     pub color: Color,
+    /// Print only failures and the closing counts: no progress, notes or lists of known
+    /// differences and skips.
+    #[arg(short, long, global = true, help_heading = GLOBAL)]
+    pub quiet: bool,
     #[command(subcommand)]
     pub command: Command,
 }
+
+/// The heading of the options every command takes.
+const GLOBAL: &str = "Global options";
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum Color {
@@ -84,6 +93,14 @@ pub enum Command {
         #[arg(long, value_name = "ID")]
         profile: String,
     },
+    /// Print a completion script for a shell, e.g.
+    /// `plc-conformance completions bash > ~/.local/share/bash-completion/completions/plc-conformance`.
+    Completions {
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+    /// Print the manual page (roff), e.g. `plc-conformance man | man -l -`.
+    Man,
 }
 
 #[derive(Debug, clap::Args)]
@@ -149,6 +166,10 @@ pub struct BackendArgs {
     /// Backends run side by side [default: the number of CPUs].
     #[arg(short = 'j', long, value_name = "N")]
     pub jobs: Option<usize>,
+    /// Stop at the first failing trial: no further batch starts (trials already sent to a
+    /// backend finish and are reported).
+    #[arg(long)]
+    pub fail_fast: bool,
 }
 
 /// Where a report goes and how it is compared, shared by `run` and `diff`.
@@ -218,6 +239,8 @@ pub fn main() -> ExitCode {
         Command::List { filter } => info::list(&cli, filter.as_deref()),
         Command::Schema { kind } => info::schema(*kind),
         Command::Serve { profile } => info::serve(&cli, profile),
+        Command::Completions { shell } => info::completions(*shell),
+        Command::Man => info::man(),
     };
     // An interrupted run ends as an interruption, whatever it found before.
     ExitCode::from(crate::interrupt::exit_status().unwrap_or(code))

@@ -3,11 +3,12 @@
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 use anstream::{eprintln, print, println};
 
-use super::backends::{prepare, start, Prepared};
+use super::backends::{prepare, project_root, start, Prepared};
 use super::{
     BackendArgs, Cli, DiffArgs, Format, ReportArgs, RunArgs, EXIT_BAD_INPUT, EXIT_DIFFERENCES,
     EXIT_OK,
@@ -20,9 +21,11 @@ use crate::plan::Trial;
 use crate::report::baseline::{self, SavedRun};
 use crate::report::document::{self, Collector};
 use crate::report::json::{BackendInfo, RunInfo};
+use crate::report::matrix_text;
+use crate::report::progress::ProgressReporter;
 use crate::report::text::{memory_diff, Palette};
 use crate::report::text_reporter::TextReporter;
-use crate::report::{Reporter, Tee};
+use crate::report::{All, Event, Reporter};
 use crate::runner::{self, Project};
 
 pub fn run(cli: &Cli, args: &RunArgs) -> u8 {
@@ -98,8 +101,11 @@ fn execute_command(
     let jobs = backend_args.jobs.unwrap_or_else(|| {
         std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
     });
+    let date = utc_now();
     let stop = crate::interrupt::stop_flag();
     let mut collector = Collector::default();
+    let mut stopper = StopAtFailure { stop };
+    let mut text = None;
     if format == Format::Text {
         let notes = if backend_args.backends.is_empty() {
             file.skipped.iter().map(ToString::to_string).collect()
@@ -116,19 +122,38 @@ fn execute_command(
             },
             None => (Box::new(anstream::stdout()), Palette::coloured()),
         };
-        let mut text = TextReporter::new(out, palette, show_recorded, notes);
-        runner::run(&trials, jobs, stop, &mut Tee(&mut text, &mut collector));
-    } else {
-        runner::run(&trials, jobs, stop, &mut collector as &mut dyn Reporter);
+        text = Some(TextReporter::new(out, palette, show_recorded, notes).quiet(cli.quiet));
+    }
+    {
+        let mut reporters: Vec<&mut dyn Reporter> = vec![&mut collector];
+        if let Some(text) = &mut text {
+            reporters.push(text);
+        }
+        if backend_args.fail_fast {
+            reporters.push(&mut stopper);
+        }
+        let mut all = All(reporters);
+        if cli.quiet {
+            runner::run(&trials, jobs, stop, &mut all);
+        } else {
+            let mut progress = ProgressReporter::new(&trials, &mut all);
+            runner::run(&trials, jobs, stop, &mut progress);
+        }
     }
     let (records, summary, interrupted) = collector.finish();
     let info = RunInfo {
         tool: format!("plc-conformance {}", env!("CARGO_PKG_VERSION")),
+        commit: project_root(cli)
+            .ok()
+            .flatten()
+            .and_then(|r| git_commit(&r)),
+        date,
         backends: backends
             .iter()
             .map(|b| BackendInfo {
                 name: b.name().to_string(),
                 description: b.describe(),
+                version: b.version(),
             })
             .collect(),
         interrupted,
@@ -142,13 +167,20 @@ fn execute_command(
         };
         let coloured = report.output.is_none()
             && anstream::AutoStream::choice(&std::io::stdout()) != anstream::ColorChoice::Never;
-        let rendered = document::render(doc_format, &records, &summary, &info, coloured);
+        let rendered = document::render(
+            doc_format,
+            &records,
+            &summary,
+            &info,
+            coloured,
+            text_width(report.output.is_none()),
+        );
         if let Err(code) = write_out(report.output.as_deref(), &rendered) {
             return code;
         }
     }
     for (name, known) in &project.known {
-        if !known.ignored.is_empty() {
+        if !known.ignored.is_empty() && !cli.quiet {
             eprintln!(
                 "note: {} entr{} of {} (backend {name}) name cases not in this corpus and were \
                  not used",
@@ -164,7 +196,14 @@ fn execute_command(
             path.display()
         );
     } else if let Some(path) = &report.save {
-        let saved = document::render(document::Format::Json, &records, &summary, &info, false);
+        let saved = document::render(
+            document::Format::Json,
+            &records,
+            &summary,
+            &info,
+            false,
+            matrix_text::DEFAULT_WIDTH,
+        );
         if let Err(e) = write_atomically(path, &saved) {
             eprintln!("error: cannot save the run to {}: {e}", path.display());
             return EXIT_BAD_INPUT;
@@ -209,7 +248,15 @@ fn probe_cases(
     project: &Project,
     question: &str,
 ) -> Result<std::collections::BTreeSet<String>, u8> {
-    let file = cli.root.join(crate::load::OPEN_QUESTIONS);
+    let Some(root) = super::backends::project_root(cli)? else {
+        eprintln!(
+            "error: --probes: the open questions are a project's {}, and no project was found \
+             (pass --root, or run inside a checkout)",
+            crate::load::OPEN_QUESTIONS
+        );
+        return Err(EXIT_BAD_INPUT);
+    };
+    let file = root.join(crate::load::OPEN_QUESTIONS);
     let questions = crate::load::load_open_questions(&file, &project.profiles, &project.corpus)
         .map_err(|e| super::backends::report_load_errors(&e))?;
     let chosen: Vec<_> = questions
@@ -263,6 +310,78 @@ fn idle_backends(trials: &[Trial], asked: &[&str], filtered: bool) -> Vec<(Strin
         ));
     }
     out
+}
+
+/// Stops the run at the first failing trial (`--fail-fast`): no further batch starts.
+struct StopAtFailure<'a> {
+    stop: &'a AtomicBool,
+}
+
+impl Reporter for StopAtFailure<'_> {
+    fn event(&mut self, event: &Event<'_>) {
+        if let Event::TrialFinished { verdict, .. } = event {
+            if verdict.is_failure() {
+                self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
+            }
+        }
+    }
+}
+
+/// The project's commit when its folder is in a git repository (`git describe --always
+/// --dirty`: the abbreviated hash, `-dirty` when files changed).
+fn git_commit(root: &Path) -> Option<String> {
+    let dir = if root.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        root
+    };
+    let out = std::process::Command::new("git")
+        .args(["describe", "--always", "--dirty", "--abbrev=12"])
+        .current_dir(dir)
+        .stderr(std::process::Stdio::null())
+        .output()
+        .ok()?;
+    let text = String::from_utf8(out.stdout).ok()?;
+    (out.status.success() && !text.trim().is_empty()).then(|| text.trim().to_string())
+}
+
+/// The current time, UTC, as RFC 3339 (`2026-11-22T13:24:34Z`).
+fn utc_now() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let (days, rest) = (secs / 86_400, secs % 86_400);
+    // Civil date from days since 1970-01-01 (Howard Hinnant's algorithm).
+    let z = days as i64 + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    format!(
+        "{year:04}-{month:02}-{day:02}T{:02}:{:02}:{:02}Z",
+        rest / 3600,
+        rest % 3600 / 60,
+        rest % 60
+    )
+}
+
+/// The width text reports fit: the terminal's when writing to one, else `COLUMNS`, else
+/// [`matrix_text::DEFAULT_WIDTH`].
+fn text_width(to_stdout: bool) -> usize {
+    if to_stdout {
+        if let Some((terminal_size::Width(w), _)) = terminal_size::terminal_size() {
+            return usize::from(w);
+        }
+    }
+    std::env::var("COLUMNS")
+        .ok()
+        .and_then(|c| c.parse().ok())
+        .filter(|&c: &usize| c >= 20)
+        .unwrap_or(matrix_text::DEFAULT_WIDTH)
 }
 
 /// The planned trials whose names contain `filter`.

@@ -284,10 +284,8 @@ mod tests {
     }
 
     fn load(text: &str, strict: bool) -> Result<KnownDifferences, String> {
-        let dir =
-            std::env::temp_dir().join(format!("plc-conformance-known-unit-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("dir");
-        let file = dir.join(format!("k{}.yaml", text.len()));
+        let dir = tempfile::tempdir().expect("temp dir");
+        let file = dir.path().join("known.yaml");
         std::fs::write(&file, text).expect("write");
         let corpus = Corpus {
             cases: vec![

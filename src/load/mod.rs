@@ -14,6 +14,7 @@ mod open_questions;
 mod profiles;
 mod project;
 mod shape;
+mod source;
 mod vectors;
 
 use std::path::{Path, PathBuf};
@@ -29,6 +30,10 @@ pub use project::{
     load_project, locate_project, requirements_enforced, valid_name, ENV_CONFIG, ENV_REQUIRE,
     ENV_SELF, FILE_NAME,
 };
+pub use source::{
+    embedded_files, embedded_text, embedded_vectors, embedded_vendors, find_project_root,
+    is_project_root, EMBEDDED,
+};
 pub use vectors::{load_corpus, CorpusBuilder};
 
 /// The YAML files under a path: the file itself, or every `.yaml`/`.yml` below a folder, in a
@@ -36,8 +41,23 @@ pub use vectors::{load_corpus, CorpusBuilder};
 ///
 /// Symbolic links are followed, to folders as to files: a linked folder of vectors is part of the
 /// corpus, never silently left out. A link that leads back to a folder it is in (a loop) and a
-/// link to nothing are errors; a file reached twice through links is read once.
+/// link to nothing are errors; a file reached twice through links is read once. A path under
+/// `<embedded>` lists the files shipped in the binary.
 pub fn yaml_files(path: &Path) -> Result<Vec<PathBuf>, LoadError> {
+    if let Some(files) = embedded_files(path) {
+        if files.is_empty() {
+            return Err(LoadError {
+                file: path.to_path_buf(),
+                line: None,
+                key: None,
+                kind: LoadErrorKind::Io(
+                    "no such folder among the files shipped in the binary".into(),
+                )
+                .into(),
+            });
+        }
+        return Ok(files);
+    }
     let error = |at: &Path, message: String| LoadError {
         file: at.to_path_buf(),
         line: None,
@@ -209,7 +229,12 @@ pub(crate) fn check_text(file: &Path, text: &str) -> Result<(), LoadError> {
     })
 }
 
+/// The text of a file (see [`read_regular`]), or of a file shipped in the binary (a path under
+/// `<embedded>`).
 pub(crate) fn read_file(path: &Path) -> Result<String, LoadError> {
+    if let Some(text) = embedded_text(path) {
+        return Ok(text.to_string());
+    }
     let error = |line: Option<usize>, kind: LoadErrorKind| LoadError {
         file: path.to_path_buf(),
         line,

@@ -208,21 +208,17 @@ pub fn valid_name(name: &str) -> bool {
 mod tests {
     use super::*;
 
-    fn write(name: &str, text: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!(
-            "plc-conformance-config-{}-{name}",
-            std::process::id()
-        ));
-        std::fs::create_dir_all(&dir).expect("temp dir");
-        let file = dir.join(FILE_NAME);
+    /// A project file in a scratch folder, removed when the folder is dropped.
+    fn write(text: &str) -> (tempfile::TempDir, PathBuf) {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let file = dir.path().join(FILE_NAME);
         std::fs::write(&file, text).expect("write");
-        file
+        (dir, file)
     }
 
     #[test]
     fn reads_backends_relative_to_the_file() {
-        let file = write(
-            "ok",
+        let (_dir, file) = write(
             "backends:\n  - name: emu\n    command: ./emu --serve\n    profile: mitsubishi-iqr\n    \
              timeout: 0.5\n    known_differences: emu.known.yaml\n    requires: [emu]\n  \
              - name: py\n    command: [python3, adapter.py]\n",
@@ -254,8 +250,7 @@ mod tests {
 
     #[test]
     fn errors_name_file_line_and_key() {
-        let file = write(
-            "bad",
+        let (_dir, file) = write(
             "backends:\n  - name: Emu\n    command: x\n  - name: ok\n    command: []\n  \
              - name: ok\n    command: y\n    timeout: 0\n    max_consecutive_faults: 0\n",
         );
@@ -272,7 +267,7 @@ mod tests {
         ] {
             assert!(errors.contains(&expected), "{expected}\nin:\n{errors}");
         }
-        let file = write("shape", "backends:\n  - name: emu\n    comand: x\n");
+        let (_dir2, file) = write("backends:\n  - name: emu\n    comand: x\n");
         let errors = read_project(&file, Path::new("p"))
             .expect_err("invalid")
             .to_string();

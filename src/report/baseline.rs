@@ -132,6 +132,7 @@ mod tests {
             behaviour,
             shown: shown.into(),
             detail: String::new(),
+            seconds: std::time::Duration::ZERO,
             verdict: None,
         }
     }

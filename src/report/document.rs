@@ -46,7 +46,14 @@ impl Reporter for Collector {
                 index,
                 trial,
                 verdict,
-            } => self.records.push((*index, Record::of(trial, verdict))),
+                elapsed,
+            } => self.records.push((
+                *index,
+                Record {
+                    seconds: *elapsed,
+                    ..Record::of(trial, verdict)
+                },
+            )),
             Event::RunFinished {
                 summary,
                 interrupted,
@@ -59,17 +66,19 @@ impl Reporter for Collector {
     }
 }
 
-/// Renders records in a document format; `coloured` applies to the matrix text only.
+/// Renders records in a document format; `coloured` and `width` (columns of text) apply to the
+/// matrix text only.
 pub fn render(
     format: Format,
     records: &[Record],
     summary: &Summary,
     meta: &super::json::RunInfo,
     coloured: bool,
+    width: usize,
 ) -> String {
     let matrices = sections(records);
     match format {
-        Format::Matrix => super::matrix_text::render(&matrices, coloured),
+        Format::Matrix => super::matrix_text::render(&matrices, coloured, width),
         Format::Json => super::json::render(records, &matrices, summary, meta),
         Format::Junit => super::junit::render(records),
         Format::Html => super::html::render(&matrices, records, meta),

@@ -15,8 +15,10 @@ body{font-family:system-ui,sans-serif;margin:2em;color:#222}\
 table.matrix{border-collapse:collapse;margin:1em 0}\
 .matrix th,.matrix td{border:1px solid #ccc;padding:.3em .6em;text-align:left;vertical-align:top}\
 .matrix th{background:#f3f3f3}\
-td.conforms{background:#e6f4ea}td.fails{background:#fce8e6}td.other{background:#e8f0fe}\
-td.count{text-align:right}\
+.conforms{background:#e6f4ea}.fails{background:#fce8e6}.other{background:#e8f0fe}\
+.legend span{padding:.1em .5em;margin-right:.5em;border:1px solid #ccc}\
+td.count{text-align:right}.where{color:#666;font-size:.85em}\
+table.meta td,table.meta th{text-align:left;padding:.1em .8em .1em 0;vertical-align:top}\
 pre{background:#f8f8f8;padding:.6em;overflow:auto}\
 summary{cursor:pointer}";
 
@@ -40,6 +42,21 @@ fn escape(text: &str) -> String {
     out
 }
 
+/// ` file:line` of a row's case, as markup.
+fn place(records: &[&Record], row: &str) -> String {
+    records
+        .iter()
+        .find(|r| r.row == row)
+        .map(|r| {
+            format!(
+                " <span class=\"where\">{}:{}</span>",
+                escape(&r.file),
+                r.line
+            )
+        })
+        .unwrap_or_default()
+}
+
 fn class_of(status: Status) -> &'static str {
     match status {
         Status::Pass => "conforms",
@@ -60,27 +77,46 @@ pub fn render(sections: &[Section<'_>], records: &[Record], run: &RunInfo) -> St
         records.len(),
         sections.len()
     );
-    let _ = writeln!(
-        out,
-        "<p class=\"meta\">{}{}; backends: {}</p>",
-        escape(&run.tool),
-        if run.interrupted {
-            " (interrupted: incomplete)"
-        } else {
-            ""
-        },
-        escape(
-            &run.backends
-                .iter()
-                .map(|b| format!("{} ({})", b.name, b.description))
-                .collect::<Vec<_>>()
-                .join(", ")
-        )
+    out.push_str("<table class=\"meta\" id=\"run\">\n");
+    let mut meta = |key: &str, value: &str| {
+        let _ = writeln!(
+            out,
+            "<tr><th>{}</th><td>{}</td></tr>",
+            escape(key),
+            escape(value)
+        );
+    };
+    meta(
+        "tool",
+        &format!(
+            "{}{}",
+            run.tool,
+            if run.interrupted {
+                " (interrupted: incomplete)"
+            } else {
+                ""
+            }
+        ),
     );
+    if let Some(commit) = &run.commit {
+        meta("commit", commit);
+    }
+    meta("date", &run.date);
+    for b in &run.backends {
+        meta(
+            &format!("backend {}", b.name),
+            &match &b.version {
+                Some(v) => format!("{v} — {}", b.description),
+                None => b.description.clone(),
+            },
+        );
+    }
+    out.push_str("</table>\n");
     out.push_str(
         "<p class=\"legend\"><span class=\"conforms\">conforms</span> \
          <span class=\"other\">recorded, known difference or skipped</span> \
-         <span class=\"fails\">fails (marked !)</span></p>\n",
+         <span class=\"fails\">fails (marked !)</span> \
+         a count is how many cases behave like the one shown; the others are under the table</p>\n",
     );
     if failing > 0 {
         out.push_str("<h2>Failures</h2>\n<ul id=\"failures\">\n");
@@ -101,6 +137,10 @@ pub fn render(sections: &[Section<'_>], records: &[Record], run: &RunInfo) -> St
         out.push_str("</ul>\n");
     }
     for (i, section) in sections.iter().enumerate() {
+        let section_records: Vec<&Record> = records
+            .iter()
+            .filter(|r| r.section == section.name)
+            .collect();
         let _ = write!(
             out,
             "<h2>{}</h2>\n<p>{} cases, {} behaviours. Cells marked ! fail.</p>\n\
@@ -116,9 +156,10 @@ pub fn render(sections: &[Section<'_>], records: &[Record], run: &RunInfo) -> St
         for g in &section.groups {
             let _ = write!(
                 out,
-                "<tr><td class=\"count\">{}</td><td>{}</td>",
+                "<tr><td class=\"count\">{}</td><td>{}{}</td>",
                 g.rows.len(),
-                escape(g.rows[0])
+                escape(g.rows[0]),
+                place(&section_records, g.rows[0])
             );
             for cell in &g.cells {
                 match cell {
@@ -150,11 +191,19 @@ pub fn render(sections: &[Section<'_>], records: &[Record], run: &RunInfo) -> St
             }
             let _ = write!(
                 out,
-                "<details><summary>{} — {} case(s)</summary>\n<p>{}</p>\n",
+                "<details><summary>{} — {} case(s)</summary>\n<ul class=\"members\">\n",
                 escape(g.rows[0]),
                 g.rows.len(),
-                escape(&g.rows.join(", "))
             );
+            for row in &g.rows {
+                let _ = writeln!(
+                    out,
+                    "<li>{}{}</li>",
+                    escape(row),
+                    place(&section_records, row)
+                );
+            }
+            out.push_str("</ul>\n");
             for r in failing {
                 let _ = writeln!(out, "<pre>{}</pre>", escape(&r.detail));
             }

@@ -20,6 +20,12 @@ pub const VERSION: u32 = 2;
 pub struct RunInfo {
     /// `plc-conformance 0.1.0`.
     pub tool: String,
+    /// The project's git commit (`git describe --always --dirty`) when it is in a repository.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub commit: Option<String>,
+    /// When the run started, UTC, RFC 3339 (`2026-11-22T13:24:34Z`).
+    #[serde(default)]
+    pub date: String,
     /// Each backend of the run, with what it says of itself.
     pub backends: Vec<BackendInfo>,
     /// Whether the run stopped before every trial finished.
@@ -30,6 +36,9 @@ pub struct RunInfo {
 pub struct BackendInfo {
     pub name: String,
     pub description: String,
+    /// What the backend is and its version, when it says (`pymcprotocol 0.3.0`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub version: Option<String>,
 }
 
 #[derive(Serialize)]

@@ -1,8 +1,10 @@
-//! JUnit XML for CI dashboards: one test suite per matrix section and column, one test case per
-//! cell. Failing cells carry their explanation; skipped and recorded cells are skipped with a
-//! reason, never reported as passing.
+//! JUnit XML for CI dashboards: one test suite per backend, one test case per trial with
+//! `classname` = `backend.instruction` (or `backend.cross-vendor`), so that dashboards group
+//! results by backend and instruction; the test's name is the case and variant, and `file` and
+//! `line` point at the vector. Failing trials carry their explanation; skipped and recorded
+//! trials are skipped with a reason, never reported as passing.
 
-use std::collections::BTreeMap;
+use std::time::Duration;
 
 use quick_junit::{NonSuccessKind, Report, TestCase, TestCaseStatus, TestSuite};
 
@@ -10,18 +12,56 @@ use super::record::Record;
 use super::sanitize::xml;
 use crate::judge::Status;
 
+/// The backend, the class (`backend.instruction` or `backend.cross-vendor`) and the test name
+/// of a record, from its trial name (`backend::instruction::case::variant`,
+/// `cross-vendor::backend::lowering::case::variant` or `cross-vendor::backend::codec::case`).
+fn names(record: &Record) -> (String, String, String) {
+    let parts: Vec<&str> = record.trial.split("::").collect();
+    match parts.as_slice() {
+        ["cross-vendor", backend, rest @ ..] => {
+            // The case first, then how it was asked: `case::lowering::variant`.
+            let name = match rest {
+                [lowering, case, tail @ ..] => {
+                    let mut n = vec![*case, *lowering];
+                    n.extend(tail);
+                    n.join("::")
+                }
+                _ => rest.join("::"),
+            };
+            (backend.to_string(), format!("{backend}.cross-vendor"), name)
+        }
+        [backend, instruction, rest @ ..] => (
+            backend.to_string(),
+            format!("{backend}.{instruction}"),
+            rest.join("::"),
+        ),
+        _ => (
+            record.column.clone(),
+            record.column.clone(),
+            record.trial.clone(),
+        ),
+    }
+}
+
+/// A record with its class and test name.
+type Named<'a> = (&'a Record, String, String);
+
 pub fn render(records: &[Record]) -> String {
-    let mut suites: BTreeMap<(String, String), Vec<&Record>> = BTreeMap::new();
+    // Suites keep the order in which their backends first appear.
+    let mut suites: Vec<(String, Vec<Named<'_>>)> = Vec::new();
     for r in records {
-        suites
-            .entry((r.section.clone(), r.column.clone()))
-            .or_default()
-            .push(r);
+        let (backend, class, name) = names(r);
+        match suites.iter_mut().find(|(b, _)| *b == backend) {
+            Some((_, cases)) => cases.push((r, class, name)),
+            None => suites.push((backend, vec![(r, class, name)])),
+        }
     }
     let mut report = Report::new("plc-conformance");
-    for ((section, column), cells) in suites {
-        let mut suite = TestSuite::new(xml(&format!("{section} / {column}")).into_owned());
-        for r in cells {
+    let mut total = Duration::ZERO;
+    for (backend, cases) in suites {
+        let mut suite = TestSuite::new(xml(&backend).into_owned());
+        let mut time = Duration::ZERO;
+        for (r, class, name) in cases {
             let status = match r.status {
                 Status::Pass => TestCaseStatus::success(),
                 Status::Skipped | Status::Ignored => {
@@ -37,12 +77,20 @@ pub fn render(records: &[Record]) -> String {
                     s
                 }
             };
-            let mut case = TestCase::new(xml(&r.trial).into_owned(), status);
-            case.set_classname(xml(&format!("{}:{}", r.file, r.line)).into_owned());
+            let mut case = TestCase::new(xml(&name).into_owned(), status);
+            case.set_classname(xml(&class).into_owned());
+            case.set_time(r.seconds);
+            case.extra
+                .insert("file".into(), xml(&r.file).into_owned().into());
+            case.extra.insert("line".into(), r.line.to_string().into());
+            time += r.seconds;
             suite.add_test_case(case);
         }
+        suite.set_time(time);
+        total += time;
         report.add_test_suite(suite);
     }
+    report.set_time(total);
     report
         .to_string()
         .unwrap_or_else(|e| format!("<!-- cannot write JUnit XML: {e} -->"))

@@ -105,6 +105,7 @@ mod tests {
             behaviour: Behaviour::Answer { class },
             shown: behaviour.into(),
             detail: String::new(),
+            seconds: std::time::Duration::ZERO,
             verdict: None,
         }
     }

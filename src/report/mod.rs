@@ -12,10 +12,13 @@ pub mod json;
 pub mod junit;
 pub mod matrix;
 pub mod matrix_text;
+pub mod progress;
 pub mod record;
 pub mod sanitize;
 pub mod text;
 pub mod text_reporter;
+
+use std::time::Duration;
 
 use crate::judge::{Status, Verdict};
 use crate::plan::Trial;
@@ -30,6 +33,8 @@ pub enum Event<'a> {
         index: usize,
         trial: &'a Trial,
         verdict: &'a Verdict,
+        /// How long the trial took (zero for a trial that did not run).
+        elapsed: Duration,
     },
     /// A backend's process was started again after a fault.
     BackendRestarted { backend: &'a str, restarts: usize },
@@ -53,6 +58,17 @@ impl Reporter for Tee<'_> {
     fn event(&mut self, event: &Event<'_>) {
         self.0.event(event);
         self.1.event(event);
+    }
+}
+
+/// Any number of reporters fed the same events, in order.
+pub struct All<'a>(pub Vec<&'a mut dyn Reporter>);
+
+impl Reporter for All<'_> {
+    fn event(&mut self, event: &Event<'_>) {
+        for r in &mut self.0 {
+            r.event(event);
+        }
     }
 }
 

@@ -6,6 +6,7 @@
 //! message changes no grouping and churns no baseline.
 
 use std::fmt;
+use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
 
@@ -38,6 +39,10 @@ pub struct Record {
     pub shown: String,
     /// The full explanation of a cell that did not conform (a diff, a fault, a reason).
     pub detail: String,
+    /// How long the trial took, in seconds: its batch's time shared equally among the batch's
+    /// trials (0 for a trial that did not run).
+    #[serde(default, with = "seconds")]
+    pub seconds: Duration,
     /// The verdict itself, for tools (words in hex). Not read back from a saved run: a
     /// baseline compares statuses and behaviours.
     #[serde(default, skip_deserializing, skip_serializing_if = "Option::is_none")]
@@ -123,6 +128,22 @@ impl fmt::Display for AnswerClass {
     }
 }
 
+/// A duration as seconds, a number.
+mod seconds {
+    use std::time::Duration;
+
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(d: &Duration, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_f64((d.as_secs_f64() * 1e6).round() / 1e6)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Duration, D::Error> {
+        let s = f64::deserialize(d)?;
+        Ok(Duration::try_from_secs_f64(s).unwrap_or_default())
+    }
+}
+
 impl Record {
     /// The record of a trial and its verdict.
     pub fn of(trial: &Trial, verdict: &Verdict) -> Record {
@@ -174,6 +195,7 @@ impl Record {
             behaviour: behaviour(trial, verdict),
             shown,
             detail,
+            seconds: Duration::ZERO,
             verdict: Some(verdict.clone()),
         }
     }
@@ -190,6 +212,12 @@ impl Behaviour {
                 error_text(expected.as_ref())
             ),
             Behaviour::Recorded { observed } => observed.to_string(),
+            Behaviour::Known { difference } => match verdict {
+                Verdict::KnownDifference {
+                    difference: inner, ..
+                } => difference.short(inner),
+                _ => verdict.label().to_string(),
+            },
             _ => verdict.label().to_string(),
         }
     }

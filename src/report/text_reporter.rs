@@ -20,6 +20,8 @@ pub struct TextReporter<W: Write> {
     out: W,
     palette: Palette,
     show_recorded: bool,
+    /// Only failures and the closing counts.
+    quiet: bool,
     /// Lines printed after the results, before the counts (backends left out, and why).
     notes: Vec<String>,
     known: BTreeMap<String, KnownGroup>,
@@ -36,6 +38,7 @@ impl<W: Write> TextReporter<W> {
             out,
             palette,
             show_recorded,
+            quiet: false,
             notes,
             known: BTreeMap::new(),
             skipped: BTreeMap::new(),
@@ -45,8 +48,26 @@ impl<W: Write> TextReporter<W> {
         }
     }
 
+    /// Prints only failures and the closing counts (no known differences, skips, notes or
+    /// per-backend counts).
+    pub fn quiet(mut self, quiet: bool) -> Self {
+        self.quiet = quiet;
+        self
+    }
+
     fn finish(&mut self, summary: &Summary, interrupted: bool) {
         let out = &mut self.out;
+        if self.quiet {
+            if interrupted {
+                let _ = writeln!(
+                    out,
+                    "interrupted: the counts cover the trials that finished"
+                );
+            }
+            let _ = writeln!(out, "{summary}");
+            let _ = out.flush();
+            return;
+        }
         let mut known: Vec<(&String, &KnownGroup)> = self.known.iter().collect();
         known.sort_by_key(|(_, g)| g.first);
         for (entry, group) in known {
@@ -99,6 +120,7 @@ impl<W: Write> Reporter for TextReporter<W> {
                 index,
                 trial,
                 verdict,
+                ..
             } => {
                 let counts = if trial.is_cross_vendor() {
                     self.cross_vendor.get_or_insert_with(Summary::default)

@@ -2,8 +2,8 @@
 //! a check that the corpus tells each of them apart from the manual.
 #![allow(dead_code)]
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
+use std::process::Output;
 use std::sync::Arc;
 
 use plc_conformance::backend::{Backend, Fault, Request, Response};
@@ -14,22 +14,30 @@ pub fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// The binary, without colour and without a project file named by the environment.
+pub fn bin() -> assert_cmd::Command {
+    let mut command = assert_cmd::cargo::cargo_bin_cmd!("plc-conformance");
+    command
+        .env("NO_COLOR", "1")
+        .env_remove(plc_conformance::load::ENV_CONFIG);
+    command
+}
+
 /// Runs the binary on this project, without colour.
 pub fn cli(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_plc-conformance"))
+    bin()
         .args(["--root", root().to_str().unwrap_or(".")])
         .args(args)
-        .env("NO_COLOR", "1")
         .output()
         .expect("the binary runs")
 }
 
-/// An empty scratch folder for one test.
-pub fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("plc-conformance-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
+/// An empty scratch folder for one test, removed when dropped.
+pub fn scratch() -> tempfile::TempDir {
+    tempfile::Builder::new()
+        .prefix("plc-conformance-")
+        .tempdir()
+        .expect("temp dir")
 }
 
 pub fn session() -> Project {

@@ -403,6 +403,10 @@ impl Backend for ExternalBackend {
         )
     }
 
+    fn version(&self) -> Option<String> {
+        Some(format!("{} {}", self.info.name, self.info.version))
+    }
+
     fn claims(&self, instruction: &str, variant: &str) -> bool {
         let Some(profile) = &self.profile else {
             return false;

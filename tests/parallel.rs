@@ -1,0 +1,99 @@
+//! `-j/--jobs`: backends run side by side, at most `jobs` at once, and a backend starts as soon
+//! as a worker is free.
+
+mod common;
+
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use common::{reference, session};
+use plc_conformance::backend::{Backend, Fault, Request, Response};
+use plc_conformance::execute::execute_all;
+
+/// The reference model answering each batch after a pause, counting how many backends are
+/// answering at the same moment.
+struct Slow {
+    name: String,
+    base: Arc<dyn Backend>,
+    pause: Duration,
+    running: Arc<AtomicUsize>,
+    most: Arc<AtomicUsize>,
+}
+
+impl Backend for Slow {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn profile(&self) -> &str {
+        self.base.profile()
+    }
+    fn describe(&self) -> String {
+        "slow".into()
+    }
+    fn claims(&self, instruction: &str, variant: &str) -> bool {
+        self.base.claims(instruction, variant)
+    }
+    fn execute(&self, request: &Request<'_>) -> Result<Response, Fault> {
+        self.base.execute(request)
+    }
+    fn execute_batch(&self, requests: &[Request<'_>]) -> Vec<Result<Response, Fault>> {
+        let now = self.running.fetch_add(1, Ordering::SeqCst) + 1;
+        self.most.fetch_max(now, Ordering::SeqCst);
+        std::thread::sleep(self.pause);
+        self.running.fetch_sub(1, Ordering::SeqCst);
+        self.base.execute_batch(requests)
+    }
+}
+
+/// Runs three slow backends (one batch each) with `jobs` workers: the most that ran at once
+/// and the time taken.
+fn run(jobs: usize) -> (usize, Duration) {
+    let project = session();
+    let base = reference(&project, "mitsubishi-iqr");
+    let (running, most) = (Arc::new(AtomicUsize::new(0)), Arc::new(AtomicUsize::new(0)));
+    let backends: Vec<Arc<dyn Backend>> = ["a", "b", "c"]
+        .iter()
+        .map(|n| {
+            Arc::new(Slow {
+                name: format!("slow-{n}"),
+                base: base.clone(),
+                pause: Duration::from_millis(300),
+                running: running.clone(),
+                most: most.clone(),
+            }) as Arc<dyn Backend>
+        })
+        .collect();
+    let trials: Vec<_> = project
+        .plan(&backends)
+        .into_iter()
+        .filter(|t| t.name().contains("habin-fixed-4-digits-example::rcpu"))
+        .filter(|t| !t.is_cross_vendor())
+        .collect();
+    assert_eq!(
+        trials.len(),
+        12,
+        "HABIN(P) on two variants of three backends"
+    );
+    let indices: Vec<usize> = (0..trials.len()).collect();
+    let mut observed = 0;
+    let started = Instant::now();
+    execute_all(&trials, &indices, jobs, &AtomicBool::new(false), |_| {
+        observed += 1
+    });
+    assert_eq!(observed, trials.len());
+    (most.load(Ordering::SeqCst), started.elapsed())
+}
+
+#[test]
+fn backends_run_side_by_side_up_to_jobs() {
+    let (most, took) = run(3);
+    assert_eq!(most, 3, "three backends, three workers");
+    assert!(took < Duration::from_millis(850), "{took:?}");
+    let (most, took) = run(2);
+    assert_eq!(most, 2);
+    assert!(took >= Duration::from_millis(600), "{took:?}");
+    let (most, took) = run(1);
+    assert_eq!(most, 1);
+    assert!(took >= Duration::from_millis(900), "{took:?}");
+}

@@ -1,0 +1,190 @@
+//! The README's example outputs are real: each fenced `text` block whose first line is
+//! `$ cargo run -q -- ARGS` is run (the built binary with ARGS, from the repository root, without
+//! colour and at the default width) and its output compared with the block. A line `...` in a
+//! block stands for any number of lines, so a block may show an excerpt.
+//!
+//! Blocks that run the project's third-party backends need their installs (`.ci/run` makes
+//! them); without `.venv-adapters` they are skipped with a note, unless
+//! PLC_CONFORMANCE_REQUIRE_BACKENDS is set (as on CI).
+
+mod common;
+
+use common::{bin, root};
+
+struct Example {
+    line: usize,
+    command: String,
+    expected: Vec<String>,
+}
+
+fn examples(readme: &str) -> Vec<Example> {
+    let lines: Vec<&str> = readme.lines().collect();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < lines.len() {
+        if lines[i].trim_end() == "```text" {
+            if let Some(command) = lines.get(i + 1).and_then(|l| l.strip_prefix("$ ")) {
+                let start = i + 2;
+                let end = (start..lines.len())
+                    .find(|&j| lines[j].starts_with("```"))
+                    .unwrap_or(lines.len());
+                out.push(Example {
+                    line: i + 2,
+                    command: command.to_string(),
+                    expected: lines[start..end].iter().map(|l| l.to_string()).collect(),
+                });
+                i = end;
+            }
+        }
+        i += 1;
+    }
+    out
+}
+
+/// Splits a command line as sh would for the simple quoting the README uses.
+fn words(command: &str) -> Vec<String> {
+    let mut words = Vec::new();
+    let mut word = String::new();
+    let mut quote: Option<char> = None;
+    let mut started = false;
+    for c in command.chars() {
+        match (quote, c) {
+            (Some(q), c) if c == q => quote = None,
+            (Some(_), c) => word.push(c),
+            (None, '\'' | '"') => {
+                quote = Some(c);
+                started = true;
+            }
+            (None, ' ') => {
+                if started || !word.is_empty() {
+                    words.push(std::mem::take(&mut word));
+                }
+                started = false;
+            }
+            (None, c) => word.push(c),
+        }
+    }
+    if started || !word.is_empty() {
+        words.push(word);
+    }
+    words
+}
+
+/// Whether `actual` matches `expected`, where a `...` line stands for any lines.
+fn matches(expected: &[String], actual: &[&str]) -> bool {
+    let segments: Vec<&[String]> = expected.split(|l| l == "...").collect();
+    let mut at = 0;
+    for (i, segment) in segments.iter().enumerate() {
+        let (first, last) = (i == 0, i == segments.len() - 1);
+        if segment.is_empty() {
+            continue;
+        }
+        let fits = |from: usize| {
+            from + segment.len() <= actual.len()
+                && segment
+                    .iter()
+                    .zip(&actual[from..])
+                    .all(|(e, a)| e.trim_end() == a.trim_end())
+        };
+        let found = if first {
+            fits(0).then_some(0)
+        } else if last {
+            let from = actual.len().checked_sub(segment.len());
+            from.filter(|&f| f >= at && fits(f))
+        } else {
+            (at..actual.len()).find(|&f| fits(f))
+        };
+        match found {
+            Some(f) => at = f + segment.len(),
+            None => return false,
+        }
+        if first && last && at != actual.len() {
+            return false;
+        }
+    }
+    true
+}
+
+/// Whether a command runs backends of the project file (which need their installs).
+fn needs_adapters(args: &[String]) -> bool {
+    if !matches!(args.first().map(String::as_str), Some("run" | "diff")) {
+        return false;
+    }
+    let named: Vec<&String> = args
+        .windows(2)
+        .filter(|w| w[0] == "--backend" || w[0] == "--against")
+        .map(|w| &w[1])
+        .collect();
+    named.is_empty()
+        || named
+            .iter()
+            .any(|n| !matches!(n.as_str(), "iqr" | "fx5" | "fc4a"))
+}
+
+#[test]
+fn readme_examples_show_the_real_output() {
+    let readme = std::fs::read_to_string(root().join("README.md")).expect("README.md");
+    let examples = examples(&readme);
+    assert!(examples.len() >= 3, "the README has its examples");
+    let adapters = root().join(".venv-adapters/bin/python").exists();
+    let required = std::env::var_os("PLC_CONFORMANCE_REQUIRE_BACKENDS").is_some();
+    let mut stale = Vec::new();
+    for example in &examples {
+        let Some(rest) = example.command.strip_prefix("cargo run -q -- ") else {
+            panic!(
+                "README.md:{}: an example command starts with `cargo run -q -- `",
+                example.line
+            );
+        };
+        let args = words(rest);
+        if needs_adapters(&args) && !adapters && !required {
+            eprintln!(
+                "skipped README.md:{} (`{}`): .venv-adapters is missing (.ci/run creates it)",
+                example.line, example.command
+            );
+            continue;
+        }
+        let out = bin()
+            .current_dir(root())
+            .env_remove("COLUMNS")
+            .args(&args)
+            .output()
+            .expect("the binary runs");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let actual: Vec<&str> = stdout.trim_end_matches('\n').lines().collect();
+        if !matches(&example.expected, &actual) {
+            stale.push(format!(
+                "README.md:{}: `{}` now prints:\n{stdout}",
+                example.line, example.command
+            ));
+        }
+    }
+    assert!(
+        stale.is_empty(),
+        "README examples differ from the real output:\n\n{}",
+        stale.join("\n")
+    );
+}
+
+#[test]
+fn an_excerpt_matches_lines_in_order() {
+    let e = |s: &str| s.lines().map(String::from).collect::<Vec<_>>();
+    let actual = ["a", "b", "c", "d"];
+    assert!(matches(&e("a\nb\nc\nd"), &actual));
+    assert!(!matches(&e("a\nb\nc"), &actual));
+    assert!(matches(&e("a\n...\nd"), &actual));
+    assert!(matches(&e("...\nc\n...\n"), &actual));
+    assert!(matches(&e("a\n...\nc\n..."), &actual));
+    assert!(!matches(&e("a\n...\nb\n...\nb\n..."), &actual));
+    assert!(!matches(&e("b\n..."), &actual));
+    assert_eq!(
+        words(r#"run --backend 'external:x="$P" serve' --filter a"#),
+        [
+            "run",
+            "--backend",
+            r#"external:x="$P" serve"#,
+            "--filter",
+            "a"
+        ]
+    );
+}
