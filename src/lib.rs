@@ -12,7 +12,8 @@
 //! - [`judge`]: turns observations into one [`judge::Verdict`] and applies known differences;
 //! - [`report`]: reporters fed by events render text, JSON, JUnit, HTML and matrices.
 //!
-//! [`runner`] drives the stages for a project, [`libtest`] maps them onto libtest trials for
+//! [`runner`] drives the stages for a project, [`sweep`] runs generated inputs through them and
+//! groups and shrinks what the backends disagree on, [`libtest`] maps them onto libtest trials for
 //! `cargo test` (and for emulators written in Rust), and [`cli`] is the command line.
 //! [`device`], [`value`], [`memory`] and [`text`] are shared leaves.
 
@@ -29,5 +30,6 @@ pub mod plan;
 pub mod report;
 pub mod runner;
 pub mod spec;
+pub mod sweep;
 pub mod text;
 pub mod value;

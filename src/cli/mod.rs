@@ -7,6 +7,7 @@
 mod backends;
 mod info;
 mod run;
+mod sweep;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -83,6 +84,9 @@ pub enum Command {
         #[arg(long, value_name = "ID")]
         profile: String,
     },
+    /// Generate inputs for an operation or an instruction, run them on several backends, group
+    /// the inputs they disagree on by behaviour and shrink each group to a minimal vector.
+    Sweep(sweep::SweepArgs),
 }
 
 #[derive(Debug, clap::Args)]
@@ -199,6 +203,7 @@ pub fn main() -> ExitCode {
         Command::List { filter } => info::list(&cli, filter.as_deref()),
         Command::Schema { kind } => info::schema(*kind),
         Command::Serve { profile } => info::serve(&cli, profile),
+        Command::Sweep(args) => sweep::sweep(&cli, args),
     };
     ExitCode::from(code)
 }

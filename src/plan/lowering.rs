@@ -8,7 +8,7 @@ use crate::model::Operand;
 use crate::text::pack_low_first;
 
 /// The input that runs `case` through `lowering`.
-pub(super) fn input(lowering: &Lowering, case: &CrossVendorCase) -> Input {
+pub fn input(lowering: &Lowering, case: &CrossVendorCase) -> Input {
     let mut operands = lowering.operands.clone();
     if let Some(count) = &lowering.count {
         operands.insert(count.clone(), Operand::Constant(i64::from(case.digits)));
