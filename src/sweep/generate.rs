@@ -8,8 +8,9 @@
 //!   boundaries of the byte classes: 00H, 20H, 2FH, '0', '9', 3AH, 40H, 'A', 'F', 47H, 60H,
 //!   'a', 'f', 67H, 7FH, 80H, FFH).
 //! - **random**: `count` inputs from the seed: uniform bytes, or valid hex text with one or two
-//!   bytes replaced (by any byte, a class boundary, 00H, or the UTF-8 form of a character
-//!   outside ASCII); lengths, counts, flag settings, and operands at the end of a device range.
+//!   bytes replaced (by any byte, a class boundary, 00H, a token number parsers know such as
+//!   `0x`, a sign or `_`, or the UTF-8 form of a character outside ASCII); lengths, counts,
+//!   flag settings, and operands at the end of a device range.
 //! - **full**: all 2^32 texts of 4 bytes, in a scrambled order (any contiguous part or shard
 //!   is an even sample of the whole).
 //!
@@ -28,6 +29,12 @@ use crate::device::Device;
 pub const BOUNDARIES: [u8; 17] = [
     0x00, 0x20, 0x2F, b'0', b'9', 0x3A, 0x40, b'A', b'F', 0x47, 0x60, b'a', b'f', 0x67, 0x7F, 0x80,
     0xFF,
+];
+
+/// What number parsers commonly read as part of a number besides its digits: prefixes, signs,
+/// separators, blanks, suffixes. The random generator writes them over valid text.
+pub const TOKENS: [&[u8]; 14] = [
+    b"0x", b"0X", b"+", b"-", b" ", b"\t", b"_", b".", b",", b"h", b"H", b"#", b"$", b"&H",
 ];
 
 /// The largest digit count a generated input gives (the cross-vendor format's limit).
@@ -192,6 +199,7 @@ impl Space {
             flags,
             source: None,
             destination: None,
+            counted: self.counted,
         }
     }
 
@@ -235,6 +243,7 @@ impl Space {
             flags,
             source,
             destination,
+            counted: self.counted,
         }
     }
 
@@ -292,10 +301,17 @@ fn random_text(r: &mut Rng, max_len: u32) -> Vec<u8> {
     }
     for _ in 0..=r.below(2) {
         let at = r.below(t.len() as u64) as usize;
-        match r.below(4) {
+        match r.below(5) {
             0 => t[at] = r.byte(),
             1 => t[at] = *r.pick(&BOUNDARIES),
             2 => t[at] = 0,
+            3 => {
+                for (i, b) in r.pick(&TOKENS).iter().enumerate() {
+                    if let Some(slot) = t.get_mut(at + i) {
+                        *slot = *b;
+                    }
+                }
+            }
             _ => {
                 // A character outside ASCII, in UTF-8: two bytes (U+0080-U+07FF) or three
                 // (U+0800-U+FFFF, surrogates excluded).

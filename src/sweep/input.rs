@@ -42,6 +42,9 @@ pub struct Point {
     /// Instruction sweeps: the destination operand, when not the default.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub destination: Option<Device>,
+    /// Whether the target takes the digit count (shown only then).
+    #[serde(skip)]
+    pub counted: bool,
 }
 
 impl Point {
@@ -52,6 +55,7 @@ impl Point {
             flags: BTreeMap::new(),
             source: None,
             destination: None,
+            counted: true,
         }
     }
 
@@ -62,6 +66,7 @@ impl Point {
             flags: BTreeMap::new(),
             source: None,
             destination: None,
+            counted: true,
         }
     }
 
@@ -89,8 +94,8 @@ impl Point {
     }
 
     /// The features the grouping keys on besides the answers: the kind of the first character
-    /// that is not a hex digit, how the count compares with the data, the flags set on and
-    /// whether an operand sits away from its usual place.
+    /// that is not a hex digit, and how the count compares with the data. Flags and operand
+    /// places are not features: where they matter, the answers differ.
     pub fn features(&self, counted: bool) -> Vec<String> {
         let mut out = Vec::new();
         match &self.data {
@@ -112,14 +117,6 @@ impl Point {
                     out.push("value 0".into());
                 }
             }
-        }
-        for (flag, on) in &self.flags {
-            if *on {
-                out.push(format!("{flag} on"));
-            }
-        }
-        if self.source.is_some() || self.destination.is_some() {
-            out.push("operand near a range end".into());
         }
         out
     }
@@ -168,7 +165,9 @@ impl fmt::Display for Point {
             Data::Text(t) => write!(f, "{}", Answer::Text(t.clone()))?,
             Data::Value(v) => write!(f, "{}", Answer::Value(*v))?,
         }
-        write!(f, " digits {}", self.digits)?;
+        if self.counted {
+            write!(f, " digits {}", self.digits)?;
+        }
         for (flag, on) in &self.flags {
             write!(f, " {flag}={}", if *on { "on" } else { "off" })?;
         }

@@ -1,6 +1,7 @@
 //! Shrinking: a group's input replaced, step by step, by a simpler one that still behaves the
-//! same — the same answer classes in every column, the same features and the same class — until
-//! no simpler neighbour does. "Simpler" is [`Point::simplicity`]: the shortest text, then the
+//! same — the same answer classes in every column and the same features — until no simpler
+//! neighbour does. Each class of a group starts from its own first input, so inputs whose
+//! simplest forms differ (a blank before the digits, a blank after them) stay apart. "Simpler" is [`Point::simplicity`]: the shortest text, then the
 //! fewest characters other than '0', then the lowest bytes; the value with the fewest set bits,
 //! then the lowest; then the smallest count, the fewest flags on, operands in their usual place.
 //! Every step asks all candidates in one batch, so an external backend answers a step in one
@@ -57,7 +58,6 @@ pub fn shrink(sweep: &Sweep, found: &Found, stop: &AtomicBool) -> Found {
         signature: labels(&found.replies),
         features: found.point.features(counted),
     };
-    let class = found.point.class(counted);
     let mut current = found.clone();
     for _ in 0..MAX_STEPS {
         let here = current.point.simplicity();
@@ -76,9 +76,7 @@ pub fn shrink(sweep: &Sweep, found: &Found, stop: &AtomicBool) -> Found {
             .zip(answers)
             .filter_map(|((_, p), r)| r.map(|r| (p, r)))
             .filter(|(p, r)| {
-                labels(r) == key.signature
-                    && p.features(counted) == key.features
-                    && p.class(counted) == class
+                labels(r) == key.signature && p.features(counted) == key.features
             })
             .min_by(|a, b| a.0.simplicity().cmp(&b.0.simplicity()));
         match best {
@@ -95,6 +93,21 @@ pub fn shrink(sweep: &Sweep, found: &Found, stop: &AtomicBool) -> Found {
     current
 }
 
+/// The bytes a character may step down to: '0', the class boundaries below it, and a ladder
+/// of distances below it (so a step can go a long way, and repeated steps reach the lowest).
+fn lower_bytes(b: u8) -> Vec<u8> {
+    let mut out: Vec<u8> = super::generate::BOUNDARIES
+        .iter()
+        .copied()
+        .chain([b'0', 0, b / 2])
+        .chain([1u8, 2, 3, 5, 9, 17, 33, 65].iter().filter_map(|d| b.checked_sub(*d)))
+        .filter(|x| *x < b || (*x == b'0' && b != b'0'))
+        .collect();
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
 /// Every input one step simpler than `p` (and some that are not; the caller filters).
 pub fn candidates(p: &Point, counted: bool) -> Vec<Point> {
     let mut out = Vec::new();
@@ -108,17 +121,11 @@ pub fn candidates(p: &Point, counted: bool) -> Vec<Point> {
                 let mut shorter = t.clone();
                 shorter.remove(i);
                 out.push(with(Data::Text(shorter)));
-                for b in 0..t[i] {
+                for b in lower_bytes(t[i]) {
                     let mut lower = t.clone();
                     lower[i] = b;
                     out.push(with(Data::Text(lower)));
                 }
-                if t[i] > b'0' {
-                    continue;
-                }
-                let mut zero = t.clone();
-                zero[i] = b'0';
-                out.push(with(Data::Text(zero)));
             }
         }
         Data::Value(v) => {
