@@ -27,6 +27,7 @@ pub mod load;
 pub mod memory;
 pub mod model;
 pub mod plan;
+pub mod record;
 pub mod report;
 pub mod runner;
 pub mod spec;

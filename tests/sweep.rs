@@ -51,11 +51,19 @@ fn summary(r: &Results) -> Vec<String> {
         .map(|g| {
             format!(
                 "{:?} {:?} {} {} {}",
-                g.key.signature, g.key.features, g.inputs, g.representative.index, g.classes.len()
+                g.key.signature,
+                g.key.features,
+                g.inputs,
+                g.representative.index,
+                g.classes.len()
             )
         })
         .collect();
-    out.extend(r.shrunk.iter().map(|s| format!("{} -> {}", s.from.point, s.to.point)));
+    out.extend(
+        r.shrunk
+            .iter()
+            .map(|s| format!("{} -> {}", s.from.point, s.to.point)),
+    );
     out
 }
 
@@ -125,7 +133,13 @@ fn a_mutant_shrinks_to_a_minimal_input_that_still_differs_and_emits_a_failing_ve
             .iter()
             .map(|(d, w)| {
                 let [lo, hi] = w.to_le_bytes();
-                let up = |b: u8| if (b'a'..=b'f').contains(&b) { b - 0x20 } else { b };
+                let up = |b: u8| {
+                    if (b'a'..=b'f').contains(&b) {
+                        b - 0x20
+                    } else {
+                        b
+                    }
+                };
                 (d.clone(), u16::from_le_bytes([up(lo), up(hi)]))
             })
             .collect();
@@ -151,7 +165,11 @@ fn a_mutant_shrinks_to_a_minimal_input_that_still_differs_and_emits_a_failing_ve
         .iter()
         .filter(|s| s.to.point.features(false) == vec!["first non-digit: lowercase a-f"])
         .collect();
-    assert!(!lower.is_empty(), "no lowercase group: {:#?}", summary(&results));
+    assert!(
+        !lower.is_empty(),
+        "no lowercase group: {:#?}",
+        summary(&results)
+    );
     for s in &lower {
         let Data::Text(t) = &s.to.point.data else {
             panic!("a text")
@@ -160,7 +178,11 @@ fn a_mutant_shrinks_to_a_minimal_input_that_still_differs_and_emits_a_failing_ve
         // SM705 on, "a" alone ended by 00H).
         assert!(t.len() <= 4, "{}", s.to.point);
         let others: Vec<u8> = t.iter().copied().filter(|&b| b != b'0').collect();
-        assert!(others.len() == 1 && others[0].is_ascii_lowercase(), "{}", s.to.point);
+        assert!(
+            others.len() == 1 && others[0].is_ascii_lowercase(),
+            "{}",
+            s.to.point
+        );
         // Still the same disagreement ...
         let again = sweep.answers(&[(0, s.to.point.clone())], &no_stop());
         let replies = again[0].clone().expect("answered");
@@ -196,7 +218,10 @@ fn a_mutant_shrinks_to_a_minimal_input_that_still_differs_and_emits_a_failing_ve
     );
     let profiles = load_profiles(&root().join("vendors")).expect("profiles");
     let corpus = load_corpus(std::slice::from_ref(&file), &profiles).expect("emitted corpus loads");
-    assert!(corpus.cases.iter().all(|c| c.basis != plc_conformance::model::Basis::Manual));
+    assert!(corpus
+        .cases
+        .iter()
+        .all(|c| c.basis != plc_conformance::model::Basis::Manual));
     let emitted_project = Project {
         profiles,
         corpus,
@@ -232,7 +257,15 @@ fn the_shards_of_a_sweep_are_the_whole_sweep() {
     let count = |g: &Groups| -> BTreeSet<String> {
         g.by_key
             .values()
-            .map(|g| format!("{:?} {:?} {} {}", g.key, g.inputs, g.representative.index, g.classes.len()))
+            .map(|g| {
+                format!(
+                    "{:?} {:?} {} {}",
+                    g.key,
+                    g.inputs,
+                    g.representative.index,
+                    g.classes.len()
+                )
+            })
             .collect()
     };
     assert_eq!(count(&merged), count(&whole.groups));
@@ -303,18 +336,32 @@ fn a_sweep_of_the_built_in_models_finds_every_behaviour_of_the_cross_vendor_corp
             },
             Digits::Each((0..=6).collect()),
         ),
-        (Operation::ValueToHex, Generator::Values { bits: 16 }, Digits::Each((0..=6).collect())),
+        (
+            Operation::ValueToHex,
+            Generator::Values { bits: 16 },
+            Digits::Each((0..=6).collect()),
+        ),
     ] {
         let mut settings = Settings::new(operation(op), generator, 1);
         settings.digits = digits;
         settings.shrink = 0;
         let (_, results) = run(&project, &project.backends, settings);
-        let found: BTreeSet<Vec<String>> =
-            results.groups.by_key.keys().map(|k| k.signature.clone()).collect();
+        let found: BTreeSet<Vec<String>> = results
+            .groups
+            .by_key
+            .keys()
+            .map(|k| k.signature.clone())
+            .collect();
         let wanted = corpus_behaviours(&project, op);
         let missing: Vec<_> = wanted.difference(&found).collect();
-        assert!(missing.is_empty(), "{op}: not found by the sweep: {missing:?}");
-        assert!(found.len() > wanted.len(), "{op}: nothing beyond the corpus");
+        assert!(
+            missing.is_empty(),
+            "{op}: not found by the sweep: {missing:?}"
+        );
+        assert!(
+            found.len() > wanted.len(),
+            "{op}: nothing beyond the corpus"
+        );
     }
 }
 
@@ -325,17 +372,32 @@ fn a_bounded_sweep_catches_mutants_the_corpus_does_not_target() {
         (
             "mitsubishi-iqr",
             "HABIN",
-            reads_byte_as("habin-reads-7eh-as-0", &reference(&project, "mitsubishi-iqr"), &["HABIN", "HABINP"], tilde_as_zero),
+            reads_byte_as(
+                "habin-reads-7eh-as-0",
+                &reference(&project, "mitsubishi-iqr"),
+                &["HABIN", "HABINP"],
+                tilde_as_zero,
+            ),
         ),
         (
             "mitsubishi-fx5",
             "HEXA",
-            reads_byte_as("hexa-reads-7eh-as-0", &reference(&project, "mitsubishi-fx5"), &["HEXA", "HEXAP"], tilde_as_zero),
+            reads_byte_as(
+                "hexa-reads-7eh-as-0",
+                &reference(&project, "mitsubishi-fx5"),
+                &["HEXA", "HEXAP"],
+                tilde_as_zero,
+            ),
         ),
         (
             "idec-fc4a",
             "ATOH",
-            reads_byte_as("atoh-reads-7eh-as-0", &reference(&project, "idec-fc4a"), &["ATOH"], tilde_as_zero),
+            reads_byte_as(
+                "atoh-reads-7eh-as-0",
+                &reference(&project, "idec-fc4a"),
+                &["ATOH"],
+                tilde_as_zero,
+            ),
         ),
     ];
     for (profile, name, mutant) in cases {
@@ -353,9 +415,17 @@ fn a_bounded_sweep_catches_mutants_the_corpus_does_not_target() {
             1,
         );
         settings.shrink = 1;
-        let (_, results) = run(&project, &[reference(&project, profile), mutant.clone()], settings);
+        let (_, results) = run(
+            &project,
+            &[reference(&project, profile), mutant.clone()],
+            settings,
+        );
         assert!(results.differs(), "{} survives the sweep", mutant.name());
-        let shown: Vec<String> = results.shrunk.iter().map(|s| s.to.point.to_string()).collect();
+        let shown: Vec<String> = results
+            .shrunk
+            .iter()
+            .map(|s| s.to.point.to_string())
+            .collect();
         eprintln!("{}: caught; shrunk to {shown:?}", mutant.name());
     }
 }
@@ -384,10 +454,17 @@ fn a_sweep_finds_every_known_difference_of_pymcprotocol() {
         .expect("pymcprotocol is configured")
         .settings
         .clone();
-    let known_file = settings.known_differences.clone().expect("known differences");
+    let known_file = settings
+        .known_differences
+        .clone()
+        .expect("known differences");
     let pymc = project.add_external(settings, true).expect("starts") as Arc<dyn Backend>;
     let iqr = reference(&project, "mitsubishi-iqr");
-    let known = project.known.get("pymcprotocol").expect("known differences").clone();
+    let known = project
+        .known
+        .get("pymcprotocol")
+        .expect("known differences")
+        .clone();
     let mut shrunk: Vec<Point> = Vec::new();
     for (name, count) in [("HABIN", 60_000), ("DHABIN", 20_000)] {
         let mut s = Settings::new(
@@ -430,5 +507,8 @@ fn a_sweep_finds_every_known_difference_of_pymcprotocol() {
             missing.push(format!("{} ({})", entry.case, hand));
         }
     }
-    assert!(missing.is_empty(), "not found by the sweep: {missing:?}; shrunk: {shrunk:?}");
+    assert!(
+        missing.is_empty(),
+        "not found by the sweep: {missing:?}; shrunk: {shrunk:?}"
+    );
 }

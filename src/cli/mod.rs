@@ -6,6 +6,7 @@
 
 mod backends;
 mod info;
+mod record;
 mod run;
 mod sweep;
 
@@ -87,6 +88,9 @@ pub enum Command {
     /// Generate inputs for an operation or an instruction, run them on several backends, group
     /// the inputs they disagree on by behaviour and shrink each group to a minimal vector.
     Sweep(sweep::SweepArgs),
+    /// Write what a backend did into the vectors as `observed` expectations, with provenance;
+    /// fill in the outcome of `unspecified` cases; never overwrite a `manual` expectation.
+    Record(record::RecordArgs),
 }
 
 #[derive(Debug, clap::Args)]
@@ -204,6 +208,7 @@ pub fn main() -> ExitCode {
         Command::Schema { kind } => info::schema(*kind),
         Command::Serve { profile } => info::serve(&cli, profile),
         Command::Sweep(args) => sweep::sweep(&cli, args),
+        Command::Record(args) => record::record_command(&cli, args),
     };
     ExitCode::from(code)
 }

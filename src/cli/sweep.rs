@@ -356,13 +356,17 @@ pub fn digits(spec: &str) -> Result<Digits, String> {
         let bad = || format!("--digits `{part}`: expected a count, a range `0-6` or `natural`");
         match part.split_once('-') {
             Some((a, b)) => {
-                let (a, b): (u32, u32) = (a.parse().map_err(|_| bad())?, b.parse().map_err(|_| bad())?);
+                let (a, b): (u32, u32) =
+                    (a.parse().map_err(|_| bad())?, b.parse().map_err(|_| bad())?);
                 out.extend(a..=b);
             }
             None => out.push(part.parse().map_err(|_| bad())?),
         }
     }
-    if let Some(d) = out.iter().find(|d| **d > crate::sweep::generate::MAX_DIGITS) {
+    if let Some(d) = out
+        .iter()
+        .find(|d| **d > crate::sweep::generate::MAX_DIGITS)
+    {
         return Err(format!(
             "--digits {d}: at most {}",
             crate::sweep::generate::MAX_DIGITS

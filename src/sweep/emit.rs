@@ -34,7 +34,9 @@ pub fn emit(sweep: &Sweep, results: &Results, corpus: &Corpus) -> Emitted {
             continue;
         }
         let made = match &sweep.settings.target {
-            Target::Operation { operation } => cross_vendor_case(sweep, results, *operation, &s.from, &s.to),
+            Target::Operation { operation } => {
+                cross_vendor_case(sweep, results, *operation, &s.from, &s.to)
+            }
             Target::Instruction { .. } => native_case(sweep, results, &s.from, &s.to),
         };
         match made {
@@ -79,7 +81,7 @@ pub fn emit(sweep: &Sweep, results: &Results, corpus: &Corpus) -> Emitted {
                  source: {{manual: {manual}, page: {}}}\n\
                  cases:\n",
                 settings_line(results),
-                quote(page.as_bytes())
+                quote_str(&page)
             )
         }
     };
@@ -154,8 +156,15 @@ fn cross_vendor_case(
             Reply::Answer {
                 answer,
                 fill_dependent: false,
-            } if !matches!(answer, Answer::OtherError(_)) => by_key.push((l.key.clone(), answer.clone())),
-            other => return Err(format!("{} answered {other}, which a vector cannot expect", c.name)),
+            } if !matches!(answer, Answer::OtherError(_)) => {
+                by_key.push((l.key.clone(), answer.clone()))
+            }
+            other => {
+                return Err(format!(
+                    "{} answered {other}, which a vector cannot expect",
+                    c.name
+                ))
+            }
         }
     }
     if by_key.is_empty() {
@@ -177,13 +186,10 @@ fn cross_vendor_case(
     let _ = writeln!(
         y,
         "    cite: {}",
-        quote(
-            format!(
-                "each lowering's answer is its reference model's (docs/semantics.md#cross-vendor); {}",
-                provenance(results, from, to, &sweep.columns)
-            )
-            .as_bytes()
-        )
+        quote_str(&format!(
+            "each lowering's answer is its reference model's (docs/semantics.md#cross-vendor); {}",
+            provenance(results, from, to, &sweep.columns)
+        ))
     );
     match &to.point.data {
         Data::Text(t) => {
@@ -203,14 +209,19 @@ fn cross_vendor_case(
                 y,
                 "      {key}: {{{}, why: {}}}",
                 answer_yaml(a),
-                quote(format!("the reference model's answer through {key}").as_bytes())
+                quote_str(&format!("the reference model's answer through {key}"))
             );
         }
     }
     Ok(y)
 }
 
-fn native_case(sweep: &Sweep, results: &Results, from: &Found, to: &Found) -> Result<String, String> {
+fn native_case(
+    sweep: &Sweep,
+    results: &Results,
+    from: &Found,
+    to: &Found,
+) -> Result<String, String> {
     let shape = sweep.shape.as_ref().ok_or("no instruction")?;
     // The variants where a column differs from its oracle, with the oracle's effect there.
     let mut expect: Option<&crate::judge::Effect> = None;
@@ -226,7 +237,10 @@ fn native_case(sweep: &Sweep, results: &Results, from: &Found, to: &Found) -> Re
             fill_dependent: false,
         } = theirs
         else {
-            return Err(format!("the oracle {} answered {theirs}", sweep.columns[o].name));
+            return Err(format!(
+                "the oracle {} answered {theirs}",
+                sweep.columns[o].name
+            ));
         };
         match expect {
             None => expect = Some(effect),
@@ -240,19 +254,20 @@ fn native_case(sweep: &Sweep, results: &Results, from: &Found, to: &Found) -> Re
     let effect = expect.ok_or("no column differs from its oracle")?;
     let input = shape.input(&to.point);
     let mut y = String::new();
-    let _ = writeln!(y, "  - id: {}", id(&shape.instruction.to_lowercase(), &to.point));
+    let _ = writeln!(
+        y,
+        "  - id: {}",
+        id(&shape.instruction.to_lowercase(), &to.point)
+    );
     let _ = writeln!(y, "    basis: inferred");
     let _ = writeln!(
         y,
         "    cite: {}",
-        quote(
-            format!(
-                "the expectation is the reference model of {} (its rules: docs/semantics.md#evidence); {}",
-                shape.profile.id,
-                provenance(results, from, to, &sweep.columns)
-            )
-            .as_bytes()
-        )
+        quote_str(&format!(
+            "the expectation is the reference model of {} (its rules: docs/semantics.md#evidence); {}",
+            shape.profile.id,
+            provenance(results, from, to, &sweep.columns)
+        ))
     );
     let _ = writeln!(y, "    variants: [{}]", variants.join(", "));
     if !input.flags.is_empty() {
@@ -355,6 +370,24 @@ pub fn quote(bytes: &[u8]) -> String {
     s
 }
 
+/// A YAML double-quoted string of text: characters kept, quotes, backslashes and control
+/// characters escaped.
+pub fn quote_str(text: &str) -> String {
+    let mut s = String::from("\"");
+    for c in text.chars() {
+        match c {
+            '"' => s.push_str("\\\""),
+            '\\' => s.push_str("\\\\"),
+            c if (c as u32) < 0x20 || c == '\u{7F}' => {
+                let _ = write!(s, "\\x{:02X}", c as u32);
+            }
+            c => s.push(c),
+        }
+    }
+    s.push('"');
+    s
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -363,5 +396,6 @@ mod tests {
     fn quoting_keeps_every_byte() {
         assert_eq!(quote(b"5A\"\\"), "\"5A\\\"\\\\\"");
         assert_eq!(quote(&[0, 0x09, 0xEF]), "\"\\0\\x09\\xEF\"");
+        assert_eq!(quote_str("例 \"a\"\t"), "\"例 \\\"a\\\"\\x09\"");
     }
 }

@@ -233,7 +233,10 @@ impl Space {
             }
             let end = r.pick(&self.range_ends).clone();
             let back = r.below(9) as u32;
-            Some(Device::new(end.code.clone(), end.index.saturating_sub(back)))
+            Some(Device::new(
+                end.code.clone(),
+                end.index.saturating_sub(back),
+            ))
         };
         let source = near_end(&mut r);
         let destination = near_end(&mut r);
@@ -246,7 +249,6 @@ impl Space {
             counted: self.counted,
         }
     }
-
 }
 
 fn natural_digits(data: &Data, generator: &Generator) -> u32 {
@@ -348,9 +350,11 @@ fn random_value(r: &mut Rng, bits: u32) -> u64 {
             let p = if k >= 64 { u64::MAX } else { (1u64 << k) - 1 };
             (p.wrapping_add(r.below(3))).wrapping_sub(1) & mask
         }
-        _ => (0..bits.div_ceil(4))
-            .fold(0u64, |v, i| v | (*r.pick(&[0u64, 1, 9, 0xA, 0xF]) << (4 * i)))
-            & mask,
+        _ => {
+            (0..bits.div_ceil(4)).fold(0u64, |v, i| {
+                v | (*r.pick(&[0u64, 1, 9, 0xA, 0xF]) << (4 * i))
+            }) & mask
+        }
     }
 }
 
@@ -444,7 +448,15 @@ mod tests {
     #[test]
     fn the_32_bit_scheme_has_the_lattice_and_the_boundaries() {
         let v = lattice32();
-        for x in [0, 1, 0xFFFF_FFFF, 0x1000_0000, 0x8000_0000, 0x0001_0000, 0xA9F1_0019] {
+        for x in [
+            0,
+            1,
+            0xFFFF_FFFF,
+            0x1000_0000,
+            0x8000_0000,
+            0x0001_0000,
+            0xA9F1_0019,
+        ] {
             assert!(v.binary_search(&x).is_ok(), "{x:X}");
         }
         assert!(v.len() > 390_625 && v.len() < 1_300_000, "{}", v.len());

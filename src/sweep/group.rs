@@ -249,7 +249,14 @@ impl Groups {
     }
 
     /// Counts one input.
-    pub fn add(&mut self, columns: &[Column], counted: bool, index: u64, point: &Point, replies: Vec<Reply>) {
+    pub fn add(
+        &mut self,
+        columns: &[Column],
+        counted: bool,
+        index: u64,
+        point: &Point,
+        replies: Vec<Reply>,
+    ) {
         let key = Key {
             signature: labels(&replies),
             features: point.features(counted),
@@ -345,12 +352,18 @@ impl Groups {
     pub fn sorted(&self) -> Vec<&Group> {
         let mut v: Vec<&Group> = self.by_key.values().collect();
         v.sort_by(|a, b| {
-            (a.differing.is_empty(), !a.disagree, std::cmp::Reverse(a.inputs), &a.key).cmp(&(
-                b.differing.is_empty(),
-                !b.disagree,
-                std::cmp::Reverse(b.inputs),
-                &b.key,
-            ))
+            (
+                a.differing.is_empty(),
+                !a.disagree,
+                std::cmp::Reverse(a.inputs),
+                &a.key,
+            )
+                .cmp(&(
+                    b.differing.is_empty(),
+                    !b.disagree,
+                    std::cmp::Reverse(b.inputs),
+                    &b.key,
+                ))
         });
         v
     }

@@ -143,7 +143,13 @@ fn shrunk_by_group(shrunk: &[Shrunk]) -> BTreeMap<usize, Vec<&Shrunk>> {
     by
 }
 
-fn group_text(out: &mut String, results: &Results, i: usize, g: &Group, shrunk: Option<&[&Shrunk]>) {
+fn group_text(
+    out: &mut String,
+    results: &Results,
+    i: usize,
+    g: &Group,
+    shrunk: Option<&[&Shrunk]>,
+) {
     let _ = writeln!(
         out,
         "#{} {} input(s) in {}{} class(es) [{}]",
@@ -158,7 +164,11 @@ fn group_text(out: &mut String, results: &Results, i: usize, g: &Group, shrunk: 
         g.key.features.join("; ")
     );
     if !g.differing.is_empty() {
-        let _ = writeln!(out, "   differs from its oracle: {}", g.differing.join(", "));
+        let _ = writeln!(
+            out,
+            "   differs from its oracle: {}",
+            g.differing.join(", ")
+        );
     }
     let sig: Vec<String> = results
         .columns
@@ -167,7 +177,11 @@ fn group_text(out: &mut String, results: &Results, i: usize, g: &Group, shrunk: 
         .map(|(c, l)| format!("{}={l}", c.name))
         .collect();
     let _ = writeln!(out, "   {}", sig.join("  "));
-    let _ = writeln!(out, "   first: {}", found_line(&results.columns, &g.representative));
+    let _ = writeln!(
+        out,
+        "   first: {}",
+        found_line(&results.columns, &g.representative)
+    );
     for s in shrunk.unwrap_or_default() {
         let _ = writeln!(
             out,
@@ -313,7 +327,11 @@ pub fn html(results: &Results) -> String {
         for r in &g.representative.replies {
             let _ = write!(out, "<td>{}</td>", escape(&r.to_string()));
         }
-        let _ = writeln!(out, "<td>{}</td></tr>", escape(&g.representative.point.to_string()));
+        let _ = writeln!(
+            out,
+            "<td>{}</td></tr>",
+            escape(&g.representative.point.to_string())
+        );
     }
     out.push_str("</table></body></html>\n");
     out

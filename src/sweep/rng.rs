@@ -51,7 +51,10 @@ mod tests {
     #[test]
     fn inputs_are_independent_of_order() {
         let a: Vec<u64> = (0..4).map(|i| Rng::for_input(7, i).next_u64()).collect();
-        let b: Vec<u64> = (0..4).rev().map(|i| Rng::for_input(7, i).next_u64()).collect();
+        let b: Vec<u64> = (0..4)
+            .rev()
+            .map(|i| Rng::for_input(7, i).next_u64())
+            .collect();
         assert_eq!(a, b.into_iter().rev().collect::<Vec<_>>());
         assert_ne!(a[0], a[1]);
         assert_ne!(Rng::for_input(8, 0).next_u64(), a[0]);

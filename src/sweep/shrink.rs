@@ -75,9 +75,7 @@ pub fn shrink(sweep: &Sweep, found: &Found, stop: &AtomicBool) -> Found {
             .into_iter()
             .zip(answers)
             .filter_map(|((_, p), r)| r.map(|r| (p, r)))
-            .filter(|(p, r)| {
-                labels(r) == key.signature && p.features(counted) == key.features
-            })
+            .filter(|(p, r)| labels(r) == key.signature && p.features(counted) == key.features)
             .min_by(|a, b| a.0.simplicity().cmp(&b.0.simplicity()));
         match best {
             Some((point, replies)) => {
@@ -100,7 +98,11 @@ fn lower_bytes(b: u8) -> Vec<u8> {
         .iter()
         .copied()
         .chain([b'0', 0, b / 2])
-        .chain([1u8, 2, 3, 5, 9, 17, 33, 65].iter().filter_map(|d| b.checked_sub(*d)))
+        .chain(
+            [1u8, 2, 3, 5, 9, 17, 33, 65]
+                .iter()
+                .filter_map(|d| b.checked_sub(*d)),
+        )
         .filter(|x| *x < b || (*x == b'0' && b != b'0'))
         .collect();
     out.sort_unstable();
@@ -111,10 +113,7 @@ fn lower_bytes(b: u8) -> Vec<u8> {
 /// Every input one step simpler than `p` (and some that are not; the caller filters).
 pub fn candidates(p: &Point, counted: bool) -> Vec<Point> {
     let mut out = Vec::new();
-    let with = |data: Data| Point {
-        data,
-        ..p.clone()
-    };
+    let with = |data: Data| Point { data, ..p.clone() };
     match &p.data {
         Data::Text(t) => {
             for i in 0..t.len() {

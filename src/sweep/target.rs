@@ -157,7 +157,10 @@ impl Shape {
             destination: first.lowering_operand(&first.destination),
             count: first.count.clone(),
             operands: first.operands.clone(),
-            layouts: matching.iter().map(|(l, _)| (l.flags.clone(), l.text)).collect(),
+            layouts: matching
+                .iter()
+                .map(|(l, _)| (l.flags.clone(), l.text))
+                .collect(),
             width: first.width.map(|w| if double { w * 2 } else { w }),
             words: if double { 2 } else { 1 },
             flags: def.flags.clone(),
@@ -343,7 +346,11 @@ pub fn columns(
                 Ask::Lowering(l) => l.name.clone(),
                 _ => String::new(),
             };
-            (c.profile.as_ref().map(|p| p.id.clone()), how, c.variant.clone())
+            (
+                c.profile.as_ref().map(|p| p.id.clone()),
+                how,
+                c.variant.clone(),
+            )
         })
         .collect();
     for i in 0..out.len() {
@@ -480,11 +487,9 @@ impl Cases {
                         column.variant
                     ))
                 } else {
-                    profile.variant(&column.variant).and_then(|v| {
-                        column
-                            .backend
-                            .declines(&input.flags, &input.instruction, v)
-                    })
+                    profile
+                        .variant(&column.variant)
+                        .and_then(|v| column.backend.declines(&input.flags, &input.instruction, v))
                 }
             }
             _ => None,
