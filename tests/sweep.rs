@@ -512,3 +512,81 @@ fn a_sweep_finds_every_known_difference_of_pymcprotocol() {
         "not found by the sweep: {missing:?}; shrunk: {shrunk:?}"
     );
 }
+
+/// The built-in models asked directly answer exactly what they answer as trials.
+#[test]
+fn the_direct_path_gives_the_replies_of_the_trial_path() {
+    let project = session();
+    for (target, generator) in [
+        (
+            operation(Operation::HexToValue),
+            Generator::Random {
+                count: 3000,
+                max_len: 9,
+            },
+        ),
+        (
+            operation(Operation::ValueToHex),
+            Generator::Random {
+                count: 3000,
+                max_len: 0,
+            },
+        ),
+        (
+            instruction("mitsubishi-iqr", "DHABIN"),
+            Generator::Random {
+                count: 2000,
+                max_len: 10,
+            },
+        ),
+        (
+            instruction("mitsubishi-iqr", "BINHA"),
+            Generator::Random {
+                count: 2000,
+                max_len: 0,
+            },
+        ),
+        (
+            instruction("mitsubishi-fx5", "HEXA"),
+            Generator::Random {
+                count: 2000,
+                max_len: 9,
+            },
+        ),
+        (
+            instruction("mitsubishi-fx5", "ASCI"),
+            Generator::Random {
+                count: 2000,
+                max_len: 0,
+            },
+        ),
+        (
+            instruction("idec-fc4a", "ATOH"),
+            Generator::Random {
+                count: 2000,
+                max_len: 6,
+            },
+        ),
+        (
+            instruction("idec-fc4a", "HTOA"),
+            Generator::Random {
+                count: 2000,
+                max_len: 0,
+            },
+        ),
+    ] {
+        let mut settings = Settings::new(target.clone(), generator, 4);
+        let direct =
+            Sweep::new(settings.clone(), &project.profiles, &project.backends).expect("sweep");
+        settings.direct = false;
+        let trials = Sweep::new(settings, &project.profiles, &project.backends).expect("sweep");
+        let points: Vec<(u64, Point)> = (0..direct.space.total())
+            .map(|i| (i, direct.space.point(i)))
+            .collect();
+        let a = direct.answers(&points, &no_stop());
+        let b = trials.answers(&points, &no_stop());
+        for ((i, p), (x, y)) in points.iter().zip(a.iter().zip(&b)) {
+            assert_eq!(x, y, "{target}: input {i}, {p}");
+        }
+    }
+}

@@ -263,54 +263,48 @@ impl Groups {
         };
         let class = point.class(counted);
         let max = self.max_classes;
-        let differing_now: Vec<String> = differing(columns, &replies)
-            .into_iter()
-            .map(|i| columns[i].name.clone())
-            .collect();
-        let replies_for_representative = replies.clone();
-        let group = self.by_key.entry(key.clone()).or_insert_with(|| Group {
-            key,
-            inputs: 0,
-            differing: differing_now.clone(),
-            disagree: disagree(&replies),
-            representative: Found {
-                index,
-                point: point.clone(),
-                replies: replies.clone(),
-            },
-            classes: BTreeMap::new(),
-        });
+        let found = |replies: &[Reply]| Found {
+            index,
+            point: point.clone(),
+            replies: replies.to_vec(),
+        };
+        let names = |replies: &[Reply]| -> Vec<String> {
+            differing(columns, replies)
+                .into_iter()
+                .map(|i| columns[i].name.clone())
+                .collect()
+        };
+        let group = match self.by_key.get_mut(&key) {
+            Some(g) => g,
+            None => self.by_key.entry(key.clone()).or_insert_with(|| Group {
+                key,
+                inputs: 0,
+                differing: names(&replies),
+                disagree: disagree(&replies),
+                representative: found(&replies),
+                classes: BTreeMap::new(),
+            }),
+        };
         group.inputs += 1;
+        if index < group.representative.index {
+            group.representative = found(&replies);
+            group.differing = names(&replies);
+        }
         if let Some(c) = group.classes.get_mut(&class) {
             c.inputs += 1;
             if index < c.first.index {
-                c.first = Found {
-                    index,
-                    point: point.clone(),
-                    replies,
-                };
+                c.first = found(&replies);
             }
         } else if group.classes.len() < max {
+            let first = found(&replies);
             group.classes.insert(
                 class.clone(),
                 Class {
                     name: class,
                     inputs: 1,
-                    first: Found {
-                        index,
-                        point: point.clone(),
-                        replies,
-                    },
+                    first,
                 },
             );
-        }
-        if index < group.representative.index {
-            group.representative = Found {
-                index,
-                point: point.clone(),
-                replies: replies_for_representative,
-            };
-            group.differing = differing_now;
         }
     }
 

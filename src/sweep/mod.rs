@@ -9,9 +9,11 @@
 //! it under both fills, and the judge records what the backend did as a
 //! [`crate::judge::Verdict`]. External backends get the trials through [`crate::runner::run`]
 //! with a [`crate::report::Reporter`] that keeps the verdicts, batched as in any run and stopped
-//! by the same flag; the built-in reference models run each trial in process with
-//! [`crate::runner::run_one`], spread over threads, because millions of inputs would otherwise
-//! spend their time in channels rather than in the models.
+//! by the same flag. The built-in reference models run in process, spread over threads: each
+//! input's request is made as the plan makes it and answered by the model directly
+//! ([`direct`]), because millions of inputs would otherwise spend their time building trials
+//! rather than in the models; `Settings::direct = false` runs them as trials with
+//! [`crate::runner::run_one`] instead, with the same replies.
 //!
 //! - [`generate`]: the generators, each a numbered space of inputs ([`generate::Space`]);
 //! - [`target`]: what is swept (an operation or an instruction) and the columns;
@@ -20,6 +22,7 @@
 //! - [`emit`]: a shrunk input written as a vector in the corpus format;
 //! - [`render`]: the results as text, JSON and HTML.
 
+pub mod direct;
 pub mod emit;
 pub mod generate;
 pub mod group;
@@ -61,6 +64,10 @@ pub struct Settings {
     /// Classes shrunk and written as vectors per group (the largest first); 0 shrinks none.
     #[serde(skip)]
     pub shrink: usize,
+    /// Ask the built-in models directly ([`direct`]) rather than through a trial per input;
+    /// the replies are the same.
+    #[serde(skip)]
+    pub direct: bool,
 }
 
 impl Settings {
@@ -74,6 +81,7 @@ impl Settings {
             jobs: std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get),
             max_classes: 64,
             shrink: 4,
+            direct: true,
         }
     }
 }
@@ -233,10 +241,20 @@ impl Sweep {
                     let in_process = &in_process;
                     scope.spawn(move || {
                         for (row, case) in rows.iter_mut().zip(cases) {
+                            let native = match (self.settings.direct, &self.shape) {
+                                (true, Some(shape)) => direct::native_input(shape, case).map(|i| {
+                                    let images = direct::Images::of(&i);
+                                    (i, images)
+                                }),
+                                _ => None,
+                            };
                             for &c in in_process {
-                                if let Some(trial) = case.trial(&columns[c]) {
-                                    row[c] = Some(Reply::of(&crate::runner::run_one(&trial)));
-                                }
+                                row[c] = if self.settings.direct {
+                                    direct::reply(&columns[c], case, native.as_ref())
+                                } else {
+                                    case.trial(&columns[c])
+                                        .map(|t| Reply::of(&crate::runner::run_one(&t)))
+                                };
                             }
                         }
                     });

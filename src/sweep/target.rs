@@ -82,6 +82,8 @@ pub struct Column {
     pub oracle: Option<usize>,
     /// A built-in reference model: run in process, point by point, without batching.
     pub in_process: bool,
+    /// Why the backend does not run this lowering, if it does not.
+    pub lowering_skip: Option<String>,
 }
 
 impl std::fmt::Debug for Column {
@@ -288,6 +290,7 @@ pub fn columns(
                             ask: Ask::Codec,
                             oracle: None,
                             in_process: false,
+                            lowering_skip: None,
                         });
                     }
                     continue;
@@ -309,6 +312,7 @@ pub fn columns(
                         ask: Ask::Lowering(l.clone()),
                         oracle: None,
                         in_process: reference(backend),
+                        lowering_skip: lowering_skip(backend, profile, l),
                     });
                 }
             }
@@ -332,6 +336,7 @@ pub fn columns(
                             ask: Ask::Instruction,
                             oracle: None,
                             in_process: reference(backend),
+                            lowering_skip: None,
                         });
                     }
                 }
@@ -366,6 +371,22 @@ pub fn columns(
         ));
     }
     Ok(out)
+}
+
+/// Why a backend does not run a lowering (the plan's rule: not claimed, or declined with the
+/// lowering's flags).
+fn lowering_skip(backend: &Arc<dyn Backend>, profile: &Profile, l: &Lowering) -> Option<String> {
+    if !backend.claims(&l.instruction, &l.variant) {
+        return Some(format!(
+            "{} does not implement {} on {}",
+            backend.name(),
+            l.instruction,
+            l.variant
+        ));
+    }
+    profile
+        .variant(&l.variant)
+        .and_then(|v| backend.declines(&l.flags, &l.instruction, v))
 }
 
 /// The sweep's cases for one point: shared by every column that asks it.
@@ -473,6 +494,8 @@ impl Cases {
             _ => return None,
         };
         let skip = match (&check, &column.profile) {
+            // A lowering's instruction, variant and flags are fixed: asked once per column.
+            (Check::CrossVendor { .. }, _) => column.lowering_skip.clone(),
             (Check::Codec { case }, _) => column
                 .backend
                 .codec()
