@@ -362,6 +362,14 @@ fn a_sweep_of_the_built_in_models_finds_every_behaviour_of_the_cross_vendor_corp
             found.len() > wanted.len(),
             "{op}: nothing beyond the corpus"
         );
+        for g in results.ordered() {
+            if !wanted.contains(&g.key.signature) {
+                eprintln!(
+                    "{op}: beyond the corpus: {} inputs {:?} {:?}, e.g. {}",
+                    g.inputs, g.key.signature, g.key.features, g.representative.point
+                );
+            }
+        }
     }
 }
 
