@@ -49,11 +49,12 @@ fn main() {
     if wanted("values") {
         values(&project, cores);
     }
-    if wanted("protocol") {
-        protocol(&mut project, root, if quick { 10_000 } else { 100_000 });
-    }
     if wanted("full") {
         full(&project, cores, if quick { 1 << 16 } else { 1 << 22 });
+    }
+    // Last: it adds an external backend to the project.
+    if wanted("protocol") {
+        protocol(&mut project, root, if quick { 10_000 } else { 100_000 });
     }
 }
 

@@ -63,6 +63,9 @@ pub struct Provenance {
     pub date: String,
 }
 
+/// What a backend did on one variant (and instruction) of a case, or why it cannot be recorded.
+type VariantEffect = (String, Result<Effect, String>);
+
 /// Runs every native case of the corpus that `backend` runs (and whose trial name contains
 /// `filter`) and works out the edits.
 pub fn record(
@@ -79,7 +82,7 @@ pub fn record(
         .filter(|t| filter.is_none_or(|f| t.name().contains(f)))
         .collect();
     // Per case: what the backend did on each trial.
-    let mut by_case: Vec<(Arc<Case>, Vec<(String, Result<Effect, String>)>)> = Vec::new();
+    let mut by_case: Vec<(Arc<Case>, Vec<VariantEffect>)> = Vec::new();
     for trial in &trials {
         let Check::Native { case, .. } = &trial.check else {
             continue;
@@ -161,7 +164,7 @@ fn effect_of(trial: &Trial) -> Result<Effect, String> {
     }
 }
 
-fn decide(case: &Case, results: &[(String, Result<Effect, String>)]) -> Change {
+fn decide(case: &Case, results: &[VariantEffect]) -> Change {
     let mut effect: Option<&Effect> = None;
     for (variant, r) in results {
         match r {

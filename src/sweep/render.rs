@@ -115,11 +115,19 @@ pub fn text(results: &Results) -> String {
         results.elapsed.as_secs_f64(),
         groups.len()
     );
-    let space = thousands(results.space);
+    if results.swept < results.space {
+        let _ = writeln!(
+            out,
+            "  (the whole space has {} {}; the counts below are of those swept)",
+            thousands(results.space),
+            what(results)
+        );
+    }
+    let swept = thousands(results.swept);
     for p in pairs(results) {
         let _ = writeln!(
             out,
-            "  {} and {} disagree on {} of {space} {}, in {} group(s)",
+            "  {} and {} disagree on {} of {swept} {}, in {} group(s)",
             p.a,
             p.b,
             thousands(p.inputs),
@@ -302,7 +310,7 @@ pub fn html(results: &Results) -> String {
             escape(&p.a),
             escape(&p.b),
             thousands(p.inputs),
-            thousands(results.space),
+            thousands(results.swept),
             p.groups
         );
     }
