@@ -6,7 +6,7 @@
 //! trial path (`runner::run_one`).
 
 use super::group::Reply;
-use super::target::{Ask, Cases, Column, Shape};
+use super::target::{Ask, Cases, Column};
 use crate::backend::{Request, Response};
 use crate::judge::lift::lift;
 use crate::judge::Effect;
@@ -23,17 +23,6 @@ impl Images {
             Image::new(input.before.clone(), Fill::B),
         ])
     }
-}
-
-/// The instruction input of an input for an instruction sweep (shared by its columns).
-pub fn native_input(shape: &Shape, cases: &Cases) -> Option<Input> {
-    let case = cases.native.as_ref()?;
-    Some(Input {
-        instruction: shape.instruction.clone(),
-        flags: case.flags.clone(),
-        operands: case.operands.clone(),
-        before: case.before.clone(),
-    })
 }
 
 /// One column's reply to one input. `native` is the instruction input and its images for an

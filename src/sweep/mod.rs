@@ -225,34 +225,39 @@ impl Sweep {
     /// The answers of every column to each point, in column order; `None` for a point the run
     /// was stopped before answering.
     pub fn answers(&self, points: &[(u64, Point)], stop: &AtomicBool) -> Vec<Option<Vec<Reply>>> {
-        let cases: Vec<Cases> = points
-            .iter()
-            .map(|(i, p)| Cases::new(&self.settings.target, self.shape.as_ref(), *i, p))
-            .collect();
         let n = self.columns.len();
         let mut out: Vec<Vec<Option<Reply>>> = vec![vec![None; n]; points.len()];
         let in_process: Vec<usize> = (0..n).filter(|&c| self.columns[c].in_process).collect();
+        let target = &self.settings.target;
         if !in_process.is_empty() {
             let jobs = self.settings.jobs.max(1);
             let per = points.len().div_ceil(jobs).max(1);
             std::thread::scope(|scope| {
-                for (rows, cases) in out.chunks_mut(per).zip(cases.chunks(per)) {
+                for (rows, points) in out.chunks_mut(per).zip(points.chunks(per)) {
                     let columns = &self.columns;
                     let in_process = &in_process;
                     scope.spawn(move || {
-                        for (row, case) in rows.iter_mut().zip(cases) {
+                        for (row, (i, point)) in rows.iter_mut().zip(points) {
+                            // An instruction asked directly needs only its input, made once for
+                            // every variant; the other ways need the point's cases.
                             let native = match (self.settings.direct, &self.shape) {
-                                (true, Some(shape)) => direct::native_input(shape, case).map(|i| {
-                                    let images = direct::Images::of(&i);
-                                    (i, images)
-                                }),
+                                (true, Some(shape)) => {
+                                    let input = shape.input(point);
+                                    let images = direct::Images::of(&input);
+                                    Some((input, images))
+                                }
                                 _ => None,
+                            };
+                            let cases = match native {
+                                Some(_) => Cases::none(),
+                                None => Cases::new(target, self.shape.as_ref(), *i, point),
                             };
                             for &c in in_process {
                                 row[c] = if self.settings.direct {
-                                    direct::reply(&columns[c], case, native.as_ref())
+                                    direct::reply(&columns[c], &cases, native.as_ref())
                                 } else {
-                                    case.trial(&columns[c])
+                                    cases
+                                        .trial(&columns[c])
                                         .map(|t| Reply::of(&crate::runner::run_one(&t)))
                                 };
                             }
@@ -263,6 +268,10 @@ impl Sweep {
         }
         let others: Vec<usize> = (0..n).filter(|&c| !self.columns[c].in_process).collect();
         if !others.is_empty() && !stop.load(Ordering::Relaxed) {
+            let cases: Vec<Cases> = points
+                .iter()
+                .map(|(i, p)| Cases::new(target, self.shape.as_ref(), *i, p))
+                .collect();
             let mut trials = Vec::new();
             let mut place = Vec::new();
             for (p, case) in cases.iter().enumerate() {

@@ -416,6 +416,14 @@ pub fn case_id(index: u64) -> String {
 }
 
 impl Cases {
+    /// No case: for a column asked directly from the instruction input.
+    pub fn none() -> Cases {
+        Cases {
+            cross_vendor: None,
+            native: None,
+        }
+    }
+
     pub fn new(target: &Target, shape: Option<&Shape>, index: u64, point: &Point) -> Cases {
         let id = case_id(index);
         match (target, shape) {
