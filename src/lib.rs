@@ -12,8 +12,9 @@
 //! - [`judge`]: turns observations into one [`judge::Verdict`] and applies known differences;
 //! - [`report`]: reporters fed by events render text, JSON, JUnit, HTML and matrices.
 //!
-//! [`runner`] drives the stages for a project, [`libtest`] maps them onto libtest trials for
-//! `cargo test` (and for emulators written in Rust), and [`cli`] is the command line;
+//! [`runner`] drives the stages for a project, [`sweep`] runs generated inputs through them and
+//! groups and shrinks what the backends disagree on, [`libtest`] maps them onto libtest trials
+//! for `cargo test` (and for emulators written in Rust), and [`cli`] is the command line;
 //! [`interrupt`] makes SIGINT and SIGTERM end a run with what it has and no backend running.
 //! [`device`], [`value`], [`memory`] and [`text`] are shared leaves.
 
@@ -28,8 +29,10 @@ pub mod load;
 pub mod memory;
 pub mod model;
 pub mod plan;
+pub mod record;
 pub mod report;
 pub mod runner;
 pub mod spec;
+pub mod sweep;
 pub mod text;
 pub mod value;

@@ -7,7 +7,9 @@
 
 mod backends;
 mod info;
+mod record;
 mod run;
+mod sweep;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -101,6 +103,12 @@ pub enum Command {
     },
     /// Print the manual page (roff), e.g. `plc-conformance man | man -l -`.
     Man,
+    /// Generate inputs for an operation or an instruction, run them on several backends, group
+    /// the inputs they disagree on by behaviour and shrink each group to a minimal vector.
+    Sweep(sweep::SweepArgs),
+    /// Write what a backend did into the vectors as `observed` expectations, with provenance;
+    /// fill in the outcome of `unspecified` cases; never overwrite a `manual` expectation.
+    Record(record::RecordArgs),
 }
 
 #[derive(Debug, clap::Args)]
@@ -241,6 +249,8 @@ pub fn main() -> ExitCode {
         Command::Serve { profile } => info::serve(&cli, profile),
         Command::Completions { shell } => info::completions(*shell),
         Command::Man => info::man(),
+        Command::Sweep(args) => sweep::sweep(&cli, args),
+        Command::Record(args) => record::record_command(&cli, args),
     };
     // An interrupted run ends as an interruption, whatever it found before.
     ExitCode::from(crate::interrupt::exit_status().unwrap_or(code))

@@ -198,6 +198,15 @@ fn read_case(key: &str, spec: &CaseSpec, h: &Header<'_>, cx: &mut FileContext<'_
     let before_count = cx.errors.len();
     check_id(key, &spec.id, cx);
     let cite = check_cite(key, spec.basis, spec.cite.as_deref(), cx);
+    if spec.provenance.is_some() && spec.basis != crate::model::Basis::Observed {
+        cx.error(
+            format!("{key}.provenance"),
+            LoadErrorKind::Invalid(format!(
+                "provenance belongs to an `observed` expectation, not a `{}` one",
+                spec.basis
+            )),
+        );
+    }
     if let Some(source) = &spec.source {
         check_source(&format!("{key}.source"), source, &h.profiles, cx);
     }

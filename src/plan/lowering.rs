@@ -8,7 +8,7 @@ use crate::model::Operand;
 use crate::text::pack_low_first;
 
 /// The input that runs `case` through `lowering`.
-pub(super) fn input(lowering: &Lowering, case: &CrossVendorCase) -> Input {
+pub fn input(lowering: &Lowering, case: &CrossVendorCase) -> Input {
     let mut operands = lowering.operands.clone();
     let mut count_word = None;
     if let Some(count) = &lowering.count {

@@ -10,6 +10,8 @@
 
 mod lowering;
 
+pub use lowering::input as lowered_input;
+
 use std::collections::BTreeMap;
 use std::sync::Arc;
 

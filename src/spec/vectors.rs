@@ -117,6 +117,29 @@ pub struct CaseSpec {
     /// Free text for readers.
     #[serde(default)]
     pub note: Option<String>,
+    /// Where an `observed` expectation was observed (written by `plc-conformance record`).
+    #[serde(default)]
+    pub provenance: Option<ProvenanceSpec>,
+}
+
+/// Where an `observed` expectation comes from: the backend that did it (a CPU reached through
+/// an adapter, an emulator), when, and on which model or firmware.
+#[derive(Debug, Clone, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ProvenanceSpec {
+    /// The backend's name, as `plc-conformance list` shows it.
+    pub backend: String,
+    /// What the backend says of itself, with its version.
+    #[serde(default)]
+    pub version: Option<String>,
+    /// The date of the recording, `YYYY-MM-DD`.
+    pub date: String,
+    /// The profile variants it ran on.
+    #[serde(default)]
+    pub variants: Vec<String>,
+    /// The model or firmware of those variants, from the profile.
+    #[serde(default)]
+    pub model: Option<String>,
 }
 
 /// The expected outcome: the words that change and the error signalled.

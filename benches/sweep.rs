@@ -1,0 +1,248 @@
+//! How fast sweeps go.
+//!
+//! `cargo bench --bench sweep` (add `-- --quick` for a smoke run, or a word to run only the
+//! measurements whose name contains it: `overhead`, `values`, `protocol`, `full`).
+//!
+//! - overhead: the same inputs through the sweep (plan, execute, judge, group) and through a
+//!   bare loop that only builds each request's memory and calls the reference model;
+//! - values: all 65,536 values through each value-to-hex instruction on every built-in variant;
+//! - protocol: generated inputs through `plc-conformance serve` (the native adapter), batched;
+//! - full: a shard of the 2^32 four-byte texts through every built-in hex-to-value lowering,
+//!   and the whole space extrapolated from it.
+//!
+//! Results: `docs/performance.md`, section "Sweeps".
+
+use std::path::Path;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+use std::time::Instant;
+
+use plc_conformance::backend::{Backend, Request};
+use plc_conformance::memory::{Fill, Image};
+use plc_conformance::model::cross_vendor::Operation;
+use plc_conformance::model::project::{ExternalSettings, Launch};
+use plc_conformance::plan::Input;
+use plc_conformance::runner::{Paths, Project};
+use plc_conformance::sweep::generate::Generator;
+use plc_conformance::sweep::group::Groups;
+use plc_conformance::sweep::input::Point;
+use plc_conformance::sweep::target::{Cases, Target};
+use plc_conformance::sweep::{Settings, Sweep};
+
+fn main() {
+    let quick = std::env::args().any(|a| a == "--quick");
+    let filter: Option<String> = std::env::args().skip(1).find(|a| !a.starts_with("--"));
+    let wanted = |name: &str| filter.as_deref().is_none_or(|f| name.contains(f));
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut project = match Project::load(&Paths::under(root)) {
+        Ok(p) => p,
+        Err(e) => {
+            eprintln!("the corpus does not load:\n{e}");
+            std::process::exit(2);
+        }
+    };
+    let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
+    println!("{cores} core(s); figures are the best of 3 rounds unless said otherwise");
+    if wanted("overhead") {
+        overhead(&project, if quick { 20_000 } else { 200_000 });
+    }
+    if wanted("values") {
+        values(&project, cores);
+    }
+    if wanted("full") {
+        full(&project, cores, if quick { 1 << 16 } else { 1 << 22 });
+    }
+    // Last: it adds an external backend to the project.
+    if wanted("protocol") {
+        protocol(&mut project, root, if quick { 10_000 } else { 100_000 });
+    }
+}
+
+fn best<T>(rounds: usize, mut f: impl FnMut() -> T) -> (f64, T) {
+    let mut best = f64::INFINITY;
+    let mut last = None;
+    for _ in 0..rounds {
+        let t = Instant::now();
+        let r = f();
+        best = best.min(t.elapsed().as_secs_f64());
+        last = Some(r);
+    }
+    (best, last.expect("one round"))
+}
+
+/// The sweep against the bare model loop, one thread each.
+fn overhead(project: &Project, count: u64) {
+    let mut settings = Settings::new(
+        Target::Operation {
+            operation: Operation::HexToValue,
+        },
+        Generator::Random { count, max_len: 8 },
+        1,
+    );
+    settings.jobs = 1;
+    settings.shrink = 0;
+    let sweep = Sweep::new(settings, &project.profiles, &project.backends).expect("sweep");
+    let points: Vec<(u64, Point)> = (0..count).map(|i| (i, sweep.space.point(i))).collect();
+    // The bare loop's inputs, made before timing: per point and column, the profile, variant,
+    // instruction, flags, operands and memory the plan gives.
+    let mut inputs: Vec<(usize, Input)> = Vec::new();
+    for (i, p) in &points {
+        let cases = Cases::new(&sweep.settings.target, None, *i, p);
+        for (c, column) in sweep.columns.iter().enumerate() {
+            if let Some(t) = cases.trial(column) {
+                inputs.push((c, (*t.input).clone()));
+            }
+        }
+    }
+    let (bare, answers) = best(3, || {
+        let mut n = 0usize;
+        for (c, input) in &inputs {
+            let column = &sweep.columns[*c];
+            let profile = column.profile.as_ref().expect("a lowering has a profile");
+            let variant = profile.variant(&column.variant).expect("variant");
+            for fill in Fill::ALL {
+                let image = Image::new(input.before.clone(), fill);
+                let req = Request {
+                    profile,
+                    variant,
+                    instruction: &input.instruction,
+                    case_id: "bench",
+                    flags: &input.flags,
+                    operands: &input.operands,
+                    memory: &image,
+                };
+                if column.backend.execute(&req).is_ok() {
+                    n += 1;
+                }
+            }
+        }
+        n
+    });
+    let stop = AtomicBool::new(false);
+    let (answering, _) = best(3, || sweep.answers(&points, &stop).len());
+    println!("overhead: of which answering (trials, execute, judge) {answering:.3} s");
+    let (swept, _) = best(3, || {
+        let mut groups = Groups::new(64);
+        let answers = sweep.answers(&points, &stop);
+        for ((i, p), r) in points.iter().zip(answers) {
+            if let Some(r) = r {
+                groups.add(&sweep.columns, true, *i, p, r);
+            }
+        }
+        groups.by_key.len()
+    });
+    println!(
+        "overhead: {count} random hex-to-value inputs x {} lowerings ({answers} model calls), one thread: \
+         bare model loop {bare:.3} s, sweep (trials, judge, grouping) {swept:.3} s: {:.2}x",
+        sweep.columns.len(),
+        swept / bare
+    );
+}
+
+/// Every 16-bit value through each value-to-hex instruction on every variant.
+fn values(project: &Project, cores: usize) {
+    let mut total = 0.0;
+    let mut all_flags = 0.0;
+    for (profile, instruction) in [
+        ("mitsubishi-iqr", "BINHA"),
+        ("mitsubishi-iqr", "DBINHA"),
+        ("mitsubishi-fx5", "ASCI"),
+        ("idec-fc4a", "HTOA"),
+    ] {
+        let mut settings = Settings::new(
+            Target::Instruction {
+                profile: profile.into(),
+                instruction: instruction.into(),
+            },
+            Generator::Values { bits: 16 },
+            1,
+        );
+        settings.jobs = cores;
+        settings.shrink = 0;
+        let mut sweep = Sweep::new(settings, &project.profiles, &project.backends).expect("sweep");
+        let flags = std::mem::take(&mut sweep.space.flags);
+        let (t, r) = best(3, || sweep.run(&AtomicBool::new(false), &mut |_, _| {}));
+        total += t;
+        println!(
+            "values: {instruction}: 65,536 values, default flags, on {} variant(s): {t:.3} s, {} groups",
+            sweep.columns.len(),
+            r.groups.by_key.len()
+        );
+        sweep.space.flags = flags;
+        let (t, r) = best(3, || sweep.run(&AtomicBool::new(false), &mut |_, _| {}));
+        all_flags += t;
+        println!(
+            "values: {instruction}: {} inputs (65,536 values x {} flag setting(s)) on {} variant(s): {t:.3} s, {} groups",
+            r.swept,
+            r.swept / 65_536,
+            sweep.columns.len(),
+            r.groups.by_key.len()
+        );
+    }
+    println!(
+        "values: all four instructions: {total:.3} s with default flags, {all_flags:.3} s with every flag setting"
+    );
+}
+
+/// Generated inputs through the native adapter, batched.
+fn protocol(project: &mut Project, root: &Path, count: u64) {
+    let mut settings = ExternalSettings::new(
+        "native",
+        Launch::Exec(vec![
+            env!("CARGO_BIN_EXE_plc-conformance").to_string(),
+            "--root".into(),
+            root.display().to_string(),
+            "serve".into(),
+            "--profile".into(),
+            "mitsubishi-iqr".into(),
+        ]),
+    );
+    settings.timeout = std::time::Duration::from_secs(30);
+    let native = project.add_external(settings, false).expect("serve starts") as Arc<dyn Backend>;
+    let mut s = Settings::new(
+        Target::Instruction {
+            profile: "mitsubishi-iqr".into(),
+            instruction: "HABIN".into(),
+        },
+        Generator::Random { count, max_len: 8 },
+        1,
+    );
+    s.shrink = 0;
+    let sweep = Sweep::new(s, &project.profiles, &[native]).expect("sweep");
+    let (t, r) = best(3, || sweep.run(&AtomicBool::new(false), &mut |_, _| {}));
+    let trials = r.swept * sweep.columns.len() as u64;
+    println!(
+        "protocol: {} HABIN inputs x {} variants through `serve`, batched: {t:.3} s, {:.0} trials/s, {:.0} cases/s (a case is one request: a trial under one fill)",
+        r.swept,
+        sweep.columns.len(),
+        trials as f64 / t,
+        2.0 * trials as f64 / t
+    );
+}
+
+/// A shard of the 2^32 four-byte texts through every built-in hex-to-value lowering.
+fn full(project: &Project, cores: usize, texts: u64) {
+    let shards = (1u64 << 32) / texts;
+    let mut settings = Settings::new(
+        Target::Operation {
+            operation: Operation::HexToValue,
+        },
+        Generator::Full,
+        1,
+    );
+    settings.jobs = cores;
+    settings.shrink = 0;
+    settings.shard = (1, shards);
+    let sweep = Sweep::new(settings, &project.profiles, &project.backends).expect("sweep");
+    let (t, r) = best(1, || sweep.run(&AtomicBool::new(false), &mut |_, _| {}));
+    println!(
+        "full: shard 1/{shards} of the 2^32 texts ({} texts) x {} lowerings: {t:.2} s, {:.0} texts/s; \
+         the whole space at this rate: {:.0} s ({:.1} min), {} groups",
+        r.swept,
+        sweep.columns.len(),
+        r.swept as f64 / t,
+        t * shards as f64,
+        t * shards as f64 / 60.0,
+        r.groups.by_key.len()
+    );
+}

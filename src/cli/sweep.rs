@@ -1,0 +1,392 @@
+//! `sweep`: generated inputs on several backends, disagreements grouped, shrunk and written as
+//! vectors.
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+use anstream::{eprintln, println};
+
+use super::backends::{prepare, Prepared};
+use super::{BackendArgs, Cli, EXIT_BAD_INPUT, EXIT_DIFFERENCES, EXIT_OK};
+use crate::backend::Backend;
+use crate::model::cross_vendor::Operation;
+use crate::sweep::generate::{Digits, Generator, BOUNDARIES};
+use crate::sweep::target::Target;
+use crate::sweep::{emit, render, Settings, Sweep};
+
+/// What `sweep` takes.
+#[derive(Debug, clap::Args)]
+pub struct SweepArgs {
+    /// Sweep a cross-vendor operation: every lowering of every backend, and codecs.
+    #[arg(long, value_enum, conflicts_with = "instruction")]
+    pub operation: Option<OperationArg>,
+    /// Sweep one instruction (HABIN, ASCI, ATOH, ...) on every variant of its profile.
+    #[arg(long, value_name = "NAME")]
+    pub instruction: Option<String>,
+    /// The instruction's profile, when several have it.
+    #[arg(long, value_name = "ID")]
+    pub profile: Option<String>,
+    /// The generator [default: text for text-reading targets, values for the others].
+    #[arg(long, value_enum)]
+    pub generator: Option<GeneratorArg>,
+    /// Seed of the random generator (printed with the results) [default: from the clock].
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Inputs of the random generator.
+    #[arg(long, default_value_t = 100_000)]
+    pub count: u64,
+    /// Longest text: the text generator's (default 4) or the random one's (default 8).
+    #[arg(long, value_name = "N")]
+    pub length: Option<u32>,
+    /// The text generator's alphabet: bytes as `20H` or single characters, comma-separated
+    /// [default: 00H,20H,2FH,0,9,3AH,40H,A,F,47H,60H,a,f,67H,7FH,80H,FFH].
+    #[arg(long, value_name = "LIST")]
+    pub alphabet: Option<String>,
+    /// Digit counts to give: `natural` (the text's length, the value's width) or a list and
+    /// ranges such as `0-6` or `1,4,8`.
+    #[arg(long, default_value = "natural")]
+    pub digits: String,
+    /// Run shard K of N (1-based): every N-th input from the K-th; the shards of a sweep
+    /// together are the whole sweep.
+    #[arg(long, value_name = "K/N", default_value = "1/1")]
+    pub shard: String,
+    /// Backends to sweep besides the reference models (which are always there, as the oracle):
+    /// a name or `external:NAME=COMMAND`, as for `run`; repeat for several.
+    #[arg(long = "backend", value_name = "NAME")]
+    pub backends: Vec<String>,
+    /// Seconds an `external:` backend may take to answer one case.
+    #[arg(long, value_name = "SECONDS", default_value_t = 5.0)]
+    pub timeout: f64,
+    /// Threads for the built-in models [default: the number of CPUs].
+    #[arg(short = 'j', long, value_name = "N")]
+    pub jobs: Option<usize>,
+    /// Classes of each group shrunk to a minimal input (the largest first).
+    #[arg(long, value_name = "N", default_value_t = 4)]
+    pub shrink: usize,
+    /// Results format.
+    #[arg(long, value_enum, default_value_t = SweepFormat::Text)]
+    pub format: SweepFormat,
+    /// Write the results to this file instead of standard output.
+    #[arg(long, value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    /// Write the shrunk inputs as a vector file (cross-vendor for an operation).
+    #[arg(long, value_name = "FILE")]
+    pub emit: Option<PathBuf>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum OperationArg {
+    HexToValue,
+    ValueToHex,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum GeneratorArg {
+    /// Every 16-bit value.
+    Values,
+    /// 32-bit values: the lattice of digits 0, 1, 9, A, F and every boundary.
+    Values32,
+    /// Every text of length 1..--length over --alphabet.
+    Text,
+    /// --count random inputs from --seed.
+    Random,
+    /// All 2^32 texts of 4 bytes.
+    Full,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum SweepFormat {
+    Text,
+    Json,
+    Html,
+}
+
+/// Set by Ctrl-C: the sweep stops after the round under way and reports what it found.
+static STOP: AtomicBool = AtomicBool::new(false);
+
+#[cfg(unix)]
+extern "C" fn on_interrupt(_: libc::c_int) {
+    STOP.store(true, Ordering::Relaxed);
+    // A second Ctrl-C ends the process at once.
+    // SAFETY: restoring the default disposition is async-signal-safe.
+    unsafe {
+        libc::signal(libc::SIGINT, libc::SIG_DFL);
+    }
+}
+
+fn catch_interrupt() {
+    #[cfg(unix)]
+    // SAFETY: the handler only stores to an atomic and resets the disposition.
+    unsafe {
+        libc::signal(
+            libc::SIGINT,
+            on_interrupt as extern "C" fn(libc::c_int) as libc::sighandler_t,
+        );
+    }
+}
+
+pub fn sweep(cli: &Cli, args: &SweepArgs) -> u8 {
+    match run(cli, args) {
+        Ok(code) => code,
+        Err(message) => {
+            eprintln!("error: {message}");
+            EXIT_BAD_INPUT
+        }
+    }
+}
+
+fn run(cli: &Cli, args: &SweepArgs) -> Result<u8, String> {
+    let backend_args = BackendArgs {
+        backends: args.backends.clone(),
+        timeout: args.timeout,
+        known_differences: Vec::new(),
+        filter: None,
+        vectors: Vec::new(),
+        jobs: args.jobs,
+        max_faults: crate::model::project::DEFAULT_MAX_CONSECUTIVE_FAULTS,
+        allow_empty: false,
+        fail_fast: false,
+    };
+    let Prepared {
+        project, backends, ..
+    } = if args.backends.is_empty() {
+        // Only the reference models: no external backend of the project file is started.
+        let paths = super::backends::paths(cli, &[], "--vectors")
+            .map_err(|_| "the project's data is not found".to_string())?;
+        let project =
+            super::backends::load(&paths).map_err(|_| "the project does not load".to_string())?;
+        let backends = project.backends.clone();
+        Prepared {
+            file: Default::default(),
+            project,
+            backends,
+        }
+    } else {
+        prepare(cli, &backend_args).map_err(|_| "the backends could not be started".to_string())?
+    };
+    let target = match (&args.operation, &args.instruction) {
+        (Some(OperationArg::HexToValue), _) => Target::Operation {
+            operation: Operation::HexToValue,
+        },
+        (Some(OperationArg::ValueToHex), _) => Target::Operation {
+            operation: Operation::ValueToHex,
+        },
+        (None, Some(instruction)) => {
+            let profile = match &args.profile {
+                Some(p) => p.clone(),
+                None => {
+                    let having: Vec<String> = project
+                        .profiles
+                        .iter()
+                        .filter(|p| p.instructions.contains_key(instruction))
+                        .map(|p| p.id.clone())
+                        .collect();
+                    match having.as_slice() {
+                        [one] => one.clone(),
+                        [] => return Err(format!("no profile has an instruction `{instruction}`")),
+                        many => {
+                            return Err(format!(
+                                "several profiles have {instruction} ({}): give --profile",
+                                many.join(", ")
+                            ))
+                        }
+                    }
+                }
+            };
+            Target::Instruction {
+                profile,
+                instruction: instruction.clone(),
+            }
+        }
+        (None, None) => {
+            return Err("give --operation hex-to-value|value-to-hex or --instruction NAME".into())
+        }
+    };
+    // The reference models are always there: they are the oracle.
+    let mut chosen: Vec<Arc<dyn Backend>> = Vec::new();
+    for b in project
+        .backends
+        .iter()
+        .filter(|b| project.profiles.iter().any(|p| p.short == b.name()))
+    {
+        chosen.push(b.clone());
+    }
+    for b in backends {
+        if !chosen.iter().any(|c| c.name() == b.name()) {
+            chosen.push(b);
+        }
+    }
+    let reads_text = match &target {
+        Target::Operation { operation } => *operation == Operation::HexToValue,
+        Target::Instruction {
+            profile,
+            instruction,
+        } => project
+            .profiles
+            .get(profile)
+            .and_then(|p| crate::sweep::target::Shape::of(p, instruction).ok())
+            .is_none_or(|s| s.reads == Operation::HexToValue),
+    };
+    let generator = match args.generator {
+        Some(GeneratorArg::Values) => Generator::Values { bits: 16 },
+        Some(GeneratorArg::Values32) => Generator::Values { bits: 32 },
+        Some(GeneratorArg::Text) => text_generator(args)?,
+        Some(GeneratorArg::Random) => Generator::Random {
+            count: args.count,
+            max_len: args.length.unwrap_or(8),
+        },
+        Some(GeneratorArg::Full) => Generator::Full,
+        None if reads_text => text_generator(args)?,
+        None => Generator::Values { bits: 16 },
+    };
+    let seed = args.seed.unwrap_or_else(|| {
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(1, |d| d.as_secs())
+    });
+    let mut settings = Settings::new(target, generator, seed);
+    settings.digits = digits(&args.digits)?;
+    settings.shard = shard(&args.shard)?;
+    settings.shrink = args.shrink;
+    if let Some(j) = args.jobs {
+        settings.jobs = j.max(1);
+    }
+    let sweep = Sweep::new(settings, &project.profiles, &chosen)?;
+    catch_interrupt();
+    let bar = std::io::stderr().is_terminal().then(|| {
+        let bar = indicatif::ProgressBar::new(sweep.space.total());
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{elapsed_precise} [{bar:40}] {human_pos}/{human_len} inputs ({per_sec}, eta {eta})",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+            .progress_chars("=> "),
+        );
+        bar
+    });
+    eprintln!(
+        "sweeping {} with the {} generator, seed {} (--seed {} repeats it): {} input(s) in this shard",
+        sweep.settings.target,
+        sweep.settings.generator.name(),
+        sweep.settings.seed,
+        sweep.settings.seed,
+        render::thousands(sweep.space.total().div_ceil(sweep.settings.shard.1))
+    );
+    let results = sweep.run(&STOP, &mut |done, of| {
+        if let Some(bar) = &bar {
+            bar.set_length(of);
+            bar.set_position(done);
+        }
+    });
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    if results.interrupted {
+        eprintln!(
+            "interrupted: {} of {} inputs swept; what was found so far follows",
+            render::thousands(results.swept),
+            render::thousands(results.shard_inputs)
+        );
+    }
+    let rendered = match args.format {
+        SweepFormat::Text => render::text(&results),
+        SweepFormat::Json => render::json(&results),
+        SweepFormat::Html => render::html(&results),
+    };
+    match &args.output {
+        Some(path) => std::fs::write(path, &rendered)
+            .map_err(|e| format!("cannot write {}: {e}", path.display()))?,
+        None => println!("{}", rendered.trim_end()),
+    }
+    if let Some(path) = &args.emit {
+        let emitted = emit::emit(&sweep, &results, &project.corpus);
+        for why in &emitted.skipped {
+            eprintln!("note: not written as a vector: {why}");
+        }
+        std::fs::write(path, &emitted.yaml)
+            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+        eprintln!("wrote {} vector(s) to {}", emitted.cases, path.display());
+    }
+    Ok(if results.differs() {
+        EXIT_DIFFERENCES
+    } else {
+        EXIT_OK
+    })
+}
+
+fn text_generator(args: &SweepArgs) -> Result<Generator, String> {
+    let alphabet = match &args.alphabet {
+        Some(list) => alphabet(list)?,
+        None => BOUNDARIES.to_vec(),
+    };
+    Ok(Generator::Text {
+        alphabet,
+        max_len: args.length.unwrap_or(4),
+    })
+}
+
+/// `20H,0,9,a` -> bytes.
+pub fn alphabet(list: &str) -> Result<Vec<u8>, String> {
+    let mut out = Vec::new();
+    for item in list.split(',').filter(|s| !s.is_empty()) {
+        let byte = if item.chars().count() == 1 {
+            u8::try_from(item.chars().next().unwrap_or('\0'))
+                .map_err(|_| format!("`{item}` is not one byte"))?
+        } else {
+            let hex = item
+                .strip_suffix('H')
+                .or_else(|| item.strip_suffix('h'))
+                .ok_or_else(|| format!("`{item}`: give a byte as `20H` or one character"))?;
+            u8::from_str_radix(hex, 16).map_err(|_| format!("`{item}` is not a byte"))?
+        };
+        if !out.contains(&byte) {
+            out.push(byte);
+        }
+    }
+    if out.is_empty() {
+        return Err("the alphabet is empty".into());
+    }
+    Ok(out)
+}
+
+/// `natural`, or `0-6`, `1,4,8`.
+pub fn digits(spec: &str) -> Result<Digits, String> {
+    if spec == "natural" {
+        return Ok(Digits::Natural);
+    }
+    let mut out = Vec::new();
+    for part in spec.split(',').filter(|s| !s.is_empty()) {
+        let bad = || format!("--digits `{part}`: expected a count, a range `0-6` or `natural`");
+        match part.split_once('-') {
+            Some((a, b)) => {
+                let (a, b): (u32, u32) =
+                    (a.parse().map_err(|_| bad())?, b.parse().map_err(|_| bad())?);
+                out.extend(a..=b);
+            }
+            None => out.push(part.parse().map_err(|_| bad())?),
+        }
+    }
+    if let Some(d) = out
+        .iter()
+        .find(|d| **d > crate::sweep::generate::MAX_DIGITS)
+    {
+        return Err(format!(
+            "--digits {d}: at most {}",
+            crate::sweep::generate::MAX_DIGITS
+        ));
+    }
+    Ok(Digits::Each(out))
+}
+
+/// `K/N`.
+pub fn shard(spec: &str) -> Result<(u64, u64), String> {
+    let bad = || format!("--shard `{spec}`: expected K/N with 1 <= K <= N, like 2/8");
+    let (k, n) = spec.split_once('/').ok_or_else(bad)?;
+    let (k, n): (u64, u64) = (k.parse().map_err(|_| bad())?, n.parse().map_err(|_| bad())?);
+    if k == 0 || n == 0 || k > n {
+        return Err(bad());
+    }
+    Ok((k, n))
+}

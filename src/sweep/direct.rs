@@ -1,0 +1,122 @@
+//! The built-in reference models asked directly: the same request the plan and the executor
+//! would make for a trial (the plan's lowering, both fills), answered by the model's
+//! `Backend::execute`, and recorded as the judge records an `unspecified` case — without
+//! building a trial per input. An instruction's memory images are built once per input and
+//! shared by every variant. `tests/sweep.rs` checks that this gives exactly the replies of the
+//! trial path (`runner::run_one`).
+
+use super::group::Reply;
+use super::target::{Ask, Cases, Column};
+use crate::backend::{Request, Response};
+use crate::judge::lift::lift;
+use crate::judge::Effect;
+use crate::memory::{Fill, Image};
+use crate::plan::{lowered_input, Input};
+
+/// The memory of one input under both fills.
+pub struct Images([Image; 2]);
+
+impl Images {
+    pub fn of(input: &Input) -> Images {
+        Images([
+            Image::new(input.before.clone(), Fill::A),
+            Image::new(input.before.clone(), Fill::B),
+        ])
+    }
+}
+
+/// One column's reply to one input. `native` is the instruction input and its images for an
+/// instruction sweep; a lowering makes its own.
+pub fn reply(column: &Column, cases: &Cases, native: Option<&(Input, Images)>) -> Option<Reply> {
+    let profile = column.profile.as_ref()?;
+    let variant = profile.variant(&column.variant)?;
+    let lowered;
+    let own_images;
+    let (input, images, lowering, digits) = match (&column.ask, native) {
+        (Ask::Lowering(l), _) => {
+            let case = cases.cross_vendor.as_ref()?;
+            if let Some(why) = &column.lowering_skip {
+                return Some(Reply::Skipped {
+                    reason: why.clone(),
+                });
+            }
+            lowered = lowered_input(l, case);
+            own_images = Images::of(&lowered);
+            (&lowered, &own_images, Some(l), case.digits)
+        }
+        (Ask::Instruction, Some((input, images))) => {
+            if !column.backend.claims(&input.instruction, &column.variant) {
+                return Some(Reply::Skipped {
+                    reason: format!(
+                        "{} does not implement {} on {}",
+                        column.backend.name(),
+                        input.instruction,
+                        column.variant
+                    ),
+                });
+            }
+            if let Some(why) = column.backend.declines(&crate::backend::Setting {
+                instruction: &input.instruction,
+                variant,
+                flags: &input.flags,
+                operands: &input.operands,
+            }) {
+                return Some(Reply::Skipped { reason: why });
+            }
+            (input, images, None, 0)
+        }
+        _ => return None,
+    };
+    let mut outcomes = Vec::with_capacity(2);
+    for image in &images.0 {
+        let request = Request {
+            profile,
+            variant,
+            instruction: &input.instruction,
+            case_id: "sweep",
+            flags: &input.flags,
+            operands: &input.operands,
+            memory: image,
+        };
+        match column.backend.execute(&request) {
+            Ok(Response::Done(o)) => outcomes.push(o),
+            Ok(Response::Unsupported(reason)) => {
+                return Some(Reply::Failed {
+                    label: "unsupported".into(),
+                    detail: reason,
+                })
+            }
+            Ok(Response::Answer(_)) => {
+                return Some(Reply::Failed {
+                    label: "protocol-error".into(),
+                    detail: "a codec answer answered an instruction request".into(),
+                })
+            }
+            Err(fault) => {
+                return Some(Reply::Failed {
+                    label: fault.kind().to_string(),
+                    detail: fault.to_string(),
+                })
+            }
+        }
+    }
+    let [a, b] = &images.0;
+    Some(match lowering {
+        Some(l) => {
+            let first = lift(profile, l, digits, &outcomes[0], a);
+            let second = lift(profile, l, digits, &outcomes[1], b);
+            Reply::Answer {
+                fill_dependent: first != second,
+                answer: first,
+            }
+        }
+        None => {
+            let first = Effect::of(a, &outcomes[0]);
+            let second = Effect::of(b, &outcomes[1]);
+            Reply::Memory {
+                fill_dependent: first != second,
+                effect: first,
+            }
+        }
+    })
+}

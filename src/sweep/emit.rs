@@ -1,0 +1,401 @@
+//! Writing shrunk inputs as vectors in the corpus format: a cross-vendor file for an operation
+//! sweep, a vector file for an instruction sweep. The expectation is what the reference models
+//! answered; the basis is `inferred` (the models' rules are readings of the manuals, cited in
+//! `docs/semantics.md`), never `manual`: a person who finds the page adds the citation. The
+//! cite records the generator, the seed, the input found and every column's answer.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+use super::group::{Found, Reply};
+use super::input::{Data, Point};
+use super::target::{Ask, Column, Target};
+use super::{Results, Sweep};
+use crate::model::cross_vendor::{Answer, Operation};
+use crate::model::{Corpus, ErrorSignal, Operand};
+use crate::value::hex_word;
+
+/// A vector file holding one case per shrunk input that can be written, and the inputs that
+/// could not be (with why).
+pub struct Emitted {
+    pub yaml: String,
+    pub cases: usize,
+    pub skipped: Vec<String>,
+}
+
+/// The vector file of a sweep's shrunk inputs.
+pub fn emit(sweep: &Sweep, results: &Results, corpus: &Corpus) -> Emitted {
+    let mut body = String::new();
+    let mut skipped = Vec::new();
+    let mut cases = 0;
+    let mut seen = std::collections::HashSet::new();
+    for s in &results.shrunk {
+        if !seen.insert(s.to.point.clone()) {
+            continue;
+        }
+        let made = match &sweep.settings.target {
+            Target::Operation { operation } => {
+                cross_vendor_case(sweep, results, *operation, &s.from, &s.to)
+            }
+            Target::Instruction { .. } => native_case(sweep, results, &s.from, &s.to),
+        };
+        match made {
+            Ok(text) => {
+                body.push_str(&text);
+                cases += 1;
+            }
+            Err(why) => skipped.push(format!("{}: {why}", s.to.point)),
+        }
+    }
+    let header = match &sweep.settings.target {
+        Target::Operation { operation } => format!(
+            "# yaml-language-server: $schema=../../schema/cross-vendor.schema.json\n\
+             # Written by `plc-conformance sweep`: {}.\n\
+             operation: {operation}\n\
+             source: \"plc-conformance sweep of the reference models; their rules: docs/semantics.md#cross-vendor\"\n\
+             cases:\n",
+            settings_line(results)
+        ),
+        Target::Instruction {
+            profile,
+            instruction,
+        } => {
+            let (manual, page) = corpus
+                .cases
+                .iter()
+                .find(|c| c.instructions.iter().any(|i| i == instruction) && c.profiles.iter().any(|p| p == profile))
+                .map(|c| (c.citation.manual.clone(), c.citation.page.clone()))
+                .or_else(|| {
+                    sweep
+                        .shape
+                        .as_ref()
+                        .and_then(|s| s.profile.manuals.keys().next().cloned())
+                        .map(|m| (m, "see the cite".to_string()))
+                })
+                .unwrap_or_default();
+            format!(
+                "# yaml-language-server: $schema=../../schema/vectors.schema.json\n\
+                 # Written by `plc-conformance sweep`: {}.\n\
+                 instructions: [{instruction}]\n\
+                 profiles: [{profile}]\n\
+                 source: {{manual: {manual}, page: {}}}\n\
+                 cases:\n",
+                settings_line(results),
+                quote_str(&page)
+            )
+        }
+    };
+    Emitted {
+        yaml: format!("{header}{body}"),
+        cases,
+        skipped,
+    }
+}
+
+fn settings_line(results: &Results) -> String {
+    let s = &results.settings;
+    format!(
+        "{} generator, seed {}, shard {}/{}",
+        s.generator.name(),
+        s.seed,
+        s.shard.0,
+        s.shard.1
+    )
+}
+
+/// A stable id from the input.
+fn id(prefix: &str, point: &Point) -> String {
+    let mut h: u64 = 0xCBF2_9CE4_8422_2325;
+    for b in format!("{point}").bytes() {
+        h ^= u64::from(b);
+        h = h.wrapping_mul(0x0100_0000_01B3);
+    }
+    format!("sweep-{prefix}-{:08x}", h as u32)
+}
+
+fn answers_line(columns: &[Column], replies: &[Reply]) -> String {
+    columns
+        .iter()
+        .zip(replies)
+        .map(|(c, r)| format!("{} {r}", c.name))
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+fn provenance(results: &Results, from: &Found, to: &Found, columns: &[Column]) -> String {
+    let s = &results.settings;
+    let shrunk = if from.point == to.point {
+        String::new()
+    } else {
+        format!(", shrunk from {}", from.point)
+    };
+    format!(
+        "found by plc-conformance sweep ({} generator, seed {}, input {}{shrunk}); answers: {}",
+        s.generator.name(),
+        s.seed,
+        from.index,
+        answers_line(columns, &to.replies)
+    )
+}
+
+fn cross_vendor_case(
+    sweep: &Sweep,
+    results: &Results,
+    operation: Operation,
+    from: &Found,
+    to: &Found,
+) -> Result<String, String> {
+    // The reference models' answers, by lowering key.
+    let mut by_key: Vec<(String, Answer)> = Vec::new();
+    for (c, r) in sweep.columns.iter().zip(&to.replies) {
+        let Ask::Lowering(l) = &c.ask else { continue };
+        if !c.in_process {
+            continue;
+        }
+        match r {
+            Reply::Answer {
+                answer,
+                fill_dependent: false,
+            } if !matches!(answer, Answer::OtherError(_)) => {
+                by_key.push((l.key.clone(), answer.clone()))
+            }
+            other => {
+                return Err(format!(
+                    "{} answered {other}, which a vector cannot expect",
+                    c.name
+                ))
+            }
+        }
+    }
+    if by_key.is_empty() {
+        return Err("no reference model answered it: nothing to expect".into());
+    }
+    let mut counts: BTreeMap<&Answer, usize> = BTreeMap::new();
+    for (_, a) in &by_key {
+        *counts.entry(a).or_default() += 1;
+    }
+    let most = by_key
+        .iter()
+        .map(|(_, a)| a)
+        .max_by_key(|a| counts[a])
+        .cloned()
+        .unwrap_or(Answer::Value(0));
+    let mut y = String::new();
+    let _ = writeln!(y, "  - id: {}", id(&operation.to_string(), &to.point));
+    let _ = writeln!(y, "    basis: inferred");
+    let _ = writeln!(
+        y,
+        "    cite: {}",
+        quote_str(&format!(
+            "each lowering's answer is its reference model's (docs/semantics.md#cross-vendor); {}",
+            provenance(results, from, to, &sweep.columns)
+        ))
+    );
+    match &to.point.data {
+        Data::Text(t) => {
+            let _ = writeln!(y, "    text: {}", quote(t));
+        }
+        Data::Value(v) => {
+            let _ = writeln!(y, "    value: {}", hex_value(*v));
+        }
+    }
+    let _ = writeln!(y, "    digits: {}", to.point.digits);
+    let _ = writeln!(y, "    expect: {{{}}}", answer_yaml(&most));
+    let except: Vec<&(String, Answer)> = by_key.iter().filter(|(_, a)| *a != most).collect();
+    if !except.is_empty() {
+        let _ = writeln!(y, "    except:");
+        for (key, a) in except {
+            let _ = writeln!(
+                y,
+                "      {key}: {{{}, why: {}}}",
+                answer_yaml(a),
+                quote_str(&format!("the reference model's answer through {key}"))
+            );
+        }
+    }
+    Ok(y)
+}
+
+fn native_case(
+    sweep: &Sweep,
+    results: &Results,
+    from: &Found,
+    to: &Found,
+) -> Result<String, String> {
+    let shape = sweep.shape.as_ref().ok_or("no instruction")?;
+    // The variants where a column differs from its oracle, with the oracle's effect there.
+    let mut expect: Option<&crate::judge::Effect> = None;
+    let mut variants = Vec::new();
+    for (i, c) in sweep.columns.iter().enumerate() {
+        let Some(o) = c.oracle else { continue };
+        let (mine, theirs) = (&to.replies[i], &to.replies[o]);
+        if mine.is_skipped() || theirs.is_skipped() || mine == theirs {
+            continue;
+        }
+        let Reply::Memory {
+            effect,
+            fill_dependent: false,
+        } = theirs
+        else {
+            return Err(format!(
+                "the oracle {} answered {theirs}",
+                sweep.columns[o].name
+            ));
+        };
+        match expect {
+            None => expect = Some(effect),
+            Some(e) if e != effect => continue,
+            Some(_) => {}
+        }
+        if !variants.contains(&c.variant) {
+            variants.push(c.variant.clone());
+        }
+    }
+    let effect = expect.ok_or("no column differs from its oracle")?;
+    let input = shape.input(&to.point);
+    let mut y = String::new();
+    let _ = writeln!(
+        y,
+        "  - id: {}",
+        id(&shape.instruction.to_lowercase(), &to.point)
+    );
+    let _ = writeln!(y, "    basis: inferred");
+    let _ = writeln!(
+        y,
+        "    cite: {}",
+        quote_str(&format!(
+            "the expectation is the reference model of {} (its rules: docs/semantics.md#evidence); {}",
+            shape.profile.id,
+            provenance(results, from, to, &sweep.columns)
+        ))
+    );
+    let _ = writeln!(y, "    variants: [{}]", variants.join(", "));
+    if !input.flags.is_empty() {
+        let flags: Vec<String> = input
+            .flags
+            .iter()
+            .map(|(f, on)| format!("{f}: {}", if *on { "on" } else { "off" }))
+            .collect();
+        let _ = writeln!(y, "    flags: {{{}}}", flags.join(", "));
+    }
+    let operands: Vec<String> = input
+        .operands
+        .iter()
+        .map(|(n, o)| match o {
+            Operand::Device(d) => format!("{n}: {d}"),
+            Operand::Constant(k) => format!("{n}: K{k}"),
+        })
+        .collect();
+    let _ = writeln!(y, "    operands: {{{}}}", operands.join(", "));
+    let source = input
+        .operands
+        .get(&shape.source)
+        .and_then(|o| match o {
+            Operand::Device(d) => Some(d.clone()),
+            Operand::Constant(_) => None,
+        })
+        .ok_or("the source is not a device")?;
+    // Words past the device range cannot be set by a vector (a CPU has none): they are left out,
+    // and the text is then given word by word.
+    let exists = |d: &crate::device::Device| shape.profile.word_exists_anywhere(d);
+    let whole = input.before.keys().all(exists);
+    if input.before.keys().any(exists) {
+        let _ = writeln!(y, "    before:");
+    } else {
+        let _ = writeln!(y, "    before: {{}}");
+    }
+    match &to.point.data {
+        Data::Text(t) if whole => {
+            let mut text = t.clone();
+            text.push(0);
+            let key = match shape.layout(&to.point.flags) {
+                crate::model::cross_vendor::TextLayout::Packed => "ascii",
+                crate::model::cross_vendor::TextLayout::Words => "ascii_words",
+            };
+            let _ = writeln!(y, "      {source}: {{{key}: {}}}", quote(&text));
+        }
+        _ => {
+            for (d, w) in input.before.iter().filter(|(d, _)| exists(d)) {
+                let _ = writeln!(y, "      {d}: {}", hex_word(*w));
+            }
+        }
+    }
+    let _ = writeln!(y, "    expect:");
+    let after: Vec<String> = effect
+        .changed
+        .iter()
+        .map(|(d, w)| format!("{d}: {}", hex_word(*w)))
+        .collect();
+    let _ = writeln!(y, "      after: {{{}}}", after.join(", "));
+    let _ = writeln!(
+        y,
+        "      error: {}",
+        match &effect.error {
+            None => "none".to_string(),
+            Some(ErrorSignal::Code(c)) => hex_word(*c),
+            Some(ErrorSignal::Flag(d)) => d.to_string(),
+        }
+    );
+    Ok(y)
+}
+
+fn hex_value(v: u64) -> String {
+    format!("{v:04X}H")
+}
+
+fn answer_yaml(a: &Answer) -> String {
+    match a {
+        Answer::Value(v) => format!("value: {}", hex_value(*v)),
+        Answer::Text(t) => format!("text: {}", quote(t)),
+        Answer::Error(c) => format!("error: {c}"),
+        Answer::OtherError(e) => format!("error: {e}"),
+    }
+}
+
+/// A YAML double-quoted string of bytes, one character per byte (`\xHH` above 7EH).
+pub fn quote(bytes: &[u8]) -> String {
+    let mut s = String::from("\"");
+    for &b in bytes {
+        match b {
+            b'"' => s.push_str("\\\""),
+            b'\\' => s.push_str("\\\\"),
+            0 => s.push_str("\\0"),
+            0x20..=0x7E => s.push(b as char),
+            _ => {
+                let _ = write!(s, "\\x{b:02X}");
+            }
+        }
+    }
+    s.push('"');
+    s
+}
+
+/// A YAML double-quoted string of text: characters kept, quotes, backslashes and control
+/// characters escaped.
+pub fn quote_str(text: &str) -> String {
+    let mut s = String::from("\"");
+    for c in text.chars() {
+        match c {
+            '"' => s.push_str("\\\""),
+            '\\' => s.push_str("\\\\"),
+            c if (c as u32) < 0x20 || c == '\u{7F}' => {
+                let _ = write!(s, "\\x{:02X}", c as u32);
+            }
+            c => s.push(c),
+        }
+    }
+    s.push('"');
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quoting_keeps_every_byte() {
+        assert_eq!(quote(b"5A\"\\"), "\"5A\\\"\\\\\"");
+        assert_eq!(quote(&[0, 0x09, 0xEF]), "\"\\0\\x09\\xEF\"");
+        assert_eq!(quote_str("例 \"a\"\t"), "\"例 \\\"a\\\"\\x09\"");
+    }
+}

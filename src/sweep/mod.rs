@@ -1,0 +1,400 @@
+//! Differential sweeps: generated inputs run on several backends, the inputs on which they
+//! disagree grouped by behaviour, each group shrunk to a minimal input and written back as a
+//! vector.
+//!
+//! A sweep is built on the pipeline, not beside it. Every generated input becomes an
+//! `unspecified` case — a cross-vendor case for an operation, a native case for an instruction —
+//! and each column (a backend through a lowering, or on a variant) runs it as a
+//! [`crate::plan::Trial`]: the plan's lowering makes its memory and operands, the executor runs
+//! it under both fills, and the judge records what the backend did as a
+//! [`crate::judge::Verdict`]. External backends get the trials through [`crate::runner::run`]
+//! with a [`crate::report::Reporter`] that keeps the verdicts, batched as in any run and stopped
+//! by the same flag. The built-in reference models run in process, spread over threads: each
+//! input's request is made as the plan makes it and answered by the model directly
+//! ([`direct`]), because millions of inputs would otherwise spend their time building trials
+//! rather than in the models; `Settings::direct = false` runs them as trials with
+//! [`crate::runner::run_one`] instead, with the same replies.
+//!
+//! - [`generate`]: the generators, each a numbered space of inputs ([`generate::Space`]);
+//! - [`target`]: what is swept (an operation or an instruction) and the columns;
+//! - [`group`]: answers reduced to behaviour signatures and counted;
+//! - [`shrink`]: a group's inputs reduced to the simplest that behaves the same;
+//! - [`emit`]: a shrunk input written as a vector in the corpus format;
+//! - [`render`]: the results as text, JSON and HTML.
+
+pub mod direct;
+pub mod emit;
+pub mod generate;
+pub mod group;
+pub mod input;
+pub mod render;
+pub mod rng;
+pub mod shrink;
+pub mod target;
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use serde::Serialize;
+
+use crate::backend::Backend;
+use crate::model::profile::Profiles;
+use crate::report::{Event, Reporter};
+use generate::{shard_indices, Digits, Generator, Space};
+use group::{Found, Groups, Reply};
+use input::Point;
+use target::{columns, Cases, Column, Shape, Target};
+
+/// What to sweep and how.
+#[derive(Debug, Clone, Serialize)]
+pub struct Settings {
+    pub target: Target,
+    pub generator: Generator,
+    pub seed: u64,
+    pub digits: Digits,
+    /// `(k, n)`: run the k-th of n shards (1-based); `(1, 1)` is the whole sweep.
+    pub shard: (u64, u64),
+    /// Threads for the built-in models, backends side by side for the others.
+    #[serde(skip)]
+    pub jobs: usize,
+    /// Classes counted separately per group.
+    #[serde(skip)]
+    pub max_classes: usize,
+    /// Classes shrunk and written as vectors per group (the largest first); 0 shrinks none.
+    #[serde(skip)]
+    pub shrink: usize,
+    /// Ask the built-in models directly ([`direct`]) rather than through a trial per input;
+    /// the replies are the same.
+    #[serde(skip)]
+    pub direct: bool,
+}
+
+impl Settings {
+    pub fn new(target: Target, generator: Generator, seed: u64) -> Settings {
+        Settings {
+            target,
+            generator,
+            seed,
+            digits: Digits::Natural,
+            shard: (1, 1),
+            jobs: std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get),
+            max_classes: 64,
+            shrink: 4,
+            direct: true,
+        }
+    }
+}
+
+/// A sweep ready to run: its columns and its space of inputs.
+pub struct Sweep {
+    pub settings: Settings,
+    pub columns: Vec<Column>,
+    pub shape: Option<Shape>,
+    pub space: Space,
+}
+
+/// A column as the results name it.
+#[derive(Debug, Clone, Serialize)]
+pub struct ColumnInfo {
+    pub name: String,
+    pub backend: String,
+    pub description: String,
+    /// The column it is judged against.
+    pub oracle: Option<String>,
+}
+
+/// A group's input reduced to the simplest one that behaves the same.
+#[derive(Debug, Clone, Serialize)]
+pub struct Shrunk {
+    /// The group's place in [`Results::groups`] order.
+    pub group: usize,
+    pub class: String,
+    pub from: Found,
+    pub to: Found,
+}
+
+/// What a sweep found.
+#[derive(Debug, Serialize)]
+pub struct Results {
+    pub settings: Settings,
+    pub columns: Vec<ColumnInfo>,
+    /// Inputs in the whole space (every shard).
+    pub space: u64,
+    /// Inputs in this shard.
+    pub shard_inputs: u64,
+    /// Inputs run (all of the shard unless interrupted).
+    pub swept: u64,
+    pub interrupted: bool,
+    #[serde(skip)]
+    pub elapsed: Duration,
+    /// The groups, in [`Groups::sorted`] order.
+    #[serde(skip)]
+    pub groups: Groups,
+    pub shrunk: Vec<Shrunk>,
+}
+
+impl Results {
+    /// The groups in report order.
+    pub fn ordered(&self) -> Vec<&group::Group> {
+        self.groups.sorted()
+    }
+
+    /// Whether any column differs from its oracle.
+    pub fn differs(&self) -> bool {
+        self.groups.by_key.values().any(|g| !g.differing.is_empty())
+    }
+}
+
+/// Inputs per round for a sweep with an external backend (one `runner::run` each).
+const CHUNK_EXTERNAL: usize = 4096;
+/// Inputs per round for the built-in models only.
+const CHUNK_IN_PROCESS: usize = 1 << 16;
+
+impl Sweep {
+    /// Sets up a sweep of `settings.target` on `backends`. The reference model of each profile
+    /// involved should be among them: it is the oracle.
+    pub fn new(
+        settings: Settings,
+        profiles: &Profiles,
+        backends: &[Arc<dyn Backend>],
+    ) -> Result<Sweep, String> {
+        let shape = match &settings.target {
+            Target::Instruction {
+                profile,
+                instruction,
+            } => {
+                let p = profiles
+                    .get(profile)
+                    .ok_or_else(|| format!("no profile `{profile}`"))?;
+                Some(Shape::of(p, instruction)?)
+            }
+            Target::Operation { .. } => None,
+        };
+        let columns = columns(&settings.target, profiles, backends)?;
+        let reads = settings.target.reads(shape.as_ref());
+        let text = reads == crate::model::cross_vendor::Operation::HexToValue;
+        if text != settings.generator.makes_text() && settings.generator.name() != "random" {
+            return Err(format!(
+                "the {} generator makes {}, but {} reads {}",
+                settings.generator.name(),
+                if settings.generator.makes_text() {
+                    "texts"
+                } else {
+                    "values"
+                },
+                settings.target,
+                if text { "text" } else { "a value" }
+            ));
+        }
+        let counted = match &shape {
+            Some(s) => s.count.is_some(),
+            None => true,
+        };
+        let mut space = Space::new(
+            settings.generator.clone(),
+            settings.seed,
+            settings.digits.clone(),
+            counted,
+        );
+        space.reads_text = text;
+        if let Some(s) = &shape {
+            space.flags = s.flags.clone();
+            space.value_bits = 16 * s.words;
+            space.range_ends = range_ends(s);
+        } else {
+            space.value_bits = 32;
+        }
+        let (k, n) = settings.shard;
+        if n == 0 || k == 0 || k > n {
+            return Err(format!("shard {k}/{n}: give K/N with 1 <= K <= N"));
+        }
+        Ok(Sweep {
+            settings,
+            columns,
+            shape,
+            space,
+        })
+    }
+
+    /// Whether the target takes a digit count.
+    pub fn counted(&self) -> bool {
+        self.space.counted
+    }
+
+    /// The answers of every column to each point, in column order; `None` for a point the run
+    /// was stopped before answering.
+    pub fn answers(&self, points: &[(u64, Point)], stop: &AtomicBool) -> Vec<Option<Vec<Reply>>> {
+        let n = self.columns.len();
+        let mut out: Vec<Vec<Option<Reply>>> = vec![vec![None; n]; points.len()];
+        let in_process: Vec<usize> = (0..n).filter(|&c| self.columns[c].in_process).collect();
+        let target = &self.settings.target;
+        if !in_process.is_empty() {
+            let jobs = self.settings.jobs.max(1);
+            let per = points.len().div_ceil(jobs).max(1);
+            std::thread::scope(|scope| {
+                for (rows, points) in out.chunks_mut(per).zip(points.chunks(per)) {
+                    let columns = &self.columns;
+                    let in_process = &in_process;
+                    scope.spawn(move || {
+                        for (row, (i, point)) in rows.iter_mut().zip(points) {
+                            // An instruction asked directly needs only its input, made once for
+                            // every variant; the other ways need the point's cases.
+                            let native = match (self.settings.direct, &self.shape) {
+                                (true, Some(shape)) => {
+                                    let input = shape.input(point);
+                                    let images = direct::Images::of(&input);
+                                    Some((input, images))
+                                }
+                                _ => None,
+                            };
+                            let cases = match native {
+                                Some(_) => Cases::none(),
+                                None => Cases::new(target, self.shape.as_ref(), *i, point),
+                            };
+                            for &c in in_process {
+                                row[c] = if self.settings.direct {
+                                    direct::reply(&columns[c], &cases, native.as_ref())
+                                } else {
+                                    cases
+                                        .trial(&columns[c])
+                                        .map(|t| Reply::of(&crate::runner::run_one(&t)))
+                                };
+                            }
+                        }
+                    });
+                }
+            });
+        }
+        let others: Vec<usize> = (0..n).filter(|&c| !self.columns[c].in_process).collect();
+        if !others.is_empty() && !stop.load(Ordering::Relaxed) {
+            let cases: Vec<Cases> = points
+                .iter()
+                .map(|(i, p)| Cases::new(target, self.shape.as_ref(), *i, p))
+                .collect();
+            let mut trials = Vec::new();
+            let mut place = Vec::new();
+            for (p, case) in cases.iter().enumerate() {
+                for &c in &others {
+                    if let Some(t) = case.trial(&self.columns[c]) {
+                        trials.push(t);
+                        place.push((p, c));
+                    }
+                }
+            }
+            let mut keep = Keep {
+                place: &place,
+                out: &mut out,
+            };
+            crate::runner::run(&trials, self.settings.jobs.max(1), stop, &mut keep);
+        }
+        out.into_iter()
+            .map(|row| row.into_iter().collect::<Option<Vec<Reply>>>())
+            .collect()
+    }
+
+    /// Runs the sweep (this shard of it), calling `progress(done, of)` after each round, then
+    /// shrinks the groups. A set `stop` ends it after the round under way, with what was found.
+    pub fn run(&self, stop: &AtomicBool, progress: &mut dyn FnMut(u64, u64)) -> Results {
+        let started = Instant::now();
+        let total = self.space.total();
+        let (k, n) = self.settings.shard;
+        let shard_inputs = total.saturating_sub(k - 1).div_ceil(n);
+        let chunk = if self.columns.iter().all(|c| c.in_process) {
+            CHUNK_IN_PROCESS
+        } else {
+            CHUNK_EXTERNAL
+        };
+        let mut groups = Groups::new(self.settings.max_classes);
+        let mut swept = 0u64;
+        let mut indices = shard_indices(total, self.settings.shard);
+        let mut interrupted = false;
+        progress(0, shard_inputs);
+        loop {
+            if stop.load(Ordering::Relaxed) {
+                interrupted = swept < shard_inputs;
+                break;
+            }
+            let points: Vec<(u64, Point)> = indices
+                .by_ref()
+                .take(chunk)
+                .map(|i| (i, self.space.point(i)))
+                .collect();
+            if points.is_empty() {
+                break;
+            }
+            let answers = self.answers(&points, stop);
+            for ((index, point), replies) in points.iter().zip(answers) {
+                if let Some(replies) = replies {
+                    groups.add(&self.columns, self.counted(), *index, point, replies);
+                    swept += 1;
+                }
+            }
+            progress(swept, shard_inputs);
+        }
+        let mut results = Results {
+            settings: self.settings.clone(),
+            columns: self.column_info(),
+            space: total,
+            shard_inputs,
+            swept,
+            interrupted,
+            elapsed: started.elapsed(),
+            groups,
+            shrunk: Vec::new(),
+        };
+        if !stop.load(Ordering::Relaxed) {
+            results.shrunk = shrink::shrink_groups(self, &results, stop);
+        }
+        results.elapsed = started.elapsed();
+        results
+    }
+
+    pub fn column_info(&self) -> Vec<ColumnInfo> {
+        self.columns
+            .iter()
+            .map(|c| ColumnInfo {
+                name: c.name.clone(),
+                backend: c.backend.name().to_string(),
+                description: c.backend.describe(),
+                oracle: c.oracle.map(|o| self.columns[o].name.clone()),
+            })
+            .collect()
+    }
+}
+
+/// Keeps each verdict of a batched run as a reply in its place.
+struct Keep<'a> {
+    place: &'a [(usize, usize)],
+    out: &'a mut Vec<Vec<Option<Reply>>>,
+}
+
+impl Reporter for Keep<'_> {
+    fn event(&mut self, event: &Event<'_>) {
+        if let Event::TrialFinished { index, verdict, .. } = event {
+            if let Some(&(p, c)) = self.place.get(*index) {
+                self.out[p][c] = Some(Reply::of(verdict));
+            }
+        }
+    }
+}
+
+/// The last words of each range of the source's device code on every variant: where the
+/// random generator puts an operand to reach the end of a device range.
+fn range_ends(shape: &Shape) -> Vec<crate::device::Device> {
+    let Some(head) = shape.device(&shape.source) else {
+        return Vec::new();
+    };
+    let mut ends: Vec<u32> = shape
+        .profile
+        .variants
+        .iter()
+        .filter_map(|v| shape.profile.ranges(v, &head.code))
+        .flat_map(|r| r.iter().map(|r| r.last).collect::<Vec<_>>())
+        .collect();
+    ends.sort_unstable();
+    ends.dedup();
+    ends.into_iter()
+        .map(|i| crate::device::Device::new(head.code.clone(), i))
+        .collect()
+}

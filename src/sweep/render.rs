@@ -1,0 +1,346 @@
+//! A sweep's results for people (text, HTML) and for tools (a JSON document of groups).
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+use serde::Serialize;
+
+use super::group::{Class, Found, Group};
+use super::{ColumnInfo, Results, Settings, Shrunk};
+
+/// How many inputs two columns disagree on.
+#[derive(Debug, Clone, Serialize)]
+pub struct Pair {
+    pub a: String,
+    pub b: String,
+    pub inputs: u64,
+    pub groups: usize,
+}
+
+/// Every pair of columns that disagree somewhere, in column order. Columns that did not run an
+/// input (skipped) do not count as disagreeing on it.
+pub fn pairs(results: &Results) -> Vec<Pair> {
+    let n = results.columns.len();
+    let mut out = Vec::new();
+    for a in 0..n {
+        for b in a + 1..n {
+            let mut inputs = 0;
+            let mut groups = 0;
+            for g in results.groups.by_key.values() {
+                let (x, y) = (&g.key.signature[a], &g.key.signature[b]);
+                if x != y && x != "skipped" && y != "skipped" {
+                    inputs += g.inputs;
+                    groups += 1;
+                }
+            }
+            if groups > 0 {
+                out.push(Pair {
+                    a: results.columns[a].name.clone(),
+                    b: results.columns[b].name.clone(),
+                    inputs,
+                    groups,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// `1234567` as `1,234,567`.
+pub fn thousands(n: u64) -> String {
+    let s = n.to_string();
+    let mut out = String::new();
+    for (i, c) in s.chars().enumerate() {
+        if i > 0 && (s.len() - i) % 3 == 0 {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+fn found_line(columns: &[ColumnInfo], f: &Found) -> String {
+    let answers: Vec<String> = columns
+        .iter()
+        .zip(&f.replies)
+        .map(|(c, r)| format!("{} {r}", c.name))
+        .collect();
+    format!("{} -> {}", f.point, answers.join(", "))
+}
+
+fn what(results: &Results) -> &'static str {
+    if results.settings.generator.makes_text() && results.settings.generator.name() != "random" {
+        "texts"
+    } else {
+        "inputs"
+    }
+}
+
+/// The results as text: the settings, the disagreements between columns, then every group
+/// with its classes and shrunk inputs.
+pub fn text(results: &Results) -> String {
+    let mut out = String::new();
+    let s = &results.settings;
+    let _ = writeln!(
+        out,
+        "sweep of {}: {} generator, seed {}, shard {}/{}",
+        s.target,
+        s.generator.name(),
+        s.seed,
+        s.shard.0,
+        s.shard.1
+    );
+    for c in &results.columns {
+        match &c.oracle {
+            Some(o) => {
+                let _ = writeln!(out, "  column {} (judged against {o})", c.name);
+            }
+            None => {
+                let _ = writeln!(out, "  column {}", c.name);
+            }
+        }
+    }
+    let groups = results.ordered();
+    let _ = writeln!(
+        out,
+        "{} of {} {} swept{} in {:.1} s: {} behaviour(s)",
+        thousands(results.swept),
+        thousands(results.shard_inputs),
+        what(results),
+        if results.interrupted {
+            " (interrupted)"
+        } else {
+            ""
+        },
+        results.elapsed.as_secs_f64(),
+        groups.len()
+    );
+    if results.swept < results.space {
+        let _ = writeln!(
+            out,
+            "  (the whole space has {} {}; the counts below are of those swept)",
+            thousands(results.space),
+            what(results)
+        );
+    }
+    let swept = thousands(results.swept);
+    for p in pairs(results) {
+        let _ = writeln!(
+            out,
+            "  {} and {} disagree on {} of {swept} {}, in {} group(s)",
+            p.a,
+            p.b,
+            thousands(p.inputs),
+            what(results),
+            p.groups
+        );
+    }
+    let shrunk = shrunk_by_group(&results.shrunk);
+    for (i, g) in groups.iter().enumerate() {
+        let _ = writeln!(out);
+        group_text(&mut out, results, i, g, shrunk.get(&i).map(Vec::as_slice));
+    }
+    out
+}
+
+fn shrunk_by_group(shrunk: &[Shrunk]) -> BTreeMap<usize, Vec<&Shrunk>> {
+    let mut by: BTreeMap<usize, Vec<&Shrunk>> = BTreeMap::new();
+    for s in shrunk {
+        by.entry(s.group).or_default().push(s);
+    }
+    by
+}
+
+fn group_text(
+    out: &mut String,
+    results: &Results,
+    i: usize,
+    g: &Group,
+    shrunk: Option<&[&Shrunk]>,
+) {
+    let _ = writeln!(
+        out,
+        "#{} {} input(s) in {}{} class(es) [{}]",
+        i + 1,
+        thousands(g.inputs),
+        g.classes.len(),
+        if g.classes.len() >= results.groups.max_classes {
+            "+"
+        } else {
+            ""
+        },
+        g.key.features.join("; ")
+    );
+    if !g.differing.is_empty() {
+        let _ = writeln!(
+            out,
+            "   differs from its oracle: {}",
+            g.differing.join(", ")
+        );
+    }
+    let sig: Vec<String> = results
+        .columns
+        .iter()
+        .zip(&g.key.signature)
+        .map(|(c, l)| format!("{}={l}", c.name))
+        .collect();
+    let _ = writeln!(out, "   {}", sig.join("  "));
+    let _ = writeln!(
+        out,
+        "   first: {}",
+        found_line(&results.columns, &g.representative)
+    );
+    for s in shrunk.unwrap_or_default() {
+        let _ = writeln!(
+            out,
+            "   shrunk ({}): {}",
+            s.class,
+            found_line(&results.columns, &s.to)
+        );
+    }
+}
+
+/// The JSON document: settings, columns, counts, every group with its classes, the pairs of
+/// columns that disagree, and the shrunk inputs.
+#[derive(Serialize)]
+pub struct Document<'a> {
+    pub tool: String,
+    pub settings: &'a Settings,
+    pub columns: &'a [ColumnInfo],
+    pub space: u64,
+    pub shard_inputs: u64,
+    pub swept: u64,
+    pub interrupted: bool,
+    pub elapsed_seconds: f64,
+    pub pairs: Vec<Pair>,
+    pub groups: Vec<GroupDoc<'a>>,
+}
+
+#[derive(Serialize)]
+pub struct GroupDoc<'a> {
+    pub number: usize,
+    pub inputs: u64,
+    pub features: &'a [String],
+    /// Per column, the class of its answer.
+    pub signature: BTreeMap<&'a str, &'a str>,
+    pub differing: &'a [String],
+    pub disagree: bool,
+    pub representative: &'a Found,
+    pub classes: Vec<&'a Class>,
+    pub shrunk: Vec<&'a Shrunk>,
+}
+
+pub fn document(results: &Results) -> Document<'_> {
+    let shrunk = shrunk_by_group(&results.shrunk);
+    Document {
+        tool: format!("plc-conformance {}", env!("CARGO_PKG_VERSION")),
+        settings: &results.settings,
+        columns: &results.columns,
+        space: results.space,
+        shard_inputs: results.shard_inputs,
+        swept: results.swept,
+        interrupted: results.interrupted,
+        elapsed_seconds: results.elapsed.as_secs_f64(),
+        pairs: pairs(results),
+        groups: results
+            .ordered()
+            .into_iter()
+            .enumerate()
+            .map(|(i, g)| GroupDoc {
+                number: i + 1,
+                inputs: g.inputs,
+                features: &g.key.features,
+                signature: results
+                    .columns
+                    .iter()
+                    .map(|c| c.name.as_str())
+                    .zip(g.key.signature.iter().map(String::as_str))
+                    .collect(),
+                differing: &g.differing,
+                disagree: g.disagree,
+                representative: &g.representative,
+                classes: g.classes_by_size(),
+                shrunk: shrunk.get(&i).cloned().unwrap_or_default(),
+            })
+            .collect(),
+    }
+}
+
+pub fn json(results: &Results) -> String {
+    serde_json::to_string_pretty(&document(results)).unwrap_or_default()
+}
+
+fn escape(t: &str) -> String {
+    t.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// One self-contained HTML page: the pairs that disagree and a table of the groups.
+pub fn html(results: &Results) -> String {
+    let mut out = String::from(
+        "<!doctype html>\n<html><head><meta charset=\"utf-8\"><title>plc-conformance sweep</title>\
+         <style>body{font-family:sans-serif;margin:2em}table{border-collapse:collapse}\
+         td,th{border:1px solid #ccc;padding:2px 6px;font-family:monospace;font-size:90%}\
+         tr.differs td{background:#fee}</style></head><body>\n",
+    );
+    let s = &results.settings;
+    let _ = writeln!(
+        out,
+        "<h1>Sweep of {}</h1><p>{} generator, seed {}, shard {}/{}: {} of {} inputs{}.</p>",
+        escape(&s.target.to_string()),
+        s.generator.name(),
+        s.seed,
+        s.shard.0,
+        s.shard.1,
+        thousands(results.swept),
+        thousands(results.shard_inputs),
+        if results.interrupted {
+            " (interrupted)"
+        } else {
+            ""
+        }
+    );
+    out.push_str("<h2>Disagreements</h2><ul>\n");
+    for p in pairs(results) {
+        let _ = writeln!(
+            out,
+            "<li>{} and {}: {} of {} inputs, {} group(s)</li>",
+            escape(&p.a),
+            escape(&p.b),
+            thousands(p.inputs),
+            thousands(results.swept),
+            p.groups
+        );
+    }
+    out.push_str("</ul><h2>Groups</h2><table><tr><th>#</th><th>inputs</th><th>features</th>");
+    for c in &results.columns {
+        let _ = write!(out, "<th>{}</th>", escape(&c.name));
+    }
+    out.push_str("<th>first input</th></tr>\n");
+    for (i, g) in results.ordered().into_iter().enumerate() {
+        let _ = write!(
+            out,
+            "<tr{}><td>{}</td><td>{}</td><td>{}</td>",
+            if g.differing.is_empty() {
+                ""
+            } else {
+                " class=\"differs\""
+            },
+            i + 1,
+            thousands(g.inputs),
+            escape(&g.key.features.join("; "))
+        );
+        for r in &g.representative.replies {
+            let _ = write!(out, "<td>{}</td>", escape(&r.to_string()));
+        }
+        let _ = writeln!(
+            out,
+            "<td>{}</td></tr>",
+            escape(&g.representative.point.to_string())
+        );
+    }
+    out.push_str("</table></body></html>\n");
+    out
+}

@@ -1,0 +1,601 @@
+//! Sweeps: deterministic from their seed, shrinking to minimal inputs that still differ,
+//! emitting vectors that load and fail where the backend differs, split into shards whose union
+//! is the whole, stopped cleanly by the stop flag, and catching mutants no hand-written vector
+//! targets.
+
+mod common;
+
+use std::collections::BTreeSet;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+use common::{failing_trials, reference, root, scratch, session, Mutant};
+use plc_conformance::backend::{Backend, Request};
+use plc_conformance::load::{load_corpus, load_profiles};
+use plc_conformance::memory::Image;
+use plc_conformance::model::cross_vendor::Operation;
+use plc_conformance::runner::{Paths, Project};
+use plc_conformance::sweep::generate::{Digits, Generator};
+use plc_conformance::sweep::group::{labels, Groups};
+use plc_conformance::sweep::input::{Data, Point};
+use plc_conformance::sweep::shrink::candidates;
+use plc_conformance::sweep::target::Target;
+use plc_conformance::sweep::{emit, render, Results, Settings, Sweep};
+
+fn no_stop() -> AtomicBool {
+    AtomicBool::new(false)
+}
+
+fn operation(op: Operation) -> Target {
+    Target::Operation { operation: op }
+}
+
+fn instruction(profile: &str, name: &str) -> Target {
+    Target::Instruction {
+        profile: profile.into(),
+        instruction: name.into(),
+    }
+}
+
+fn run(project: &Project, backends: &[Arc<dyn Backend>], settings: Settings) -> (Sweep, Results) {
+    let sweep = Sweep::new(settings, &project.profiles, backends).expect("sweep sets up");
+    let results = sweep.run(&no_stop(), &mut |_, _| {});
+    (sweep, results)
+}
+
+/// What a run found, without its timing.
+fn summary(r: &Results) -> Vec<String> {
+    let mut out: Vec<String> = r
+        .ordered()
+        .iter()
+        .map(|g| {
+            format!(
+                "{:?} {:?} {} {} {}",
+                g.key.signature,
+                g.key.features,
+                g.inputs,
+                g.representative.index,
+                g.classes.len()
+            )
+        })
+        .collect();
+    out.extend(
+        r.shrunk
+            .iter()
+            .map(|s| format!("{} -> {}", s.from.point, s.to.point)),
+    );
+    out
+}
+
+/// A mutant of a reference model that reads every byte `from` of the source as `to`.
+fn reads_byte_as(
+    name: &'static str,
+    base: &Arc<dyn Backend>,
+    instructions: &'static [&'static str],
+    rewrite: fn(u16) -> u16,
+) -> Arc<dyn Backend> {
+    Mutant::new(name, base, move |req: &Request<'_>, base: &dyn Backend| {
+        if !instructions.contains(&req.instruction) {
+            return base.execute(req);
+        }
+        let words = req
+            .memory
+            .explicit()
+            .iter()
+            .map(|(d, w)| (d.clone(), rewrite(*w)))
+            .collect();
+        let image = Image::new(words, req.memory.fill());
+        base.execute(&Request {
+            memory: &image,
+            ..*req
+        })
+    })
+}
+
+fn tilde_as_zero(w: u16) -> u16 {
+    let [lo, hi] = w.to_le_bytes();
+    let f = |b: u8| if b == b'~' { b'0' } else { b };
+    u16::from_le_bytes([f(lo), f(hi)])
+}
+
+#[test]
+fn the_same_seed_gives_the_same_results() {
+    let project = session();
+    let mut settings = Settings::new(
+        operation(Operation::HexToValue),
+        Generator::Random {
+            count: 3000,
+            max_len: 6,
+        },
+        11,
+    );
+    settings.jobs = 2;
+    let (_, a) = run(&project, &project.backends, settings.clone());
+    settings.jobs = 1;
+    let (_, b) = run(&project, &project.backends, settings.clone());
+    assert_eq!(summary(&a), summary(&b));
+    settings.seed = 12;
+    let (_, c) = run(&project, &project.backends, settings);
+    assert_ne!(summary(&a), summary(&c), "another seed, other inputs");
+}
+
+#[test]
+fn a_mutant_shrinks_to_a_minimal_input_that_still_differs_and_emits_a_failing_vector() {
+    let project = session();
+    let iqr = reference(&project, "mitsubishi-iqr");
+    let mutant = Mutant::new("accepts-lowercase", &iqr, |req, base| {
+        if !req.instruction.contains("HABIN") {
+            return base.execute(req);
+        }
+        let words = req
+            .memory
+            .explicit()
+            .iter()
+            .map(|(d, w)| {
+                let [lo, hi] = w.to_le_bytes();
+                let up = |b: u8| {
+                    if (b'a'..=b'f').contains(&b) {
+                        b - 0x20
+                    } else {
+                        b
+                    }
+                };
+                (d.clone(), u16::from_le_bytes([up(lo), up(hi)]))
+            })
+            .collect();
+        let image = Image::new(words, req.memory.fill());
+        base.execute(&Request {
+            memory: &image,
+            ..*req
+        })
+    });
+    let mut settings = Settings::new(
+        instruction("mitsubishi-iqr", "HABIN"),
+        Generator::Random {
+            count: 4000,
+            max_len: 6,
+        },
+        5,
+    );
+    settings.shrink = 1;
+    let (sweep, results) = run(&project, &[iqr.clone(), mutant.clone()], settings);
+    assert!(results.differs(), "the mutant was not caught");
+    let lower: Vec<_> = results
+        .shrunk
+        .iter()
+        .filter(|s| s.to.point.features(false) == vec!["first non-digit: lowercase a-f"])
+        .collect();
+    assert!(
+        !lower.is_empty(),
+        "no lowercase group: {:#?}",
+        summary(&results)
+    );
+    for s in &lower {
+        let Data::Text(t) = &s.to.point.data else {
+            panic!("a text")
+        };
+        // At most the four characters HABIN reads, one of them lowercase, the rest '0' (with
+        // SM705 on, "a" alone ended by 00H).
+        assert!(t.len() <= 4, "{}", s.to.point);
+        let others: Vec<u8> = t.iter().copied().filter(|&b| b != b'0').collect();
+        assert!(
+            others.len() == 1 && others[0].is_ascii_lowercase(),
+            "{}",
+            s.to.point
+        );
+        // Still the same disagreement ...
+        let again = sweep.answers(&[(0, s.to.point.clone())], &no_stop());
+        let replies = again[0].clone().expect("answered");
+        assert_eq!(labels(&replies), labels(&s.from.replies));
+        // ... and no simpler neighbour keeps it.
+        let here = s.to.point.simplicity();
+        let simpler: Vec<(u64, Point)> = candidates(&s.to.point, false)
+            .into_iter()
+            .filter(|p| p.simplicity() < here)
+            .map(|p| (0, p))
+            .collect();
+        for ((_, p), r) in simpler.iter().zip(sweep.answers(&simpler, &no_stop())) {
+            let r = r.expect("answered");
+            assert!(
+                labels(&r) != labels(&replies) || p.features(false) != s.to.point.features(false),
+                "{p} is simpler than {} and behaves the same",
+                s.to.point
+            );
+        }
+    }
+    // Emitted, the vectors load, pass on the reference model and fail on the mutant.
+    let emitted = emit::emit(&sweep, &results, &project.corpus);
+    assert!(emitted.cases > 0, "{:?}", emitted.skipped);
+    let scratch_dir = scratch();
+    let dir = scratch_dir.path().to_path_buf();
+    let file = dir.join("habin-sweep.yaml");
+    std::fs::write(&file, &emitted.yaml).expect("write");
+    let out = common::cli(&["validate", file.to_str().expect("utf-8")]);
+    assert!(
+        out.status.success(),
+        "{}\n{}",
+        String::from_utf8_lossy(&out.stderr),
+        emitted.yaml
+    );
+    let profiles = load_profiles(&root().join("vendors")).expect("profiles");
+    let corpus = load_corpus(std::slice::from_ref(&file), &profiles).expect("emitted corpus loads");
+    assert!(corpus
+        .cases
+        .iter()
+        .all(|c| c.basis != plc_conformance::model::Basis::Manual));
+    let emitted_project = Project {
+        profiles,
+        corpus,
+        backends: Vec::new(),
+        known: Default::default(),
+    };
+    assert!(failing_trials(&emitted_project, &iqr).is_empty());
+    assert!(!failing_trials(&emitted_project, &mutant).is_empty());
+}
+
+#[test]
+fn the_shards_of_a_sweep_are_the_whole_sweep() {
+    let project = session();
+    let mut settings = Settings::new(
+        operation(Operation::ValueToHex),
+        Generator::Random {
+            count: 2000,
+            max_len: 0,
+        },
+        3,
+    );
+    settings.shrink = 0;
+    let (_, whole) = run(&project, &project.backends, settings.clone());
+    let mut merged = Groups::new(settings.max_classes);
+    let mut swept = 0;
+    for k in 1..=3 {
+        settings.shard = (k, 3);
+        let (_, part) = run(&project, &project.backends, settings.clone());
+        swept += part.swept;
+        merged.merge(part.groups);
+    }
+    assert_eq!(swept, whole.swept);
+    let count = |g: &Groups| -> BTreeSet<String> {
+        g.by_key
+            .values()
+            .map(|g| {
+                format!(
+                    "{:?} {:?} {} {}",
+                    g.key,
+                    g.inputs,
+                    g.representative.index,
+                    g.classes.len()
+                )
+            })
+            .collect()
+    };
+    assert_eq!(count(&merged), count(&whole.groups));
+}
+
+#[test]
+fn a_stopped_sweep_reports_what_it_found() {
+    let project = session();
+    let settings = Settings::new(
+        operation(Operation::HexToValue),
+        Generator::Random {
+            count: 300_000,
+            max_len: 5,
+        },
+        9,
+    );
+    let sweep = Sweep::new(settings, &project.profiles, &project.backends).expect("sweep");
+    let stop = AtomicBool::new(false);
+    let results = sweep.run(&stop, &mut |done, _| {
+        if done > 0 {
+            stop.store(true, Ordering::Relaxed);
+        }
+    });
+    assert!(results.interrupted);
+    assert!(results.swept > 0 && results.swept < results.shard_inputs);
+    let found: u64 = results.groups.by_key.values().map(|g| g.inputs).sum();
+    assert_eq!(found, results.swept);
+    assert!(render::text(&results).contains("(interrupted)"));
+}
+
+/// The cross-vendor corpus's behaviours, as the built-in models give them.
+fn corpus_behaviours(project: &Project, op: Operation) -> BTreeSet<Vec<String>> {
+    let generator = match op {
+        Operation::HexToValue => Generator::Random {
+            count: 1,
+            max_len: 1,
+        },
+        Operation::ValueToHex => Generator::Values { bits: 16 },
+    };
+    let settings = Settings::new(operation(op), generator, 0);
+    let sweep = Sweep::new(settings, &project.profiles, &project.backends).expect("sweep");
+    let points: Vec<(u64, Point)> = project
+        .corpus
+        .cross_vendor
+        .iter()
+        .filter(|c| c.operation == op)
+        .map(|c| match op {
+            Operation::HexToValue => (0, Point::text(&c.text, c.digits)),
+            Operation::ValueToHex => (0, Point::value(c.value, c.digits)),
+        })
+        .collect();
+    sweep
+        .answers(&points, &no_stop())
+        .into_iter()
+        .map(|r| labels(&r.expect("answered")))
+        .collect()
+}
+
+#[test]
+fn a_sweep_of_the_built_in_models_finds_every_behaviour_of_the_cross_vendor_corpus() {
+    let project = session();
+    for (op, generator, digits) in [
+        (
+            Operation::HexToValue,
+            Generator::Text {
+                alphabet: b"\x00/0A8fG".to_vec(),
+                max_len: 5,
+            },
+            Digits::Each((0..=6).collect()),
+        ),
+        (
+            Operation::ValueToHex,
+            Generator::Values { bits: 16 },
+            Digits::Each((0..=6).collect()),
+        ),
+    ] {
+        let mut settings = Settings::new(operation(op), generator, 1);
+        settings.digits = digits;
+        settings.shrink = 0;
+        let (_, results) = run(&project, &project.backends, settings);
+        let found: BTreeSet<Vec<String>> = results
+            .groups
+            .by_key
+            .keys()
+            .map(|k| k.signature.clone())
+            .collect();
+        let wanted = corpus_behaviours(&project, op);
+        let missing: Vec<_> = wanted.difference(&found).collect();
+        assert!(
+            missing.is_empty(),
+            "{op}: not found by the sweep: {missing:?}"
+        );
+        assert!(
+            found.len() > wanted.len(),
+            "{op}: nothing beyond the corpus"
+        );
+        for g in results.ordered() {
+            if !wanted.contains(&g.key.signature) {
+                eprintln!(
+                    "{op}: beyond the corpus: {} inputs {:?} {:?}, e.g. {}",
+                    g.inputs, g.key.signature, g.key.features, g.representative.point
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn a_bounded_sweep_catches_mutants_the_corpus_does_not_target() {
+    let project = session();
+    let cases = [
+        (
+            "mitsubishi-iqr",
+            "HABIN",
+            reads_byte_as(
+                "habin-reads-7eh-as-0",
+                &reference(&project, "mitsubishi-iqr"),
+                &["HABIN", "HABINP"],
+                tilde_as_zero,
+            ),
+        ),
+        (
+            "mitsubishi-fx5",
+            "HEXA",
+            reads_byte_as(
+                "hexa-reads-7eh-as-0",
+                &reference(&project, "mitsubishi-fx5"),
+                &["HEXA", "HEXAP"],
+                tilde_as_zero,
+            ),
+        ),
+        (
+            "idec-fc4a",
+            "ATOH",
+            reads_byte_as(
+                "atoh-reads-7eh-as-0",
+                &reference(&project, "idec-fc4a"),
+                &["ATOH"],
+                tilde_as_zero,
+            ),
+        ),
+    ];
+    for (profile, name, mutant) in cases {
+        assert!(
+            failing_trials(&project, &mutant).is_empty(),
+            "{}: the corpus already catches it; pick a mutant it does not target",
+            mutant.name()
+        );
+        let mut settings = Settings::new(
+            instruction(profile, name),
+            Generator::Random {
+                count: 20_000,
+                max_len: 6,
+            },
+            1,
+        );
+        settings.shrink = 1;
+        let (_, results) = run(
+            &project,
+            &[reference(&project, profile), mutant.clone()],
+            settings,
+        );
+        assert!(results.differs(), "{} survives the sweep", mutant.name());
+        let shown: Vec<String> = results
+            .shrunk
+            .iter()
+            .map(|s| s.to.point.to_string())
+            .collect();
+        eprintln!("{}: caught; shrunk to {shown:?}", mutant.name());
+    }
+}
+
+/// The project file's pymcprotocol backend, swept without being told its differences: each
+/// known difference of its HABIN/DHABIN vectors shows as a group, shrunk to an input no less
+/// simple than the hand-written vector's.
+#[test]
+fn a_sweep_finds_every_known_difference_of_pymcprotocol() {
+    let python = root().join(".venv-adapters/bin/python");
+    if !python.exists() {
+        eprintln!("skipped: .venv-adapters is not installed (CI installs it)");
+        return;
+    }
+    let mut project = Project::load(&Paths::under(root())).expect("project loads");
+    let file = plc_conformance::load::load_project(
+        &root().join("plc-conformance.yaml"),
+        true,
+        std::path::Path::new(env!("CARGO_BIN_EXE_plc-conformance")),
+    )
+    .expect("project file");
+    let settings = file
+        .configured
+        .iter()
+        .find(|c| c.settings.name == "pymcprotocol")
+        .expect("pymcprotocol is configured")
+        .settings
+        .clone();
+    let known_file = settings
+        .known_differences
+        .clone()
+        .expect("known differences");
+    let pymc = project.add_external(settings, true).expect("starts") as Arc<dyn Backend>;
+    let iqr = reference(&project, "mitsubishi-iqr");
+    let known = project
+        .known
+        .get("pymcprotocol")
+        .expect("known differences")
+        .clone();
+    let mut shrunk: Vec<Point> = Vec::new();
+    for (name, count) in [("HABIN", 60_000), ("DHABIN", 20_000)] {
+        let mut s = Settings::new(
+            instruction("mitsubishi-iqr", name),
+            Generator::Random { count, max_len: 9 },
+            7,
+        );
+        s.shrink = 2;
+        let (_, results) = run(&project, &[iqr.clone(), pymc.clone()], s);
+        shrunk.extend(results.shrunk.iter().map(|s| s.to.point.clone()));
+    }
+    let kind_of = |t: &[u8]| {
+        Point::text(t, 0)
+            .features(false)
+            .into_iter()
+            .next()
+            .unwrap_or_default()
+    };
+    let mut missing = Vec::new();
+    for entry in known.entries.iter().filter(|e| e.instruction.is_none()) {
+        let case = project
+            .corpus
+            .cases
+            .iter()
+            .find(|c| c.id == entry.case)
+            .unwrap_or_else(|| panic!("{} is in {}", entry.case, known_file.display()));
+        // The hand-written text, read back from its words (two characters per word).
+        let text: Vec<u8> = case
+            .before
+            .values()
+            .flat_map(|w| w.to_le_bytes())
+            .take_while(|b| *b != 0)
+            .collect();
+        let hand = Point::text(&text, 0);
+        let found = shrunk.iter().any(|p| match &p.data {
+            Data::Text(t) => kind_of(t) == kind_of(&text) && p.simplicity() <= hand.simplicity(),
+            Data::Value(_) => false,
+        });
+        if !found {
+            missing.push(format!("{} ({})", entry.case, hand));
+        }
+    }
+    assert!(
+        missing.is_empty(),
+        "not found by the sweep: {missing:?}; shrunk: {shrunk:?}"
+    );
+}
+
+/// The built-in models asked directly answer exactly what they answer as trials.
+#[test]
+fn the_direct_path_gives_the_replies_of_the_trial_path() {
+    let project = session();
+    for (target, generator) in [
+        (
+            operation(Operation::HexToValue),
+            Generator::Random {
+                count: 3000,
+                max_len: 9,
+            },
+        ),
+        (
+            operation(Operation::ValueToHex),
+            Generator::Random {
+                count: 3000,
+                max_len: 0,
+            },
+        ),
+        (
+            instruction("mitsubishi-iqr", "DHABIN"),
+            Generator::Random {
+                count: 2000,
+                max_len: 10,
+            },
+        ),
+        (
+            instruction("mitsubishi-iqr", "BINHA"),
+            Generator::Random {
+                count: 2000,
+                max_len: 0,
+            },
+        ),
+        (
+            instruction("mitsubishi-fx5", "HEXA"),
+            Generator::Random {
+                count: 2000,
+                max_len: 9,
+            },
+        ),
+        (
+            instruction("mitsubishi-fx5", "ASCI"),
+            Generator::Random {
+                count: 2000,
+                max_len: 0,
+            },
+        ),
+        (
+            instruction("idec-fc4a", "ATOH"),
+            Generator::Random {
+                count: 2000,
+                max_len: 6,
+            },
+        ),
+        (
+            instruction("idec-fc4a", "HTOA"),
+            Generator::Random {
+                count: 2000,
+                max_len: 0,
+            },
+        ),
+    ] {
+        let mut settings = Settings::new(target.clone(), generator, 4);
+        let direct =
+            Sweep::new(settings.clone(), &project.profiles, &project.backends).expect("sweep");
+        settings.direct = false;
+        let trials = Sweep::new(settings, &project.profiles, &project.backends).expect("sweep");
+        let points: Vec<(u64, Point)> = (0..direct.space.total())
+            .map(|i| (i, direct.space.point(i)))
+            .collect();
+        let a = direct.answers(&points, &no_stop());
+        let b = trials.answers(&points, &no_stop());
+        for ((i, p), (x, y)) in points.iter().zip(a.iter().zip(&b)) {
+            assert_eq!(x, y, "{target}: input {i}, {p}");
+        }
+    }
+}
