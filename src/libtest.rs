@@ -26,6 +26,7 @@ use crate::backend::external::ExternalBackend;
 use crate::backend::{Backend, Fault, Request, Response};
 use crate::judge::{Status, Verdict};
 use crate::load::{load_known, load_project, locate_project};
+use crate::model::cross_vendor::{CodecAbilities, OperationAbilities};
 use crate::model::profile::Profiles;
 use crate::model::project::ExternalSettings;
 use crate::plan::Trial;
@@ -211,18 +212,24 @@ fn add_configured(
             Err(Failed::from(message))
         }));
     };
-    let Some(profile) = settings.profile.clone() else {
-        match project.add_external(settings, whole_corpus) {
-            Ok(b) => backends.push(b),
-            Err(e) => fail(tests, e.to_string()),
+    // A backend whose level (a profile, or codec) is declared is planned without starting it.
+    let profile = match (&settings.profile, settings.codec) {
+        (Some(p), _) => Some(p.clone()),
+        (None, true) => None,
+        (None, false) => {
+            match project.add_external(settings, whole_corpus) {
+                Ok(b) => backends.push(b),
+                Err(e) => fail(tests, e.to_string()),
+            }
+            return;
         }
-        return;
     };
-    if let (Some(known), Some(p)) = (
-        settings.known_differences.as_ref(),
-        project.profiles.get(&profile),
-    ) {
-        match load_known(known, Some(p), &project.corpus, whole_corpus) {
+    if let Some(known) = settings.known_differences.as_ref() {
+        let p = profile
+            .as_ref()
+            .and_then(|p| project.profiles.get(p))
+            .map(|p| p.as_ref());
+        match load_known(known, p, &project.corpus, whole_corpus) {
             Ok(k) => {
                 project.known.insert(name.clone(), k);
             }
@@ -240,7 +247,19 @@ fn add_configured(
     }));
     backends.push(Arc::new(Placeholder {
         name,
-        profile,
+        // Planned as able to answer anything; the started backend's own capabilities decide
+        // each trial's skip before it runs.
+        codec: profile.is_none().then(|| {
+            let any = OperationAbilities {
+                digits: Some((0..=16).collect()),
+                width: 64,
+            };
+            CodecAbilities {
+                hex_to_value: Some(any.clone()),
+                value_to_hex: Some(any),
+            }
+        }),
+        profile: profile.unwrap_or_default(),
         lazy: lazy.clone(),
     }));
     lazies.push(lazy);
@@ -345,6 +364,8 @@ impl LazyStart {
 struct Placeholder {
     name: String,
     profile: String,
+    /// For a codec-level backend.
+    codec: Option<CodecAbilities>,
     lazy: Arc<LazyStart>,
 }
 
@@ -366,5 +387,8 @@ impl Backend for Placeholder {
     }
     fn execute(&self, _request: &Request<'_>) -> Result<Response, Fault> {
         Err(Fault::Unreachable("the backend was not started".into()))
+    }
+    fn codec(&self) -> Option<&CodecAbilities> {
+        self.codec.as_ref()
     }
 }

@@ -171,7 +171,16 @@ fn read_project(file: &Path, plc_conformance: &Path) -> Result<Vec<Configured>, 
             );
         }
         let mut settings = ExternalSettings::new(b.name, launch);
+        if b.codec && b.profile.is_some() {
+            cx.error(
+                key("codec"),
+                LoadErrorKind::Invalid(
+                    "a codec-level backend has no profile: give `codec: true` or `profile`".into(),
+                ),
+            );
+        }
         settings.profile = b.profile;
+        settings.codec = b.codec;
         settings.timeout = timeout;
         settings.startup_timeout = startup_timeout;
         settings.known_differences = b.known_differences.map(|p| dir.join(p));

@@ -43,6 +43,8 @@ pub struct ExternalSettings {
     /// The profile family the configuration says the backend implements; the handshake must
     /// agree. `None` takes the handshake's word.
     pub profile: Option<String>,
+    /// Whether the configuration says the backend is codec-level; the handshake must agree.
+    pub codec: bool,
     /// The limit for one case's answer.
     pub timeout: Duration,
     /// The limit for starting and answering `hello`.
@@ -70,6 +72,7 @@ impl ExternalSettings {
             name: name.into(),
             launch,
             profile: None,
+            codec: false,
             timeout: DEFAULT_TIMEOUT,
             startup_timeout: DEFAULT_STARTUP_TIMEOUT,
             known_differences: None,

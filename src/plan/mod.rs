@@ -205,7 +205,7 @@ pub fn plan(
     }
     for backend in backends {
         let list = known.get(backend.name());
-        if let Some(abilities) = backend.codec() {
+        if backend.codec().is_some() {
             for case in &corpus.cross_vendor {
                 let mut t = Trial {
                     backend: backend.clone(),
@@ -213,11 +213,10 @@ pub fn plan(
                     variant: String::new(),
                     check: Check::Codec { case: case.clone() },
                     input: Arc::new(Input::default()),
-                    skip: abilities
-                        .declines(case)
-                        .map(|why| format!("{} {why}", backend.name())),
+                    skip: None,
                     known: None,
                 };
+                t.skip = skip_reason(&t, backend.as_ref());
                 t.known = list.and_then(|k| k.entry(&case.id, "codec", "")).cloned();
                 trials.push(t);
             }
@@ -279,6 +278,14 @@ fn trial(
 /// variant, declines the setting (a flag value, an operand form), or does not check device
 /// ranges and the trial expects a device-range error.
 pub fn skip_reason(t: &Trial, backend: &dyn Backend) -> Option<String> {
+    if let Check::Codec { case } = &t.check {
+        return match backend.codec() {
+            Some(abilities) => abilities
+                .declines(case)
+                .map(|why| format!("{} {why}", backend.name())),
+            None => Some(format!("{} is not a codec-level backend", backend.name())),
+        };
+    }
     let instruction = &t.input.instruction;
     if !backend.claims(instruction, &t.variant) {
         return Some(format!(

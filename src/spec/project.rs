@@ -24,6 +24,11 @@ pub struct BackendSpec {
     /// The profile family the backend implements; its handshake must claim the same.
     #[serde(default)]
     pub profile: Option<String>,
+    /// The backend is codec-level (it answers the cross-vendor operations directly); its
+    /// handshake must claim the codec level. Declared here, as `profile` is for an
+    /// instruction-level backend, it lets `cargo test` plan its trials without starting it.
+    #[serde(default)]
+    pub codec: bool,
     /// Seconds to wait for one case's answer.
     #[serde(default)]
     pub timeout: Option<f64>,

@@ -121,6 +121,12 @@ impl ExternalBackend {
             kind,
         };
         let (process, info, capabilities) = handshake(&spec).map_err(error)?;
+        if spec.codec && capabilities.codec.is_none() {
+            return Err(error(ExternalErrorKind::Capabilities(
+                "is configured as codec-level but its handshake claims the instruction level"
+                    .into(),
+            )));
+        }
         let (profile, codec) = match &capabilities.codec {
             Some(codec) => (
                 None,
