@@ -167,17 +167,34 @@ impl<'a> FileContext<'a> {
     }
 }
 
+/// The schema of an on-disk type, generated once per process: a test process that runs one
+/// trial reads a handful of files, and generating a schema costs more than checking one.
+fn schema_once<T: schemars::JsonSchema + 'static>() -> std::sync::Arc<serde_json::Value> {
+    use std::any::TypeId;
+    use std::collections::HashMap;
+    use std::sync::{Arc, Mutex, OnceLock};
+    static SCHEMAS: OnceLock<Mutex<HashMap<TypeId, Arc<serde_json::Value>>>> = OnceLock::new();
+    let mut schemas = match SCHEMAS.get_or_init(Default::default).lock() {
+        Ok(s) => s,
+        Err(poisoned) => poisoned.into_inner(),
+    };
+    schemas
+        .entry(TypeId::of::<T>())
+        .or_insert_with(|| Arc::new(crate::spec::schema_of::<T>()))
+        .clone()
+}
+
 /// Reads one document as its on-disk type: first its shape against the type's schema, which
 /// reports every unknown, missing or misplaced key at once (see [`shape`]); then, when the shape
 /// is right, the deserializer, which stops at its first error. A document that is not YAML at
 /// all goes straight to the deserializer, which says where the syntax breaks. Problems go to
 /// the file's errors.
-pub(crate) fn parse_document<T: DeserializeOwned + schemars::JsonSchema>(
+pub(crate) fn parse_document<T: DeserializeOwned + schemars::JsonSchema + 'static>(
     text: &str,
     cx: &mut FileContext<'_>,
 ) -> Option<T> {
     if let Ok(doc) = serde_yaml::from_str::<serde_yaml::Value>(text) {
-        if !shape::check(&doc, &crate::spec::schema_of::<T>(), cx) {
+        if !shape::check(&doc, &schema_once::<T>(), cx) {
             return None;
         }
     }
