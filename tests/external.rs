@@ -5,9 +5,13 @@
 //! model served by the binary and sabotages one case, `ext-target`, of a three-case corpus:
 //! the case before it and the one after it must still conform.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::sync::{Arc, OnceLock};
+use std::sync::Arc;
+
+use common::{interpreter, python};
 use std::time::Duration;
 
 use plc_conformance::backend::external::ExternalErrorKind;
@@ -27,35 +31,6 @@ fn fixtures() -> PathBuf {
 }
 
 const BIN: &str = env!("CARGO_BIN_EXE_plc-conformance");
-
-/// The Python interpreter itself (not a launcher script in front of it, which would add a
-/// shell start to every restart), or `None` on a machine without python3.
-fn interpreter() -> Option<&'static str> {
-    static PATH: OnceLock<Option<String>> = OnceLock::new();
-    PATH.get_or_init(|| {
-        let out = Command::new("python3")
-            .args(["-c", "import sys; print(sys.executable)"])
-            .output()
-            .ok()?;
-        let path = String::from_utf8_lossy(&out.stdout).trim().to_string();
-        (out.status.success() && !path.is_empty()).then_some(path)
-    })
-    .as_deref()
-}
-
-/// Python runs the fixture adapters; a machine without it cannot run these tests.
-fn python() -> bool {
-    let ok = interpreter().is_some();
-    // CI sets PLC_CONFORMANCE_REQUIRE_BACKENDS: there a missing interpreter is a failure.
-    assert!(
-        ok || std::env::var_os("PLC_CONFORMANCE_REQUIRE_BACKENDS").is_none(),
-        "python3 is required for the fixture adapters"
-    );
-    if !ok {
-        eprintln!("skipped: python3 is not installed; the fixture adapters need it");
-    }
-    ok
-}
 
 fn fixture_session() -> Project {
     let paths = Paths {

@@ -6,10 +6,9 @@ mod common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
-use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
-use common::{root, scratch};
+use common::{interpreter, python, root, scratch};
 use plc_conformance::backend::Backend;
 use plc_conformance::judge::Verdict;
 use plc_conformance::load::ENV_SELF;
@@ -327,33 +326,6 @@ fn known_differences_for_a_backend_that_is_not_an_external_one_of_the_run_is_an_
 
 fn fixtures() -> PathBuf {
     root().join("tests/fixtures/external")
-}
-
-/// The Python interpreter, or `None` on a machine without python3.
-fn interpreter() -> Option<&'static str> {
-    static PATH: OnceLock<Option<String>> = OnceLock::new();
-    PATH.get_or_init(|| {
-        let out = Command::new("python3")
-            .args(["-c", "import sys; print(sys.executable)"])
-            .output()
-            .ok()?;
-        let path = String::from_utf8_lossy(&out.stdout).trim().to_string();
-        (out.status.success() && !path.is_empty()).then_some(path)
-    })
-    .as_deref()
-}
-
-/// Python runs the fixture adapter; CI (PLC_CONFORMANCE_REQUIRE_BACKENDS) must have it.
-fn python() -> bool {
-    let ok = interpreter().is_some();
-    assert!(
-        ok || std::env::var_os("PLC_CONFORMANCE_REQUIRE_BACKENDS").is_none(),
-        "python3 is required for the fixture adapters"
-    );
-    if !ok {
-        eprintln!("skipped: python3 is not installed; the fixture adapters need it");
-    }
-    ok
 }
 
 fn faulty_command(mode: &str, trigger: &str) -> String {

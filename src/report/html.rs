@@ -120,11 +120,7 @@ pub fn render(sections: &[Section<'_>], records: &[Record], run: &RunInfo) -> St
     );
     if failing > 0 {
         out.push_str("<h2>Failures</h2>\n<ul id=\"failures\">\n");
-        for (i, r) in records
-            .iter()
-            .enumerate()
-            .filter(|(_, r)| r.status.is_failure())
-        {
+        for (i, r) in failures(records) {
             let _ = writeln!(
                 out,
                 "<li><a href=\"#failure-{i}\">{}</a> — {} ({}:{})</li>",
@@ -212,11 +208,7 @@ pub fn render(sections: &[Section<'_>], records: &[Record], run: &RunInfo) -> St
     }
     if failing > 0 {
         out.push_str("<h2>Failure details</h2>\n");
-        for (i, r) in records
-            .iter()
-            .enumerate()
-            .filter(|(_, r)| r.status.is_failure())
-        {
+        for (i, r) in failures(records) {
             let _ = writeln!(
                 out,
                 "<section id=\"failure-{i}\"><h3>{}</h3><p>{}:{}</p><pre>{}</pre></section>",
@@ -229,4 +221,12 @@ pub fn render(sections: &[Section<'_>], records: &[Record], run: &RunInfo) -> St
     }
     out.push_str("</body>\n</html>\n");
     out
+}
+
+/// The failing records with their index, which anchors their explanation in the page.
+fn failures(records: &[Record]) -> impl Iterator<Item = (usize, &Record)> {
+    records
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.status.is_failure())
 }

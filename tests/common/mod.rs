@@ -3,8 +3,8 @@
 #![allow(dead_code)]
 
 use std::path::Path;
-use std::process::Output;
-use std::sync::Arc;
+use std::process::{Command, Output};
+use std::sync::{Arc, OnceLock};
 
 use plc_conformance::backend::{Backend, Fault, Request, Response};
 use plc_conformance::runner::{Paths, Project};
@@ -131,4 +131,33 @@ pub fn assert_corpus_kills(
         survivors.is_empty(),
         "the corpus lets these wrong backends through (a vector is missing): {survivors:?}"
     );
+}
+
+/// The Python interpreter itself (not a launcher script in front of it, which would add a
+/// shell start to every restart), or `None` on a machine without python3.
+pub fn interpreter() -> Option<&'static str> {
+    static PATH: OnceLock<Option<String>> = OnceLock::new();
+    PATH.get_or_init(|| {
+        let out = Command::new("python3")
+            .args(["-c", "import sys; print(sys.executable)"])
+            .output()
+            .ok()?;
+        let path = String::from_utf8_lossy(&out.stdout).trim().to_string();
+        (out.status.success() && !path.is_empty()).then_some(path)
+    })
+    .as_deref()
+}
+
+/// Python runs the fixture adapters; a machine without it cannot run these tests.
+pub fn python() -> bool {
+    let ok = interpreter().is_some();
+    // CI sets PLC_CONFORMANCE_REQUIRE_BACKENDS: there a missing interpreter is a failure.
+    assert!(
+        ok || std::env::var_os("PLC_CONFORMANCE_REQUIRE_BACKENDS").is_none(),
+        "python3 is required for the fixture adapters"
+    );
+    if !ok {
+        eprintln!("skipped: python3 is not installed; the fixture adapters need it");
+    }
+    ok
 }
