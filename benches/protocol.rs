@@ -9,6 +9,10 @@
 //! and one case per message, and one process per case. The built-in model called directly is
 //! the ceiling. Each figure is the best of a few rounds. Results: `docs/performance.md`.
 
+/// The allocator the `plc-conformance` binary uses, so that both sides measure alike.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 use std::path::Path;
 use std::time::{Duration, Instant};
 

@@ -18,8 +18,10 @@ use crate::backend::{Fault, Question, Request, Response};
 use crate::memory::{Fill, Image};
 use crate::plan::{Check, Trial};
 
-/// Trials per exchange with a backend.
-pub const CHUNK: usize = 128;
+/// Trials handed to a backend at once. An external backend sends them as several `run`
+/// messages (its `batch` cases each) and keeps the next message queued while the current one is
+/// answered, so a chunk should hold several messages' worth.
+pub const CHUNK: usize = 1024;
 
 /// What one backend did under one fill (a codec-level backend answers once, reported under
 /// fill A: it reads no memory).

@@ -3,39 +3,7 @@
 
 mod common;
 
-use common::{cli, root, scratch};
-use quick_xml::events::Event;
-use quick_xml::Reader;
-
-/// Element names and the count of each, from a document that must be well-formed XML.
-fn xml_elements(text: &str) -> Vec<(String, Vec<(String, String)>)> {
-    let mut reader = Reader::from_str(text);
-    let mut out = Vec::new();
-    loop {
-        match reader.read_event() {
-            Ok(Event::Start(e)) | Ok(Event::Empty(e)) => {
-                let attrs = e
-                    .attributes()
-                    .filter_map(Result::ok)
-                    .map(|a| {
-                        (
-                            String::from_utf8_lossy(a.key.as_ref()).into_owned(),
-                            String::from_utf8_lossy(&a.value).into_owned(),
-                        )
-                    })
-                    .collect();
-                out.push((
-                    String::from_utf8_lossy(e.name().as_ref()).into_owned(),
-                    attrs,
-                ));
-            }
-            Ok(Event::Eof) => break,
-            Ok(_) => {}
-            Err(e) => panic!("not well-formed XML at {}: {e}", reader.buffer_position()),
-        }
-    }
-    out
-}
+use common::{cli, root, scratch, xml_elements};
 
 #[test]
 fn text_matrix_groups_rows_by_behaviour() {

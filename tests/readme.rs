@@ -1,7 +1,8 @@
 //! The README's example outputs are real: each fenced `text` block whose first line is
 //! `$ cargo run -q -- ARGS` is run (the built binary with ARGS, from the repository root, without
 //! colour and at the default width) and its output compared with the block. A line `...` in a
-//! block stands for any number of lines, so a block may show an excerpt.
+//! block stands for any number of lines, so a block may show an excerpt, and `[..]` within a
+//! line for any text (a time, say).
 //!
 //! Blocks that run the project's third-party backends need their installs (`.ci/run` makes
 //! them); without `.venv-adapters` they are skipped with a note, unless
@@ -84,7 +85,7 @@ fn matches(expected: &[String], actual: &[&str]) -> bool {
                 && segment
                     .iter()
                     .zip(&actual[from..])
-                    .all(|(e, a)| e.trim_end() == a.trim_end())
+                    .all(|(e, a)| line_matches(e.trim_end(), a.trim_end()))
         };
         let found = if first {
             fits(0).then_some(0)
@@ -105,9 +106,30 @@ fn matches(expected: &[String], actual: &[&str]) -> bool {
     true
 }
 
+/// Whether `actual` is `expected`, where `[..]` stands for any text.
+fn line_matches(expected: &str, actual: &str) -> bool {
+    let pieces: Vec<&str> = expected.split("[..]").collect();
+    let [first, middle @ .., last] = pieces.as_slice() else {
+        return expected == actual;
+    };
+    let Some(mut rest) = actual.strip_prefix(first) else {
+        return false;
+    };
+    for piece in middle {
+        match rest.find(piece) {
+            Some(i) => rest = &rest[i + piece.len()..],
+            None => return false,
+        }
+    }
+    rest.len() >= last.len() && rest.ends_with(last)
+}
+
 /// Whether a command runs backends of the project file (which need their installs).
 fn needs_adapters(args: &[String]) -> bool {
-    if !matches!(args.first().map(String::as_str), Some("run" | "diff")) {
+    if !matches!(
+        args.first().map(String::as_str),
+        Some("run" | "diff" | "sweep")
+    ) {
         return false;
     }
     let named: Vec<&String> = args
@@ -115,7 +137,7 @@ fn needs_adapters(args: &[String]) -> bool {
         .filter(|w| w[0] == "--backend" || w[0] == "--against")
         .map(|w| &w[1])
         .collect();
-    named.is_empty()
+    (named.is_empty() && args[0] != "sweep")
         || named
             .iter()
             .any(|n| !matches!(n.as_str(), "iqr" | "fx5" | "fc4a"))
@@ -177,6 +199,10 @@ fn an_excerpt_matches_lines_in_order() {
     assert!(matches(&e("a\n...\nc\n..."), &actual));
     assert!(!matches(&e("a\n...\nb\n...\nb\n..."), &actual));
     assert!(!matches(&e("b\n..."), &actual));
+    assert!(line_matches("swept in [..] s: 12", "swept in 4.5 s: 12"));
+    assert!(line_matches("[..]", "anything"));
+    assert!(!line_matches("swept in [..] s: 12", "swept in 4.5 s: 13"));
+    assert!(!line_matches("a[..]a", "a"));
     assert_eq!(
         words(r#"run --backend 'external:x="$P" serve' --filter a"#),
         [

@@ -466,6 +466,25 @@ fn the_circuit_breaker_stops_asking_a_backend_that_fails_every_case() {
     }
 }
 
+#[test]
+fn a_fault_while_the_next_message_is_queued_loses_no_case() {
+    if !python() {
+        return;
+    }
+    for (mode, label) in [("crash", "crashed"), ("hang", "timeout")] {
+        let mut spec = faulty(mode, "ext-target");
+        // One request per message: while one is answered the next is already queued, and the
+        // process it was queued to is the one that fails.
+        spec.batch = 1;
+        spec.timeout = Duration::from_millis(500);
+        let session = fixture_session(spec);
+        let v = verdicts(&session, true);
+        assert_eq!(v[0], Verdict::Conforms, "{mode}: {:?}", v[0]);
+        assert_eq!(v[1].label(), label, "{mode}: {:?}", v[1]);
+        assert_eq!(v[2], Verdict::Conforms, "{mode}: {:?}", v[2]);
+    }
+}
+
 /// Whether a process is still there (a zombie is not: it has ended and waits to be reaped).
 fn alive(pid: i32) -> bool {
     match std::fs::read_to_string(format!("/proc/{pid}/stat")) {

@@ -15,6 +15,7 @@ use plc_conformance::load::{load_corpus, load_profiles};
 use plc_conformance::memory::Image;
 use plc_conformance::model::cross_vendor::Operation;
 use plc_conformance::runner::{Paths, Project};
+use plc_conformance::sweep::classes::ByteClasses;
 use plc_conformance::sweep::generate::{Digits, Generator};
 use plc_conformance::sweep::group::{labels, Groups};
 use plc_conformance::sweep::input::{Data, Point};
@@ -598,4 +599,148 @@ fn the_direct_path_gives_the_replies_of_the_trial_path() {
             assert_eq!(x, y, "{target}: input {i}, {p}");
         }
     }
+}
+
+fn full_by_class(check: u64) -> Settings {
+    let mut settings = Settings::new(
+        operation(Operation::HexToValue),
+        Generator::Full { by_class: true },
+        5,
+    );
+    settings.shrink = 0;
+    settings.class_check = check;
+    settings
+}
+
+/// The group whose signature is `signature`, column by column.
+fn inputs_with(r: &Results, signature: &[&str]) -> u64 {
+    r.groups
+        .by_key
+        .values()
+        .filter(|g| g.key.signature == signature)
+        .map(|g| g.inputs)
+        .sum()
+}
+
+#[test]
+fn the_full_sweep_by_class_counts_every_four_byte_text_exactly() {
+    let project = session();
+    let (sweep, r) = run(&project, &project.backends, full_by_class(1 << 16));
+    let classes = r
+        .classes
+        .as_ref()
+        .expect("a sweep by class reports its classes");
+    assert!(classes.mismatch.is_none(), "{:?}", classes.mismatch);
+    assert_eq!(classes.checked, 1 << 16);
+    assert_eq!(classes.classes.len(), 26, "{:?}", classes.classes);
+    assert_eq!(classes.tuples, 26u64.pow(4));
+    assert_eq!(r.swept, 1 << 32);
+    assert_eq!(
+        r.groups.by_key.values().map(|g| g.inputs).sum::<u64>(),
+        1 << 32
+    );
+    let names: Vec<&str> = sweep.columns.iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "iqr/habin-fixed",
+            "iqr/habin-terminated",
+            "fx5/hexa-16bit",
+            "fx5/hexa-8bit",
+            "fc4a/atoh"
+        ]
+    );
+    // Counted by hand: every text of four hex digits, and every text that HABIN with SM705 on
+    // ends at a 00H after one to three digits (whatever follows the 00H).
+    assert_eq!(inputs_with(&r, &["value#1"; 5]), 16u64.pow(4));
+    assert_eq!(
+        inputs_with(
+            &r,
+            &[
+                "invalid-digit",
+                "value#1",
+                "invalid-digit",
+                "invalid-digit",
+                "error"
+            ]
+        ),
+        16 * 256 * 256 + 16 * 16 * 256 + 16 * 16 * 16
+    );
+}
+
+#[test]
+fn classes_that_do_not_hold_fail_their_check() {
+    let project = session();
+    let mut sweep =
+        Sweep::new(full_by_class(1 << 14), &project.profiles, &project.backends).expect("sweep");
+    // 00H put with the control characters: HABIN with SM705 on tells them apart.
+    let mut classes: Vec<Vec<u8>> = ByteClasses::by_kind().classes().to_vec();
+    let nul = classes.iter().position(|c| c == &[0]).expect("00H alone");
+    classes.remove(nul);
+    classes
+        .iter_mut()
+        .find(|c| c.contains(&1))
+        .expect("control")
+        .push(0);
+    sweep.space.classes = Some(Arc::new(ByteClasses::new(classes).expect("a partition")));
+    let r = sweep.run(&no_stop(), &mut |_, _| {});
+    let report = r.classes.as_ref().expect("reported");
+    let m = report
+        .mismatch
+        .as_ref()
+        .expect("the check finds a text unlike its class");
+    assert_ne!(m.text.replies, m.representative.replies);
+    assert!(render::text(&r).contains("CHECK FAILED"));
+}
+
+#[test]
+fn a_column_that_reads_one_byte_apart_splits_its_class() {
+    let project = session();
+    let iqr = reference(&project, "mitsubishi-iqr");
+    let mutant = reads_byte_as("tilde-as-zero", &iqr, &["HABIN"], tilde_as_zero);
+    let backends = vec![iqr, mutant];
+    let sweep = Sweep::new(full_by_class(1 << 12), &project.profiles, &backends).expect("sweep");
+    let (classes, asked) =
+        plc_conformance::sweep::classes::derive(&sweep, &no_stop()).expect("not stopped");
+    assert!(asked > 0);
+    assert!(
+        classes.classes().contains(&vec![b'~']),
+        "{:?}",
+        classes.describe()
+    );
+    assert!(!classes
+        .classes()
+        .iter()
+        .any(|c| c.len() > 1 && c.contains(&b'~')));
+    assert_eq!(classes.len(), 27);
+}
+
+#[test]
+fn the_html_results_are_a_well_formed_report_page_with_every_group() {
+    let project = session();
+    let mut settings = Settings::new(
+        operation(Operation::HexToValue),
+        Generator::Random {
+            count: 2000,
+            max_len: 6,
+        },
+        4,
+    );
+    settings.shrink = 0;
+    let (_, r) = run(&project, &project.backends, settings);
+    let html = render::html(&r);
+    let elements = common::xml_elements(html.trim_start_matches("<!DOCTYPE html>\n"));
+    let rows = elements.iter().filter(|(n, _)| n == "tr").count();
+    assert_eq!(
+        rows,
+        r.groups.by_key.len() + 1,
+        "a header and a row per group"
+    );
+    assert!(elements
+        .iter()
+        .any(|(n, a)| n == "table" && a.iter().any(|(k, v)| k == "id" && v == "groups")));
+    assert!(elements
+        .iter()
+        .all(|(n, _)| !matches!(n.as_str(), "script" | "link" | "img" | "iframe")));
+    assert!(html.contains("<style>"), "the report's own style");
 }

@@ -427,12 +427,12 @@ fn lowering_device(
     allowed: Option<&Vec<String>>,
     d: &Device,
 ) -> Option<LoadErrorKind> {
-    if !p.devices.contains_key(&d.code) {
+    if !p.devices.contains_key(d.code()) {
         let known: Vec<String> = p.devices.keys().cloned().collect();
-        return Some(unknown("device", &d.code, &known));
+        return Some(unknown("device", d.code(), &known));
     }
-    if let Some(allowed) = allowed.filter(|a| !a.contains(&d.code)) {
-        return Some(unknown("device for this operand", &d.code, allowed));
+    if let Some(allowed) = allowed.filter(|a| !a.iter().any(|c| c == d.code())) {
+        return Some(unknown("device for this operand", d.code(), allowed));
     }
     let variant = variant?;
     (!crate::model::profile::words_exist(&p.devices, variant, d, 1)).then(|| {

@@ -107,6 +107,15 @@ fn check_profile(p: &ProfileSpec, cx: &mut FileContext<'_>) {
         device_names(&format!("errors.also[{i}]"), r, cx);
     }
     for (code, def) in &p.devices {
+        if let Err(e) = format!("{code}0").parse::<crate::device::Device>() {
+            cx.error(
+                format!("devices.{code}"),
+                LoadErrorKind::Invalid(format!(
+                    "not a device code ({e}; at most {} letters)",
+                    crate::device::MAX_CODE_LEN
+                )),
+            );
+        }
         check_ranges(&format!("devices.{code}"), &def.ranges(), def, cx);
         if def.points_per_word == 0 {
             cx.error(

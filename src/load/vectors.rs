@@ -387,15 +387,15 @@ fn read_operands(
                     Operand::Device(d)
                         if def
                             .limits
-                            .get(&d.code)
+                            .get(d.code())
                             .is_some_and(|r| !r.contains(d.index)) =>
                     {
-                        let r = def.limits[&d.code];
+                        let r = def.limits[d.code()];
                         cx.error(
                             &okey,
                             LoadErrorKind::Invalid(format!(
                                 "{d} cannot be programmed: {instr} operand `{name}` takes {0}{1}-{0}{2} only ({3})",
-                                d.code, r.first, r.last, p.id
+                                d.code(), r.first, r.last, p.id
                             )),
                         )
                     }
@@ -406,9 +406,9 @@ fn read_operands(
                             def.devices.join(", ")
                         )),
                     ),
-                    Operand::Device(d) if !def.devices.contains(&d.code) => cx.error(
+                    Operand::Device(d) if !def.devices.iter().any(|c| c == d.code()) => cx.error(
                         &okey,
-                        unknown("device for this operand", &d.code, &def.devices),
+                        unknown("device for this operand", d.code(), &def.devices),
                     ),
                     Operand::Device(d) if !p.word_exists_anywhere(d) => {
                         cx.error(&okey, missing_word(p, d));
@@ -447,12 +447,12 @@ fn read_memory(
         // of their 16 points. Such words are given one by one, by their heads.
         if words.len() > 1 {
             for p in &h.profiles {
-                if let Some(def) = p.devices.get(&head.code).filter(|d| d.points_per_word > 1) {
+                if let Some(def) = p.devices.get(head.code()).filter(|d| d.points_per_word > 1) {
                     cx.error(
                         &mkey,
                         LoadErrorKind::Invalid(format!(
                             "a word of {} is {} points from its head; give each word by its head instead of a list or text",
-                            head.code, def.points_per_word
+                            head.code(), def.points_per_word
                         )),
                     );
                 }
@@ -463,9 +463,9 @@ fn read_memory(
                 break;
             };
             for p in &h.profiles {
-                if !p.devices.contains_key(&device.code) {
+                if !p.devices.contains_key(device.code()) {
                     let known: Vec<String> = p.devices.keys().cloned().collect();
-                    cx.error(&mkey, unknown("device", &device.code, &known));
+                    cx.error(&mkey, unknown("device", device.code(), &known));
                 } else if !p.word_exists_anywhere(&device) {
                     cx.error(&mkey, missing_word(p, &device));
                 }
@@ -485,15 +485,15 @@ fn read_memory(
 
 /// Why a word a vector names does not exist, in the profile's terms.
 fn missing_word(p: &Profile, d: &Device) -> LoadErrorKind {
-    LoadErrorKind::Invalid(match p.devices.get(&d.code) {
+    LoadErrorKind::Invalid(match p.devices.get(d.code()) {
         Some(def) if def.numbering.point(d.index).is_none() => format!(
             "{d} is not a valid {} number: {}",
-            d.code,
+            d.code(),
             def.numbering.rule()
         ),
         Some(def) if def.points_per_word > 1 => format!(
             "{d} does not exist on any {} variant: a word of {} is the {} points from its head, and all of them must exist",
-            p.id, d.code, def.points_per_word
+            p.id, d.code(), def.points_per_word
         ),
         _ => format!("{d} does not exist on any {} variant", p.id),
     })

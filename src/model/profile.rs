@@ -136,12 +136,12 @@ pub fn words_exist(
     head: &Device,
     count: u32,
 ) -> bool {
-    let Some(def) = devices.get(&head.code) else {
+    let Some(def) = devices.get(head.code()) else {
         return false;
     };
     let ranges = variant
         .devices
-        .get(&head.code)
+        .get(head.code())
         .cloned()
         .unwrap_or_else(|| def.ranges());
     let Some(first) = def.numbering.point(head.index) else {

@@ -20,9 +20,12 @@ table.matrix{border-collapse:collapse;margin:1em 0}\
 td.count{text-align:right}.where{color:#666;font-size:.85em}\
 table.meta td,table.meta th{text-align:left;padding:.1em .8em .1em 0;vertical-align:top}\
 pre{background:#f8f8f8;padding:.6em;overflow:auto}\
-summary{cursor:pointer}";
+summary{cursor:pointer}\
+tr.differs td{background:#fce8e6}";
 
-fn escape(text: &str) -> String {
+/// Text as markup: special characters as entities, and characters XML forbids or a terminal
+/// would act on shown as escapes.
+pub fn escape(text: &str) -> String {
     let mut out = String::with_capacity(text.len());
     for c in text.chars() {
         match c {
@@ -68,12 +71,10 @@ fn class_of(status: Status) -> &'static str {
 pub fn render(sections: &[Section<'_>], records: &[Record], run: &RunInfo) -> String {
     let failing = records.iter().filter(|r| r.status.is_failure()).count();
     let mut out = String::new();
-    let _ = write!(
+    out.push_str(&head("plc-conformance report"));
+    let _ = writeln!(
         out,
-        "<!DOCTYPE html>\n<html xmlns=\"http://www.w3.org/1999/xhtml\" lang=\"en\">\n<head>\n\
-         <meta charset=\"utf-8\" />\n<title>plc-conformance report</title>\n\
-         <style>{STYLE}</style>\n</head>\n<body>\n<h1>plc-conformance report</h1>\n\
-         <p id=\"summary\">{} cells in {} matrices; {failing} failing.</p>\n",
+        "<p id=\"summary\">{} cells in {} matrices; {failing} failing.</p>",
         records.len(),
         sections.len()
     );
@@ -219,9 +220,23 @@ pub fn render(sections: &[Section<'_>], records: &[Record], run: &RunInfo) -> St
             );
         }
     }
-    out.push_str("</body>\n</html>\n");
+    out.push_str(FOOT);
     out
 }
+
+/// The start of a report page, up to its heading: every page of the tool (a run's report, a
+/// sweep's) has the same look and is well-formed XHTML with no scripts and no network access.
+pub fn head(title: &str) -> String {
+    format!(
+        "<!DOCTYPE html>\n<html xmlns=\"http://www.w3.org/1999/xhtml\" lang=\"en\">\n<head>\n\
+         <meta charset=\"utf-8\" />\n<title>{t}</title>\n<style>{STYLE}</style>\n</head>\n\
+         <body>\n<h1>{t}</h1>\n",
+        t = escape(title)
+    )
+}
+
+/// The end of a report page.
+pub const FOOT: &str = "</body>\n</html>\n";
 
 /// The failing records with their index, which anchors their explanation in the page.
 fn failures(records: &[Record]) -> impl Iterator<Item = (usize, &Record)> {

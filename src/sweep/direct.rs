@@ -18,9 +18,13 @@ pub struct Images([Image; 2]);
 
 impl Images {
     pub fn of(input: &Input) -> Images {
+        Images::from_words(input.before.clone())
+    }
+
+    fn from_words(words: std::collections::BTreeMap<crate::device::Device, u16>) -> Images {
         Images([
-            Image::new(input.before.clone(), Fill::A),
-            Image::new(input.before.clone(), Fill::B),
+            Image::new(words.clone(), Fill::A),
+            Image::new(words, Fill::B),
         ])
     }
 }
@@ -40,8 +44,10 @@ pub fn reply(column: &Column, cases: &Cases, native: Option<&(Input, Images)>) -
                     reason: why.clone(),
                 });
             }
-            lowered = lowered_input(l, case);
-            own_images = Images::of(&lowered);
+            let mut input = lowered_input(l, case);
+            // The request reads memory from the images only.
+            own_images = Images::from_words(std::mem::take(&mut input.before));
+            lowered = input;
             (&lowered, &own_images, Some(l), case.digits)
         }
         (Ask::Instruction, Some((input, images))) => {

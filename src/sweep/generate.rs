@@ -11,8 +11,9 @@
 //!   bytes replaced (by any byte, a class boundary, 00H, a token number parsers know such as
 //!   `0x`, a sign or `_`, or the UTF-8 form of a character outside ASCII); lengths, counts,
 //!   flag settings, and operands at the end of a device range.
-//! - **full**: all 2^32 texts of 4 bytes, in a scrambled order (any contiguous part or shard
-//!   is an even sample of the whole).
+//! - **full**: all 2^32 texts of 4 bytes. By class (the default), one text per tuple of byte
+//!   classes, each standing for all the texts of its tuple (`super::classes`); or each text
+//!   asked, in a scrambled order (any contiguous part or shard is an even sample of the whole).
 //!
 //! Each text or value is crossed with the digit counts asked for and, for an instruction,
 //! with every setting of the flags it reads (the random generator draws them instead).
@@ -21,6 +22,9 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
+use std::sync::Arc;
+
+use super::classes::ByteClasses;
 use super::input::{Data, Point};
 use super::rng::Rng;
 use crate::device::Device;
@@ -54,8 +58,8 @@ pub enum Generator {
     },
     /// `count` random inputs, texts up to `max_len` bytes.
     Random { count: u64, max_len: u32 },
-    /// All 2^32 texts of 4 bytes.
-    Full,
+    /// All 2^32 texts of 4 bytes: by class (`super::classes`), or each text asked.
+    Full { by_class: bool },
 }
 
 fn hex_bytes<S: serde::Serializer>(b: &[u8], s: S) -> Result<S::Ok, S::Error> {
@@ -68,7 +72,7 @@ impl Generator {
             Generator::Values { .. } => "values",
             Generator::Text { .. } => "text",
             Generator::Random { .. } => "random",
-            Generator::Full => "full",
+            Generator::Full { .. } => "full",
         }
     }
 
@@ -107,6 +111,9 @@ pub struct Space {
     pub reads_text: bool,
     /// The 32-bit value list (built once).
     values32: Vec<u64>,
+    /// The full generator by class: the byte classes, once found. Each point is then the
+    /// representative of a tuple of classes, standing for [`Space::weight`] texts.
+    pub classes: Option<Arc<ByteClasses>>,
 }
 
 impl Space {
@@ -126,6 +133,24 @@ impl Space {
             range_ends: Vec::new(),
             reads_text,
             values32,
+            classes: None,
+        }
+    }
+
+    /// How many points the space has: [`Space::total`], or for a sweep by class the tuples.
+    pub fn points(&self) -> u64 {
+        match &self.classes {
+            Some(c) => c.tuples(),
+            None => self.total(),
+        }
+    }
+
+    /// How many inputs point `index` stands for: 1, or for a sweep by class the texts of its
+    /// tuple.
+    pub fn weight(&self, index: u64) -> u64 {
+        match &self.classes {
+            Some(c) => c.weight(index),
+            None => 1,
         }
     }
 
@@ -137,7 +162,7 @@ impl Space {
                 .map(|l| (alphabet.len() as u64).saturating_pow(l))
                 .fold(0u64, u64::saturating_add),
             Generator::Random { count, .. } => *count,
-            Generator::Full => 1 << 32,
+            Generator::Full { .. } => 1 << 32,
         }
     }
 
@@ -162,8 +187,13 @@ impl Space {
             .saturating_mul(self.flag_choices())
     }
 
-    /// Input `index` (below [`Space::total`]).
+    /// Input `index` (below [`Space::points`]).
     pub fn point(&self, index: u64) -> Point {
+        if let Some(c) = &self.classes {
+            let mut p = Point::text(&c.representative(index), if self.counted { 4 } else { 0 });
+            p.counted = self.counted;
+            return p;
+        }
         if let Generator::Random { max_len, .. } = self.generator {
             return self.random(index, max_len);
         }
@@ -176,7 +206,7 @@ impl Space {
             Generator::Values { bits: 16 } => Data::Value(data_pick),
             Generator::Values { .. } => Data::Value(self.values32[data_pick as usize]),
             Generator::Text { alphabet, .. } => Data::Text(nth_text(alphabet, data_pick)),
-            Generator::Full => Data::Text(scramble(data_pick as u32).to_be_bytes().to_vec()),
+            Generator::Full { .. } => Data::Text(scramble(data_pick as u32).to_be_bytes().to_vec()),
             Generator::Random { .. } => unreachable!("handled above"),
         };
         let digits = if !self.counted {
@@ -233,10 +263,7 @@ impl Space {
             }
             let end = r.pick(&self.range_ends).clone();
             let back = r.below(9) as u32;
-            Some(Device::new(
-                end.code.clone(),
-                end.index.saturating_sub(back),
-            ))
+            Some(Device::new(end.code(), end.index.saturating_sub(back)))
         };
         let source = near_end(&mut r);
         let destination = near_end(&mut r);

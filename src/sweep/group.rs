@@ -2,6 +2,7 @@
 //! column answered which class of answer), and inputs with the same signature and features
 //! counted together.
 
+use std::borrow::Cow;
 use std::collections::{BTreeMap, HashMap};
 
 use serde::Serialize;
@@ -84,25 +85,25 @@ impl Reply {
     }
 
     /// The class of the answer, before numbering equal values: `value`, `text`, an error
-    /// class or signal, `writes`, `no change`, `skipped`, a fault kind.
-    fn class(&self) -> (String, bool) {
-        let (class, numbered) = match self {
+    /// class or signal, `writes`, `no change`, `skipped`, a fault kind. (Borrowed where it can
+    /// be: grouping asks this of every reply of every input.)
+    fn class(&self) -> (Cow<'_, str>, bool) {
+        match self {
             Reply::Answer { answer, .. } => match answer {
-                Answer::Value(_) => ("value".to_string(), true),
-                Answer::Text(_) => ("text".to_string(), true),
-                Answer::Error(c) => (c.to_string(), false),
-                Answer::OtherError(e) => (format!("error {e}"), false),
+                Answer::Value(_) => (Cow::Borrowed("value"), true),
+                Answer::Text(_) => (Cow::Borrowed("text"), true),
+                Answer::Error(c) => (Cow::Owned(c.to_string()), false),
+                Answer::OtherError(e) => (Cow::Owned(format!("error {e}")), false),
             },
             Reply::Memory { effect, .. } => match (&effect.error, effect.changed.is_empty()) {
-                (Some(e), true) => (format!("error {e}"), false),
-                (Some(e), false) => (format!("error {e} and writes"), true),
-                (None, true) => ("no change".to_string(), false),
-                (None, false) => ("writes".to_string(), true),
+                (Some(e), true) => (Cow::Owned(format!("error {e}")), false),
+                (Some(e), false) => (Cow::Owned(format!("error {e} and writes")), true),
+                (None, true) => (Cow::Borrowed("no change"), false),
+                (None, false) => (Cow::Borrowed("writes"), true),
             },
-            Reply::Skipped { .. } => ("skipped".to_string(), false),
-            Reply::Failed { label, .. } => (label.clone(), false),
-        };
-        (class, numbered)
+            Reply::Skipped { .. } => (Cow::Borrowed("skipped"), false),
+            Reply::Failed { label, .. } => (Cow::Borrowed(label.as_str()), false),
+        }
     }
 }
 
@@ -124,27 +125,34 @@ impl std::fmt::Display for Reply {
 /// The behaviour signature of one input: per column, the class of its answer, with equal
 /// values numbered alike across columns (`value#1` twice means the same value).
 pub fn labels(replies: &[Reply]) -> Vec<String> {
-    let mut seen: Vec<(String, &Reply)> = Vec::new();
+    let same = |x: &Reply, y: &Reply| match (x, y) {
+        (Reply::Answer { answer: a, .. }, Reply::Answer { answer: b, .. }) => a == b,
+        (Reply::Memory { effect: a, .. }, Reply::Memory { effect: b, .. }) => a == b,
+        _ => false,
+    };
+    // Per class, the distinct numbered replies seen so far: a reply's number is its place there.
+    let mut seen: Vec<(Cow<'_, str>, Vec<&Reply>)> = Vec::new();
     replies
         .iter()
         .map(|r| {
             let (class, numbered) = r.class();
             let mut label = if numbered {
-                let same = |x: &Reply, y: &Reply| match (x, y) {
-                    (Reply::Answer { answer: a, .. }, Reply::Answer { answer: b, .. }) => a == b,
-                    (Reply::Memory { effect: a, .. }, Reply::Memory { effect: b, .. }) => a == b,
-                    _ => false,
-                };
-                let n = match seen.iter().position(|(c, x)| *c == class && same(x, r)) {
-                    Some(i) => seen[..=i].iter().filter(|(c, _)| *c == class).count(),
+                let n = match seen.iter_mut().find(|(c, _)| *c == class) {
+                    Some((_, distinct)) => match distinct.iter().position(|x| same(x, r)) {
+                        Some(i) => i + 1,
+                        None => {
+                            distinct.push(r);
+                            distinct.len()
+                        }
+                    },
                     None => {
-                        seen.push((class.clone(), r));
-                        seen.iter().filter(|(c, _)| *c == class).count()
+                        seen.push((class.clone(), vec![r]));
+                        1
                     }
                 };
                 format!("{class}#{n}")
             } else {
-                class
+                class.into_owned()
             };
             if r.fill_dependent() {
                 label.push_str(" (fill-dependent)");
@@ -248,7 +256,8 @@ impl Groups {
         }
     }
 
-    /// Counts one input.
+    /// Counts one input, standing for `weight` inputs (more than 1 for the representative of
+    /// a tuple of byte classes).
     pub fn add(
         &mut self,
         columns: &[Column],
@@ -256,6 +265,7 @@ impl Groups {
         index: u64,
         point: &Point,
         replies: Vec<Reply>,
+        weight: u64,
     ) {
         let key = Key {
             signature: labels(&replies),
@@ -285,13 +295,13 @@ impl Groups {
                 classes: BTreeMap::new(),
             }),
         };
-        group.inputs += 1;
+        group.inputs += weight;
         if index < group.representative.index {
             group.representative = found(&replies);
             group.differing = names(&replies);
         }
         if let Some(c) = group.classes.get_mut(&class) {
-            c.inputs += 1;
+            c.inputs += weight;
             if index < c.first.index {
                 c.first = found(&replies);
             }
@@ -301,7 +311,7 @@ impl Groups {
                 class.clone(),
                 Class {
                     name: class,
-                    inputs: 1,
+                    inputs: weight,
                     first,
                 },
             );

@@ -6,7 +6,7 @@
 //! and operands is the column's business (`super::target`).
 
 use std::collections::BTreeMap;
-use std::fmt;
+use std::fmt::{self, Write as _};
 
 use serde::Serialize;
 
@@ -126,22 +126,26 @@ impl Point {
     pub fn class(&self, counted: bool) -> String {
         let mut s = match &self.data {
             Data::Text(t) => {
-                let mut tokens: Vec<String> = Vec::new();
-                for b in t {
-                    let k = kind(*b);
-                    let token = if k == Kind::Digit {
-                        "D".to_string()
+                let mut s = String::new();
+                let mut last = None;
+                for k in t.iter().map(|b| kind(*b)) {
+                    if last == Some(k) {
+                        continue;
+                    }
+                    if last.is_some() {
+                        s.push(' ');
+                    }
+                    last = Some(k);
+                    if k == Kind::Digit {
+                        s.push('D');
                     } else {
-                        k.to_string()
-                    };
-                    if tokens.last() != Some(&token) {
-                        tokens.push(token);
+                        let _ = write!(s, "{k}");
                     }
                 }
-                if tokens.is_empty() {
+                if s.is_empty() {
                     "empty".to_string()
                 } else {
-                    tokens.join(" ")
+                    s
                 }
             }
             Data::Value(v) => format!("{} digit(s)", significant_digits(*v)),

@@ -16,12 +16,14 @@
 //! [`crate::runner::run_one`] instead, with the same replies.
 //!
 //! - [`generate`]: the generators, each a numbered space of inputs ([`generate::Space`]);
+//! - [`classes`]: byte classes, by which the full generator covers all 2^32 texts;
 //! - [`target`]: what is swept (an operation or an instruction) and the columns;
 //! - [`group`]: answers reduced to behaviour signatures and counted;
 //! - [`shrink`]: a group's inputs reduced to the simplest that behaves the same;
 //! - [`emit`]: a shrunk input written as a vector in the corpus format;
 //! - [`render`]: the results as text, JSON and HTML.
 
+pub mod classes;
 pub mod direct;
 pub mod emit;
 pub mod generate;
@@ -46,6 +48,9 @@ use group::{Found, Groups, Reply};
 use input::Point;
 use target::{columns, Cases, Column, Shape, Target};
 
+/// Random texts that check the byte classes of a full sweep by class.
+pub const DEFAULT_CLASS_CHECK: u64 = 1 << 20;
+
 /// What to sweep and how.
 #[derive(Debug, Clone, Serialize)]
 pub struct Settings {
@@ -68,6 +73,8 @@ pub struct Settings {
     /// the replies are the same.
     #[serde(skip)]
     pub direct: bool,
+    /// The full generator by class: random texts asked as they are, to check the classes.
+    pub class_check: u64,
 }
 
 impl Settings {
@@ -82,6 +89,7 @@ impl Settings {
             max_classes: 64,
             shrink: 4,
             direct: true,
+            class_check: DEFAULT_CLASS_CHECK,
         }
     }
 }
@@ -132,6 +140,9 @@ pub struct Results {
     #[serde(skip)]
     pub groups: Groups,
     pub shrunk: Vec<Shrunk>,
+    /// The full generator by class: the classes and their check.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub classes: Option<classes::Report>,
 }
 
 impl Results {
@@ -295,19 +306,47 @@ impl Sweep {
 
     /// Runs the sweep (this shard of it), calling `progress(done, of)` after each round, then
     /// shrinks the groups. A set `stop` ends it after the round under way, with what was found.
+    /// The full generator by class first finds its byte classes and afterwards checks them
+    /// ([`classes`]).
     pub fn run(&self, stop: &AtomicBool, progress: &mut dyn FnMut(u64, u64)) -> Results {
         let started = Instant::now();
-        let total = self.space.total();
-        let (k, n) = self.settings.shard;
-        let shard_inputs = total.saturating_sub(k - 1).div_ceil(n);
+        let by_class = matches!(self.settings.generator, Generator::Full { by_class: true });
+        let mut split_texts = 0;
+        let space = match (&self.space.classes, by_class) {
+            (None, true) => {
+                let found = match classes::derive(self, stop) {
+                    Some((c, asked)) => {
+                        split_texts = asked;
+                        c
+                    }
+                    None => classes::ByteClasses::by_kind(),
+                };
+                let mut space = self.space.clone();
+                space.classes = Some(Arc::new(found));
+                std::borrow::Cow::Owned(space)
+            }
+            _ => std::borrow::Cow::Borrowed(&self.space),
+        };
+        let total = space.total();
+        let weighted = space.classes.is_some();
+        let shard = self.settings.shard;
+        let shard_inputs = if weighted {
+            shard_indices(space.points(), shard)
+                .map(|i| space.weight(i))
+                .sum()
+        } else {
+            total.saturating_sub(shard.0 - 1).div_ceil(shard.1)
+        };
         let chunk = if self.columns.iter().all(|c| c.in_process) {
             CHUNK_IN_PROCESS
         } else {
             CHUNK_EXTERNAL
         };
         let mut groups = Groups::new(self.settings.max_classes);
+        let mut digests = std::collections::HashMap::new();
         let mut swept = 0u64;
-        let mut indices = shard_indices(total, self.settings.shard);
+        let mut asked = 0u64;
+        let mut indices = shard_indices(space.points(), shard);
         let mut interrupted = false;
         progress(0, shard_inputs);
         loop {
@@ -318,7 +357,7 @@ impl Sweep {
             let points: Vec<(u64, Point)> = indices
                 .by_ref()
                 .take(chunk)
-                .map(|i| (i, self.space.point(i)))
+                .map(|i| (i, space.point(i)))
                 .collect();
             if points.is_empty() {
                 break;
@@ -326,12 +365,38 @@ impl Sweep {
             let answers = self.answers(&points, stop);
             for ((index, point), replies) in points.iter().zip(answers) {
                 if let Some(replies) = replies {
-                    groups.add(&self.columns, self.counted(), *index, point, replies);
-                    swept += 1;
+                    let weight = space.weight(*index);
+                    if weighted {
+                        digests.insert(*index, classes::digest(&replies));
+                    }
+                    groups.add(
+                        &self.columns,
+                        self.counted(),
+                        *index,
+                        point,
+                        replies,
+                        weight,
+                    );
+                    swept += weight;
+                    asked += 1;
                 }
             }
             progress(swept, shard_inputs);
         }
+        let class_report = space.classes.as_ref().filter(|_| by_class).map(|c| {
+            let (checked, mismatch) = if interrupted {
+                (0, None)
+            } else {
+                classes::check(self, c, &digests, self.settings.class_check, stop)
+            };
+            classes::Report {
+                classes: c.describe(),
+                split_texts,
+                tuples: asked,
+                checked,
+                mismatch,
+            }
+        });
         let mut results = Results {
             settings: self.settings.clone(),
             columns: self.column_info(),
@@ -342,6 +407,7 @@ impl Sweep {
             elapsed: started.elapsed(),
             groups,
             shrunk: Vec::new(),
+            classes: class_report,
         };
         if !stop.load(Ordering::Relaxed) {
             results.shrunk = shrink::shrink_groups(self, &results, stop);
@@ -389,12 +455,12 @@ fn range_ends(shape: &Shape) -> Vec<crate::device::Device> {
         .profile
         .variants
         .iter()
-        .filter_map(|v| shape.profile.ranges(v, &head.code))
+        .filter_map(|v| shape.profile.ranges(v, head.code()))
         .flat_map(|r| r.iter().map(|r| r.last).collect::<Vec<_>>())
         .collect();
     ends.sort_unstable();
     ends.dedup();
     ends.into_iter()
-        .map(|i| crate::device::Device::new(head.code.clone(), i))
+        .map(|i| crate::device::Device::new(head.code(), i))
         .collect()
 }

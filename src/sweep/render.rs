@@ -7,6 +7,7 @@ use serde::Serialize;
 
 use super::group::{Class, Found, Group};
 use super::{ColumnInfo, Results, Settings, Shrunk};
+use crate::report::html::{escape, head, FOOT};
 
 /// How many inputs two columns disagree on.
 #[derive(Debug, Clone, Serialize)]
@@ -123,6 +124,9 @@ pub fn text(results: &Results) -> String {
             what(results)
         );
     }
+    if let Some(c) = &results.classes {
+        class_text(&mut out, c);
+    }
     let swept = thousands(results.swept);
     for p in pairs(results) {
         let _ = writeln!(
@@ -141,6 +145,37 @@ pub fn text(results: &Results) -> String {
         group_text(&mut out, results, i, g, shrunk.get(&i).map(Vec::as_slice));
     }
     out
+}
+
+/// How a sweep by class covered its texts, and whether the check held.
+fn class_text(out: &mut String, c: &super::classes::Report) {
+    let _ = writeln!(
+        out,
+        "  by class: {} texts asked, one per tuple of {} byte classes (found with {} texts)",
+        thousands(c.tuples),
+        c.classes.len(),
+        thousands(c.split_texts),
+    );
+    let _ = writeln!(out, "  byte classes: {}", c.classes.join(", "));
+    match &c.mismatch {
+        None => {
+            let _ = writeln!(
+                out,
+                "  checked: {} random texts asked as they are, each answered as its class representative",
+                thousands(c.checked)
+            );
+        }
+        Some(m) => {
+            let _ = writeln!(
+                out,
+                "  CHECK FAILED after {} random texts: {} answers unlike its representative {}; \
+                 the counts are not exact",
+                thousands(c.checked),
+                m.text.point,
+                m.representative.point
+            );
+        }
+    }
 }
 
 fn shrunk_by_group(shrunk: &[Shrunk]) -> BTreeMap<usize, Vec<&Shrunk>> {
@@ -214,6 +249,9 @@ pub struct Document<'a> {
     pub elapsed_seconds: f64,
     pub pairs: Vec<Pair>,
     pub groups: Vec<GroupDoc<'a>>,
+    /// The full generator by class: the byte classes and their check.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub byte_classes: Option<&'a super::classes::Report>,
 }
 
 #[derive(Serialize)]
@@ -263,6 +301,7 @@ pub fn document(results: &Results) -> Document<'_> {
                 shrunk: shrunk.get(&i).cloned().unwrap_or_default(),
             })
             .collect(),
+        byte_classes: results.classes.as_ref(),
     }
 }
 
@@ -270,26 +309,15 @@ pub fn json(results: &Results) -> String {
     serde_json::to_string_pretty(&document(results)).unwrap_or_default()
 }
 
-fn escape(t: &str) -> String {
-    t.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-}
-
-/// One self-contained HTML page: the pairs that disagree and a table of the groups.
+/// The results as a page of the HTML report (`crate::report::html`, the same look and the same
+/// guarantees): the pairs that disagree, and a table of the groups in which those that differ
+/// from their oracle are marked as a run's report marks failures.
 pub fn html(results: &Results) -> String {
-    let mut out = String::from(
-        "<!doctype html>\n<html><head><meta charset=\"utf-8\"><title>plc-conformance sweep</title>\
-         <style>body{font-family:sans-serif;margin:2em}table{border-collapse:collapse}\
-         td,th{border:1px solid #ccc;padding:2px 6px;font-family:monospace;font-size:90%}\
-         tr.differs td{background:#fee}</style></head><body>\n",
-    );
     let s = &results.settings;
+    let mut out = head(&format!("plc-conformance sweep of {}", s.target));
     let _ = writeln!(
         out,
-        "<h1>Sweep of {}</h1><p>{} generator, seed {}, shard {}/{}: {} of {} inputs{}.</p>",
-        escape(&s.target.to_string()),
+        "<p id=\"summary\">{} generator, seed {}, shard {}/{}: {} of {} inputs{}.</p>",
         s.generator.name(),
         s.seed,
         s.shard.0,
@@ -302,7 +330,28 @@ pub fn html(results: &Results) -> String {
             ""
         }
     );
-    out.push_str("<h2>Disagreements</h2><ul>\n");
+    if let Some(c) = &results.classes {
+        let check = match &c.mismatch {
+            None => format!(
+                "{} random texts checked, each answered as its class representative",
+                thousands(c.checked)
+            ),
+            Some(m) => format!(
+                "<strong>check failed</strong>: {} answers unlike its representative {}; the \
+                 counts are not exact",
+                escape(&m.text.point.to_string()),
+                escape(&m.representative.point.to_string())
+            ),
+        };
+        let _ = writeln!(
+            out,
+            "<p>By class: {} texts asked, one per tuple of {} byte classes ({}); {check}.</p>",
+            thousands(c.tuples),
+            c.classes.len(),
+            escape(&c.classes.join(", "))
+        );
+    }
+    out.push_str("<h2>Disagreements</h2>\n<ul>\n");
     for p in pairs(results) {
         let _ = writeln!(
             out,
@@ -314,7 +363,11 @@ pub fn html(results: &Results) -> String {
             p.groups
         );
     }
-    out.push_str("</ul><h2>Groups</h2><table><tr><th>#</th><th>inputs</th><th>features</th>");
+    out.push_str(
+        "</ul>\n<h2>Groups</h2>\n<p class=\"legend\"><span class=\"fails\">differs from its \
+         oracle</span></p>\n<table class=\"matrix\" id=\"groups\">\n<tr><th>#</th><th>inputs</th>\
+         <th>features</th>",
+    );
     for c in &results.columns {
         let _ = write!(out, "<th>{}</th>", escape(&c.name));
     }
@@ -341,6 +394,7 @@ pub fn html(results: &Results) -> String {
             escape(&g.representative.point.to_string())
         );
     }
-    out.push_str("</table></body></html>\n");
+    out.push_str("</table>\n");
+    out.push_str(FOOT);
     out
 }

@@ -187,9 +187,19 @@ impl ExternalBackend {
     }
 
     /// Runs one batch of case requests, restarting the process after each fault and resending
-    /// the cases after the faulty one.
-    fn run_chunk(&self, state: &mut State, cases: &[RunCase]) -> Vec<Result<Response, Fault>> {
+    /// the cases after the faulty one. `sent`: the batch is already queued to the running
+    /// process. `ahead` queues the next batch once this one is sent, before its answers are
+    /// read; the returned flag says whether that next batch is still queued to a live process
+    /// (a fault here kills the process it went to).
+    fn run_chunk(
+        &self,
+        state: &mut State,
+        cases: &[RunCase],
+        mut sent: bool,
+        mut ahead: impl FnMut(&mut Process) -> bool,
+    ) -> (Vec<Result<Response, Fault>>, bool) {
         let mut results: Vec<Result<Response, Fault>> = Vec::with_capacity(cases.len());
+        let mut ahead_sent = false;
         while results.len() < cases.len() {
             let rest = &cases[results.len()..];
             if let Some(why) = &state.down {
@@ -197,6 +207,7 @@ impl ExternalBackend {
                 break;
             }
             if state.process.is_none() {
+                sent = false;
                 match handshake(&self.settings) {
                     Ok((p, _, _)) => {
                         if self.settings.persistent {
@@ -227,7 +238,12 @@ impl ExternalBackend {
                 continue;
             };
             let mark = process.stderr_mark();
-            process.send(run_message(rest));
+            if !std::mem::take(&mut sent) {
+                process.send(run_message(rest));
+            }
+            if !ahead_sent {
+                ahead_sent = ahead(process);
+            }
             let mut deadline = Instant::now() + self.settings.timeout;
             for case in rest {
                 match self.answer(process, case, deadline) {
@@ -242,6 +258,7 @@ impl ExternalBackend {
                             p.kill();
                             p.stderr_since(mark, Duration::from_millis(300))
                         });
+                        ahead_sent = false;
                         state.faults_in_a_row += 1;
                         if closing() {
                             state.down = Some(INTERRUPTED.into());
@@ -259,7 +276,7 @@ impl ExternalBackend {
                 p.shutdown(shutdown_message());
             }
         }
-        results
+        (results, ahead_sent && state.process.is_some())
     }
 
     /// Why the rest of the trials are not run once the circuit breaker trips: a backend that
@@ -382,23 +399,18 @@ impl Backend for ExternalBackend {
     }
 
     fn convert_batch(&self, questions: &[Question<'_>]) -> Vec<Result<Response, Fault>> {
-        self.send_all(|id| {
-            questions
-                .iter()
-                .zip(id..)
-                .map(|(q, id)| {
-                    RunCase::Codec(CodecRequest {
-                        id,
-                        case: q.case_id.to_string(),
-                        operation: q.operation,
-                        text: (q.operation == crate::model::cross_vendor::Operation::HexToValue)
-                            .then(|| q.text.to_vec()),
-                        value: (q.operation == crate::model::cross_vendor::Operation::ValueToHex)
-                            .then_some(q.value),
-                        digits: q.digits,
-                    })
-                })
-                .collect()
+        self.send_all(questions.len(), |i, id| {
+            let q = &questions[i];
+            RunCase::Codec(CodecRequest {
+                id,
+                case: q.case_id.to_string(),
+                operation: q.operation,
+                text: (q.operation == crate::model::cross_vendor::Operation::HexToValue)
+                    .then(|| q.text.to_vec()),
+                value: (q.operation == crate::model::cross_vendor::Operation::ValueToHex)
+                    .then_some(q.value),
+                digits: q.digits,
+            })
         })
     }
 
@@ -461,11 +473,11 @@ impl Backend for ExternalBackend {
                     Operand::Device(d) => caps
                         .devices
                         .as_ref()
-                        .filter(|list| !list.contains(&d.code))
+                        .filter(|list| !list.iter().any(|c| c == d.code()))
                         .map(|_| {
                             format!(
                                 "{name} does not implement operand {op} as a {} device",
-                                d.code
+                                d.code()
                             )
                         }),
                 }
@@ -488,34 +500,59 @@ impl Backend for ExternalBackend {
     }
 
     fn execute_batch(&self, requests: &[Request<'_>]) -> Vec<Result<Response, Fault>> {
-        self.send_all(|id| {
-            requests
-                .iter()
-                .zip(id..)
-                .map(|(r, id)| RunCase::Instruction(case_request(r, id)))
-                .collect()
+        self.send_all(requests.len(), |i, id| {
+            RunCase::Instruction(case_request(&requests[i], id))
         })
     }
 }
 
 impl ExternalBackend {
-    /// Sends requests in batches and reads their answers; `make` numbers them from the id given.
-    fn send_all(&self, make: impl FnOnce(u64) -> Vec<RunCase>) -> Vec<Result<Response, Fault>> {
+    /// Sends `count` requests in batches and reads their answers; `make(i, id)` builds the
+    /// `i`-th with its id. A persistent process gets the next batch as soon as the current one
+    /// is sent, built while the process works on the current one: both sides stay busy, where
+    /// sending a batch only once the last is answered would leave each waiting on the other.
+    fn send_all(
+        &self,
+        count: usize,
+        make: impl Fn(usize, u64) -> RunCase,
+    ) -> Vec<Result<Response, Fault>> {
         let mut state = match self.state.lock() {
             Ok(s) => s,
             Err(poisoned) => poisoned.into_inner(),
         };
-        let cases = make(state.next_id);
-        state.next_id += cases.len() as u64;
+        let first_id = state.next_id;
+        state.next_id += count as u64;
         let size = if self.settings.persistent {
             self.settings.batch.max(1)
         } else {
             1
         };
-        cases
-            .chunks(size)
-            .flat_map(|chunk| self.run_chunk(&mut state, chunk))
-            .collect()
+        let build = |k: usize| -> Vec<RunCase> {
+            (k * size..((k + 1) * size).min(count))
+                .map(|i| make(i, first_id + i as u64))
+                .collect()
+        };
+        let batches = count.div_ceil(size);
+        let mut results = Vec::with_capacity(count);
+        let mut next: Option<Vec<RunCase>> = None;
+        let mut sent = false;
+        for k in 0..batches {
+            let cases = next.take().unwrap_or_else(|| build(k));
+            let mut ahead: Option<Vec<RunCase>> = None;
+            let pipelined = self.settings.persistent && k + 1 < batches;
+            let (answers, ahead_sent) =
+                self.run_chunk(&mut state, &cases, sent, |process: &mut Process| {
+                    if !pipelined {
+                        return false;
+                    }
+                    process.send(run_message(ahead.get_or_insert_with(|| build(k + 1))));
+                    true
+                });
+            results.extend(answers);
+            sent = ahead_sent;
+            next = ahead;
+        }
+        results
     }
 }
 

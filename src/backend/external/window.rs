@@ -45,7 +45,7 @@ pub fn ranges(req: &Request<'_>) -> Vec<(String, u32, u32)> {
     let set = req.memory.explicit().keys().map(|d| (d, SET_SPAN));
     for (d, len) in operands.chain(set) {
         let last = d.index.saturating_add(len - 1);
-        spans.entry(&d.code).or_default().push((d.index, last));
+        spans.entry(d.code()).or_default().push((d.index, last));
     }
     let mut out = Vec::new();
     for (code, list) in spans {
@@ -83,14 +83,14 @@ pub fn memory(req: &Request<'_>) -> Vec<MemoryRange> {
     ranges(req)
         .into_iter()
         .map(|(code, first, last)| {
-            let mut device = Device::new(code, first);
+            let mut device = Device::new(&code, first);
             let mut words = Vec::with_capacity((last - first + 1) as usize);
             for index in first..=last {
                 device.index = index;
                 words.push(fill.word(&device));
             }
             device.index = first;
-            let end = Device::new(device.code.clone(), last);
+            let end = Device::new(device.code(), last);
             for (d, value) in req.memory.explicit().range(&device..=&end) {
                 words[(d.index - first) as usize] = *value;
             }
