@@ -744,3 +744,71 @@ fn the_html_results_are_a_well_formed_report_page_with_every_group() {
         .all(|(n, _)| !matches!(n.as_str(), "script" | "link" | "img" | "iframe")));
     assert!(html.contains("<style>"), "the report's own style");
 }
+
+/// Ctrl-C on the command line: the sweep stops after the round under way and still writes what
+/// it found, marked as interrupted.
+#[cfg(unix)]
+#[test]
+fn ctrl_c_ends_a_sweep_with_what_it_found() {
+    use std::process::{Command, Stdio};
+    use std::time::{Duration, Instant};
+    let dir = scratch();
+    let output = dir.path().join("sweep.json");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_plc-conformance"))
+        .args(["--root", root().to_str().unwrap_or(".")])
+        .args([
+            "sweep",
+            "--operation",
+            "hex-to-value",
+            "--generator",
+            "full",
+        ])
+        .args(["--each-text", "--seed", "1", "--format", "json", "--output"])
+        .arg(&output)
+        .env("NO_COLOR", "1")
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the binary starts");
+    // The first line comes once the handler is in place; every text asked takes hours, so
+    // the signal lands while the sweep runs.
+    let mut stderr = std::io::BufReader::new(child.stderr.take().expect("stderr"));
+    let mut first = String::new();
+    std::io::BufRead::read_line(&mut stderr, &mut first).expect("stderr read");
+    assert!(first.starts_with("sweeping "), "{first}");
+    std::thread::sleep(Duration::from_millis(300));
+    let pid = i32::try_from(child.id()).expect("pid");
+    // SAFETY: kill(2) takes no pointers; the child has not been waited for.
+    unsafe {
+        libc::kill(pid, libc::SIGINT);
+    }
+    let signalled = Instant::now();
+    while child.try_wait().ok().flatten().is_none() && signalled.elapsed() < Duration::from_secs(30)
+    {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    assert!(
+        signalled.elapsed() < Duration::from_secs(10),
+        "took {:?} to stop",
+        signalled.elapsed()
+    );
+    let mut rest = String::new();
+    std::io::Read::read_to_string(&mut stderr, &mut rest).expect("stderr read");
+    assert!(rest.contains("interrupted: "), "{rest}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&output).expect("results written"))
+            .expect("JSON");
+    assert_eq!(json["interrupted"], true);
+    let swept = json["swept"].as_u64().expect("swept");
+    assert!(swept > 0 && swept < 1 << 32, "{swept}");
+    let counted: u64 = json["groups"]
+        .as_array()
+        .expect("groups")
+        .iter()
+        .filter_map(|g| g["inputs"].as_u64())
+        .sum();
+    assert_eq!(counted, swept);
+}
