@@ -46,17 +46,7 @@ fn junit_cases(xml: &str) -> Vec<Case> {
             _ => continue,
         };
         let name = String::from_utf8_lossy(element.name().as_ref()).into_owned();
-        let attrs: Vec<(String, String)> = element
-            .attributes()
-            .filter_map(Result::ok)
-            .map(|a| {
-                (
-                    String::from_utf8_lossy(a.key.as_ref()).into_owned(),
-                    // Raw: the attributes read here (names, classes, paths) hold no escapes.
-                    String::from_utf8_lossy(&a.value).into_owned(),
-                )
-            })
-            .collect();
+        let attrs = common::xml_attributes(element);
         let get = |k: &str| {
             attrs
                 .iter()

@@ -38,6 +38,13 @@ fn instruction(profile: &str, name: &str) -> Target {
     }
 }
 
+/// A random sweep of `op`, not shrunk.
+fn random(op: Operation, count: u64, max_len: u32, seed: u64) -> Settings {
+    let mut settings = Settings::new(operation(op), Generator::Random { count, max_len }, seed);
+    settings.shrink = 0;
+    settings
+}
+
 fn run(project: &Project, backends: &[Arc<dyn Backend>], settings: Settings) -> (Sweep, Results) {
     let sweep = Sweep::new(settings, &project.profiles, backends).expect("sweep sets up");
     let results = sweep.run(&no_stop(), &mut |_, _| {});
@@ -237,15 +244,7 @@ fn a_mutant_shrinks_to_a_minimal_input_that_still_differs_and_emits_a_failing_ve
 #[test]
 fn the_shards_of_a_sweep_are_the_whole_sweep() {
     let project = session();
-    let mut settings = Settings::new(
-        operation(Operation::ValueToHex),
-        Generator::Random {
-            count: 2000,
-            max_len: 0,
-        },
-        3,
-    );
-    settings.shrink = 0;
+    let mut settings = random(Operation::ValueToHex, 2000, 0, 3);
     let (_, whole) = run(&project, &project.backends, settings.clone());
     let mut merged = Groups::new(settings.max_classes);
     let mut swept = 0;
@@ -718,16 +717,11 @@ fn a_column_that_reads_one_byte_apart_splits_its_class() {
 #[test]
 fn the_html_results_are_a_well_formed_report_page_with_every_group() {
     let project = session();
-    let mut settings = Settings::new(
-        operation(Operation::HexToValue),
-        Generator::Random {
-            count: 2000,
-            max_len: 6,
-        },
-        4,
+    let (_, r) = run(
+        &project,
+        &project.backends,
+        random(Operation::HexToValue, 2000, 6, 4),
     );
-    settings.shrink = 0;
-    let (_, r) = run(&project, &project.backends, settings);
     let html = render::html(&r);
     let elements = common::xml_elements(html.trim_start_matches("<!DOCTYPE html>\n"));
     let rows = elements.iter().filter(|(n, _)| n == "tr").count();

@@ -170,19 +170,9 @@ pub fn xml_elements(text: &str) -> Vec<(String, Vec<(String, String)>)> {
     loop {
         match reader.read_event() {
             Ok(quick_xml::events::Event::Start(e)) | Ok(quick_xml::events::Event::Empty(e)) => {
-                let attrs = e
-                    .attributes()
-                    .filter_map(Result::ok)
-                    .map(|a| {
-                        (
-                            String::from_utf8_lossy(a.key.as_ref()).into_owned(),
-                            String::from_utf8_lossy(&a.value).into_owned(),
-                        )
-                    })
-                    .collect();
                 out.push((
                     String::from_utf8_lossy(e.name().as_ref()).into_owned(),
-                    attrs,
+                    xml_attributes(&e),
                 ));
             }
             Ok(quick_xml::events::Event::Eof) => break,
@@ -191,4 +181,18 @@ pub fn xml_elements(text: &str) -> Vec<(String, Vec<(String, String)>)> {
         }
     }
     out
+}
+
+/// An element's attributes, raw: the attributes the tests read (names, classes, paths) hold no
+/// escapes.
+pub fn xml_attributes(e: &quick_xml::events::BytesStart<'_>) -> Vec<(String, String)> {
+    e.attributes()
+        .filter_map(Result::ok)
+        .map(|a| {
+            (
+                String::from_utf8_lossy(a.key.as_ref()).into_owned(),
+                String::from_utf8_lossy(&a.value).into_owned(),
+            )
+        })
+        .collect()
 }
