@@ -806,3 +806,14 @@ fn ctrl_c_ends_a_sweep_with_what_it_found() {
         .sum();
     assert_eq!(counted, swept);
 }
+
+#[test]
+fn each_text_without_the_full_generator_is_refused() {
+    let out = common::cli(&["sweep", "--operation", "hex-to-value", "--each-text"]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("--each-text applies to --generator full"),
+        "{stderr}"
+    );
+}

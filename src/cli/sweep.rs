@@ -251,6 +251,9 @@ fn run(cli: &Cli, args: &SweepArgs) -> Result<u8, String> {
         None if reads_text => text_generator(args)?,
         None => Generator::Values { bits: 16 },
     };
+    if args.each_text && !matches!(generator, Generator::Full { .. }) {
+        return Err("--each-text applies to --generator full".into());
+    }
     let seed = args.seed.unwrap_or_else(|| {
         std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
@@ -285,6 +288,13 @@ fn run(cli: &Cli, args: &SweepArgs) -> Result<u8, String> {
         sweep.settings.seed,
         render::thousands(sweep.space.total().div_ceil(sweep.settings.shard.1))
     );
+    if matches!(sweep.settings.generator, Generator::Full { by_class: true }) {
+        eprintln!(
+            "by byte class: the classes are found first, then one text per tuple of classes is \
+             asked, then {} random texts check them",
+            render::thousands(sweep.settings.class_check)
+        );
+    }
     let results = sweep.run(&STOP, &mut |done, of| {
         if let Some(bar) = &bar {
             bar.set_length(of);

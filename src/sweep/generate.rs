@@ -19,10 +19,9 @@
 //! with every setting of the flags it reads (the random generator draws them instead).
 
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 use serde::Serialize;
-
-use std::sync::Arc;
 
 use super::classes::ByteClasses;
 use super::input::{Data, Point};
