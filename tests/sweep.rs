@@ -817,3 +817,21 @@ fn each_text_without_the_full_generator_is_refused() {
         "{stderr}"
     );
 }
+
+#[test]
+fn a_full_sweep_by_class_of_an_instruction_covers_every_flag_setting() {
+    let project = session();
+    let mut settings = full_by_class(1 << 14);
+    settings.target = instruction("mitsubishi-iqr", "HABIN");
+    let (_, r) = run(&project, &project.backends, settings);
+    let classes = r.classes.as_ref().expect("by class");
+    assert!(classes.mismatch.is_none(), "{:?}", classes.mismatch);
+    assert_eq!(r.swept, 2 << 32, "every text under SM705 off and on");
+    let pairs = render::pairs(&r);
+    assert_eq!(pairs.len(), 1, "{pairs:?}");
+    // Only SM705 on tells the variants apart: a 00H after one to three digits.
+    assert_eq!(
+        pairs[0].inputs,
+        16 * 256 * 256 + 16 * 16 * 256 + 16 * 16 * 16
+    );
+}

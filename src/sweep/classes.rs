@@ -197,17 +197,16 @@ pub struct Mismatch {
     pub representative: Found,
 }
 
-fn point(sweep: &Sweep, text: [u8; 4]) -> Point {
-    let mut p = Point::text(&text, 4);
-    p.counted = sweep.counted();
-    if !p.counted {
-        p.digits = 0;
-    }
-    p
+/// `text` with setting `pick` of the sweep's space (its digit count and flags).
+fn point(sweep: &Sweep, text: [u8; 4], pick: u64) -> Point {
+    sweep
+        .space
+        .with_setting(super::input::Data::Text(text.to_vec()), pick)
 }
 
-/// Splits [`ByteClasses::by_kind`] by what the sweep's columns do (step 2 above). Returns the
-/// classes and the number of texts asked; `None` if stopped.
+/// Splits [`ByteClasses::by_kind`] by what the sweep's columns do (step 2 above), under every
+/// setting of the space (digit counts, flags). Returns the classes and the number of texts
+/// asked; `None` if stopped.
 pub fn derive(sweep: &Sweep, stop: &AtomicBool) -> Option<(ByteClasses, u64)> {
     let start = ByteClasses::by_kind();
     let contexts: Vec<[u8; 3]> = CONTEXT
@@ -233,8 +232,10 @@ pub fn derive(sweep: &Sweep, stop: &AtomicBool) -> Option<(ByteClasses, u64)> {
                             rest.next().copied().unwrap_or(b'0')
                         };
                     }
-                    points.push((PROBE_BASE + points.len() as u64, point(sweep, text)));
-                    owners.push(b);
+                    for pick in 0..sweep.space.settings() {
+                        points.push((PROBE_BASE + points.len() as u64, point(sweep, text, pick)));
+                        owners.push(b);
+                    }
                 }
             }
         }
@@ -262,9 +263,9 @@ pub fn digest(replies: &[Reply]) -> u64 {
     h.finish()
 }
 
-/// Step 3: `count` random texts of the tuples in this shard (drawn from `seed`), each asked as
-/// it is and compared with the digest of its representative's replies (`digests`, by tuple,
-/// for the tuples swept). Returns how many were checked and the first that differed.
+/// Step 3: `count` random texts of the tuples in this shard, each with a random setting (drawn
+/// from the seed), asked as they are and compared with the digest of their representative's
+/// replies (`digests`, by point of the space, for the points swept). Returns how many were checked and the first that differed.
 pub fn check(
     sweep: &Sweep,
     classes: &ByteClasses,
@@ -272,7 +273,10 @@ pub fn check(
     count: u64,
     stop: &AtomicBool,
 ) -> (u64, Option<Mismatch>) {
+    let settings = sweep.space.settings();
+    // Each drawn text with its setting, and the point of the space it belongs to.
     let mut points = Vec::new();
+    let mut at = Vec::new();
     let mut draw = 0u64;
     // A shard holds 1/N of the tuples; draws outside it are passed over (bounded, so that a
     // very fine shard still ends).
@@ -280,46 +284,48 @@ pub fn check(
         let mut r = Rng::for_input(sweep.settings.seed ^ PROBE_BASE, draw);
         draw += 1;
         let text = [r.byte(), r.byte(), r.byte(), r.byte()];
-        if digests.contains_key(&classes.tuple_of(text)) {
-            points.push((PROBE_BASE + draw, point(sweep, text)));
+        let pick = r.below(settings);
+        let index = classes.tuple_of(text) * settings + pick;
+        if digests.contains_key(&index) {
+            points.push((PROBE_BASE + draw, point(sweep, text, pick)));
+            at.push((index, pick));
         }
     }
     let mut checked = 0;
-    for block in points.chunks(1 << 16) {
+    for (block, at) in points.chunks(1 << 16).zip(at.chunks(1 << 16)) {
         let answers = sweep.answers(block, stop);
-        for ((index, p), replies) in block.iter().zip(answers) {
+        for (((number, p), replies), &(index, pick)) in block.iter().zip(answers).zip(at) {
             let Some(replies) = replies else {
                 return (checked, None);
             };
             checked += 1;
-            let super::input::Data::Text(t) = &p.data else {
+            if digests.get(&index) == Some(&digest(&replies)) {
                 continue;
-            };
-            let text = [t[0], t[1], t[2], t[3]];
-            let tuple = classes.tuple_of(text);
-            if digests.get(&tuple) != Some(&digest(&replies)) {
-                let rep = (tuple, point(sweep, classes.representative(tuple)));
-                let theirs = sweep
-                    .answers(std::slice::from_ref(&rep), stop)
-                    .pop()
-                    .flatten()
-                    .unwrap_or_default();
-                return (
-                    checked,
-                    Some(Mismatch {
-                        text: Found {
-                            index: *index,
-                            point: p.clone(),
-                            replies,
-                        },
-                        representative: Found {
-                            index: rep.0,
-                            point: rep.1,
-                            replies: theirs,
-                        },
-                    }),
-                );
             }
+            let rep = (
+                index,
+                point(sweep, classes.representative(index / settings), pick),
+            );
+            let theirs = sweep
+                .answers(std::slice::from_ref(&rep), stop)
+                .pop()
+                .flatten()
+                .unwrap_or_default();
+            return (
+                checked,
+                Some(Mismatch {
+                    text: Found {
+                        index: *number,
+                        point: p.clone(),
+                        replies,
+                    },
+                    representative: Found {
+                        index: rep.0,
+                        point: rep.1,
+                        replies: theirs,
+                    },
+                }),
+            );
         }
     }
     (checked, None)

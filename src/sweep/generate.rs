@@ -136,10 +136,11 @@ impl Space {
         }
     }
 
-    /// How many points the space has: [`Space::total`], or for a sweep by class the tuples.
+    /// How many points the space has: [`Space::total`], or for a sweep by class one per tuple
+    /// of classes (crossed, like any text, with the counts and flag settings).
     pub fn points(&self) -> u64 {
         match &self.classes {
-            Some(c) => c.tuples(),
+            Some(c) => c.tuples().saturating_mul(self.settings()),
             None => self.total(),
         }
     }
@@ -148,7 +149,7 @@ impl Space {
     /// tuple.
     pub fn weight(&self, index: u64) -> u64 {
         match &self.classes {
-            Some(c) => c.weight(index),
+            Some(c) => c.weight(index / self.settings()),
             None => 1,
         }
     }
@@ -188,26 +189,37 @@ impl Space {
 
     /// Input `index` (below [`Space::points`]).
     pub fn point(&self, index: u64) -> Point {
-        if let Some(c) = &self.classes {
-            let mut p = Point::text(&c.representative(index), if self.counted { 4 } else { 0 });
-            p.counted = self.counted;
-            return p;
-        }
         if let Generator::Random { max_len, .. } = self.generator {
             return self.random(index, max_len);
         }
-        let flags_n = self.flag_choices();
-        let digits_n = self.digit_choices();
-        let flag_pick = index % flags_n;
-        let digit_pick = (index / flags_n) % digits_n;
-        let data_pick = index / flags_n / digits_n;
-        let data = match &self.generator {
-            Generator::Values { bits: 16 } => Data::Value(data_pick),
-            Generator::Values { .. } => Data::Value(self.values32[data_pick as usize]),
-            Generator::Text { alphabet, .. } => Data::Text(nth_text(alphabet, data_pick)),
-            Generator::Full { .. } => Data::Text(scramble(data_pick as u32).to_be_bytes().to_vec()),
-            Generator::Random { .. } => unreachable!("handled above"),
+        let settings = self.settings();
+        let data_pick = index / settings;
+        let data = match (&self.generator, &self.classes) {
+            (Generator::Full { .. }, Some(c)) => Data::Text(c.representative(data_pick).to_vec()),
+            (generator, _) => match generator {
+                Generator::Values { bits: 16 } => Data::Value(data_pick),
+                Generator::Values { .. } => Data::Value(self.values32[data_pick as usize]),
+                Generator::Text { alphabet, .. } => Data::Text(nth_text(alphabet, data_pick)),
+                Generator::Full { .. } => {
+                    Data::Text(scramble(data_pick as u32).to_be_bytes().to_vec())
+                }
+                Generator::Random { .. } => unreachable!("handled above"),
+            },
         };
+        self.with_setting(data, index % settings)
+    }
+
+    /// How many settings (digit count and flags) each text or value is crossed with.
+    pub fn settings(&self) -> u64 {
+        self.digit_choices().saturating_mul(self.flag_choices())
+    }
+
+    /// `data` with setting number `pick` (below [`Space::settings`]): its digit count and
+    /// flags.
+    pub fn with_setting(&self, data: Data, pick: u64) -> Point {
+        let flags_n = self.flag_choices();
+        let flag_pick = pick % flags_n;
+        let digit_pick = (pick / flags_n) % self.digit_choices();
         let digits = if !self.counted {
             0
         } else {
