@@ -18,11 +18,6 @@ use crate::backend::{Fault, Question, Request, Response};
 use crate::memory::{Fill, Image};
 use crate::plan::{Check, Trial};
 
-/// Trials handed to a backend at once. An external backend sends them as several `run`
-/// messages (its `batch` cases each) and keeps the next message queued while the current one is
-/// answered, so a chunk should hold several messages' worth.
-pub const CHUNK: usize = 1024;
-
 /// What one backend did under one fill (a codec-level backend answers once, reported under
 /// fill A: it reads no memory).
 #[derive(Debug, Clone, Serialize)]
@@ -151,7 +146,7 @@ fn run_backend(trials: &[Trial], group: &[usize], stop: &AtomicBool, tx: &mpsc::
     };
     let backend = &trials[first].backend;
     let mut restarts = backend.restarts();
-    for chunk in group.chunks(CHUNK) {
+    for chunk in group.chunks(backend.chunk_trials().max(1)) {
         if stop.load(Ordering::Relaxed) {
             return;
         }

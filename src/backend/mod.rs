@@ -209,6 +209,12 @@ pub trait Backend: Send + Sync {
     fn checks_device_ranges(&self) -> bool {
         true
     }
+    /// How many trials the executor hands over at once. In process, a small chunk keeps
+    /// progress and `--fail-fast` close to the trials; a backend in another process wants
+    /// several messages' worth, so that it can keep the next one queued.
+    fn chunk_trials(&self) -> usize {
+        128
+    }
     fn execute(&self, request: &Request<'_>) -> Result<Response, Fault>;
     /// Executes several requests, answers in order. A backend in another process answers a
     /// batch in one exchange, which is what makes it fast.

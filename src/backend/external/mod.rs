@@ -394,6 +394,12 @@ impl Backend for ExternalBackend {
         &self.capabilities.profile
     }
 
+    /// Several `run` messages' worth (its `batch` cases each), so that the next message is
+    /// queued while the current one is answered (`send_all`).
+    fn chunk_trials(&self) -> usize {
+        self.settings.batch.max(1) * 4
+    }
+
     fn codec(&self) -> Option<&CodecAbilities> {
         self.codec.as_ref()
     }
