@@ -16,21 +16,6 @@ fn scratch_vectors(yaml: &str) -> TempDir {
     dir
 }
 
-const ONE_CASE: &str = "\
-instructions: [HABIN]
-profiles: [mitsubishi-iqr]
-source: {manual: iqr-instructions-ja, page: 478}
-cases:
-  - id: cli-example
-    basis: manual
-    cite: example on p.478
-    operands: {s: D100, d: D200}
-    before:
-      D100: {ascii: \"5A8D\"}
-    expect:
-      after: {D200: 5A8DH}
-";
-
 #[test]
 fn validate_accepts_the_corpus() {
     let out = cli(&["validate"]);
@@ -44,7 +29,7 @@ fn validate_accepts_the_corpus() {
 
 #[test]
 fn validate_rejects_a_bad_vector_with_file_and_line() {
-    let dir = scratch_vectors(&ONE_CASE.replace("D200: 5A8DH", "D200: 15A8DH"));
+    let dir = scratch_vectors(&common::habin_example("cli-example", "15A8DH"));
     let out = cli(&["validate", dir.path().to_str().unwrap_or_default()]);
     assert_eq!(out.status.code(), Some(2));
     let err = text(&out.stderr);
@@ -78,7 +63,7 @@ fn run_exits_zero_when_everything_conforms() {
 
 #[test]
 fn run_exits_one_and_shows_a_diff_on_a_difference() {
-    let dir = scratch_vectors(&ONE_CASE.replace("D200: 5A8DH", "D200: 5A8EH"));
+    let dir = scratch_vectors(&common::habin_example("cli-example", "5A8EH"));
     let out = cli(&["run", "--vectors", dir.path().to_str().unwrap_or_default()]);
     assert_eq!(out.status.code(), Some(1));
     let stdout = text(&out.stdout);
@@ -189,7 +174,7 @@ fn quiet_prints_only_failures_and_the_counts() {
     let stdout = text(&out.stdout);
     assert_eq!(stdout.lines().count(), 1, "{stdout}");
     assert!(stdout.contains(" passed, 0 failed"), "{stdout}");
-    let dir = scratch_vectors(&ONE_CASE.replace("D200: 5A8DH", "D200: 5A8EH"));
+    let dir = scratch_vectors(&common::habin_example("cli-example", "5A8EH"));
     let out = cli(&[
         "run",
         "--quiet",

@@ -55,27 +55,17 @@ fn path(p: &Path) -> &str {
     p.to_str().unwrap_or_default()
 }
 
-const ONE_CASE: &str = "\
-instructions: [HABIN]
-profiles: [mitsubishi-iqr]
-source: {manual: iqr-instructions-ja, page: 478}
-cases:
-  - id: rel-example
-    basis: manual
-    cite: example on p.478
-    operands: {s: D100, d: D200}
-    before:
-      D100: {ascii: \"5A8D\"}
-    expect:
-      after: {D200: 5A8DH}
-";
-
 fn mkfifo(at: &Path) {
     let status = Command::new("mkfifo")
         .arg(at)
         .status()
         .expect("mkfifo runs");
     assert!(status.success(), "mkfifo {}", at.display());
+}
+
+/// The HABIN example of p.478, as the manual gives it.
+fn one_case() -> String {
+    common::habin_example("rel-example", "5A8DH")
 }
 
 // --- saved runs -------------------------------------------------------------------------------
@@ -176,7 +166,7 @@ fn a_fifo_is_refused_in_bounded_time_wherever_a_file_is_read_or_written() {
     let dir = scratch_dir.path().to_path_buf();
     let vectors = dir.join("vectors");
     std::fs::create_dir_all(&vectors).expect("dir");
-    std::fs::write(vectors.join("good.yaml"), ONE_CASE).expect("write");
+    std::fs::write(vectors.join("good.yaml"), one_case()).expect("write");
     mkfifo(&vectors.join("pipe.yaml"));
     let fifo = dir.join("fifo");
     mkfifo(&fifo);
@@ -218,8 +208,9 @@ fn invalid_utf8_and_deep_nesting_are_reported_with_their_line() {
     let scratch_dir = scratch();
     let dir = scratch_dir.path().to_path_buf();
     let file = dir.join("case.yaml");
-    let mut bytes = ONE_CASE.as_bytes().to_vec();
-    let at = ONE_CASE.find("example on").expect("cite");
+    let one_case = one_case();
+    let mut bytes = one_case.as_bytes().to_vec();
+    let at = one_case.find("example on").expect("cite");
     bytes.insert(at, 0xFF);
     std::fs::write(&file, bytes).expect("write");
     let out = cli(&["validate", path(&file)]);
@@ -232,7 +223,7 @@ fn invalid_utf8_and_deep_nesting_are_reported_with_their_line() {
 
     let deep = format!(
         "{}{}1{}\n",
-        ONE_CASE,
+        one_case,
         "      D300: ".to_string() + &"[".repeat(100_000),
         "]".repeat(100_000)
     );
@@ -260,7 +251,7 @@ fn a_linked_folder_of_vectors_is_followed_and_a_loop_is_an_error() {
     let dir = scratch_dir.path().to_path_buf();
     let elsewhere = dir.join("elsewhere");
     std::fs::create_dir_all(&elsewhere).expect("dir");
-    std::fs::write(elsewhere.join("linked.yaml"), ONE_CASE).expect("write");
+    std::fs::write(elsewhere.join("linked.yaml"), one_case()).expect("write");
     let vectors = dir.join("vectors");
     std::fs::create_dir_all(&vectors).expect("dir");
     symlink(&elsewhere, vectors.join("family")).expect("link");

@@ -10,22 +10,6 @@ use common::{cli, root, scratch};
 use quick_xml::events::Event;
 use quick_xml::Reader;
 
-/// A vector file whose only case expects 5A8EH where HABIN gives 5A8DH.
-const WRONG: &str = "\
-instructions: [HABIN]
-profiles: [mitsubishi-iqr]
-source: {manual: iqr-instructions-ja, page: 478}
-cases:
-  - id: report-wrong
-    basis: manual
-    cite: example on p.478
-    operands: {s: D100, d: D200}
-    before:
-      D100: {ascii: \"5A8D\"}
-    expect:
-      after: {D200: 5A8EH}
-";
-
 /// Test cases as (classname, name, attributes, child element names).
 type Case = (String, String, Vec<(String, String)>, Vec<String>);
 
@@ -153,7 +137,11 @@ fn junit_from_run_validates_and_groups_by_backend_and_instruction() {
 #[test]
 fn a_failing_trial_is_a_junit_failure_with_its_explanation() {
     let dir = scratch();
-    std::fs::write(dir.path().join("wrong.yaml"), WRONG).expect("write");
+    std::fs::write(
+        dir.path().join("wrong.yaml"),
+        common::habin_example("report-wrong", "5A8EH"),
+    )
+    .expect("write");
     let file = dir.path().join("run.xml");
     for command in ["run", "diff"] {
         let out = cli(&[
@@ -207,7 +195,11 @@ fn json_of(args: &[&str]) -> serde_json::Value {
 #[test]
 fn json_from_run_and_diff_follows_the_shipped_schema() {
     let dir = scratch();
-    std::fs::write(dir.path().join("wrong.yaml"), WRONG).expect("write");
+    std::fs::write(
+        dir.path().join("wrong.yaml"),
+        common::habin_example("report-wrong", "5A8EH"),
+    )
+    .expect("write");
     let wrong = dir.path().join("wrong.yaml");
     let reports = [
         json_of(&["run", "--format", "json"]),
@@ -243,7 +235,11 @@ fn json_from_run_and_diff_follows_the_shipped_schema() {
 #[test]
 fn html_from_run_lists_failures_with_links_metadata_and_places() {
     let dir = scratch();
-    std::fs::write(dir.path().join("wrong.yaml"), WRONG).expect("write");
+    std::fs::write(
+        dir.path().join("wrong.yaml"),
+        common::habin_example("report-wrong", "5A8EH"),
+    )
+    .expect("write");
     let file = dir.path().join("report.html");
     let out = cli(&[
         "run",

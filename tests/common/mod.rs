@@ -196,3 +196,24 @@ pub fn xml_attributes(e: &quick_xml::events::BytesStart<'_>) -> Vec<(String, Str
         })
         .collect()
 }
+
+/// A vector file of one case: the HABIN example of iqr-instructions-ja p.478 ("5A8D" in D100),
+/// with case id `id` and `expected` as the word D200 must hold (`5A8DH` is what the manual says).
+pub fn habin_example(id: &str, expected: &str) -> String {
+    format!(
+        "\
+instructions: [HABIN]
+profiles: [mitsubishi-iqr]
+source: {{manual: iqr-instructions-ja, page: 478}}
+cases:
+  - id: {id}
+    basis: manual
+    cite: example on p.478
+    operands: {{s: D100, d: D200}}
+    before:
+      D100: {{ascii: \"5A8D\"}}
+    expect:
+      after: {{D200: {expected}}}
+"
+    )
+}
