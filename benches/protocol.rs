@@ -193,14 +193,5 @@ fn row(name: &str, cases: usize, time: Duration) {
 }
 
 fn thousands(x: f64) -> String {
-    let n = x.round() as u64;
-    let s = n.to_string();
-    let mut out = String::new();
-    for (i, c) in s.chars().enumerate() {
-        if i > 0 && (s.len() - i) % 3 == 0 {
-            out.push(',');
-        }
-        out.push(c);
-    }
-    out
+    plc_conformance::sweep::render::thousands(x.round() as u64)
 }

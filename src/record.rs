@@ -10,7 +10,6 @@
 //! layout stay as they were.
 
 use std::collections::BTreeMap;
-use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -18,10 +17,9 @@ use crate::backend::{Backend, Response};
 use crate::execute::execute;
 use crate::judge::Effect;
 use crate::memory::Image;
-use crate::model::{Basis, Case, ErrorSignal, Expectation};
+use crate::model::{Basis, Case, Expectation};
 use crate::plan::{Check, Trial};
 use crate::runner::Project;
-use crate::value::hex_word;
 
 /// What recording did to one case.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -289,23 +287,7 @@ fn edit(
             crate::sweep::emit::quote_str(model)
         ),
     );
-    let mut expect = format!("{pad}expect:\n");
-    let after: Vec<String> = effect
-        .changed
-        .iter()
-        .map(|(d, w)| format!("{d}: {}", hex_word(*w)))
-        .collect();
-    let _ = writeln!(expect, "{pad}  after: {{{}}}", after.join(", "));
-    let _ = write!(
-        expect,
-        "{pad}  error: {}",
-        match &effect.error {
-            None => "none".to_string(),
-            Some(ErrorSignal::Code(c)) => hex_word(*c),
-            Some(ErrorSignal::Flag(d)) => d.to_string(),
-        }
-    );
-    replacement.insert("expect", expect);
+    replacement.insert("expect", crate::sweep::emit::expect_lines(effect, &pad));
     let mut out: Vec<String> = lines[..start].iter().map(|s| s.to_string()).collect();
     let mut done: Vec<&str> = Vec::new();
     let mut cursor = start;

@@ -56,18 +56,24 @@ impl<W: Write> TextReporter<W> {
     }
 
     fn finish(&mut self, summary: &Summary, interrupted: bool) {
-        let out = &mut self.out;
-        if self.quiet {
-            if interrupted {
-                let _ = writeln!(
-                    out,
-                    "interrupted: the counts cover the trials that finished"
-                );
-            }
-            let _ = writeln!(out, "{summary}");
-            let _ = out.flush();
-            return;
+        // Quiet: only whether the run was cut short, and the summary.
+        if !self.quiet {
+            self.details();
         }
+        let out = &mut self.out;
+        if interrupted {
+            let _ = writeln!(
+                out,
+                "interrupted: the counts cover the trials that finished"
+            );
+        }
+        let _ = writeln!(out, "{summary}");
+        let _ = out.flush();
+    }
+
+    /// The known differences met, the skips, restarts and per-backend counts.
+    fn details(&mut self) {
+        let out = &mut self.out;
         let mut known: Vec<(&String, &KnownGroup)> = self.known.iter().collect();
         known.sort_by_key(|(_, g)| g.first);
         for (entry, group) in known {
@@ -101,14 +107,6 @@ impl<W: Write> TextReporter<W> {
         if let Some(s) = &self.cross_vendor {
             let _ = writeln!(out, "cross-vendor: {s}");
         }
-        if interrupted {
-            let _ = writeln!(
-                out,
-                "interrupted: the counts cover the trials that finished"
-            );
-        }
-        let _ = writeln!(out, "{summary}");
-        let _ = out.flush();
     }
 }
 

@@ -11,6 +11,7 @@ use super::group::{Found, Reply};
 use super::input::{Data, Point};
 use super::target::{Ask, Column, Target};
 use super::{Results, Sweep};
+use crate::judge::Effect;
 use crate::model::cross_vendor::{Answer, Operation};
 use crate::model::{Corpus, ErrorSignal, Operand};
 use crate::value::hex_word;
@@ -320,23 +321,27 @@ fn native_case(
             }
         }
     }
-    let _ = writeln!(y, "    expect:");
+    let _ = writeln!(y, "{}", expect_lines(effect, "    "));
+    Ok(y)
+}
+
+/// An effect as a vector's `expect:` key at `indent`: every word written, and the error (or
+/// `none`), so that nothing the backend did is left implicit. No newline at the end.
+pub fn expect_lines(effect: &Effect, indent: &str) -> String {
     let after: Vec<String> = effect
         .changed
         .iter()
         .map(|(d, w)| format!("{d}: {}", hex_word(*w)))
         .collect();
-    let _ = writeln!(y, "      after: {{{}}}", after.join(", "));
-    let _ = writeln!(
-        y,
-        "      error: {}",
-        match &effect.error {
-            None => "none".to_string(),
-            Some(ErrorSignal::Code(c)) => hex_word(*c),
-            Some(ErrorSignal::Flag(d)) => d.to_string(),
-        }
-    );
-    Ok(y)
+    let error = match &effect.error {
+        None => "none".to_string(),
+        Some(ErrorSignal::Code(c)) => hex_word(*c),
+        Some(ErrorSignal::Flag(d)) => d.to_string(),
+    };
+    format!(
+        "{indent}expect:\n{indent}  after: {{{}}}\n{indent}  error: {error}",
+        after.join(", ")
+    )
 }
 
 fn hex_value(v: u64) -> String {
