@@ -302,17 +302,15 @@ impl<C: Codec> Backend for CodecBackend<C> {
     }
 }
 
+/// The built-in reference models: one line per family. A family whose profile is not loaded
+/// has no backend.
+const MODELS: &[fn(&Profiles) -> Option<Arc<dyn Backend>>] = &[
+    reference::backend::<iqr::Iqr>,
+    reference::backend::<fx5::Fx5>,
+    reference::backend::<fc4a::Fc4a>,
+];
+
 /// The reference models, one per profile that has one.
 pub fn reference_backends(profiles: &Profiles) -> Vec<Arc<dyn Backend>> {
-    let mut out: Vec<Arc<dyn Backend>> = Vec::new();
-    if let Some(p) = profiles.get(iqr::PROFILE) {
-        out.push(Arc::new(reference::Reference::<iqr::Iqr>::new(p)));
-    }
-    if let Some(p) = profiles.get(fx5::PROFILE) {
-        out.push(Arc::new(reference::Reference::<fx5::Fx5>::new(p)));
-    }
-    if let Some(p) = profiles.get(fc4a::PROFILE) {
-        out.push(Arc::new(reference::Reference::<fc4a::Fc4a>::new(p)));
-    }
-    out
+    MODELS.iter().filter_map(|make| make(profiles)).collect()
 }

@@ -2,9 +2,10 @@
 //! their profile, and claim exactly the instructions they model on the variants that have them.
 
 use std::marker::PhantomData;
+use std::sync::Arc;
 
 use super::{Backend, Fault, Outcome, Request, Response, Unsupported};
-use crate::model::profile::Profile;
+use crate::model::profile::{Profile, Profiles};
 
 /// One vendor family's reference model.
 pub trait Model: Send + Sync + 'static {
@@ -30,6 +31,13 @@ impl From<Unsupported> for Stop {
     fn from(u: Unsupported) -> Self {
         Stop::Unsupported(u)
     }
+}
+
+/// The model's backend, when its profile is loaded: what [`super::reference_backends`] lists.
+pub fn backend<M: Model>(profiles: &Profiles) -> Option<Arc<dyn Backend>> {
+    profiles
+        .get(M::PROFILE)
+        .map(|p| Arc::new(Reference::<M>::new(p)) as Arc<dyn Backend>)
 }
 
 /// A reference model as a backend.
