@@ -1,16 +1,21 @@
-//! Device addresses as the manuals write them: a device letter code and a number (`D100`, `SD0`,
-//! `M1260`).
+//! Device addresses as the manuals write them: a code and a decimal number (`D100`, `SD0`,
+//! `M1260`, `DT100`, `MB20`, `DB1.DBB10`).
 //!
-//! A device here always names one 16-bit word. For a bit device used as a word operand (IDEC's
-//! "16 points", e.g. `M0` as a destination) the address names the word made of the 16 points
-//! starting at that head; the vendor profile says which device codes exist and their ranges.
+//! A device names one unit of its family's memory ([`crate::memory::Unit`]): a 16-bit word, or
+//! a byte in a byte-addressed family. The number is the unit's address, so `(s)+1` is the next
+//! word or the next byte. For a bit device used as a word operand (IDEC's "16 points", e.g. `M0`
+//! as a destination) the address names the word made of the 16 points starting at that head.
+//!
+//! The syntax is the same for every family, a code and the number after it; which codes exist is
+//! data in the vendor profile (`devices:`), where a `#` in a code stands for a block number
+//! (`DB#.DBB` is every data block's bytes).
 
 use std::fmt;
 use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
 
-/// One word-sized device address.
+/// One unit-sized device address.
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct Device {
     code: Code,
@@ -18,13 +23,14 @@ pub struct Device {
     pub index: u32,
 }
 
-/// The longest device code: the manuals' longest is three letters (`ZR`, `SW`, `LCN`).
-pub const MAX_CODE_LEN: usize = 8;
+/// The longest device code: MELSEC's are up to three letters (`ZR`, `SW`, `LCN`), a Siemens data
+/// block's bytes carry the block number (`DB65535.DBB`).
+pub const MAX_CODE_LEN: usize = 12;
 
-/// A device letter code kept inline, zero-padded. Memory images and effects are maps keyed
+/// A device code kept inline, zero-padded. Memory images and effects are maps keyed
 /// by devices, and a sweep builds millions of them: a code that is a `String` makes every
-/// address copy an allocation. Uppercase letters are never zero, so comparing the padded
-/// arrays orders codes as their text does.
+/// address copy an allocation. A code's characters are never zero, so comparing the
+/// padded arrays orders codes as their text does.
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
 struct Code([u8; MAX_CODE_LEN]);
 
@@ -60,17 +66,18 @@ impl Device {
     pub fn new(code: &str, index: u32) -> Self {
         let code = Code::new(code).unwrap_or_else(|| {
             debug_assert!(false, "device code `{code}` longer than {MAX_CODE_LEN}");
-            Code::new(code.get(..MAX_CODE_LEN).unwrap_or_default()).unwrap_or(Code([0; 8]))
+            Code::new(code.get(..MAX_CODE_LEN).unwrap_or_default())
+                .unwrap_or(Code([0; MAX_CODE_LEN]))
         });
         Device { code, index }
     }
 
-    /// The device letter code, uppercase (`D`, `SD`, `M`, `T`).
+    /// The device code, uppercase (`D`, `SD`, `M`, `DB1.DBB`).
     pub fn code(&self) -> &str {
         self.code.as_str()
     }
 
-    /// The device `offset` words after this one, e.g. `(s)+1`. `None` when the number would
+    /// The device `offset` units after this one, e.g. `(s)+1`. `None` when the number would
     /// overflow, which callers treat like any other address past the end of the device range.
     pub fn offset(&self, offset: u32) -> Option<Device> {
         self.index.checked_add(offset).map(|index| Device {
@@ -94,7 +101,7 @@ impl fmt::Display for DeviceSyntaxError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "`{}` is not a device name; expected uppercase letters followed by a decimal number, like `D100`",
+            "`{}` is not a device name; expected a code of uppercase letters followed by a decimal number, like `D100`, `MB20` or `DB1.DBB10`",
             self.0
         )
     }
@@ -107,18 +114,41 @@ impl FromStr for Device {
 
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         let err = || DeviceSyntaxError(s.to_string());
-        let split = s.find(|c: char| c.is_ascii_digit()).ok_or_else(err)?;
+        let split = s.rfind(|c: char| !c.is_ascii_digit()).map_or(0, |i| i + 1);
         let (code, number) = s.split_at(split);
-        if code.is_empty()
-            || code.len() > MAX_CODE_LEN
-            || !code.chars().all(|c| c.is_ascii_uppercase())
-            || !number.chars().all(|c| c.is_ascii_digit())
-        {
+        if number.is_empty() || !valid_code(code) {
             return Err(err());
         }
         let index = number.parse::<u32>().map_err(|_| err())?;
         Ok(Device::new(code, index))
     }
+}
+
+/// A code: uppercase letters, optionally with block numbers between dots (`DB1.DBB`), starting
+/// and ending with a letter.
+fn valid_code(code: &str) -> bool {
+    let bytes = code.as_bytes();
+    !code.is_empty()
+        && code.len() <= MAX_CODE_LEN
+        && bytes[0].is_ascii_uppercase()
+        && bytes[bytes.len() - 1].is_ascii_uppercase()
+        && bytes
+            .iter()
+            .all(|b| b.is_ascii_uppercase() || b.is_ascii_digit() || *b == b'.')
+        && !code.contains("..")
+}
+
+/// Whether a profile's device code names `code`: equal, or a pattern in which each `#` stands
+/// for a decimal block number (`DB#.DBB` names `DB1.DBB` and `DB100.DBB`).
+pub fn code_matches(pattern: &str, code: &str) -> bool {
+    let Some((head, rest)) = pattern.split_once('#') else {
+        return pattern == code;
+    };
+    let Some(after) = code.strip_prefix(head) else {
+        return false;
+    };
+    let digits = after.len() - after.trim_start_matches(|c: char| c.is_ascii_digit()).len();
+    digits > 0 && code_matches(rest, &after[digits..])
 }
 
 impl Serialize for Device {
@@ -143,6 +173,9 @@ mod tests {
     #[case("D100", "D", 100)]
     #[case("SD0", "SD", 0)]
     #[case("M1277", "M", 1277)]
+    #[case("DT100", "DT", 100)]
+    #[case("MB20", "MB", 20)]
+    #[case("DB1.DBB10", "DB1.DBB", 10)]
     fn parses(#[case] text: &str, #[case] code: &str, #[case] index: u32) {
         assert_eq!(text.parse::<Device>(), Ok(Device::new(code, index)));
     }
@@ -154,9 +187,26 @@ mod tests {
     #[case("D10A")]
     #[case("D-1")]
     #[case("D99999999999")]
-    #[case("ABCDEFGHI1")]
+    #[case("ABCDEFGHIJKLM1")]
     #[case("")]
+    #[case("DB1.10")]
+    #[case("DB1..DBB10")]
+    #[case(".DBB10")]
+    #[case("1D10")]
+    #[case("Db1.DBB10")]
     fn rejects(#[case] text: &str) {
         assert!(text.parse::<Device>().is_err());
+    }
+
+    #[rstest]
+    #[case("D", "D", true)]
+    #[case("D", "DT", false)]
+    #[case("DB#.DBB", "DB1.DBB", true)]
+    #[case("DB#.DBB", "DB100.DBB", true)]
+    #[case("DB#.DBB", "DB.DBB", false)]
+    #[case("DB#.DBB", "DB1.DBW", false)]
+    #[case("DB#.DBB", "DB1X.DBB", false)]
+    fn patterns(#[case] pattern: &str, #[case] code: &str, #[case] matches: bool) {
+        assert_eq!(code_matches(pattern, code), matches);
     }
 }

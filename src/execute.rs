@@ -38,10 +38,7 @@ pub enum Progress {
 
 /// The memory before a trial, once per fill (in [`Fill::ALL`] order).
 pub fn images(trial: &Trial) -> Vec<Image> {
-    Fill::ALL
-        .iter()
-        .map(|&fill| Image::new(trial.input.before.clone(), fill))
-        .collect()
+    Fill::ALL.iter().map(|&fill| trial.image(fill)).collect()
 }
 
 /// The requests that run a trial on its images. A variant the profile lacks cannot happen for a

@@ -1,14 +1,79 @@
 //! Memory images: what a backend reads, and what it wrote.
 //!
-//! Every word a vector does not set holds a fill pattern, and each case runs under two fills
-//! that share no byte value: a stray write is always a change, and a read of a word the vector
+//! A family's memory is made of units, 16-bit words (MELSEC `D100`, IDEC `D0`) or bytes
+//! (Siemens `MB20`, `DB1.DBB10`), as its profile says; a device names one unit, and a value in
+//! an image is that unit's contents (a byte's value fits in the low 8 bits).
+//!
+//! Every unit a vector does not set holds a fill pattern, and each case runs under two fills
+//! that share no byte value: a stray write is always a change, and a read of a unit the vector
 //! did not set shows up as an outcome that depends on the fill.
 
 use std::collections::BTreeMap;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::device::Device;
+
+/// What one device of a family holds.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    PartialOrd,
+    Ord,
+    Hash,
+    Default,
+    Serialize,
+    Deserialize,
+    schemars::JsonSchema,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum Unit {
+    /// One byte: byte-addressed memory, where consecutive numbers are consecutive bytes.
+    Byte,
+    /// One 16-bit word: word-addressed memory, where a character pair shares one device.
+    #[default]
+    Word,
+}
+
+impl Unit {
+    pub fn bits(self) -> u32 {
+        match self {
+            Unit::Byte => 8,
+            Unit::Word => 16,
+        }
+    }
+
+    /// The largest value a unit holds.
+    pub fn max(self) -> u16 {
+        match self {
+            Unit::Byte => 0xFF,
+            Unit::Word => 0xFFFF,
+        }
+    }
+
+    /// Hex digits in one unit.
+    pub fn digits(self) -> u32 {
+        self.bits() / 4
+    }
+
+    /// A unit's value the way the manuals write it: `5A8DH` for a word, `5AH` for a byte.
+    pub fn hex(self, value: u16) -> String {
+        match self {
+            Unit::Byte => format!("{value:02X}H"),
+            Unit::Word => format!("{value:04X}H"),
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Unit::Byte => "byte",
+            Unit::Word => "word",
+        }
+    }
+}
 
 /// A pattern for the words a vector leaves unset.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -23,15 +88,23 @@ pub enum Fill {
 impl Fill {
     pub const ALL: [Fill; 2] = [Fill::A, Fill::B];
 
-    pub fn word(self, device: &Device) -> u16 {
+    /// The fill's value of a unit: each byte of a word fill is the byte fill of the same kind,
+    /// so a byte-addressed family sees the same kinds of bytes as a word-addressed one.
+    pub fn value(self, device: &Device, unit: Unit) -> u16 {
         let i = (device.index % 16) as usize;
-        match self {
+        let word = match self {
             Fill::A => 0xA5A5 ^ ((i % 6) as u16 * 0x0101),
             Fill::B => {
                 const DIGITS: &[u8; 16] = b"0123456789ABCDEF";
                 u16::from(DIGITS[i]) | (u16::from(DIGITS[15 - i]) << 8)
             }
-        }
+        };
+        word & unit.max()
+    }
+
+    /// The fill's value of a word.
+    pub fn word(self, device: &Device) -> u16 {
+        self.value(device, Unit::Word)
     }
 
     pub fn name(self) -> &'static str {
@@ -42,27 +115,37 @@ impl Fill {
     }
 }
 
-/// Memory before execution: the vector's words over a fill.
+/// Memory before execution: the vector's units over a fill.
 #[derive(Debug, Clone)]
 pub struct Image {
     words: BTreeMap<Device, u16>,
     fill: Fill,
+    unit: Unit,
 }
 
 impl Image {
+    /// Word-addressed memory.
     pub fn new(words: BTreeMap<Device, u16>, fill: Fill) -> Self {
-        Image { words, fill }
+        Image::of_units(words, fill, Unit::Word)
+    }
+
+    pub fn of_units(words: BTreeMap<Device, u16>, fill: Fill, unit: Unit) -> Self {
+        Image { words, fill, unit }
     }
 
     pub fn read(&self, device: &Device) -> u16 {
         self.words
             .get(device)
             .copied()
-            .unwrap_or_else(|| self.fill.word(device))
+            .unwrap_or_else(|| self.fill.value(device, self.unit))
     }
 
     pub fn fill(&self) -> Fill {
         self.fill
+    }
+
+    pub fn unit(&self) -> Unit {
+        self.unit
     }
 
     /// The words the vector set explicitly.
@@ -119,6 +202,19 @@ mod tests {
                 assert!(byte_b.is_ascii_hexdigit() && !byte_b.is_ascii_lowercase());
             }
         }
+    }
+
+    #[test]
+    fn byte_fills_are_the_word_fills_bytes() {
+        for index in 0..64 {
+            let d = Device::new("MB", index);
+            for fill in Fill::ALL {
+                assert_eq!(fill.value(&d, Unit::Byte), fill.word(&d) & 0xFF);
+            }
+            assert_ne!(Fill::A.value(&d, Unit::Byte), Fill::B.value(&d, Unit::Byte));
+        }
+        let image = Image::of_units(BTreeMap::new(), Fill::A, Unit::Byte);
+        assert!(image.read(&Device::new("MB", 3)) <= 0xFF);
     }
 
     #[test]

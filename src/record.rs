@@ -16,7 +16,6 @@ use std::sync::Arc;
 use crate::backend::{Backend, Response};
 use crate::execute::execute;
 use crate::judge::Effect;
-use crate::memory::Image;
 use crate::model::{Basis, Case, Expectation};
 use crate::plan::{Check, Trial};
 use crate::runner::Project;
@@ -144,7 +143,7 @@ fn effect_of(trial: &Trial) -> Result<Effect, String> {
     for o in &observations {
         match &o.result {
             Ok(Response::Done(outcome)) => {
-                let image = Image::new(trial.input.before.clone(), o.fill);
+                let image = trial.image(o.fill);
                 effects.push(Effect::of(&image, outcome));
             }
             Ok(Response::Unsupported(r)) => return Err(format!("unsupported: {r}")),

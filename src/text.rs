@@ -18,6 +18,11 @@ pub fn digit_char(value: u64) -> u8 {
     b"0123456789ABCDEF"[(value & 0xF) as usize]
 }
 
+/// The hex digits a value has (at least 1).
+pub fn significant_digits(v: u64) -> u32 {
+    (64 - v.leading_zeros()).div_ceil(4).max(1)
+}
+
 /// The `k`-th character of text stored two characters per word, first character in the low
 /// byte (MELSEC string storage).
 pub fn packed_char(memory: &Image, head: &Device, k: u32) -> Option<u8> {

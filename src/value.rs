@@ -92,11 +92,16 @@ pub fn to_bits(text: &str, value: i64, bits: u32) -> Result<u64, ValueError> {
 
 /// Reads a 16-bit word.
 pub fn parse_word(text: &str) -> Result<u16, ValueError> {
+    parse_bits(text, 16)
+}
+
+/// Reads a number that must fit `bits` bits (at most 16: a word or a byte).
+pub fn parse_bits(text: &str, bits: u32) -> Result<u16, ValueError> {
     let value = parse_number(text).map_err(|e| match e {
-        ValueError::TooWide { text, .. } => ValueError::TooWide { text, bits: 16 },
+        ValueError::TooWide { text, .. } => ValueError::TooWide { text, bits },
         e => e,
     })?;
-    Ok(to_bits(text, value, 16)? as u16)
+    Ok(to_bits(text, value, bits)? as u16)
 }
 
 /// Formats a word the way the manuals do: four hex digits and an `H` suffix.

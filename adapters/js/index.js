@@ -24,7 +24,7 @@ const readline = require('node:readline');
 
 const VERSION = '0.2.0';
 /** The protocol versions this module speaks: 1 (instruction level) and 2 (adds codec level). */
-const PROTOCOL_VERSIONS = Object.freeze([1, 2]);
+const PROTOCOL_VERSIONS = Object.freeze([1, 2, 3]);
 const PROTOCOL_VERSION = 2;
 /** The error classes a codec answers with. */
 const ERROR_CLASSES = Object.freeze(['invalid-digit', 'invalid-count', 'device-range', 'error']);
@@ -60,7 +60,8 @@ class Device {
   }
 
   static parse(text) {
-    const m = /^([A-Z]+)([0-9]+)$/.exec(String(text));
+    // A code and the decimal number after it: D100, MB20, DB1.DBB10.
+    const m = /^([A-Z](?:[A-Z0-9.]*[A-Z])?)([0-9]+)$/.exec(String(text));
     if (!m) throw new TypeError(`not a device name: ${JSON.stringify(text)}`);
     return new Device(m[1], Number(m[2]));
   }
@@ -112,9 +113,13 @@ class Case {
     this.operands = message.operands || {};
     this.fill = message.fill || 'A';
     this.memory = new Map();
+    // A byte-addressed family's ranges carry bytes (protocol version 3).
+    this.unit = 'word';
     for (const block of message.memory || []) {
       const start = Device.parse(block.start);
-      block.words.forEach((word, i) => this.memory.set(start.offset(i).key, word));
+      if (block.bytes) this.unit = 'byte';
+      (block.words || block.bytes || []).forEach((value, i) =>
+        this.memory.set(start.offset(i).key, value));
     }
     this.writes = new Map();
     this.error = null;
@@ -149,7 +154,8 @@ class Case {
     const d = asDevice(device);
     if (this.writes.has(d.key)) return this.writes.get(d.key);
     if (this.memory.has(d.key)) return this.memory.get(d.key);
-    return fillWord(this.fill, d);
+    const word = fillWord(this.fill, d);
+    return this.unit === 'byte' ? word & 0xff : word;
   }
 
   /**

@@ -45,7 +45,7 @@ from collections import namedtuple
 __version__ = "0.2.0"
 
 # The protocol versions this module speaks: 1 (instruction level) and 2 (adds codec level).
-PROTOCOL_VERSIONS = (1, 2)
+PROTOCOL_VERSIONS = (1, 2, 3)
 PROTOCOL_VERSION = 2
 
 # The error classes a codec answers with (docs/protocol.md, "Version 2").
@@ -95,11 +95,13 @@ class Device(namedtuple("Device", "code index")):
 
     @classmethod
     def parse(cls, text):
-        split = 0
-        while split < len(text) and text[split].isalpha():
-            split += 1
+        """A code and the decimal number after it: D100, MB20, DB1.DBB10."""
+        split = len(text)
+        while split > 0 and text[split - 1].isdigit():
+            split -= 1
         code, number = text[:split], text[split:]
-        if not code or not code.isupper() or not number.isdigit():
+        if not code or not code[0].isalpha() or not code[-1].isalpha() \
+                or code != code.upper() or not number.isdigit():
             raise ValueError("not a device name: %r" % (text,))
         return cls(code, int(number))
 
@@ -140,10 +142,14 @@ class Case:
         self.operands = message.get("operands", {})
         self.fill = message.get("fill", "A")
         memory = {}
+        # A byte-addressed family's ranges carry bytes (protocol version 3).
+        self.unit = "word"
         for block in message.get("memory", []):
             start = Device.parse(block["start"])
-            for i, word in enumerate(block["words"]):
-                memory[(start.code, start.index + i)] = word
+            if "bytes" in block:
+                self.unit = "byte"
+            for i, value in enumerate(block.get("words", block.get("bytes", []))):
+                memory[(start.code, start.index + i)] = value
         self.memory = memory
         self.writes = {}
         self.error = None
@@ -176,7 +182,8 @@ class Case:
             return self.writes[key]
         if key in self.memory:
             return self.memory[key]
-        return fill_word(self.fill, device[1])
+        word = fill_word(self.fill, device[1])
+        return word & 0xFF if self.unit == "byte" else word
 
     def exists(self, device):
         """Whether the word exists on the case's variant, for words within 64 of a device

@@ -302,9 +302,12 @@ impl<C: Codec> Backend for CodecBackend<C> {
     }
 }
 
+/// Makes a reference model's backend when its profile is loaded.
+type MakeBackend = fn(&Profiles) -> Option<Arc<dyn Backend>>;
+
 /// The built-in reference models: one line per family. A family whose profile is not loaded
 /// has no backend.
-const MODELS: &[fn(&Profiles) -> Option<Arc<dyn Backend>>] = &[
+const MODELS: &[MakeBackend] = &[
     reference::backend::<iqr::Iqr>,
     reference::backend::<fx5::Fx5>,
     reference::backend::<fc4a::Fc4a>,

@@ -564,7 +564,7 @@ fn compare_outcomes(
 ) -> String {
     let mut out = String::new();
     for (oa, ob) in a.iter().zip(b) {
-        let image = crate::memory::Image::new(trial.input.before.clone(), oa.fill);
+        let image = trial.image(oa.fill);
         match (&oa.result, &ob.result) {
             (Ok(Response::Done(x)), Ok(Response::Done(y))) => {
                 let expect = Expectation {
@@ -608,7 +608,7 @@ fn compare_answers(ta: &Trial, tb: &Trial, a: &[Observation], b: &[Observation])
                 .profile
             {
                 Some(profile) => {
-                    let image = crate::memory::Image::new(t.input.before.clone(), o.fill);
+                    let image = t.image(o.fill);
                     crate::judge::lift::lift(profile, lowering, case.digits, x, &image).to_string()
                 }
                 None => "no profile".to_string(),

@@ -5,6 +5,7 @@ use crate::backend::Outcome;
 use crate::memory::Image;
 use crate::model::cross_vendor::{Answer, Lowering, Operation, TextLayout};
 use crate::model::profile::Profile;
+use crate::plan::lowering::{units_for, units_value};
 
 /// The answer an outcome gives to a cross-vendor case asked with `digits` digits.
 pub fn lift(
@@ -28,12 +29,11 @@ pub fn lift(
     let digits = lowering.width.unwrap_or(digits);
     match lowering.operation {
         Operation::HexToValue => {
-            let words = digits.div_ceil(4).clamp(1, 4);
-            let value = (0..words)
+            let units = units_for(digits, 1, lowering.unit);
+            let values = (0..units)
                 .filter_map(|i| destination.offset(i))
-                .enumerate()
-                .fold(0u64, |acc, (i, d)| acc | u64::from(read(&d)) << (16 * i));
-            Answer::Value(value)
+                .map(|d| read(&d));
+            Answer::Value(units_value(values, lowering.unit, lowering.order))
         }
         Operation::ValueToHex => {
             let mut text = Vec::new();

@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::backend::{Fault, Response};
 use crate::execute::Observation;
-use crate::memory::{Fill, Image};
+use crate::memory::Fill;
 use crate::model::cross_vendor::Answer;
 use crate::model::known::Entry;
 use crate::model::Basis;
@@ -205,9 +205,7 @@ fn judge_unlisted(trial: &Trial, observations: &[Observation]) -> Verdict {
             let mut outcomes = Vec::new();
             for obs in observations {
                 match &obs.result {
-                    Ok(Response::Done(o)) => {
-                        outcomes.push((Image::new(trial.input.before.clone(), obs.fill), o))
-                    }
+                    Ok(Response::Done(o)) => outcomes.push((trial.image(obs.fill), o)),
                     _ => return wrong_kind(obs),
                 }
             }
@@ -217,12 +215,12 @@ fn judge_unlisted(trial: &Trial, observations: &[Observation]) -> Verdict {
                 Some(e) if case.basis != Basis::Unspecified => e,
                 _ => {
                     return Verdict::Recorded {
-                        observed: Observed::Memory(effects.into_iter().next().unwrap_or_else(
-                            || Effect {
-                                changed: Default::default(),
-                                error: None,
-                            },
-                        )),
+                        observed: Observed::Memory(
+                            effects
+                                .into_iter()
+                                .next()
+                                .unwrap_or_else(|| Effect::none(trial.image(Fill::A).unit())),
+                        ),
                         fill_dependent,
                     }
                 }
@@ -251,7 +249,7 @@ fn judge_unlisted(trial: &Trial, observations: &[Observation]) -> Verdict {
             for obs in observations {
                 match &obs.result {
                     Ok(Response::Done(o)) => {
-                        let image = Image::new(trial.input.before.clone(), obs.fill);
+                        let image = trial.image(obs.fill);
                         answers.push(lift::lift(profile, lowering, case.digits, o, &image));
                     }
                     _ => return wrong_kind(obs),

@@ -1,6 +1,7 @@
-//! Judging a native case: the words an outcome changed against the words the case expects.
+//! Judging a native case: the units (words, or bytes in byte-addressed memory) an outcome
+//! changed against the ones the case expects.
 //!
-//! The comparison is semantic: a word counts as changed only if its value differs from before,
+//! The comparison is semantic: a unit counts as changed only if its value differs from before,
 //! every change not in the expectation is a difference, and errors compare as signals (a code
 //! never equals a flag).
 
@@ -10,25 +11,31 @@ use serde::{Deserialize, Serialize};
 
 use crate::backend::Outcome;
 use crate::device::Device;
-use crate::memory::{Fill, Image};
+use crate::memory::{Fill, Image, Unit};
 use crate::model::{ErrorSignal, Expectation};
-use crate::value::hex_word;
 
-/// One word in a comparison: its value before, as expected after, and as found after.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+/// One unit in a comparison: its value before, as expected after, and as found after.
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct WordRow {
     pub device: Device,
-    #[serde(serialize_with = "hex")]
+    pub unit: Unit,
     pub before: u16,
-    #[serde(serialize_with = "hex")]
     pub expected: u16,
-    #[serde(serialize_with = "hex")]
     pub actual: u16,
 }
 
-/// Words appear in reports as the manuals write them (`5A8DH`), not as decimal numbers.
-fn hex<S: serde::Serializer>(word: &u16, s: S) -> Result<S::Ok, S::Error> {
-    s.serialize_str(&hex_word(*word))
+/// Values appear in reports as the manuals write them (`5A8DH`, `5AH`), not as decimal numbers.
+impl Serialize for WordRow {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let mut row = s.serialize_struct("WordRow", 5)?;
+        row.serialize_field("device", &self.device)?;
+        row.serialize_field("unit", &self.unit)?;
+        row.serialize_field("before", &self.unit.hex(self.before))?;
+        row.serialize_field("expected", &self.unit.hex(self.expected))?;
+        row.serialize_field("actual", &self.unit.hex(self.actual))?;
+        row.end()
+    }
 }
 
 /// How one run (under one fill) differed from the expectation.
@@ -50,16 +57,33 @@ impl Mismatch {
     }
 }
 
-/// What an outcome did to memory: the words it changed (written with a new value) and its error.
+/// What an outcome did to memory: the units it changed (written with a new value) and its error.
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 pub struct Effect {
     pub changed: BTreeMap<Device, u16>,
     pub error: Option<ErrorSignal>,
+    /// What the changed devices hold (absent in baselines of word-addressed families).
+    #[serde(default, skip_serializing_if = "is_word")]
+    pub unit: Unit,
+}
+
+fn is_word(unit: &Unit) -> bool {
+    *unit == Unit::Word
 }
 
 impl Effect {
+    /// No change and no error.
+    pub fn none(unit: Unit) -> Effect {
+        Effect {
+            changed: BTreeMap::new(),
+            error: None,
+            unit,
+        }
+    }
+
     pub fn of(before: &Image, outcome: &Outcome) -> Effect {
         Effect {
+            unit: before.unit(),
             changed: outcome
                 .writes
                 .iter()
@@ -79,7 +103,7 @@ impl std::fmt::Display for Effect {
         } else {
             self.changed
                 .iter()
-                .map(|(d, v)| format!("{d}={}", hex_word(*v)))
+                .map(|(d, v)| format!("{d}={}", self.unit.hex(*v)))
                 .collect::<Vec<_>>()
                 .join(" ")
         };
@@ -99,6 +123,7 @@ pub fn rows(before: &Image, expect: &Expectation, outcome: &Outcome) -> Vec<Word
             let was = before.read(d);
             WordRow {
                 device: d.clone(),
+                unit: before.unit(),
                 before: was,
                 expected: expect.after.get(d).copied().unwrap_or(was),
                 actual: outcome.writes.get(d).copied().unwrap_or(was),

@@ -6,9 +6,10 @@ use std::sync::Arc;
 
 use super::checks::{check_cite, check_expect_optional, check_id, text_bytes, unknown};
 use super::{FileContext, LoadErrorKind};
-use crate::device::Device;
+use crate::device::{code_matches, Device};
+use crate::memory::Unit;
 use crate::model::cross_vendor::{
-    Answer, CrossVendorCase, CrossVendorSection, ErrorClass, Lowering, Operation,
+    Answer, CrossVendorCase, CrossVendorSection, ErrorClass, Lowering, Operation, TextLayout,
 };
 use crate::model::profile::{Profiles, SignalKind};
 use crate::model::{Citation, ErrorSignal, Operand};
@@ -391,6 +392,15 @@ pub(crate) fn read_section(p: &ProfileSpec, cx: &mut FileContext<'_>) -> CrossVe
                 ),
             );
         }
+        if p.memory_unit == Unit::Byte && l.text == TextLayout::Packed {
+            cx.error(
+                format!("{key}.text"),
+                LoadErrorKind::Invalid(
+                    "`packed` puts two characters in a word; a byte-addressed profile holds one                      character per byte: use `words`"
+                        .into(),
+                ),
+            );
+        }
         let (Some(source), Some(destination)) = (source, destination) else {
             continue;
         };
@@ -413,6 +423,8 @@ pub(crate) fn read_section(p: &ProfileSpec, cx: &mut FileContext<'_>) -> CrossVe
             count_constants,
             count_register,
             width: l.width,
+            unit: p.memory_unit,
+            order: l.value_order,
         }));
     }
     out
@@ -427,15 +439,16 @@ fn lowering_device(
     allowed: Option<&Vec<String>>,
     d: &Device,
 ) -> Option<LoadErrorKind> {
-    if !p.devices.contains_key(d.code()) {
+    let devices = crate::model::profile::DeviceTable::new(p.devices.clone());
+    if !devices.contains_key(d.code()) {
         let known: Vec<String> = p.devices.keys().cloned().collect();
         return Some(unknown("device", d.code(), &known));
     }
-    if let Some(allowed) = allowed.filter(|a| !a.iter().any(|c| c == d.code())) {
+    if let Some(allowed) = allowed.filter(|a| !a.iter().any(|c| code_matches(c, d.code()))) {
         return Some(unknown("device for this operand", d.code(), allowed));
     }
     let variant = variant?;
-    (!crate::model::profile::words_exist(&p.devices, variant, d, 1)).then(|| {
+    (!crate::model::profile::words_exist(&devices, variant, d, 1)).then(|| {
         LoadErrorKind::Invalid(format!(
             "{d} does not exist on variant `{}`, which the lowering runs on",
             variant.id

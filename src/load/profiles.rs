@@ -6,7 +6,7 @@ use std::path::Path;
 use super::checks::unknown;
 use super::{read_file, yaml_files, FileContext, LineIndex, LoadError, LoadErrorKind, LoadErrors};
 use crate::device::Device;
-use crate::model::profile::{ErrorSignalling, Profile, Profiles};
+use crate::model::profile::{DeviceTable, ErrorSignalling, Profile, Profiles};
 use crate::spec::profile::{DeviceDef, DeviceRanges, ProfileSpec, SignalKind};
 
 /// Loads every profile in a folder.
@@ -77,7 +77,8 @@ pub fn parse_profile(file: &Path, text: &str, errors: &mut Vec<LoadError>) -> Op
         manuals: spec.manuals,
         errors,
         flags: spec.flags,
-        devices: spec.devices,
+        unit: spec.memory_unit,
+        devices: DeviceTable::new(spec.devices),
         instructions: spec.instructions,
         variants: spec.variants,
         cross_vendor,
@@ -107,11 +108,12 @@ fn check_profile(p: &ProfileSpec, cx: &mut FileContext<'_>) {
         device_names(&format!("errors.also[{i}]"), r, cx);
     }
     for (code, def) in &p.devices {
-        if let Err(e) = format!("{code}0").parse::<crate::device::Device>() {
+        // A `#` stands for a block number.
+        if let Err(e) = format!("{}0", code.replace('#', "1")).parse::<crate::device::Device>() {
             cx.error(
                 format!("devices.{code}"),
                 LoadErrorKind::Invalid(format!(
-                    "not a device code ({e}; at most {} letters)",
+                    "not a device code ({e}; at most {} characters)",
                     crate::device::MAX_CODE_LEN
                 )),
             );

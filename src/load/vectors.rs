@@ -6,13 +6,15 @@ use std::sync::Arc;
 
 use super::checks::{check_cite, check_expect_optional, check_id, text_bytes, unknown};
 use super::{read_file, yaml_files, FileContext, LoadError, LoadErrorKind, LoadErrors};
-use crate::device::Device;
+use crate::device::{code_matches, Device};
+use crate::memory::Unit;
 use crate::model::profile::{Profile, Profiles, SignalKind};
 use crate::model::{Case, Citation, Corpus, ErrorSignal, Expectation, Location, Operand};
 use crate::spec::vectors::{
     CaseSpec, ExpectSpec, FlagSpec, ScalarSpec, SourceSpec, ValueSpec, VectorFileSpec,
 };
-use crate::value::{parse_number, parse_word, to_bits};
+use crate::text::pack_low_first;
+use crate::value::{parse_bits, parse_number, parse_word, to_bits};
 
 /// Loads every vector file under the given paths (files or folders).
 pub fn load_corpus(paths: &[PathBuf], profiles: &Profiles) -> Result<Corpus, LoadErrors> {
@@ -130,6 +132,8 @@ impl CorpusBuilder {
 struct Header<'p> {
     instructions: Arc<[String]>,
     profiles: Vec<&'p Profile>,
+    /// What a device of these profiles holds (they must agree).
+    unit: Unit,
     profile_ids: Arc<[String]>,
     source: SourceSpec,
 }
@@ -173,10 +177,24 @@ fn read_header<'p>(
             }
         }
     }
+    let unit = found.first().map_or(Unit::Word, |p| p.unit);
+    if let Some(other) = found.iter().find(|p| p.unit != unit) {
+        cx.error(
+            "profiles",
+            LoadErrorKind::Invalid(format!(
+                "`{}` is {}-addressed and `{}` {}-addressed: one file's memory is in one unit",
+                found[0].id,
+                unit.name(),
+                other.id,
+                other.unit.name()
+            )),
+        );
+    }
     check_source("source", &spec.source, &found, cx);
     (cx.errors.len() == before).then(|| Header {
         instructions: spec.instructions.clone().into(),
         profiles: found,
+        unit,
         profile_ids: spec.profiles.clone().into(),
         source: spec.source.clone(),
     })
@@ -406,10 +424,14 @@ fn read_operands(
                             def.devices.join(", ")
                         )),
                     ),
-                    Operand::Device(d) if !def.devices.iter().any(|c| c == d.code()) => cx.error(
-                        &okey,
-                        unknown("device for this operand", d.code(), &def.devices),
-                    ),
+                    Operand::Device(d)
+                        if !def.devices.iter().any(|c| code_matches(c, d.code())) =>
+                    {
+                        cx.error(
+                            &okey,
+                            unknown("device for this operand", d.code(), &def.devices),
+                        )
+                    }
                     Operand::Device(d) if !p.word_exists_anywhere(d) => {
                         cx.error(&okey, missing_word(p, d));
                     }
@@ -440,7 +462,7 @@ fn read_memory(
                 continue;
             }
         };
-        let Some(words) = expand(&mkey, value, cx) else {
+        let Some(words) = expand(&mkey, value, h.unit, cx) else {
             continue;
         };
         // Consecutive numbers of a bit device are not consecutive words: M0 and M1 share 15
@@ -499,11 +521,13 @@ fn missing_word(p: &Profile, d: &Device) -> LoadErrorKind {
     })
 }
 
-/// The words a value spec stands for.
-fn expand(key: &str, value: &ValueSpec, cx: &mut FileContext<'_>) -> Option<Vec<u16>> {
+/// The units a value spec stands for. Text is stored as the family stores a string: two
+/// characters per word, first in the low byte, in word memory; one per byte in byte memory.
+fn expand(key: &str, value: &ValueSpec, unit: Unit, cx: &mut FileContext<'_>) -> Option<Vec<u16>> {
+    let bits = unit.bits();
     let word = |s: &ScalarSpec| match s {
-        ScalarSpec::Number(n) => to_bits(&n.to_string(), *n, 16).map(|w| w as u16),
-        ScalarSpec::Text(t) => parse_word(t),
+        ScalarSpec::Number(n) => to_bits(&n.to_string(), *n, bits).map(|w| w as u16),
+        ScalarSpec::Text(t) => parse_bits(t, bits),
     };
     let words = match value {
         ValueSpec::Word(s) => vec![word(s)
@@ -522,10 +546,11 @@ fn expand(key: &str, value: &ValueSpec, cx: &mut FileContext<'_>) -> Option<Vec<
             }
             out
         }
-        ValueSpec::Ascii(text) => text_bytes(key, text, cx)?
-            .chunks(2)
-            .map(|pair| u16::from(pair[0]) | (u16::from(*pair.get(1).unwrap_or(&0)) << 8))
+        ValueSpec::Ascii(text) if unit == Unit::Byte => text_bytes(key, text, cx)?
+            .into_iter()
+            .map(u16::from)
             .collect(),
+        ValueSpec::Ascii(text) => pack_low_first(&text_bytes(key, text, cx)?),
         ValueSpec::AsciiWords(text) => text_bytes(key, text, cx)?
             .into_iter()
             .map(u16::from)

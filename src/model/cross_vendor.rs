@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{Basis, Citation, ErrorSignal, Location, Operand};
 use crate::device::Device;
-pub use crate::spec::cross_vendor::{ErrorClass, Operation, TextLayout};
+pub use crate::spec::cross_vendor::{ErrorClass, Operation, TextLayout, ValueOrder};
 
 /// What a vendor answered to a cross-vendor question.
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
@@ -94,6 +94,10 @@ pub struct Lowering {
     pub count_register: Option<Device>,
     /// The digits the instruction handles when it takes no count (HABIN, BINHA: 4).
     pub width: Option<u32>,
+    /// What one device of the profile holds.
+    pub unit: crate::memory::Unit,
+    /// The order of a value's units in memory.
+    pub order: ValueOrder,
 }
 
 /// A validated cross-vendor case.

@@ -10,7 +10,8 @@ use std::sync::Arc;
 
 use super::cross_vendor::CrossVendorSection;
 use super::ErrorSignal;
-use crate::device::Device;
+use crate::device::{code_matches, Device};
+use crate::memory::Unit;
 pub use crate::spec::profile::{
     DeviceDef, DeviceRange, DeviceRanges, FlagDef, InstructionDef, Manual, Numbering, OperandDef,
     SignalKind, Variant,
@@ -27,11 +28,54 @@ pub struct Profile {
     pub manuals: BTreeMap<String, Manual>,
     pub errors: ErrorSignalling,
     pub flags: BTreeMap<String, FlagDef>,
-    pub devices: BTreeMap<String, DeviceDef>,
+    /// What one device holds: a byte or a word.
+    pub unit: Unit,
+    pub devices: DeviceTable,
     pub instructions: BTreeMap<String, InstructionDef>,
     pub variants: Vec<Variant>,
     /// How the profile answers the cross-vendor operations (empty when it does not).
     pub cross_vendor: CrossVendorSection,
+}
+
+/// A profile's device codes, looked up by the code a device has: an entry is a code (`D`) or a
+/// pattern with `#` for a block number (`DB#.DBB`, see [`code_matches`]).
+#[derive(Debug, Clone, Default)]
+pub struct DeviceTable {
+    defs: BTreeMap<String, DeviceDef>,
+}
+
+impl DeviceTable {
+    pub fn new(defs: BTreeMap<String, DeviceDef>) -> Self {
+        DeviceTable { defs }
+    }
+
+    /// The entry that names `code`, and its key.
+    pub fn entry(&self, code: &str) -> Option<(&str, &DeviceDef)> {
+        if let Some((key, def)) = self.defs.get_key_value(code) {
+            return Some((key, def));
+        }
+        self.defs
+            .iter()
+            .find(|(key, _)| key.contains('#') && code_matches(key, code))
+            .map(|(key, def)| (key.as_str(), def))
+    }
+
+    pub fn get(&self, code: &str) -> Option<&DeviceDef> {
+        self.entry(code).map(|(_, def)| def)
+    }
+
+    pub fn contains_key(&self, code: &str) -> bool {
+        self.entry(code).is_some()
+    }
+
+    /// The codes and patterns, for messages.
+    pub fn keys(&self) -> impl Iterator<Item = &String> {
+        self.defs.keys()
+    }
+
+    pub fn iter(&self) -> impl Iterator<Item = (&String, &DeviceDef)> {
+        self.defs.iter()
+    }
 }
 
 /// How an operation error becomes visible to a program, with its devices parsed.
@@ -53,11 +97,14 @@ impl Profile {
 
     /// The ranges of a device code on a variant.
     pub fn ranges(&self, variant: &Variant, code: &str) -> Option<DeviceRanges> {
-        variant
-            .devices
-            .get(code)
-            .cloned()
-            .or_else(|| self.devices.get(code).map(DeviceDef::ranges))
+        let (key, def) = self.devices.entry(code)?;
+        Some(
+            variant
+                .devices
+                .get(key)
+                .cloned()
+                .unwrap_or_else(|| def.ranges()),
+        )
     }
 
     /// Whether `count` consecutive word operands from `head` all exist on the variant: every
@@ -130,18 +177,13 @@ impl Profile {
 
 /// [`Profile::words_exist`] over a profile's device table, for the loader, which checks a
 /// profile before it is one.
-pub fn words_exist(
-    devices: &BTreeMap<String, DeviceDef>,
-    variant: &Variant,
-    head: &Device,
-    count: u32,
-) -> bool {
-    let Some(def) = devices.get(head.code()) else {
+pub fn words_exist(devices: &DeviceTable, variant: &Variant, head: &Device, count: u32) -> bool {
+    let Some((key, def)) = devices.entry(head.code()) else {
         return false;
     };
     let ranges = variant
         .devices
-        .get(head.code())
+        .get(key)
         .cloned()
         .unwrap_or_else(|| def.ranges());
     let Some(first) = def.numbering.point(head.index) else {

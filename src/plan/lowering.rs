@@ -3,9 +3,49 @@
 //! judge's part.)
 
 use super::Input;
-use crate::model::cross_vendor::{CrossVendorCase, Lowering, Operation, TextLayout};
+use crate::memory::Unit;
+use crate::model::cross_vendor::{CrossVendorCase, Lowering, Operation, TextLayout, ValueOrder};
 use crate::model::Operand;
-use crate::text::pack_low_first;
+use crate::text::{pack_low_first, significant_digits};
+
+/// Text with its 00H terminator, in memory units as `layout` stores it.
+pub fn text_units(layout: TextLayout, text: &[u8]) -> Vec<u16> {
+    let mut chars = text.to_vec();
+    chars.push(0);
+    match layout {
+        TextLayout::Packed => pack_low_first(&chars),
+        TextLayout::Words => chars.iter().map(|c| u16::from(*c)).collect(),
+    }
+}
+
+/// A value spread over `count` units of memory, in `order`.
+pub fn value_units(value: u64, unit: Unit, order: ValueOrder, count: u32) -> Vec<u16> {
+    let bits = unit.bits();
+    let part = |i: u32| (value.checked_shr(bits * i).unwrap_or(0) & u64::from(unit.max())) as u16;
+    match order {
+        ValueOrder::LowFirst => (0..count).map(part).collect(),
+        ValueOrder::HighFirst => (0..count).rev().map(part).collect(),
+    }
+}
+
+/// The value `units` hold, read in `order`.
+pub fn units_value(units: impl Iterator<Item = u16>, unit: Unit, order: ValueOrder) -> u64 {
+    let bits = unit.bits();
+    match order {
+        ValueOrder::LowFirst => units
+            .enumerate()
+            .fold(0, |acc, (i, u)| acc | u64::from(u) << (bits * i as u32)),
+        ValueOrder::HighFirst => units.fold(0, |acc, u| acc << bits | u64::from(u)),
+    }
+}
+
+/// How many units hold a value of `digits` hex digits, and at least the `needed` ones.
+pub fn units_for(digits: u32, needed: u32, unit: Unit) -> u32 {
+    digits
+        .div_ceil(unit.digits())
+        .max(needed)
+        .clamp(1, 64 / unit.bits())
+}
 
 /// The input that runs `case` through `lowering`.
 pub fn input(lowering: &Lowering, case: &CrossVendorCase) -> Input {
@@ -26,22 +66,15 @@ pub fn input(lowering: &Lowering, case: &CrossVendorCase) -> Input {
         }
     }
     let words: Vec<u16> = match lowering.operation {
-        Operation::HexToValue => {
-            let mut chars = case.text.clone();
-            chars.push(0);
-            match lowering.text {
-                TextLayout::Packed => pack_low_first(&chars),
-                TextLayout::Words => chars.iter().map(|c| u16::from(*c)).collect(),
-            }
-        }
+        Operation::HexToValue => text_units(lowering.text, &case.text),
         Operation::ValueToHex => {
-            // As many words as the value needs or the digits read, the upper ones zero, so that
+            // As many units as the value needs or the digits read, the upper ones zero, so that
             // an instruction reading past the value reads zeros, not the fill.
             let v = case.value;
             let digits = lowering.width.unwrap_or(case.digits);
-            let needed = if v > 0xFFFF { 2 } else { 1 };
-            let count = digits.div_ceil(4).clamp(needed, 4);
-            (0..count).map(|i| (v >> (16 * i)) as u16).collect()
+            let needed = significant_digits(v).div_ceil(lowering.unit.digits());
+            let count = units_for(digits, needed, lowering.unit);
+            value_units(v, lowering.unit, lowering.order, count)
         }
     };
     let mut before: std::collections::BTreeMap<_, _> = words

@@ -8,7 +8,7 @@
 //! not claim is skipped with the reason, and a trial whose outcome cannot fail (an `unspecified`
 //! case, a listed known difference) is marked so that a test runner can count it as ignored.
 
-mod lowering;
+pub mod lowering;
 
 pub use lowering::input as lowered_input;
 
@@ -17,6 +17,7 @@ use std::sync::Arc;
 
 use crate::backend::{Backend, Setting};
 use crate::device::Device;
+use crate::memory::{Fill, Image, Unit};
 use crate::model::cross_vendor::{Answer, CrossVendorCase, ErrorClass, Lowering};
 use crate::model::known::{Entry, KnownDifferences};
 use crate::model::profile::{Profile, Profiles};
@@ -90,6 +91,12 @@ impl Trial {
                 format!("cross-vendor::{}::codec::{}", self.backend.name(), case.id)
             }
         }
+    }
+
+    /// The memory before the trial under a fill, in the units of its profile's memory.
+    pub fn image(&self, fill: Fill) -> Image {
+        let unit = self.profile.as_ref().map_or(Unit::Word, |p| p.unit);
+        Image::of_units(self.input.before.clone(), fill, unit)
     }
 
     pub fn case_id(&self) -> &str {

@@ -8,10 +8,10 @@ use similar::{ChangeTag, TextDiff};
 
 use super::sanitize::terminal;
 use crate::judge::{Difference, Mismatch, Verdict, WordRow};
+use crate::memory::Unit;
 use crate::model::cross_vendor::Operation;
 use crate::model::{error_text, Case};
 use crate::plan::{Check, Trial};
-use crate::value::hex_word;
 
 /// Styles for the text report; all plain unless colour is on, so the same renderer serves a
 /// terminal, a log file and libtest's captured output.
@@ -37,17 +37,15 @@ impl Palette {
     }
 }
 
-/// A word as a report line shows it: device, hex value, and its two bytes as characters in
-/// memory order (low byte first).
-pub fn word_line(device: &impl std::fmt::Display, value: u16) -> String {
+/// A unit as a report line shows it: device, hex value, and its bytes as characters in memory
+/// order (a word's low byte first).
+pub fn word_line(device: &impl std::fmt::Display, value: u16, unit: Unit) -> String {
     let [lo, hi] = value.to_le_bytes();
-    format!(
-        "{:<8} {}  \"{}{}\"",
-        device.to_string(),
-        hex_word(value),
-        show_byte(lo),
-        show_byte(hi)
-    )
+    let chars = match unit {
+        Unit::Byte => show_byte(lo),
+        Unit::Word => show_byte(lo) + &show_byte(hi),
+    };
+    format!("{:<8} {}  \"{chars}\"", device.to_string(), unit.hex(value))
 }
 
 fn show_byte(b: u8) -> String {
@@ -124,7 +122,7 @@ pub fn describe_setting(trial: &Trial) -> String {
     let before: Vec<String> = input
         .before
         .iter()
-        .map(|(d, v)| format!("{d}={}", hex_word(*v)))
+        .map(|(d, v)| format!("{d}={}", profile.unit.hex(*v)))
         .collect();
     let _ = writeln!(
         out,
@@ -314,11 +312,11 @@ fn render_mismatch(m: &Mismatch, palette: Palette) -> String {
 pub fn memory_diff(rows: &[WordRow], palette: Palette) -> String {
     let expected: String = rows
         .iter()
-        .map(|r| word_line(&r.device, r.expected) + "\n")
+        .map(|r| word_line(&r.device, r.expected, r.unit) + "\n")
         .collect();
     let actual: String = rows
         .iter()
-        .map(|r| word_line(&r.device, r.actual) + "\n")
+        .map(|r| word_line(&r.device, r.actual, r.unit) + "\n")
         .collect();
     let diff = TextDiff::from_lines(&expected, &actual);
     let mut out = String::new();

@@ -56,14 +56,26 @@ impl fmt::Display for ErrorClass {
     }
 }
 
-/// How characters are stored in words.
+/// How characters are stored in memory.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum TextLayout {
-    /// Two characters per word, first character in the low byte.
+    /// Two characters per word, first character in the low byte (word-addressed memory only).
     Packed,
-    /// One character per word, in the low byte.
+    /// One character per device: in the low byte of a word, or the whole byte of
+    /// byte-addressed memory.
     Words,
+}
+
+/// The order of a multi-unit value's units in memory.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum ValueOrder {
+    /// The least significant unit at the head (MELSEC D100/D101 for a BIN32).
+    #[default]
+    LowFirst,
+    /// The most significant unit at the head: a byte array in reading order (Siemens).
+    HighFirst,
 }
 
 /// A profile's `cross_vendor` section: how its instructions answer the cross-vendor operations.
@@ -112,6 +124,10 @@ pub struct LoweringSpec {
     /// The digits the instruction handles when it takes no count (HABIN, BINHA: 4).
     #[serde(default)]
     pub width: Option<u32>,
+    /// The order of the value's units at the source (value-to-hex) or destination
+    /// (hex-to-value): `low-first` (the default) or `high-first`.
+    #[serde(default)]
+    pub value_order: ValueOrder,
 }
 
 /// A file of vendor-neutral cases for one operation.

@@ -33,7 +33,13 @@ pub struct ProfileSpec {
     /// Mode flags the instructions read.
     #[serde(default)]
     pub flags: BTreeMap<String, FlagDef>,
-    /// Device codes and their ranges, for every variant unless a variant overrides them.
+    /// What one device holds: `word` (16 bits, MELSEC, IDEC, Panasonic, Omron, KEYENCE) or
+    /// `byte` (Siemens markers and data blocks, where `MB20` and `MB21` are neighbouring
+    /// bytes). Values, fills, text and diffs follow it.
+    #[serde(default)]
+    pub memory_unit: crate::memory::Unit,
+    /// Device codes and their ranges, for every variant unless a variant overrides them. A
+    /// code may hold `#` for a block number (`DB#.DBB`: the bytes of any data block).
     pub devices: BTreeMap<String, DeviceDef>,
     /// The instructions the profile covers.
     pub instructions: BTreeMap<String, InstructionDef>,

@@ -10,21 +10,24 @@ use super::target::{Ask, Cases, Column};
 use crate::backend::{Request, Response};
 use crate::judge::lift::lift;
 use crate::judge::Effect;
-use crate::memory::{Fill, Image};
+use crate::memory::{Fill, Image, Unit};
 use crate::plan::{lowered_input, Input};
 
 /// The memory of one input under both fills.
 pub struct Images([Image; 2]);
 
 impl Images {
-    pub fn of(input: &Input) -> Images {
-        Images::from_words(input.before.clone())
+    pub fn of(input: &Input, unit: Unit) -> Images {
+        Images::from_words(input.before.clone(), unit)
     }
 
-    fn from_words(words: std::collections::BTreeMap<crate::device::Device, u16>) -> Images {
+    fn from_words(
+        words: std::collections::BTreeMap<crate::device::Device, u16>,
+        unit: Unit,
+    ) -> Images {
         Images([
-            Image::new(words.clone(), Fill::A),
-            Image::new(words, Fill::B),
+            Image::of_units(words.clone(), Fill::A, unit),
+            Image::of_units(words, Fill::B, unit),
         ])
     }
 }
@@ -46,7 +49,7 @@ pub fn reply(column: &Column, cases: &Cases, native: Option<&(Input, Images)>) -
             }
             let mut input = lowered_input(l, case);
             // The request reads memory from the images only.
-            own_images = Images::from_words(std::mem::take(&mut input.before));
+            own_images = Images::from_words(std::mem::take(&mut input.before), profile.unit);
             lowered = input;
             (&lowered, &own_images, Some(l), case.digits)
         }

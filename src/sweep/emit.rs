@@ -317,7 +317,7 @@ fn native_case(
         }
         _ => {
             for (d, w) in input.before.iter().filter(|(d, _)| exists(d)) {
-                let _ = writeln!(y, "      {d}: {}", hex_word(*w));
+                let _ = writeln!(y, "      {d}: {}", shape.profile.unit.hex(*w));
             }
         }
     }
@@ -331,7 +331,7 @@ pub fn expect_lines(effect: &Effect, indent: &str) -> String {
     let after: Vec<String> = effect
         .changed
         .iter()
-        .map(|(d, w)| format!("{d}: {}", hex_word(*w)))
+        .map(|(d, w)| format!("{d}: {}", effect.unit.hex(*w)))
         .collect();
     let error = match &effect.error {
         None => "none".to_string(),

@@ -185,10 +185,7 @@ impl fmt::Display for Point {
     }
 }
 
-/// The hex digits a value has (at least 1).
-pub fn significant_digits(v: u64) -> u32 {
-    (64 - v.leading_zeros()).div_ceil(4).max(1)
-}
+pub use crate::text::significant_digits;
 
 fn count_relation(count: u32, size: u32, what: &str) -> String {
     match count.cmp(&size) {

@@ -254,7 +254,7 @@ impl Sweep {
                             let native = match (self.settings.direct, &self.shape) {
                                 (true, Some(shape)) => {
                                     let input = shape.input(point);
-                                    let images = direct::Images::of(&input);
+                                    let images = direct::Images::of(&input, shape.profile.unit);
                                     Some((input, images))
                                 }
                                 _ => None,

@@ -15,11 +15,12 @@ use serde::Serialize;
 use super::input::{Data, Point};
 use crate::backend::Backend;
 use crate::device::Device;
-use crate::model::cross_vendor::{CrossVendorCase, Lowering, Operation, TextLayout};
+use crate::model::cross_vendor::{CrossVendorCase, Lowering, Operation, TextLayout, ValueOrder};
 use crate::model::profile::{Profile, Profiles};
 use crate::model::{Basis, Case, Citation, Location, Operand};
+use crate::plan::lowering::{text_units, units_for, value_units};
 use crate::plan::{lowered_input, Check, Input, Trial};
-use crate::text::pack_low_first;
+use crate::text::significant_digits;
 
 /// What a sweep generates inputs for.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
@@ -111,6 +112,8 @@ pub struct Shape {
     pub width: Option<u32>,
     /// Words of binary data (1, or 2 for a 32-bit form).
     pub words: u32,
+    /// The order of a value's units in memory.
+    pub order: ValueOrder,
     /// The flags the instruction reads.
     pub flags: Vec<String>,
 }
@@ -165,6 +168,7 @@ impl Shape {
                 .collect(),
             width: first.width.map(|w| if double { w * 2 } else { w }),
             words: if double { 2 } else { 1 },
+            order: first.order,
             flags: def.flags.clone(),
         })
     }
@@ -209,24 +213,14 @@ impl Shape {
         if let Some(count) = &self.count {
             operands.insert(count.clone(), Operand::Constant(i64::from(point.digits)));
         }
+        let unit = self.profile.unit;
         let words: Vec<u16> = match &point.data {
-            Data::Text(t) => {
-                let mut chars = t.clone();
-                chars.push(0);
-                match self.layout(&point.flags) {
-                    TextLayout::Packed => pack_low_first(&chars),
-                    TextLayout::Words => chars.iter().map(|c| u16::from(*c)).collect(),
-                }
-            }
+            Data::Text(t) => text_units(self.layout(&point.flags), t),
             Data::Value(v) => {
-                let needed = super::input::significant_digits(*v).div_ceil(4);
-                let count = point
-                    .digits
-                    .div_ceil(4)
-                    .max(needed)
-                    .max(self.words)
-                    .clamp(1, 4);
-                (0..count).map(|i| (v >> (16 * i)) as u16).collect()
+                let needed = significant_digits(*v)
+                    .div_ceil(unit.digits())
+                    .max(self.words * 16 / unit.bits());
+                value_units(*v, unit, self.order, units_for(point.digits, needed, unit))
             }
         };
         let before = words

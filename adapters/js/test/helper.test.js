@@ -36,6 +36,7 @@ function drive(fixture, args, messages, { closeStdin = true } = {}) {
 
 const HELLO_2 = { type: 'hello', protocol: 2, harness: 'plc-conformance 0.2.0' };
 const HELLO_1 = { type: 'hello', protocol: 1, harness: 'plc-conformance 0.1.0' };
+const HELLO_3 = { type: 'hello', protocol: 3, harness: 'plc-conformance 0.3.0' };
 const SHUTDOWN = { type: 'shutdown' };
 const bytes = (s) => [...Buffer.from(s, 'latin1')];
 const h2v = (id, text, digits) => ({ id, case: `h2v-${id}`, operation: 'hex-to-value', text: bytes(text), digits });
@@ -145,7 +146,7 @@ function habinCase(id, overrides = {}) {
 }
 
 test('an instruction-level backend answers hello with the version the harness speaks', async () => {
-  for (const [hello, version] of [[HELLO_1, 1], [HELLO_2, 2], [{ type: 'hello' }, 1]]) {
+  for (const [hello, version] of [[HELLO_1, 1], [HELLO_2, 2], [HELLO_3, 3], [{ type: 'hello' }, 1]]) {
     const { answers } = await drive('habin.js', [], [hello, SHUTDOWN]);
     assert.deepEqual(answers[0], {
       type: 'hello',
@@ -178,6 +179,21 @@ test('an instruction-level backend executes cases on the window, the fill and th
 });
 
 // --- in process: the Case, the fill and the error table -----------------------------------------
+
+test('a byte-addressed case reads bytes', () => {
+  const device = helper.Device.parse('DB1.DBB10');
+  assert.equal(device.code, 'DB1.DBB');
+  assert.equal(device.offset(1).toString(), 'DB1.DBB11');
+  for (const bad of ['DB1.10', 'db1.DBB10', 'DB1.DBB']) {
+    assert.throws(() => helper.Device.parse(bad), TypeError);
+  }
+  const c = new helper.Case({
+    id: 1, case: 'x', instruction: 'ATH', profile: 'p', variant: 'v', flags: {}, operands: {},
+    fill: 'B', memory: [{ start: 'MB20', bytes: [0x30, 0x41] }],
+  });
+  assert.equal(c.read('MB21'), 0x41);
+  assert.equal(c.read('MB30'), helper.fillWord('B', 30) & 0xff);
+});
 
 test('fillWord gives the two fill patterns of docs/protocol.md', () => {
   assert.equal(helper.fillWord('A', 0), 0xa5a5);

@@ -19,6 +19,7 @@ import plc_adapter  # noqa: E402
 
 HELLO_1 = {"type": "hello", "protocol": 1, "harness": "plc-conformance 0.1.0"}
 HELLO_2 = {"type": "hello", "protocol": 2, "harness": "plc-conformance 0.2.0"}
+HELLO_3 = {"type": "hello", "protocol": 3, "harness": "plc-conformance 0.3.0"}
 SHUTDOWN = {"type": "shutdown"}
 
 
@@ -128,7 +129,7 @@ def habin_case(ident, **overrides):
 
 class InstructionLevel(unittest.TestCase):
     def test_hello_answers_the_version_the_harness_speaks(self):
-        for hello, version in ((HELLO_1, 1), (HELLO_2, 2), ({"type": "hello"}, 1)):
+        for hello, version in ((HELLO_1, 1), (HELLO_2, 2), (HELLO_3, 3), ({"type": "hello"}, 1)):
             answers, _, _ = drive("habin.py", [], [hello, SHUTDOWN])
             self.assertEqual(answers[0], {
                 "type": "hello", "protocol": version,
@@ -228,6 +229,21 @@ class InProcess(unittest.TestCase):
         self.assertEqual(case.read(plc_adapter.Device.parse("D300")), plc_adapter.fill_word("B", 300))
         self.assertFalse(case.flag("SM705"))
         self.assertTrue(case.flag("SM701"))
+
+    def test_a_byte_addressed_case_reads_bytes(self):
+        device = plc_adapter.Device.parse("DB1.DBB10")
+        self.assertEqual((device.code, device.index), ("DB1.DBB", 10))
+        self.assertEqual(str(device.offset(1)), "DB1.DBB11")
+        for bad in ("DB1.10", "db1.DBB10", "DB1.DBB"):
+            with self.assertRaises(ValueError):
+                plc_adapter.Device.parse(bad)
+        message = habin_case(1, fill="B")
+        message["memory"] = [{"start": "MB20", "bytes": [0x30, 0x41]}]
+        case = plc_adapter.Case(message)
+        self.assertEqual(case.read(plc_adapter.Device.parse("MB21")), 0x41)
+        # A byte the case does not set holds the low byte of the word fill.
+        self.assertEqual(case.read(plc_adapter.Device.parse("MB30")),
+                         plc_adapter.fill_word("B", 30) & 0xFF)
 
 
 if __name__ == "__main__":

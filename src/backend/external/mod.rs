@@ -24,13 +24,13 @@ pub use process::{closing, kill_all, shell_line, MAX_LINE};
 use process::{describe_exit, Next, Process};
 use protocol::{
     BackendInfo, BackendMessage, Capabilities, CaseRequest, CodecRequest, ErrorReport, FillName,
-    HarnessMessage, MemoryRange, OperandValue, RunCase, SignalReport, PROTOCOL_VERSION,
-    SUPPORTED_VERSIONS,
+    HarnessMessage, MemoryRange, OperandValue, RunCase, SignalReport, BYTES_VERSION,
+    PROTOCOL_VERSION, SUPPORTED_VERSIONS,
 };
 
 use super::{Backend, Fault, Outcome, Question, Request, Response, Setting};
 use crate::device::Device;
-use crate::memory::Fill;
+use crate::memory::{Fill, Unit};
 use crate::model::cross_vendor::{Answer, CodecAbilities, OperationAbilities};
 use crate::model::profile::{Profile, Profiles};
 use crate::model::project::ExternalSettings;
@@ -71,7 +71,7 @@ impl fmt::Display for ExternalError {
             ExternalErrorKind::Handshake(m) => write!(f, "handshake failed: {m}"),
             ExternalErrorKind::Version { theirs } => write!(
                 f,
-                "speaks protocol version {theirs}; this harness speaks versions 1 and \
+                "speaks protocol version {theirs}; this harness speaks versions 1 to \
                  {PROTOCOL_VERSION}"
             ),
             ExternalErrorKind::Capabilities(m) => write!(f, "{m}"),
@@ -120,7 +120,7 @@ impl ExternalBackend {
             command: spec.launch.to_string(),
             kind,
         };
-        let (process, info, capabilities) = handshake(&spec).map_err(error)?;
+        let (process, version, info, capabilities) = handshake(&spec).map_err(error)?;
         if spec.codec && capabilities.codec.is_none() {
             return Err(error(ExternalErrorKind::Capabilities(
                 "is configured as codec-level but its handshake claims the instruction level"
@@ -137,7 +137,7 @@ impl ExternalBackend {
             ),
             None => (
                 Some(
-                    check_capabilities(&spec, &capabilities, profiles)
+                    check_capabilities(&spec, &capabilities, profiles, version)
                         .map_err(|m| error(ExternalErrorKind::Capabilities(m)))?,
                 ),
                 None,
@@ -209,7 +209,7 @@ impl ExternalBackend {
             if state.process.is_none() {
                 sent = false;
                 match handshake(&self.settings) {
-                    Ok((p, _, _)) => {
+                    Ok((p, _, _, _)) => {
                         if self.settings.persistent {
                             self.restarts
                                 .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
@@ -355,7 +355,8 @@ impl ExternalBackend {
                 text,
             } if id == case.id() => match case {
                 RunCase::Instruction(case) if value.is_none() && text.is_none() => {
-                    outcome(case, memory, writes, error)
+                    let unit = self.profile.as_ref().map_or(Unit::Word, |p| p.unit);
+                    outcome(case, unit, memory, writes, error)
                         .map(Response::Done)
                         .map_err(unexpected)
                 }
@@ -565,7 +566,7 @@ impl ExternalBackend {
 /// Starts the process and exchanges `hello`.
 fn handshake(
     spec: &ExternalSettings,
-) -> Result<(Process, BackendInfo, Capabilities), ExternalErrorKind> {
+) -> Result<(Process, u32, BackendInfo, Capabilities), ExternalErrorKind> {
     let mut process = Process::spawn(&spec.launch, spec.cwd.as_ref(), &spec.env)
         .map_err(|e| ExternalErrorKind::Spawn(e.to_string()))?;
     let hello = HarnessMessage::Hello {
@@ -645,10 +646,10 @@ fn handshake(
                 .into(),
         )),
         Ok(BackendMessage::Hello {
-            protocol: _,
+            protocol,
             backend,
             capabilities,
-        }) => Ok((process, backend, capabilities)),
+        }) => Ok((process, protocol, backend, capabilities)),
         Ok(_) => Err(failed(
             &mut process,
             format!("expected a hello, got: {}", quote(&line)),
@@ -730,6 +731,7 @@ fn check_capabilities(
     spec: &ExternalSettings,
     caps: &Capabilities,
     profiles: &Profiles,
+    version: u32,
 ) -> Result<Arc<Profile>, String> {
     if let Some(configured) = &spec.profile {
         if configured != &caps.profile {
@@ -746,6 +748,13 @@ fn check_capabilities(
             profiles.ids().join(", ")
         )
     })?;
+    if profile.unit == Unit::Byte && version < BYTES_VERSION {
+        return Err(format!(
+            "answers hello with protocol version {version}, but profile `{}` is byte-addressed: \
+             its memory ranges carry `bytes`, which needs version {BYTES_VERSION}",
+            profile.id
+        ));
+    }
     let unknown = |what: &str, name: &str, known: Vec<String>| {
         format!(
             "claims {what} `{name}`, which profile `{}` does not define; it defines: {}",
@@ -845,6 +854,7 @@ pub fn case_request(req: &Request<'_>, id: u64) -> CaseRequest {
 /// that kept their value (an echoed window is not a list of writes).
 fn outcome(
     case: &CaseRequest,
+    unit: Unit,
     memory: Vec<MemoryRange>,
     writes: BTreeMap<String, u16>,
     error: Option<ErrorReport>,
@@ -859,12 +869,15 @@ fn outcome(
     } else {
         case.memory
             .iter()
-            .filter_map(|r| r.start.parse::<Device>().ok().map(|d| (d, &r.words)))
-            .flat_map(|(d, words)| {
-                words
-                    .iter()
+            .filter_map(|r| {
+                let start = r.start.parse::<Device>().ok()?;
+                Some((start, r.values(unit).ok()?))
+            })
+            .flat_map(|(d, values)| {
+                values
+                    .into_iter()
                     .enumerate()
-                    .filter_map(move |(i, w)| d.offset(i as u32).map(|d| (d, *w)))
+                    .filter_map(move |(i, w)| d.offset(i as u32).map(|d| (d, w)))
             })
             .collect()
     };
@@ -873,7 +886,7 @@ fn outcome(
     let mut in_memory: BTreeMap<Device, String> = BTreeMap::new();
     for range in memory {
         let start = device(&range.start)?;
-        for (i, word) in range.words.into_iter().enumerate() {
+        for (i, word) in range.values(unit)?.into_iter().enumerate() {
             let d = start
                 .offset(i as u32)
                 .ok_or_else(|| format!("memory from {start} runs past the last device number"))?;
@@ -891,6 +904,13 @@ fn outcome(
     let mut in_writes: BTreeMap<Device, String> = BTreeMap::new();
     for (name, word) in writes {
         let d = device(&name)?;
+        if word > unit.max() {
+            return Err(format!(
+                "`{name}` in `writes` is {word}, past a {} ({} at most)",
+                unit.name(),
+                unit.max()
+            ));
+        }
         if let Some(first) = in_writes.insert(d.clone(), name.clone()) {
             return Err(format!(
                 "`{first}` and `{name}` in `writes` are the same word, {d}"
@@ -1009,21 +1029,17 @@ mod tests {
             ignored_flags: BTreeMap::new(),
             operands: BTreeMap::new(),
             fill: FillName::A,
-            memory: vec![MemoryRange {
-                start: "D200".into(),
-                words: vec![0, 0],
-            }],
+            memory: vec![MemoryRange::new("D200".into(), Unit::Word, vec![0, 0])],
         }
     }
 
     #[test]
     fn one_word_given_two_values_is_no_answer() {
-        let range = |start: &str, words: Vec<u16>| MemoryRange {
-            start: start.into(),
-            words,
-        };
+        let range =
+            |start: &str, words: Vec<u16>| MemoryRange::new(start.into(), Unit::Word, words);
         let e = outcome(
             &request(),
+            Unit::Word,
             vec![range("D200", vec![1, 2]), range("D201", vec![3])],
             BTreeMap::new(),
             None,
@@ -1031,14 +1047,22 @@ mod tests {
         .expect_err("two ranges over D201");
         assert!(e.contains("D201 is given twice in `memory`"), "{e}");
         let writes = BTreeMap::from([("D200".to_string(), 1), ("D0200".to_string(), 2)]);
-        let e = outcome(&request(), Vec::new(), writes, None).expect_err("D200 and D0200");
+        let e =
+            outcome(&request(), Unit::Word, Vec::new(), writes, None).expect_err("D200 and D0200");
         assert!(
             e.contains("`D0200` and `D200` in `writes` are the same word, D200"),
             "{e}"
         );
         // `writes` wins over `memory` for a word in both, as documented.
         let writes = BTreeMap::from([("D200".to_string(), 7)]);
-        let o = outcome(&request(), vec![range("D200", vec![1])], writes, None).expect("ok");
+        let o = outcome(
+            &request(),
+            Unit::Word,
+            vec![range("D200", vec![1])],
+            writes,
+            None,
+        )
+        .expect("ok");
         assert_eq!(o.writes.values().copied().collect::<Vec<_>>(), vec![7]);
     }
 }

@@ -10,13 +10,21 @@ use std::collections::BTreeMap;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
+use crate::memory::Unit;
 use crate::model::cross_vendor::{ErrorClass, Operation};
 
 /// The newest protocol version this harness speaks: it says so in its `hello`.
-pub const PROTOCOL_VERSION: u32 = 2;
-/// The versions a backend may answer with: 1 (instruction level only) and 2 (instruction or
-/// codec level). Any other is refused before a case runs.
-pub const SUPPORTED_VERSIONS: [u32; 2] = [1, 2];
+pub const PROTOCOL_VERSION: u32 = 3;
+/// The versions a backend may answer with: 1 (instruction level only), 2 (instruction or
+/// codec level) and 3 (also byte-addressed families, whose memory ranges carry `bytes`). Any
+/// other is refused before a case runs.
+pub const SUPPORTED_VERSIONS: [u32; 3] = [1, 2, 3];
+/// The first version that can describe byte-addressed memory.
+pub const BYTES_VERSION: u32 = 3;
+
+/// A device name as the protocol carries it: a code and a decimal number (`D100`, `MB20`,
+/// `DB1.DBB10`).
+const DEVICE_PATTERN: &str = r"^[A-Z]([A-Z0-9.]*[A-Z])?[0-9]+$";
 
 /// A message from the harness to a backend.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
@@ -116,7 +124,7 @@ pub struct CodecRequest {
 #[serde(untagged)]
 pub enum OperandValue {
     /// A word device as the manuals write it, e.g. `D100`.
-    Device(#[schemars(regex(pattern = r"^[A-Z]+[0-9]+$"))] String),
+    Device(#[schemars(regex(pattern = DEVICE_PATTERN))] String),
     /// A constant (`K4` is `4`, `H0ABC` is `2748`).
     Constant(i64),
 }
@@ -128,15 +136,59 @@ pub enum FillName {
     B,
 }
 
-/// Consecutive words from a start device.
+/// Consecutive devices from a start device: words of a word-addressed family, or (version 3)
+/// bytes of a byte-addressed one; exactly one of `words` and `bytes`.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MemoryRange {
-    /// The first word, e.g. `D100`.
-    #[schemars(regex(pattern = r"^[A-Z]+[0-9]+$"))]
+    /// The first device, e.g. `D100` or `DB1.DBB10`.
+    #[schemars(regex(pattern = DEVICE_PATTERN))]
     pub start: String,
-    /// The words from `start` on, as unsigned 16-bit integers.
+    /// The words from `start` on, as unsigned 16-bit integers (word-addressed families).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub words: Vec<u16>,
+    /// The bytes from `start` on, as unsigned 8-bit integers (byte-addressed families,
+    /// version 3).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub bytes: Vec<u8>,
+}
+
+impl MemoryRange {
+    /// A range of units of memory.
+    pub fn new(start: String, unit: Unit, values: Vec<u16>) -> Self {
+        match unit {
+            Unit::Word => MemoryRange {
+                start,
+                words: values,
+                bytes: Vec::new(),
+            },
+            Unit::Byte => MemoryRange {
+                start,
+                words: Vec::new(),
+                bytes: values.into_iter().map(|v| v as u8).collect(),
+            },
+        }
+    }
+
+    /// The range's values in `unit`s; an error names what does not fit.
+    pub fn values(&self, unit: Unit) -> Result<Vec<u16>, String> {
+        match (unit, self.words.is_empty(), self.bytes.is_empty()) {
+            (_, false, false) => Err(format!(
+                "the range from {} gives both `words` and `bytes`",
+                self.start
+            )),
+            (Unit::Word, _, true) => Ok(self.words.clone()),
+            (Unit::Byte, true, _) => Ok(self.bytes.iter().map(|b| u16::from(*b)).collect()),
+            (Unit::Word, true, false) => Err(format!(
+                "the range from {} gives `bytes`, but the family is word-addressed: give `words`",
+                self.start
+            )),
+            (Unit::Byte, false, true) => Err(format!(
+                "the range from {} gives `words`, but the family is byte-addressed: give `bytes`",
+                self.start
+            )),
+        }
+    }
 }
 
 /// A message from a backend to the harness.
@@ -283,7 +335,7 @@ pub enum SignalReport {
     /// The error code, e.g. `13313` for 3401H.
     Code(u16),
     /// The error flag turned on, e.g. `"M8004"`.
-    Flag(#[schemars(regex(pattern = r"^[A-Z]+[0-9]+$"))] String),
+    Flag(#[schemars(regex(pattern = DEVICE_PATTERN))] String),
 }
 
 /// `writes` with every name once: JSON lets a key repeat, and a map would keep the last value
@@ -295,7 +347,7 @@ fn unique_writes<'de, D: serde::Deserializer<'de>>(
     impl<'de> serde::de::Visitor<'de> for Unique {
         type Value = BTreeMap<String, u16>;
         fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-            f.write_str("a map of device names to 16-bit words")
+            f.write_str("a map of device names to values (16-bit words, or bytes)")
         }
         fn visit_map<A: serde::de::MapAccess<'de>>(
             self,
@@ -480,7 +532,7 @@ impl BackendMessage {
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(untagged)]
 #[schemars(
-    title = "plc-conformance external-backend protocol, versions 1 and 2",
+    title = "plc-conformance external-backend protocol, versions 1 to 3",
     description = "One JSON object per line. The harness sends HarnessMessage lines on the \
                    backend's stdin; the backend answers with BackendMessage lines on stdout."
 )]

@@ -137,7 +137,11 @@ fn answer(backend: &dyn Backend, profile: &Profile, case: &CaseRequest) -> Backe
             return unsupported(format!("bad device `{}` in memory", range.start));
         };
         let first = device.index;
-        for (i, word) in range.words.iter().enumerate() {
+        let values = match range.values(profile.unit) {
+            Ok(values) => values,
+            Err(e) => return unsupported(e),
+        };
+        for (i, word) in values.into_iter().enumerate() {
             let Some(index) = first.checked_add(i as u32) else {
                 return unsupported(format!(
                     "memory from {} runs past the last device number",
@@ -145,12 +149,12 @@ fn answer(backend: &dyn Backend, profile: &Profile, case: &CaseRequest) -> Backe
                 ));
             };
             device.index = index;
-            if fill.word(&device) != *word {
-                words.insert(device.clone(), *word);
+            if fill.value(&device, profile.unit) != word {
+                words.insert(device.clone(), word);
             }
         }
     }
-    let memory = Image::new(words, fill);
+    let memory = Image::of_units(words, fill, profile.unit);
     let request = Request {
         profile,
         variant,

@@ -79,7 +79,7 @@ pub fn ranges(req: &Request<'_>) -> Vec<(String, u32, u32)> {
 
 /// The window with its values before execution: explicit words and fill alike.
 pub fn memory(req: &Request<'_>) -> Vec<MemoryRange> {
-    let fill = req.memory.fill();
+    let (fill, unit) = (req.memory.fill(), req.memory.unit());
     ranges(req)
         .into_iter()
         .map(|(code, first, last)| {
@@ -87,17 +87,14 @@ pub fn memory(req: &Request<'_>) -> Vec<MemoryRange> {
             let mut words = Vec::with_capacity((last - first + 1) as usize);
             for index in first..=last {
                 device.index = index;
-                words.push(fill.word(&device));
+                words.push(fill.value(&device, unit));
             }
             device.index = first;
             let end = Device::new(device.code(), last);
             for (d, value) in req.memory.explicit().range(&device..=&end) {
                 words[(d.index - first) as usize] = *value;
             }
-            MemoryRange {
-                start: device.to_string(),
-                words,
-            }
+            MemoryRange::new(device.to_string(), unit, words)
         })
         .collect()
 }
