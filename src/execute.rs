@@ -8,6 +8,7 @@
 //! backend is still running.
 
 use std::collections::BTreeMap;
+use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
@@ -98,13 +99,14 @@ fn pair(results: Vec<Result<Response, Fault>>) -> Vec<Observation> {
 
 /// Runs the trials at `indices` (skipped trials are not sent), each backend's in chunks on a
 /// thread of its own with at most `jobs` backends at once, and calls `progress` on the calling
-/// thread as results come in. Once `stop` is set no further chunk starts.
+/// thread as results come in. Once `stop` is set, or `progress` breaks, no further chunk
+/// starts.
 pub fn execute_all(
     trials: &[Trial],
     indices: &[usize],
     jobs: usize,
     stop: &AtomicBool,
-    mut progress: impl FnMut(Progress),
+    mut progress: impl FnMut(Progress) -> ControlFlow<()>,
 ) {
     let mut by_backend: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
     for &i in indices {
@@ -130,8 +132,11 @@ pub fn execute_all(
             });
         }
         drop(tx);
+        // Breaking drops the receiver: every backend's next send fails and it stops.
         for p in rx {
-            progress(p);
+            if progress(p).is_break() {
+                break;
+            }
         }
     });
 }

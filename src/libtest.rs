@@ -30,6 +30,7 @@ use crate::model::cross_vendor::{CodecAbilities, OperationAbilities};
 use crate::model::profile::Profiles;
 use crate::model::project::ExternalSettings;
 use crate::plan::Trial;
+use crate::report::console;
 use crate::report::text::{render, Palette};
 use crate::runner::{run_one, Paths, Project};
 
@@ -107,7 +108,7 @@ impl Harness {
         // Ctrl-C reaches this process but not the backends, which run in process groups of
         // their own: a signal kills them all before the harness exits.
         if let Err(e) = crate::interrupt::install(crate::interrupt::OnSignal::Exit) {
-            eprintln!("warning: SIGINT and SIGTERM are not handled: {e}");
+            console::warning(&format!("SIGINT and SIGTERM are not handled: {e}"));
         }
         let mut paths = Paths::under(&self.root);
         // A corpus cut down to one trial's file need not hold every case a known-differences
@@ -120,7 +121,7 @@ impl Harness {
         let mut project = match Project::load(&paths) {
             Ok(p) => p,
             Err(errors) => {
-                eprintln!("the corpus does not load:\n{errors}");
+                console::error(&format!("the corpus does not load:\n{errors}"));
                 return ExitCode::from(2);
             }
         };
@@ -155,7 +156,7 @@ impl Harness {
             let configured = match load_project(&file, explicit, binary) {
                 Ok(p) => p,
                 Err(errors) => {
-                    eprintln!("the project file does not load:\n{errors}");
+                    console::error(&format!("the project file does not load:\n{errors}"));
                     return ExitCode::from(2);
                 }
             };

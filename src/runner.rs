@@ -3,6 +3,7 @@
 
 use std::collections::BTreeMap;
 use std::fmt;
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -154,17 +155,18 @@ pub fn run_one(trial: &Trial) -> Verdict {
 /// Runs trials and reports each verdict as it is judged: skipped trials first, then each
 /// backend's results as they come in (backends side by side, at most `jobs` at once). When
 /// `stop` is set, no further chunk is started and the run finishes with what it has, reported
-/// as interrupted. Returns the counts.
+/// as interrupted. Returns the counts, or the reporter's first write error: the run ends
+/// there, since a report that cannot be written would only be truncated.
 pub fn run(
     trials: &[Trial],
     jobs: usize,
     stop: &AtomicBool,
     reporter: &mut dyn Reporter,
-) -> Summary {
+) -> std::io::Result<Summary> {
     let mut summary = Summary::default();
     reporter.event(&Event::RunStarted {
         trials: trials.len(),
-    });
+    })?;
     for (i, t) in trials.iter().enumerate() {
         if let Some(reason) = &t.skip {
             finished(
@@ -174,42 +176,55 @@ pub fn run(
                 i,
                 skipped(reason),
                 Duration::ZERO,
-            );
+            )?;
         }
     }
     let indices: Vec<usize> = (0..trials.len()).collect();
-    execute_all(trials, &indices, jobs, stop, |progress| match progress {
-        Progress::Observed(i, observations, elapsed) => {
-            let verdict = judge(&trials[i], &observations);
-            finished(reporter, &mut summary, trials, i, verdict, elapsed);
-        }
-        Progress::Restarted { backend, restarts } => {
-            reporter.event(&Event::BackendRestarted {
+    let mut failed = None;
+    execute_all(trials, &indices, jobs, stop, |progress| {
+        let written = match progress {
+            Progress::Observed(i, observations, elapsed) => {
+                let verdict = judge(&trials[i], &observations);
+                finished(reporter, &mut summary, trials, i, verdict, elapsed)
+            }
+            Progress::Restarted { backend, restarts } => reporter.event(&Event::BackendRestarted {
                 backend: &backend,
                 restarts,
-            });
+            }),
+        };
+        match written {
+            Ok(()) => ControlFlow::Continue(()),
+            Err(e) => {
+                failed = Some(e);
+                ControlFlow::Break(())
+            }
         }
     });
+    if let Some(e) = failed {
+        return Err(e);
+    }
     let interrupted = stop.load(Ordering::Relaxed);
     reporter.event(&Event::RunFinished {
         summary: &summary,
         interrupted,
-    });
-    summary
+    })?;
+    Ok(summary)
 }
 
 /// Runs trials (each backend's batched) and returns their verdicts in plan order.
 pub fn verdicts(trials: &[Trial]) -> Vec<Verdict> {
     struct Keep(Vec<Option<Verdict>>);
     impl Reporter for Keep {
-        fn event(&mut self, event: &Event<'_>) {
+        fn event(&mut self, event: &Event<'_>) -> std::io::Result<()> {
             if let Event::TrialFinished { index, verdict, .. } = event {
                 self.0[*index] = Some((*verdict).clone());
             }
+            Ok(())
         }
     }
     let mut keep = Keep(vec![None; trials.len()]);
-    run(trials, 1, &AtomicBool::new(false), &mut keep);
+    // Keep writes nothing, so it cannot fail.
+    let _ = run(trials, 1, &AtomicBool::new(false), &mut keep);
     keep.0
         .into_iter()
         .map(|v| v.unwrap_or_else(|| skipped("not run")))
@@ -223,12 +238,12 @@ fn finished(
     index: usize,
     verdict: Verdict,
     elapsed: Duration,
-) {
+) -> std::io::Result<()> {
     summary.add(&verdict);
     reporter.event(&Event::TrialFinished {
         index,
         trial: &trials[index],
         verdict: &verdict,
         elapsed,
-    });
+    })
 }

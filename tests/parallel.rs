@@ -79,7 +79,8 @@ fn run(jobs: usize) -> (usize, Duration) {
     let mut observed = 0;
     let started = Instant::now();
     execute_all(&trials, &indices, jobs, &AtomicBool::new(false), |_| {
-        observed += 1
+        observed += 1;
+        std::ops::ControlFlow::Continue(())
     });
     assert_eq!(observed, trials.len());
     (most.load(Ordering::SeqCst), started.elapsed())

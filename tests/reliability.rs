@@ -184,13 +184,14 @@ fn a_fifo_is_refused_in_bounded_time_wherever_a_file_is_read_or_written() {
             vec!["diff", "--backend", "iqr", "--baseline", path(&fifo)],
             "fifo: a FIFO (named pipe), not a regular file",
         ),
+        // An output FIFO that no process reads is refused rather than waited for.
         (
             vec!["run", "--backend", "iqr", "--output", path(&fifo)],
-            "cannot write",
+            "a FIFO (named pipe) that no process is reading",
         ),
         (
             vec!["diff", "--backend", "iqr", "--save", path(&fifo)],
-            "a FIFO (named pipe), not a regular file",
+            "a FIFO (named pipe) that no process is reading",
         ),
     ];
     for (args, message) in cases {
@@ -202,6 +203,70 @@ fn a_fifo_is_refused_in_bounded_time_wherever_a_file_is_read_or_written() {
     }
     assert!(fifo.exists(), "the FIFO is left where it was");
 }
+
+#[test]
+fn a_device_or_a_read_fifo_is_written_in_place() {
+    let (out, _) = cli_within(&["run", "--backend", "iqr", "--output", "/dev/null"], LIMIT);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let null = std::fs::metadata("/dev/null").expect("/dev/null");
+    assert!(!null.is_file(), "/dev/null is still a device");
+
+    let scratch_dir = scratch();
+    let fifo = scratch_dir.path().join("report");
+    mkfifo(&fifo);
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || std::fs::read_to_string(fifo).expect("the FIFO reads"))
+    };
+    // The reader opens the FIFO on its own time: the report waits for it.
+    let mut args = vec!["run", "--backend", "iqr", "--format", "json", "--output"];
+    args.push(path(&fifo));
+    let mut tries = 0;
+    let out = loop {
+        let (out, _) = cli_within(&args, LIMIT);
+        let refused = text(&out.stderr).contains("no process is reading");
+        if !refused || tries == 50 {
+            break out;
+        }
+        tries += 1;
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let json: serde_json::Value =
+        serde_json::from_str(&reader.join().expect("reader")).expect("the report is JSON");
+    assert!(
+        json["summary"]["passed"].as_u64().unwrap_or(0) > 0,
+        "{json}"
+    );
+    assert!(fifo.exists(), "the FIFO is left where it was");
+}
+
+#[test]
+fn a_write_error_ends_the_run_with_a_clear_error() {
+    // A full disk.
+    let (out, _) = cli_within(&["run", "--backend", "iqr", "--output", "/dev/full"], LIMIT);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("cannot write /dev/full"), "{err}");
+    // A closed pipe on stdout: the reader has gone before the counts are written.
+    let mut child = Command::new(BIN)
+        .args(["--root", root().to_str().unwrap_or(".")])
+        .args(["run", "--backend", "iqr"])
+        .env("NO_COLOR", "1")
+        .env_remove("PLC_CONFORMANCE_CONFIG")
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the binary starts");
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("the binary ends");
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("error: cannot write stdout"), "{err}");
+}
+
+const LIMIT: Duration = Duration::from_secs(120);
 
 #[test]
 fn invalid_utf8_and_deep_nesting_are_reported_with_their_line() {

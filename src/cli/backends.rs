@@ -4,13 +4,11 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use anstream::eprintln;
-
-use super::{BackendArgs, Cli, EXIT_BAD_INPUT};
+use super::{BackendArgs, Cli, CliError};
 use crate::backend::Backend;
 use crate::load::{
     embedded_files, find_project_root, is_project_root, load_project, locate_project, valid_name,
-    LoadErrors, ENV_SELF, FILE_NAME,
+    ENV_SELF, FILE_NAME,
 };
 use crate::model::project::{ExternalSettings, Launch, ProjectBackends};
 use crate::runner::{Paths, Project};
@@ -18,22 +16,21 @@ use crate::runner::{Paths, Project};
 /// The project folder of the command: `--root`, else the nearest project folder at or above the
 /// current one (as a relative path, so that messages stay short), else none: the data built into
 /// the binary.
-pub fn project_root(cli: &Cli) -> Result<Option<PathBuf>, u8> {
+pub fn project_root(cli: &Cli) -> Result<Option<PathBuf>, CliError> {
     if let Some(root) = &cli.root {
         if is_project_root(root) {
             return Ok(Some(root.clone()));
         }
         let shown = root.display();
-        eprintln!(
-            "error: --root {shown}: not a plc-conformance project (looked for {}, and for {} \
+        return Err(CliError::input(format!(
+            "--root {shown}: not a plc-conformance project (looked for {}, and for {} \
              with {})\n  hint: pass the folder that holds them, or leave out --root: the nearest \
              project folder at or above the current one is used, else the profiles and corpus \
              built into plc-conformance",
             root.join(FILE_NAME).display(),
             root.join("vendors/").display(),
             root.join("vectors/").display(),
-        );
-        return Err(EXIT_BAD_INPUT);
+        )));
     }
     let Ok(here) = std::env::current_dir() else {
         return Ok(None);
@@ -52,28 +49,27 @@ pub fn project_root(cli: &Cli) -> Result<Option<PathBuf>, u8> {
 /// Where the command's data is: the project's (or the built-in) `vendors/` and `vectors/`,
 /// `--vendors`, and the given vector paths. A folder or file named but missing is reported
 /// here, with where it was looked for and what to pass instead.
-pub fn paths(cli: &Cli, vectors: &[PathBuf], flag: &str) -> Result<Paths, u8> {
+pub fn paths(cli: &Cli, vectors: &[PathBuf], flag: &str) -> Result<Paths, CliError> {
     let mut paths = match project_root(cli)? {
         Some(root) => Paths::of_project(&root),
         None => Paths::embedded(),
     };
     if let Some(v) = &cli.vendors {
         if !v.is_dir() && embedded_files(v).is_none_or(|f| f.is_empty()) {
-            eprintln!(
-                "error: --vendors {}: no such folder (looked at {})\n  hint: pass the folder \
+            return Err(CliError::input(format!(
+                "--vendors {}: no such folder (looked at {})\n  hint: pass the folder \
                  of vendor profiles (*.yaml), or leave out --vendors to use {}",
                 v.display(),
                 absolute(v).display(),
                 paths.vendors.display()
-            );
-            return Err(EXIT_BAD_INPUT);
+            )));
         }
         paths.vendors = v.clone();
     }
     for v in vectors {
         if !v.exists() && embedded_files(v).is_none_or(|f| f.is_empty()) {
-            eprintln!(
-                "error: {flag} {}: no such file or folder (looked at {})\n  hint: pass a vector \
+            return Err(CliError::input(format!(
+                "{flag} {}: no such file or folder (looked at {})\n  hint: pass a vector \
                  file (*.yaml) or a folder of them, or leave it out to use {}",
                 v.display(),
                 absolute(v).display(),
@@ -83,8 +79,7 @@ pub fn paths(cli: &Cli, vectors: &[PathBuf], flag: &str) -> Result<Paths, u8> {
                     .map(|p| p.display().to_string())
                     .collect::<Vec<_>>()
                     .join(", ")
-            );
-            return Err(EXIT_BAD_INPUT);
+            )));
         }
     }
     if !vectors.is_empty() {
@@ -97,13 +92,8 @@ fn absolute(path: &Path) -> PathBuf {
     std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf())
 }
 
-pub fn report_load_errors(errors: &LoadErrors) -> u8 {
-    eprintln!("{errors}");
-    EXIT_BAD_INPUT
-}
-
-pub fn load(paths: &Paths) -> Result<Project, u8> {
-    Project::load(paths).map_err(|e| report_load_errors(&e))
+pub fn load(paths: &Paths) -> Result<Project, CliError> {
+    Ok(Project::load(paths)?)
 }
 
 /// The binary that backends see as `$PLC_CONFORMANCE`.
@@ -113,7 +103,7 @@ pub fn this_binary() -> PathBuf {
 
 /// The project file, and whether it was named (then it must exist): `--config`,
 /// `$PLC_CONFORMANCE_CONFIG`, else the project folder's, else none.
-pub fn project_file_path(cli: &Cli) -> Result<Option<(PathBuf, bool)>, u8> {
+pub fn project_file_path(cli: &Cli) -> Result<Option<(PathBuf, bool)>, CliError> {
     if let Some(f) = &cli.config {
         return Ok(Some((f.clone(), true)));
     }
@@ -125,11 +115,9 @@ pub fn project_file_path(cli: &Cli) -> Result<Option<(PathBuf, bool)>, u8> {
 }
 
 /// The project file's backends; a bad file is reported here.
-pub fn project_file(cli: &Cli) -> Result<ProjectBackends, u8> {
+pub fn project_file(cli: &Cli) -> Result<ProjectBackends, CliError> {
     match project_file_path(cli)? {
-        Some((file, explicit)) => {
-            load_project(&file, explicit, &this_binary()).map_err(|e| report_load_errors(&e))
-        }
+        Some((file, explicit)) => Ok(load_project(&file, explicit, &this_binary())?),
         None => Ok(ProjectBackends::default()),
     }
 }
@@ -138,31 +126,33 @@ pub fn project_file(cli: &Cli) -> Result<ProjectBackends, u8> {
 fn command_line_external(
     text: &str,
     args: &BackendArgs,
-) -> Result<Option<ExternalSettings>, String> {
+) -> Result<Option<ExternalSettings>, CliError> {
     let Some(rest) = text.strip_prefix("external:") else {
         return Ok(None);
     };
     let Some((name, command)) = rest.split_once('=') else {
-        return Err(format!(
+        return Err(CliError::input(format!(
             "`{text}`: expected `external:NAME=COMMAND`, e.g. `external:my-emu=./my-emu --serve`"
-        ));
+        )));
     };
     if !valid_name(name) {
-        return Err(format!(
+        return Err(CliError::input(format!(
             "`{name}` is not a backend name: use lowercase letters, digits, `-` and `_`"
-        ));
+        )));
     }
     if command.trim().is_empty() {
-        return Err(format!("external backend `{name}` has an empty command"));
+        return Err(CliError::input(format!(
+            "external backend `{name}` has an empty command"
+        )));
     }
     if !(args.timeout.is_finite() && args.timeout > 0.0 && args.timeout <= 86_400.0) {
-        return Err(format!(
+        return Err(CliError::input(format!(
             "--timeout {}: give seconds above 0 and at most a day",
             args.timeout
-        ));
+        )));
     }
     if args.max_faults == 0 {
-        return Err("--max-faults 0: give at least 1".into());
+        return Err(CliError::input("--max-faults 0: give at least 1"));
     }
     let mut settings = ExternalSettings::new(name, Launch::Shell(command.to_string()));
     settings.timeout = std::time::Duration::from_secs_f64(args.timeout);
@@ -174,16 +164,18 @@ fn command_line_external(
 /// Starts the external backends a command asks for and picks its backends, in the order given.
 /// `own_corpus` is false when the command reads another corpus (`--vectors`), which need not
 /// have every case a known-differences file names.
-fn select(
+pub fn start(
     project: &mut Project,
     file: &ProjectBackends,
     args: &BackendArgs,
-) -> Result<Vec<Arc<dyn Backend>>, String> {
+) -> Result<Vec<Arc<dyn Backend>>, CliError> {
     let own_corpus = args.vectors.is_empty();
     let mut known_files: BTreeMap<&str, PathBuf> = BTreeMap::new();
     for entry in &args.known_differences {
         let Some((name, path)) = entry.split_once('=') else {
-            return Err(format!("--known-differences `{entry}`: expected NAME=FILE"));
+            return Err(CliError::input(format!(
+                "--known-differences `{entry}`: expected NAME=FILE"
+            )));
         };
         known_files.insert(name, PathBuf::from(path));
     }
@@ -191,7 +183,7 @@ fn select(
         project
             .add_external(settings, own_corpus)
             .map(|b| b as Arc<dyn Backend>)
-            .map_err(|e| e.to_string())
+            .map_err(CliError::Setup)
     };
     if args.backends.is_empty() {
         let mut chosen = project.backends.clone();
@@ -210,20 +202,20 @@ fn select(
         } else if let Some(c) = file.configured.iter().find(|c| c.settings.name == *name) {
             chosen.push(start(project, c.settings.clone())?);
         } else if let Some(skipped) = file.skipped.iter().find(|s| s.name == *name) {
-            return Err(skipped.to_string());
+            return Err(CliError::input(skipped.to_string()));
         } else {
             let mut known: Vec<&str> = project.backends.iter().map(|b| b.name()).collect();
             known.extend(file.configured.iter().map(|c| c.settings.name.as_str()));
-            return Err(format!(
+            return Err(CliError::input(format!(
                 "unknown backend `{name}`; expected one of: {}, or external:NAME=COMMAND",
                 known.join(", ")
-            ));
+            )));
         }
     }
     if let Some(name) = known_files.keys().next() {
-        return Err(format!(
+        return Err(CliError::input(format!(
             "--known-differences names `{name}`, which is not an `external:` backend of this run"
-        ));
+        )));
     }
     Ok(chosen)
 }
@@ -236,7 +228,7 @@ pub struct Prepared {
     pub backends: Vec<Arc<dyn Backend>>,
 }
 
-pub fn prepare(cli: &Cli, args: &BackendArgs) -> Result<Prepared, u8> {
+pub fn prepare(cli: &Cli, args: &BackendArgs) -> Result<Prepared, CliError> {
     let mut project = load(&paths(cli, &args.vectors, "--vectors")?)?;
     let file = project_file(cli)?;
     let backends = start(&mut project, &file, args)?;
@@ -244,18 +236,5 @@ pub fn prepare(cli: &Cli, args: &BackendArgs) -> Result<Prepared, u8> {
         project,
         file,
         backends,
-    })
-}
-
-/// [`select`], with its error reported here.
-pub fn start(
-    project: &mut Project,
-    file: &ProjectBackends,
-    args: &BackendArgs,
-) -> Result<Vec<Arc<dyn Backend>>, u8> {
-    select(project, file, args).map_err(|message| {
-        // The message may quote a backend's stderr: nothing in it reaches the terminal raw.
-        eprintln!("error: {}", crate::report::sanitize::terminal(&message));
-        EXIT_BAD_INPUT
     })
 }

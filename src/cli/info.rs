@@ -3,73 +3,54 @@
 use std::collections::BTreeSet;
 use std::path::PathBuf;
 
-use anstream::{eprintln, println};
+use std::fmt::Write as _;
 
 use clap::CommandFactory;
 
-use super::backends::{load, paths, project_file, project_file_path, report_load_errors};
-use super::{Cli, SchemaKind, EXIT_BAD_INPUT, EXIT_OK};
+use super::backends::{load, paths, project_file, project_file_path};
+use super::{output, Cli, CliError, Outcome, SchemaKind, EXIT_OK};
 use crate::backend::external::{protocol, serve as protocol_serve};
 use crate::load::{load_corpus, load_open_questions, load_profiles, OPEN_QUESTIONS};
 use crate::report::text::case_line;
 use crate::spec;
 
-pub fn validate(cli: &Cli, given: &[PathBuf]) -> u8 {
-    let paths = match paths(cli, given, "validate") {
-        Ok(p) => p,
-        Err(code) => return code,
-    };
-    let profiles = match load_profiles(&paths.vendors) {
-        Ok(p) => p,
-        Err(e) => return report_load_errors(&e),
-    };
-    match load_corpus(&paths.vectors, &profiles) {
-        Ok(corpus) => {
-            let questions = match super::backends::project_root(cli) {
-                Ok(root) => root.map(|r| r.join(OPEN_QUESTIONS)),
-                Err(code) => return code,
-            };
-            let mut open = 0;
-            if let (true, Some(questions)) = (given.is_empty(), questions.filter(|q| q.exists())) {
-                match load_open_questions(&questions, &profiles, &corpus) {
-                    Ok(q) => open = q.len(),
-                    Err(e) => return report_load_errors(&e),
-                }
-            }
-            let files: BTreeSet<&PathBuf> = corpus
-                .cases
-                .iter()
-                .map(|c| &c.location.file)
-                .chain(corpus.cross_vendor.iter().map(|c| &c.location.file))
-                .collect();
-            println!(
-                "ok: {} cases and {} cross-vendor cases in {} files, {} profiles, {open} open \
-                 questions",
-                corpus.cases.len(),
-                corpus.cross_vendor.len(),
-                files.len(),
-                profiles.iter().count()
-            );
-            EXIT_OK
-        }
-        Err(e) => report_load_errors(&e),
+pub fn validate(cli: &Cli, given: &[PathBuf]) -> Outcome {
+    let paths = paths(cli, given, "validate")?;
+    let profiles = load_profiles(&paths.vendors)?;
+    let corpus = load_corpus(&paths.vectors, &profiles)?;
+    let questions = super::backends::project_root(cli)?.map(|r| r.join(OPEN_QUESTIONS));
+    let mut open = 0;
+    if let (true, Some(questions)) = (given.is_empty(), questions.filter(|q| q.exists())) {
+        open = load_open_questions(&questions, &profiles, &corpus)?.len();
     }
+    let files: BTreeSet<&PathBuf> = corpus
+        .cases
+        .iter()
+        .map(|c| &c.location.file)
+        .chain(corpus.cross_vendor.iter().map(|c| &c.location.file))
+        .collect();
+    output::write(
+        None,
+        &format!(
+            "ok: {} cases and {} cross-vendor cases in {} files, {} profiles, {open} open \
+             questions",
+            corpus.cases.len(),
+            corpus.cross_vendor.len(),
+            files.len(),
+            profiles.iter().count()
+        ),
+    )?;
+    Ok(EXIT_OK)
 }
 
-pub fn list(cli: &Cli, filter: Option<&str>) -> u8 {
-    let paths = match paths(cli, &[], "--vectors") {
-        Ok(p) => p,
-        Err(code) => return code,
-    };
-    let project = match load(&paths) {
-        Ok(s) => s,
-        Err(code) => return code,
-    };
-    let (file, file_path) = match (project_file(cli), project_file_path(cli)) {
-        (Ok(p), Ok(path)) => (p, path),
-        (Err(code), _) | (_, Err(code)) => return code,
-    };
-    println!(
+pub fn list(cli: &Cli, filter: Option<&str>) -> Outcome {
+    let paths = paths(cli, &[], "--vectors")?;
+    let project = load(&paths)?;
+    let (file, file_path) = (project_file(cli)?, project_file_path(cli)?);
+    // Written whole at the end: a closed pipe is then one error, not a panic mid-list.
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
         "data: profiles {}, vectors {}, project file {}",
         paths.vendors.display(),
         paths
@@ -82,7 +63,7 @@ pub fn list(cli: &Cli, filter: Option<&str>) -> u8 {
             .filter(|(f, explicit)| *explicit || f.exists())
             .map_or_else(|| "none".to_string(), |(f, _)| f.display().to_string())
     );
-    println!("backends:");
+    let _ = writeln!(out, "backends:");
     let width = project
         .backends
         .iter()
@@ -92,7 +73,8 @@ pub fn list(cli: &Cli, filter: Option<&str>) -> u8 {
         .unwrap_or(0)
         .max(10);
     for b in &project.backends {
-        println!(
+        let _ = writeln!(
+            out,
             "  {:<width$} profile {:<18} {}",
             b.name(),
             b.profile(),
@@ -100,7 +82,8 @@ pub fn list(cli: &Cli, filter: Option<&str>) -> u8 {
         );
     }
     for c in &file.configured {
-        println!(
+        let _ = writeln!(
+            out,
             "  {:<width$} profile {:<18} external{}, configured at {} (`{}`)",
             c.settings.name,
             c.settings
@@ -113,11 +96,12 @@ pub fn list(cli: &Cli, filter: Option<&str>) -> u8 {
         );
     }
     for skipped in &file.skipped {
-        println!("  (skipped: {skipped})");
+        let _ = writeln!(out, "  (skipped: {skipped})");
     }
-    println!("profiles:");
+    let _ = writeln!(out, "profiles:");
     for p in project.profiles.iter() {
-        println!(
+        let _ = writeln!(
+            out,
             "  {:<18} {} — instructions: {}",
             p.id,
             p.name,
@@ -128,23 +112,24 @@ pub fn list(cli: &Cli, filter: Option<&str>) -> u8 {
                 .join(", ")
         );
         for v in &p.variants {
-            println!("    variant {:<22} {}", v.id, v.description);
+            let _ = writeln!(out, "    variant {:<22} {}", v.id, v.description);
         }
     }
-    println!("cases:");
+    let _ = writeln!(out, "cases:");
     let mut shown = 0;
     for case in &project.corpus.cases {
         let line = case_line(case);
         if filter.is_none_or(|f| line.contains(f)) {
-            println!("  {line}");
+            let _ = writeln!(out, "  {line}");
             shown += 1;
         }
     }
-    println!("{shown} of {} cases", project.corpus.cases.len());
-    EXIT_OK
+    let _ = write!(out, "{shown} of {} cases", project.corpus.cases.len());
+    output::write(None, &out)?;
+    Ok(EXIT_OK)
 }
 
-pub fn schema(kind: SchemaKind) -> u8 {
+pub fn schema(kind: SchemaKind) -> Outcome {
     let schema = match kind {
         SchemaKind::Vectors => spec::schema(spec::SchemaKind::Vectors),
         SchemaKind::Profile => spec::schema(spec::SchemaKind::Profile),
@@ -154,66 +139,55 @@ pub fn schema(kind: SchemaKind) -> u8 {
         SchemaKind::OpenQuestions => spec::schema(spec::SchemaKind::OpenQuestions),
         SchemaKind::Protocol => protocol::protocol_schema(),
     };
-    println!(
-        "{}",
-        serde_json::to_string_pretty(&schema).unwrap_or_default()
-    );
-    EXIT_OK
+    output::write(
+        None,
+        &serde_json::to_string_pretty(&schema).unwrap_or_default(),
+    )?;
+    Ok(EXIT_OK)
 }
 
 /// `serve`: the reference model of a profile, over the protocol on stdin/stdout.
-pub fn serve(cli: &Cli, profile_id: &str) -> u8 {
-    let paths = match paths(cli, &[], "--vectors") {
-        Ok(p) => p,
-        Err(code) => return code,
-    };
-    let profiles = match load_profiles(&paths.vendors) {
-        Ok(p) => p,
-        Err(e) => return report_load_errors(&e),
-    };
+pub fn serve(cli: &Cli, profile_id: &str) -> Outcome {
+    let paths = paths(cli, &[], "--vectors")?;
+    let profiles = load_profiles(&paths.vendors)?;
     let Some(profile) = profiles.get(profile_id) else {
-        eprintln!(
-            "error: unknown profile `{profile_id}`; expected one of: {}",
+        return Err(CliError::input(format!(
+            "unknown profile `{profile_id}`; expected one of: {}",
             profiles.ids().join(", ")
-        );
-        return EXIT_BAD_INPUT;
+        )));
     };
     let backends = crate::backend::reference_backends(&profiles);
     let Some(backend) = backends.iter().find(|b| b.profile() == profile_id) else {
-        eprintln!("error: profile `{profile_id}` has no built-in reference model");
-        return EXIT_BAD_INPUT;
+        return Err(CliError::input(format!(
+            "profile `{profile_id}` has no built-in reference model"
+        )));
     };
     let stdin = std::io::stdin().lock();
     let stdout = std::io::BufWriter::with_capacity(64 * 1024, std::io::stdout().lock());
-    match protocol_serve::serve(backend.as_ref(), profile, stdin, stdout) {
-        Ok(()) => EXIT_OK,
-        Err(message) => {
-            eprintln!("error: {message}");
-            EXIT_BAD_INPUT
-        }
-    }
+    protocol_serve::serve(backend.as_ref(), profile, stdin, stdout)
+        .map_err(|e| CliError::input(e.to_string()))?;
+    Ok(EXIT_OK)
 }
 
 /// `completions SHELL`: the completion script of every command and option.
-pub fn completions(shell: clap_complete::Shell) -> u8 {
+pub fn completions(shell: clap_complete::Shell) -> Outcome {
     let mut command = Cli::command();
-    clap_complete::generate(
-        shell,
-        &mut command,
-        "plc-conformance",
-        &mut std::io::stdout(),
-    );
-    EXIT_OK
+    let mut script = Vec::new();
+    clap_complete::generate(shell, &mut command, "plc-conformance", &mut script);
+    let mut out = output::Sink::open(None)?;
+    std::io::Write::write_all(&mut out, &script).map_err(|e| out.error(e))?;
+    out.finish()?;
+    Ok(EXIT_OK)
 }
 
 /// `man`: the manual page, in roff.
-pub fn man() -> u8 {
+pub fn man() -> Outcome {
     let page = clap_mangen::Man::new(Cli::command());
-    let mut out = Vec::new();
-    if let Err(e) = page.render(&mut out) {
-        eprintln!("error: cannot write the manual page: {e}");
-        return EXIT_BAD_INPUT;
-    }
-    let _ = std::io::Write::write_all(&mut std::io::stdout(), &out);
-    EXIT_OK
+    let mut roff = Vec::new();
+    page.render(&mut roff)
+        .map_err(|e| CliError::write(None, e))?;
+    let mut out = output::Sink::open(None)?;
+    std::io::Write::write_all(&mut out, &roff).map_err(|e| out.error(e))?;
+    out.finish()?;
+    Ok(EXIT_OK)
 }

@@ -6,7 +6,9 @@
 //! (143) interrupted a run.
 
 mod backends;
+mod error;
 mod info;
+mod output;
 mod record;
 mod run;
 mod sweep;
@@ -16,9 +18,16 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
 
+pub use error::CliError;
+
 pub const EXIT_OK: u8 = 0;
 pub const EXIT_DIFFERENCES: u8 = 1;
 pub const EXIT_BAD_INPUT: u8 = 2;
+
+/// What a command ends with: its exit status (0 or 1), or the error that stopped it (2).
+pub type Outcome = Result<u8, CliError>;
+
+use crate::report::console;
 
 #[derive(Debug, Parser)]
 #[command(
@@ -237,10 +246,10 @@ pub fn main() -> ExitCode {
     }
     if matches!(cli.command, Command::Run(_) | Command::Diff(_)) {
         if let Err(e) = crate::interrupt::install(crate::interrupt::OnSignal::Finish) {
-            anstream::eprintln!("warning: SIGINT and SIGTERM are not handled: {e}");
+            console::warning(&format!("SIGINT and SIGTERM are not handled: {e}"));
         }
     }
-    let code = match &cli.command {
+    let outcome = match &cli.command {
         Command::Run(args) => run::run(&cli, args),
         Command::Diff(args) => run::diff(&cli, args),
         Command::Validate { paths } => info::validate(&cli, paths),
@@ -252,6 +261,11 @@ pub fn main() -> ExitCode {
         Command::Sweep(args) => sweep::sweep(&cli, args),
         Command::Record(args) => record::record_command(&cli, args),
     };
+    // Errors are rendered here and nowhere else.
+    let code = outcome.unwrap_or_else(|e| {
+        console::error(&e.to_string());
+        EXIT_BAD_INPUT
+    });
     // An interrupted run ends as an interruption, whatever it found before.
     ExitCode::from(crate::interrupt::exit_status().unwrap_or(code))
 }

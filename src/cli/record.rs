@@ -2,10 +2,10 @@
 
 use std::path::PathBuf;
 
-use anstream::{eprintln, println};
+use std::fmt::Write as _;
 
 use super::backends::{prepare, Prepared};
-use super::{BackendArgs, Cli, EXIT_BAD_INPUT, EXIT_OK};
+use super::{output, BackendArgs, Cli, CliError, Outcome, EXIT_OK};
 use crate::record::{record, today, Change, Provenance};
 
 /// What `record` takes.
@@ -31,7 +31,7 @@ pub struct RecordArgs {
     pub dry_run: bool,
 }
 
-pub fn record_command(cli: &Cli, args: &RecordArgs) -> u8 {
+pub fn record_command(cli: &Cli, args: &RecordArgs) -> Outcome {
     let backend_args = BackendArgs {
         backends: vec![args.backend.clone()],
         timeout: args.timeout,
@@ -45,36 +45,34 @@ pub fn record_command(cli: &Cli, args: &RecordArgs) -> u8 {
     };
     let Prepared {
         project, backends, ..
-    } = match prepare(cli, &backend_args) {
-        Ok(p) => p,
-        Err(code) => return code,
-    };
+    } = prepare(cli, &backend_args)?;
     let Some(backend) = backends.first() else {
-        return EXIT_BAD_INPUT;
+        return Err(CliError::input("record needs a --backend"));
     };
     let provenance = Provenance {
         backend: backend.name().to_string(),
         version: backend.describe(),
         date: args.date.clone().unwrap_or_else(today),
     };
-    let recording = match record(&project, backend, args.filter.as_deref(), &provenance) {
-        Ok(r) => r,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return EXIT_BAD_INPUT;
-        }
-    };
+    let recording = record(&project, backend, args.filter.as_deref(), &provenance)
+        .map_err(|e| CliError::input(e.to_string()))?;
     let (mut filled, mut replaced, mut kept, mut skipped) = (0, 0, 0, 0);
+    let mut out = String::new();
     for e in &recording.entries {
         let at = &e.case.location;
         match &e.change {
             Change::Filled { effect } => {
                 filled += 1;
-                println!("{at}: {}: unspecified -> observed: {effect}", e.case.id);
+                let _ = writeln!(
+                    out,
+                    "{at}: {}: unspecified -> observed: {effect}",
+                    e.case.id
+                );
             }
             Change::Replaced { was, effect, same } => {
                 replaced += 1;
-                println!(
+                let _ = writeln!(
+                    out,
                     "{at}: {}: {was} -> observed: {effect}{}",
                     e.case.id,
                     if *same {
@@ -87,7 +85,8 @@ pub fn record_command(cli: &Cli, args: &RecordArgs) -> u8 {
             Change::KeptManual { effect, differs } => {
                 kept += 1;
                 if *differs {
-                    println!(
+                    let _ = writeln!(
+                        out,
                         "{at}: {}: manual, kept; {} did otherwise: {effect}",
                         e.case.id, provenance.backend
                     );
@@ -95,23 +94,22 @@ pub fn record_command(cli: &Cli, args: &RecordArgs) -> u8 {
             }
             Change::NotRecorded(why) => {
                 skipped += 1;
-                println!("{at}: {}: not recorded: {why}", e.case.id);
+                let _ = writeln!(out, "{at}: {}: not recorded: {why}", e.case.id);
             }
         }
     }
     if !args.dry_run {
         for (path, text) in &recording.files {
-            if let Err(e) = std::fs::write(path, text) {
-                eprintln!("error: cannot write {}: {e}", path.display());
-                return EXIT_BAD_INPUT;
-            }
+            output::write(Some(path), text)?;
         }
     }
-    println!(
+    let _ = write!(
+        out,
         "{}{filled} unspecified case(s) filled in, {replaced} expectation(s) replaced, {kept} manual \
          kept, {skipped} not recorded, in {} file(s)",
         if args.dry_run { "dry run: " } else { "" },
         recording.files.len()
     );
-    EXIT_OK
+    output::write(None, &out)?;
+    Ok(EXIT_OK)
 }

@@ -2,15 +2,14 @@
 //! baselines; `diff --against` compares two backends word by word.
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-use anstream::{eprintln, print, println};
-
 use super::backends::{prepare, project_root, start, Prepared};
+use super::output::{self, Sink};
 use super::{
-    BackendArgs, Cli, DiffArgs, Format, ReportArgs, RunArgs, EXIT_BAD_INPUT, EXIT_DIFFERENCES,
+    BackendArgs, Cli, CliError, DiffArgs, Format, Outcome, ReportArgs, RunArgs, EXIT_DIFFERENCES,
     EXIT_OK,
 };
 use crate::backend::{Backend, Response};
@@ -19,6 +18,7 @@ use crate::judge::words::rows;
 use crate::model::{error_text, Expectation};
 use crate::plan::Trial;
 use crate::report::baseline::{self, SavedRun};
+use crate::report::console;
 use crate::report::document::{self, Collector};
 use crate::report::json::{BackendInfo, RunInfo};
 use crate::report::matrix_text;
@@ -28,7 +28,7 @@ use crate::report::text_reporter::TextReporter;
 use crate::report::{All, Event, Reporter};
 use crate::runner::{self, Project};
 
-pub fn run(cli: &Cli, args: &RunArgs) -> u8 {
+pub fn run(cli: &Cli, args: &RunArgs) -> Outcome {
     execute_command(
         cli,
         &args.backends,
@@ -39,7 +39,7 @@ pub fn run(cli: &Cli, args: &RunArgs) -> u8 {
     )
 }
 
-pub fn diff(cli: &Cli, args: &DiffArgs) -> u8 {
+pub fn diff(cli: &Cli, args: &DiffArgs) -> Outcome {
     if let Some(other) = &args.against {
         return against(cli, &args.backends, other);
     }
@@ -57,46 +57,31 @@ fn execute_command(
     format: Format,
     show_recorded: bool,
     probes: Option<&str>,
-) -> u8 {
+) -> Outcome {
     for path in [&report.output, &report.save].into_iter().flatten() {
-        if let Err(e) = crate::load::check_output(path) {
-            eprintln!("error: cannot write {}: {e}", path.display());
-            return EXIT_BAD_INPUT;
-        }
+        output::check(path)?;
     }
     // The baseline is read before anything is written, so that `--save F --baseline F`
     // compares with the run saved before, not with this one.
     let before = match &report.baseline {
-        Some(path) => match baseline::load(path) {
-            Ok(b) => Some(b),
-            Err(e) => {
-                eprintln!("error: {e}");
-                return EXIT_BAD_INPUT;
-            }
-        },
+        Some(path) => Some(baseline::load(path).map_err(|e| CliError::input(e.to_string()))?),
         None => None,
     };
     let Prepared {
         project,
         file,
         backends,
-    } = match prepare(cli, backend_args) {
-        Ok(p) => p,
-        Err(code) => return code,
-    };
+    } = prepare(cli, backend_args)?;
     let mut trials = planned(&project, &backends, backend_args.filter.as_deref());
     if let Some(question) = probes {
-        match probe_cases(cli, &project, question) {
-            Ok(cases) => trials.retain(|t| cases.contains(t.case_id())),
-            Err(code) => return code,
-        }
+        let cases = probe_cases(cli, &project, question)?;
+        trials.retain(|t| cases.contains(t.case_id()));
     }
     if trials.is_empty() {
-        eprintln!(
-            "error: no trial matches (check --backend and --filter; `plc-conformance list` shows \
-             what exists)"
-        );
-        return EXIT_BAD_INPUT;
+        return Err(CliError::input(
+            "no trial matches (check --backend and --filter; `plc-conformance list` shows \
+             what exists)",
+        ));
     }
     let jobs = backend_args.jobs.unwrap_or_else(|| {
         std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
@@ -112,19 +97,15 @@ fn execute_command(
         } else {
             Vec::new()
         };
-        let (out, palette): (Box<dyn Write>, Palette) = match &report.output {
-            Some(path) => match std::fs::File::create(path) {
-                Ok(f) => (Box::new(f), Palette::plain()),
-                Err(e) => {
-                    eprintln!("error: cannot write {}: {e}", path.display());
-                    return EXIT_BAD_INPUT;
-                }
-            },
-            None => (Box::new(anstream::stdout()), Palette::coloured()),
+        let sink = Sink::open(report.output.as_deref())?;
+        let palette = if sink.is_stdout() {
+            Palette::coloured()
+        } else {
+            Palette::plain()
         };
-        text = Some(TextReporter::new(out, palette, show_recorded, notes).quiet(cli.quiet));
+        text = Some(TextReporter::new(sink, palette, show_recorded, notes).quiet(cli.quiet));
     }
-    {
+    let ran = {
         let mut reporters: Vec<&mut dyn Reporter> = vec![&mut collector];
         if let Some(text) = &mut text {
             reporters.push(text);
@@ -134,11 +115,18 @@ fn execute_command(
         }
         let mut all = All(reporters);
         if cli.quiet {
-            runner::run(&trials, jobs, stop, &mut all);
+            runner::run(&trials, jobs, stop, &mut all)
         } else {
             let mut progress = ProgressReporter::new(&trials, &mut all);
-            runner::run(&trials, jobs, stop, &mut progress);
+            runner::run(&trials, jobs, stop, &mut progress)
         }
+    };
+    if let Err(e) = ran {
+        let path = report.output.as_deref().filter(|_| text.is_some());
+        return Err(CliError::write(path, e));
+    }
+    if let Some(text) = text {
+        text.into_inner().finish()?;
     }
     let (records, summary, interrupted) = collector.finish();
     let info = RunInfo {
@@ -175,26 +163,23 @@ fn execute_command(
             coloured,
             text_width(report.output.is_none()),
         );
-        if let Err(code) = write_out(report.output.as_deref(), &rendered) {
-            return code;
-        }
+        output::write(report.output.as_deref(), &rendered)?;
     }
     for (name, known) in &project.known {
         if !known.ignored.is_empty() && !cli.quiet {
-            eprintln!(
-                "note: {} entr{} of {} (backend {name}) name cases not in this corpus and were \
-                 not used",
+            console::note(&format!(
+                "{} entr{} of {} (backend {name}) name cases not in this corpus and were not used",
                 known.ignored.len(),
                 if known.ignored.len() == 1 { "y" } else { "ies" },
                 known.file.display()
-            );
+            ));
         }
     }
     if let (Some(path), true) = (&report.save, interrupted) {
-        eprintln!(
-            "note: the run was interrupted; {} is left as it was",
+        console::note(&format!(
+            "the run was interrupted; {} is left as it was",
             path.display()
-        );
+        ));
     } else if let Some(path) = &report.save {
         let saved = document::render(
             document::Format::Json,
@@ -204,10 +189,7 @@ fn execute_command(
             false,
             matrix_text::DEFAULT_WIDTH,
         );
-        if let Err(e) = write_atomically(path, &saved) {
-            eprintln!("error: cannot save the run to {}: {e}", path.display());
-            return EXIT_BAD_INPUT;
-        }
+        output::write(Some(path), &saved)?;
     }
     // A backend the run was asked for that ran nothing passed nothing: that is no pass.
     let idle = if interrupted || backend_args.allow_empty {
@@ -225,7 +207,9 @@ fn execute_command(
         idle_backends(&trials, &asked, backend_args.filter.is_some())
     };
     for (name, why) in &idle {
-        eprintln!("error: backend `{name}` ran no trial: {why} (--allow-empty accepts such a run)");
+        console::status(&format!(
+            "error: backend `{name}` ran no trial: {why} (--allow-empty accepts such a run)"
+        ));
     }
     let idle = if idle.is_empty() {
         EXIT_OK
@@ -233,13 +217,13 @@ fn execute_command(
         EXIT_DIFFERENCES
     };
     if let Some(before) = before {
-        return compare_with(report.baseline.as_deref(), &before, &records).max(idle);
+        return Ok(compare_with(report.baseline.as_deref(), &before, &records).max(idle));
     }
-    if summary.failed > 0 {
+    Ok(if summary.failed > 0 {
         EXIT_DIFFERENCES
     } else {
         idle
-    }
+    })
 }
 
 /// The case ids that probe an open question (every question's when `question` is empty).
@@ -247,30 +231,27 @@ fn probe_cases(
     cli: &Cli,
     project: &Project,
     question: &str,
-) -> Result<std::collections::BTreeSet<String>, u8> {
+) -> Result<std::collections::BTreeSet<String>, CliError> {
     let Some(root) = super::backends::project_root(cli)? else {
-        eprintln!(
-            "error: --probes: the open questions are a project's {}, and no project was found \
+        return Err(CliError::input(format!(
+            "--probes: the open questions are a project's {}, and no project was found \
              (pass --root, or run inside a checkout)",
             crate::load::OPEN_QUESTIONS
-        );
-        return Err(EXIT_BAD_INPUT);
+        )));
     };
     let file = root.join(crate::load::OPEN_QUESTIONS);
-    let questions = crate::load::load_open_questions(&file, &project.profiles, &project.corpus)
-        .map_err(|e| super::backends::report_load_errors(&e))?;
+    let questions = crate::load::load_open_questions(&file, &project.profiles, &project.corpus)?;
     let chosen: Vec<_> = questions
         .iter()
         .filter(|q| question.is_empty() || q.id == question)
         .collect();
     if chosen.is_empty() {
         let ids: Vec<&str> = questions.iter().map(|q| q.id.as_str()).collect();
-        eprintln!(
-            "error: no open question `{question}` in {}; the questions are: {}",
+        return Err(CliError::input(format!(
+            "no open question `{question}` in {}; the questions are: {}",
             file.display(),
             ids.join(", ")
-        );
-        return Err(EXIT_BAD_INPUT);
+        )));
     }
     Ok(chosen
         .into_iter()
@@ -318,12 +299,13 @@ struct StopAtFailure<'a> {
 }
 
 impl Reporter for StopAtFailure<'_> {
-    fn event(&mut self, event: &Event<'_>) {
+    fn event(&mut self, event: &Event<'_>) -> std::io::Result<()> {
         if let Event::TrialFinished { verdict, .. } = event {
             if verdict.is_failure() {
                 self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
             }
         }
+        Ok(())
     }
 }
 
@@ -399,25 +381,31 @@ fn compare_with(
     records: &[crate::report::record::Record],
 ) -> u8 {
     let changes = baseline::compare(&before.records, records);
-    eprintln!(
+    console::status(&format!(
         "against {}: {} new, {} fixed, {} changed, {} unchanged difference(s)",
         path.map(|p| p.display().to_string()).unwrap_or_default(),
         changes.new.len(),
         changes.fixed.len(),
         changes.changed.len(),
         changes.unchanged
-    );
+    ));
     for r in &changes.new {
-        eprintln!("  new:     {} ({}: {})", r.trial, r.label, r.shown);
+        console::status(&format!(
+            "  new:     {} ({}: {})",
+            r.trial, r.label, r.shown
+        ));
     }
     for (was, now) in &changes.fixed {
-        eprintln!(
+        console::status(&format!(
             "  fixed:   {} (was {}: {})",
             now.trial, was.label, was.shown
-        );
+        ));
     }
     for (was, now) in &changes.changed {
-        eprintln!("  changed: {} ({} -> {})", now.trial, was.shown, now.shown);
+        console::status(&format!(
+            "  changed: {} ({} -> {})",
+            now.trial, was.shown, now.shown
+        ));
     }
     if changes.new.is_empty() {
         EXIT_OK
@@ -426,61 +414,31 @@ fn compare_with(
     }
 }
 
-fn write_out(path: Option<&Path>, text: &str) -> Result<(), u8> {
-    match path {
-        Some(p) => write_atomically(p, text).map_err(|e| {
-            eprintln!("error: cannot write {}: {e}", p.display());
-            EXIT_BAD_INPUT
-        }),
-        None => {
-            println!("{text}");
-            Ok(())
-        }
-    }
-}
-
-/// Writes a file whole or not at all: a temporary file beside it, then a rename, so an
-/// interrupted run never leaves half a report or a damaged baseline.
-fn write_atomically(path: &Path, text: &str) -> std::io::Result<()> {
-    let dir = path
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let temp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    std::fs::write(&temp, text)?;
-    std::fs::rename(&temp, path).inspect_err(|_| {
-        let _ = std::fs::remove_file(&temp);
-    })
-}
-
 /// Two backends side by side: every trial both run, and where their outcomes differ, the
 /// per-word diff of one against the other. Backends of different families share only the
 /// cross-vendor cases, compared as answers.
-fn against(cli: &Cli, args: &BackendArgs, other: &str) -> u8 {
+fn against(cli: &Cli, args: &BackendArgs, other: &str) -> Outcome {
     let Prepared {
         mut project,
         file,
         backends,
-    } = match prepare(cli, args) {
-        Ok(p) => p,
-        Err(code) => return code,
-    };
+    } = prepare(cli, args)?;
     let Some(a) = backends.first().cloned() else {
-        return EXIT_BAD_INPUT;
+        return Err(CliError::input(
+            "diff --against needs a --backend to compare",
+        ));
     };
     let other_args = BackendArgs {
         backends: vec![other.to_string()],
         known_differences: Vec::new(),
         ..args.clone()
     };
-    let b = match start(&mut project, &file, &other_args) {
-        Ok(b) => b[0].clone(),
-        Err(code) => return code,
+    let Some(b) = start(&mut project, &file, &other_args)?.first().cloned() else {
+        return Err(CliError::input(format!(
+            "no backend `{other}` to compare with"
+        )));
     };
+    let mut out = Sink::open(None)?;
     let filter = args.filter.as_deref();
     let trials_a = planned(&project, std::slice::from_ref(&a), filter);
     let trials_b = planned(&project, std::slice::from_ref(&b), None);
@@ -525,34 +483,37 @@ fn against(cli: &Cli, args: &BackendArgs, other: &str) -> u8 {
         }
         if !text.is_empty() {
             differing += 1;
-            println!(
-                "{}: {} — {} vs {}",
+            write!(
+                out,
+                "{}: {} — {} vs {}\n{text}",
                 ta.location(),
                 ta.name(),
                 a.name(),
                 b.name()
-            );
-            print!("{text}");
+            )
+            .map_err(|e| out.error(e))?;
         }
     }
-    println!(
+    writeln!(
+        out,
         "{} vs {}: {compared} trials compared, {differing} differ",
         a.name(),
         b.name()
-    );
+    )
+    .map_err(|e| out.error(e))?;
+    out.finish()?;
     if compared == 0 {
-        eprintln!(
-            "error: {} and {} share no trial that both run",
+        return Err(CliError::input(format!(
+            "{} and {} share no trial that both run",
             a.name(),
             b.name()
-        );
-        return EXIT_BAD_INPUT;
+        )));
     }
-    if differing == 0 && faulty == 0 {
+    Ok(if differing == 0 && faulty == 0 {
         EXIT_OK
     } else {
         EXIT_DIFFERENCES
-    }
+    })
 }
 
 /// The per-word diff of B's outcome against A's, under each fill; empty when they agree.

@@ -6,12 +6,11 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
-use anstream::{eprintln, println};
-
 use super::backends::{prepare, Prepared};
-use super::{BackendArgs, Cli, EXIT_BAD_INPUT, EXIT_DIFFERENCES, EXIT_OK};
+use super::{output, BackendArgs, Cli, CliError, Outcome, EXIT_DIFFERENCES, EXIT_OK};
 use crate::backend::Backend;
 use crate::model::cross_vendor::Operation;
+use crate::report::console;
 use crate::sweep::generate::{Digits, Generator, BOUNDARIES};
 use crate::sweep::target::Target;
 use crate::sweep::{emit, render, Settings, Sweep};
@@ -135,17 +134,7 @@ fn catch_interrupt() {
     }
 }
 
-pub fn sweep(cli: &Cli, args: &SweepArgs) -> u8 {
-    match run(cli, args) {
-        Ok(code) => code,
-        Err(message) => {
-            eprintln!("error: {message}");
-            EXIT_BAD_INPUT
-        }
-    }
-}
-
-fn run(cli: &Cli, args: &SweepArgs) -> Result<u8, String> {
+pub fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
     let backend_args = BackendArgs {
         backends: args.backends.clone(),
         timeout: args.timeout,
@@ -161,10 +150,8 @@ fn run(cli: &Cli, args: &SweepArgs) -> Result<u8, String> {
         project, backends, ..
     } = if args.backends.is_empty() {
         // Only the reference models: no external backend of the project file is started.
-        let paths = super::backends::paths(cli, &[], "--vectors")
-            .map_err(|_| "the project's data is not found".to_string())?;
-        let project =
-            super::backends::load(&paths).map_err(|_| "the project does not load".to_string())?;
+        let paths = super::backends::paths(cli, &[], "--vectors")?;
+        let project = super::backends::load(&paths)?;
         let backends = project.backends.clone();
         Prepared {
             file: Default::default(),
@@ -172,7 +159,7 @@ fn run(cli: &Cli, args: &SweepArgs) -> Result<u8, String> {
             backends,
         }
     } else {
-        prepare(cli, &backend_args).map_err(|_| "the backends could not be started".to_string())?
+        prepare(cli, &backend_args)?
     };
     let target = match (&args.operation, &args.instruction) {
         (Some(OperationArg::HexToValue), _) => Target::Operation {
@@ -193,12 +180,16 @@ fn run(cli: &Cli, args: &SweepArgs) -> Result<u8, String> {
                         .collect();
                     match having.as_slice() {
                         [one] => one.clone(),
-                        [] => return Err(format!("no profile has an instruction `{instruction}`")),
+                        [] => {
+                            return Err(CliError::input(format!(
+                                "no profile has an instruction `{instruction}`"
+                            )))
+                        }
                         many => {
-                            return Err(format!(
+                            return Err(CliError::input(format!(
                                 "several profiles have {instruction} ({}): give --profile",
                                 many.join(", ")
-                            ))
+                            )))
                         }
                     }
                 }
@@ -209,7 +200,9 @@ fn run(cli: &Cli, args: &SweepArgs) -> Result<u8, String> {
             }
         }
         (None, None) => {
-            return Err("give --operation hex-to-value|value-to-hex or --instruction NAME".into())
+            return Err(CliError::input(
+                "give --operation hex-to-value|value-to-hex or --instruction NAME",
+            ))
         }
     };
     // The reference models are always there: they are the oracle.
@@ -252,7 +245,7 @@ fn run(cli: &Cli, args: &SweepArgs) -> Result<u8, String> {
         None => Generator::Values { bits: 16 },
     };
     if args.each_text && !matches!(generator, Generator::Full { .. }) {
-        return Err("--each-text applies to --generator full".into());
+        return Err(CliError::input("--each-text applies to --generator full"));
     }
     let seed = args.seed.unwrap_or_else(|| {
         std::time::SystemTime::now()
@@ -267,7 +260,7 @@ fn run(cli: &Cli, args: &SweepArgs) -> Result<u8, String> {
     if let Some(j) = args.jobs {
         settings.jobs = j.max(1);
     }
-    let sweep = Sweep::new(settings, &project.profiles, &chosen)?;
+    let sweep = Sweep::new(settings, &project.profiles, &chosen).map_err(CliError::Input)?;
     catch_interrupt();
     let bar = std::io::stderr().is_terminal().then(|| {
         let bar = indicatif::ProgressBar::new(sweep.space.total());
@@ -280,20 +273,20 @@ fn run(cli: &Cli, args: &SweepArgs) -> Result<u8, String> {
         );
         bar
     });
-    eprintln!(
+    console::status(&format!(
         "sweeping {} with the {} generator, seed {} (--seed {} repeats it): {} input(s) in this shard",
         sweep.settings.target,
         sweep.settings.generator.name(),
         sweep.settings.seed,
         sweep.settings.seed,
         render::thousands(sweep.space.total().div_ceil(sweep.settings.shard.1))
-    );
+    ));
     if matches!(sweep.settings.generator, Generator::Full { by_class: true }) {
-        eprintln!(
+        console::status(&format!(
             "by byte class: the classes are found first, then one text per tuple of classes is \
              asked, then {} random texts check them",
             render::thousands(sweep.settings.class_check)
-        );
+        ));
     }
     let results = sweep.run(&STOP, &mut |done, of| {
         if let Some(bar) = &bar {
@@ -305,11 +298,11 @@ fn run(cli: &Cli, args: &SweepArgs) -> Result<u8, String> {
         bar.finish_and_clear();
     }
     if results.interrupted {
-        eprintln!(
+        console::status(&format!(
             "interrupted: {} of {} inputs swept; what was found so far follows",
             render::thousands(results.swept),
             render::thousands(results.shard_inputs)
-        );
+        ));
     }
     let rendered = match args.format {
         SweepFormat::Text => render::text(&results),
@@ -317,26 +310,28 @@ fn run(cli: &Cli, args: &SweepArgs) -> Result<u8, String> {
         SweepFormat::Html => render::html(&results),
     };
     match &args.output {
-        Some(path) => std::fs::write(path, &rendered)
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))?,
-        None => println!("{}", rendered.trim_end()),
+        Some(path) => output::write(Some(path), &rendered)?,
+        None => output::write(None, rendered.trim_end())?,
     }
     if let Some(m) = results.classes.as_ref().and_then(|c| c.mismatch.as_ref()) {
-        eprintln!(
+        console::status(&format!(
             "error: the byte classes do not hold: {} answers differently from its class representative {}; \
              the counts above are not exact (--each-text asks every text)",
             m.text.point, m.representative.point
-        );
+        ));
         return Ok(EXIT_DIFFERENCES);
     }
     if let Some(path) = &args.emit {
         let emitted = emit::emit(&sweep, &results, &project.corpus);
         for why in &emitted.skipped {
-            eprintln!("note: not written as a vector: {why}");
+            console::note(&format!("not written as a vector: {why}"));
         }
-        std::fs::write(path, &emitted.yaml)
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-        eprintln!("wrote {} vector(s) to {}", emitted.cases, path.display());
+        output::write(Some(path), &emitted.yaml)?;
+        console::status(&format!(
+            "wrote {} vector(s) to {}",
+            emitted.cases,
+            path.display()
+        ));
     }
     Ok(if results.differs() {
         EXIT_DIFFERENCES
@@ -345,7 +340,7 @@ fn run(cli: &Cli, args: &SweepArgs) -> Result<u8, String> {
     })
 }
 
-fn text_generator(args: &SweepArgs) -> Result<Generator, String> {
+fn text_generator(args: &SweepArgs) -> Result<Generator, CliError> {
     let alphabet = match &args.alphabet {
         Some(list) => alphabet(list)?,
         None => BOUNDARIES.to_vec(),
@@ -357,7 +352,7 @@ fn text_generator(args: &SweepArgs) -> Result<Generator, String> {
 }
 
 /// `20H,0,9,a` -> bytes.
-pub fn alphabet(list: &str) -> Result<Vec<u8>, String> {
+pub fn alphabet(list: &str) -> Result<Vec<u8>, CliError> {
     let mut out = Vec::new();
     for item in list.split(',').filter(|s| !s.is_empty()) {
         let byte = if item.chars().count() == 1 {
@@ -375,13 +370,13 @@ pub fn alphabet(list: &str) -> Result<Vec<u8>, String> {
         }
     }
     if out.is_empty() {
-        return Err("the alphabet is empty".into());
+        return Err(CliError::input("the alphabet is empty"));
     }
     Ok(out)
 }
 
 /// `natural`, or `0-6`, `1,4,8`.
-pub fn digits(spec: &str) -> Result<Digits, String> {
+pub fn digits(spec: &str) -> Result<Digits, CliError> {
     if spec == "natural" {
         return Ok(Digits::Natural);
     }
@@ -401,21 +396,21 @@ pub fn digits(spec: &str) -> Result<Digits, String> {
         .iter()
         .find(|d| **d > crate::sweep::generate::MAX_DIGITS)
     {
-        return Err(format!(
+        return Err(CliError::input(format!(
             "--digits {d}: at most {}",
             crate::sweep::generate::MAX_DIGITS
-        ));
+        )));
     }
     Ok(Digits::Each(out))
 }
 
 /// `K/N`.
-pub fn shard(spec: &str) -> Result<(u64, u64), String> {
+pub fn shard(spec: &str) -> Result<(u64, u64), CliError> {
     let bad = || format!("--shard `{spec}`: expected K/N with 1 <= K <= N, like 2/8");
     let (k, n) = spec.split_once('/').ok_or_else(bad)?;
     let (k, n): (u64, u64) = (k.parse().map_err(|_| bad())?, n.parse().map_err(|_| bad())?);
     if k == 0 || n == 0 || k > n {
-        return Err(bad());
+        return Err(bad().into());
     }
     Ok((k, n))
 }

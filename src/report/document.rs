@@ -40,7 +40,7 @@ impl Collector {
 }
 
 impl Reporter for Collector {
-    fn event(&mut self, event: &Event<'_>) {
+    fn event(&mut self, event: &Event<'_>) -> std::io::Result<()> {
         match event {
             Event::TrialFinished {
                 index,
@@ -63,6 +63,7 @@ impl Reporter for Collector {
             }
             Event::RunStarted { .. } | Event::BackendRestarted { .. } => {}
         }
+        Ok(())
     }
 }
 

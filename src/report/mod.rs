@@ -6,6 +6,7 @@
 //! the printing; nothing before this stage writes to the terminal.
 
 pub mod baseline;
+pub mod console;
 pub mod document;
 pub mod html;
 pub mod json;
@@ -45,9 +46,10 @@ pub enum Event<'a> {
     },
 }
 
-/// Something that turns a run's events into output.
+/// Something that turns a run's events into output. A write that fails (a closed pipe, a full
+/// disk) is returned, and the run ends with it rather than going on with a truncated report.
 pub trait Reporter {
-    fn event(&mut self, event: &Event<'_>);
+    fn event(&mut self, event: &Event<'_>) -> std::io::Result<()>;
 }
 
 /// Two reporters fed the same events (for example the text report and the collector of a
@@ -55,9 +57,9 @@ pub trait Reporter {
 pub struct Tee<'a>(pub &'a mut dyn Reporter, pub &'a mut dyn Reporter);
 
 impl Reporter for Tee<'_> {
-    fn event(&mut self, event: &Event<'_>) {
-        self.0.event(event);
-        self.1.event(event);
+    fn event(&mut self, event: &Event<'_>) -> std::io::Result<()> {
+        self.0.event(event)?;
+        self.1.event(event)
     }
 }
 
@@ -65,10 +67,11 @@ impl Reporter for Tee<'_> {
 pub struct All<'a>(pub Vec<&'a mut dyn Reporter>);
 
 impl Reporter for All<'_> {
-    fn event(&mut self, event: &Event<'_>) {
+    fn event(&mut self, event: &Event<'_>) -> std::io::Result<()> {
         for r in &mut self.0 {
-            r.event(event);
+            r.event(event)?;
         }
+        Ok(())
     }
 }
 

@@ -67,7 +67,7 @@ impl<'a> ProgressReporter<'a> {
 }
 
 impl Reporter for ProgressReporter<'_> {
-    fn event(&mut self, event: &Event<'_>) {
+    fn event(&mut self, event: &Event<'_>) -> std::io::Result<()> {
         match event {
             Event::RunStarted { .. } => {
                 for (bar, _) in self.lines.values() {
@@ -96,6 +96,6 @@ impl Reporter for ProgressReporter<'_> {
             _ => {}
         }
         let inner = &mut self.inner;
-        self.multi.suspend(|| inner.event(event));
+        self.multi.suspend(|| inner.event(event))
     }
 }

@@ -48,6 +48,11 @@ impl<W: Write> TextReporter<W> {
         }
     }
 
+    /// The writer, for a caller that must finish it (a staged file put in place).
+    pub fn into_inner(self) -> W {
+        self.out
+    }
+
     /// Prints only failures and the closing counts (no known differences, skips, notes or
     /// per-backend counts).
     pub fn quiet(mut self, quiet: bool) -> Self {
@@ -55,63 +60,64 @@ impl<W: Write> TextReporter<W> {
         self
     }
 
-    fn finish(&mut self, summary: &Summary, interrupted: bool) {
+    fn finish(&mut self, summary: &Summary, interrupted: bool) -> std::io::Result<()> {
         // Quiet: only whether the run was cut short, and the summary.
         if !self.quiet {
-            self.details();
+            self.details()?;
         }
         let out = &mut self.out;
         if interrupted {
-            let _ = writeln!(
+            writeln!(
                 out,
                 "interrupted: the counts cover the trials that finished"
-            );
+            )?;
         }
-        let _ = writeln!(out, "{summary}");
-        let _ = out.flush();
+        writeln!(out, "{summary}")?;
+        out.flush()
     }
 
     /// The known differences met, the skips, restarts and per-backend counts.
-    fn details(&mut self) {
+    fn details(&mut self) -> std::io::Result<()> {
         let out = &mut self.out;
         let mut known: Vec<(&String, &KnownGroup)> = self.known.iter().collect();
         known.sort_by_key(|(_, g)| g.first);
         for (entry, group) in known {
-            let _ = writeln!(
+            writeln!(
                 out,
                 "known difference ({}): {}",
                 terminal(entry),
                 terminal(&group.reason)
-            );
+            )?;
             let mut trials = group.trials.clone();
             trials.sort();
             for (_, line) in trials {
-                let _ = writeln!(out, "  {}", terminal(&line));
+                writeln!(out, "  {}", terminal(&line))?;
             }
         }
         for (reason, count) in &self.skipped {
-            let _ = writeln!(out, "skipped {count} trial(s): {}", terminal(reason));
+            writeln!(out, "skipped {count} trial(s): {}", terminal(reason))?;
         }
         for note in &self.notes {
-            let _ = writeln!(out, "skipped: {}", terminal(note));
+            writeln!(out, "skipped: {}", terminal(note))?;
         }
         for (backend, n) in &self.restarts {
-            let _ = writeln!(
+            writeln!(
                 out,
                 "note: {backend} was started again {n} time(s) after a fault"
-            );
+            )?;
         }
         for (backend, s) in &self.per_backend {
-            let _ = writeln!(out, "{backend}: {s}");
+            writeln!(out, "{backend}: {s}")?;
         }
         if let Some(s) = &self.cross_vendor {
-            let _ = writeln!(out, "cross-vendor: {s}");
+            writeln!(out, "cross-vendor: {s}")?;
         }
+        Ok(())
     }
 }
 
 impl<W: Write> Reporter for TextReporter<W> {
-    fn event(&mut self, event: &Event<'_>) {
+    fn event(&mut self, event: &Event<'_>) -> std::io::Result<()> {
         match event {
             Event::RunStarted { .. } => {}
             Event::TrialFinished {
@@ -130,8 +136,8 @@ impl<W: Write> Reporter for TextReporter<W> {
                 counts.add(verdict);
                 match verdict {
                     v if v.is_failure() => {
-                        let _ = writeln!(self.out, "{}", render(trial, v, self.palette));
-                        let _ = self.out.flush();
+                        writeln!(self.out, "{}", render(trial, v, self.palette))?;
+                        self.out.flush()?;
                     }
                     Verdict::KnownDifference { entry, .. } => {
                         let group = self.known.entry(entry.location.clone()).or_insert_with(|| {
@@ -150,7 +156,7 @@ impl<W: Write> Reporter for TextReporter<W> {
                         *self.skipped.entry(reason.clone()).or_default() += 1;
                     }
                     v @ Verdict::Recorded { .. } if self.show_recorded => {
-                        let _ = writeln!(self.out, "{}", render(trial, v, self.palette));
+                        writeln!(self.out, "{}", render(trial, v, self.palette))?;
                     }
                     _ => {}
                 }
@@ -161,7 +167,8 @@ impl<W: Write> Reporter for TextReporter<W> {
             Event::RunFinished {
                 summary,
                 interrupted,
-            } => self.finish(summary, *interrupted),
+            } => self.finish(summary, *interrupted)?,
         }
+        Ok(())
     }
 }

@@ -297,7 +297,8 @@ impl Sweep {
                 place: &place,
                 out: &mut out,
             };
-            crate::runner::run(&trials, self.settings.jobs.max(1), stop, &mut keep);
+            // Keep writes nothing, so the run cannot fail on a report.
+            let _ = crate::runner::run(&trials, self.settings.jobs.max(1), stop, &mut keep);
         }
         out.into_iter()
             .map(|row| row.into_iter().collect::<Option<Vec<Reply>>>())
@@ -436,12 +437,13 @@ struct Keep<'a> {
 }
 
 impl Reporter for Keep<'_> {
-    fn event(&mut self, event: &Event<'_>) {
+    fn event(&mut self, event: &Event<'_>) -> std::io::Result<()> {
         if let Event::TrialFinished { index, verdict, .. } = event {
             if let Some(&(p, c)) = self.place.get(*index) {
                 self.out[p][c] = Some(Reply::of(verdict));
             }
         }
+        Ok(())
     }
 }
 

@@ -1,0 +1,204 @@
+//! Where a command's report goes, written the same safe way for every format: stdout; a
+//! regular file, written whole or not at all (a temporary file beside it, renamed over it when
+//! the report is complete, so an interrupted run never leaves half a report or a damaged
+//! baseline); or a device or FIFO (`/dev/null`, `/dev/stdout`, a named pipe), written
+//! directly, since renaming over one would replace it.
+
+use std::fs::File;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use super::CliError;
+
+/// An open output: write to it, then [`Sink::finish`] it.
+pub enum Sink {
+    Stdout(anstream::AutoStream<std::io::Stdout>),
+    Direct {
+        path: PathBuf,
+        file: File,
+    },
+    Staged {
+        path: PathBuf,
+        temp: PathBuf,
+        file: Option<File>,
+    },
+}
+
+/// Refuses, before any work, an output that cannot be written: a folder, or a file in a folder
+/// that does not exist.
+pub fn check(path: &Path) -> Result<(), CliError> {
+    if path.is_dir() {
+        return Err(CliError::input(format!(
+            "{}: a folder, not a file to write",
+            path.display()
+        )));
+    }
+    if !path.exists() {
+        let parent = parent(path);
+        if !parent.is_dir() {
+            return Err(CliError::input(format!(
+                "{}: the folder {} does not exist",
+                path.display(),
+                parent.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+fn parent(path: &Path) -> PathBuf {
+    path.parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .map_or_else(|| PathBuf::from("."), Path::to_path_buf)
+}
+
+/// Whether `path` is something other than a regular file, to be written in place.
+fn special(path: &Path) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir())
+}
+
+/// Opens a device or FIFO for writing. A FIFO that no process reads would block the command
+/// for ever: it is refused at once instead.
+#[cfg(unix)]
+fn open_in_place(path: &Path) -> std::io::Result<File> {
+    use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
+    use std::os::unix::io::AsRawFd;
+    let fifo = std::fs::metadata(path).is_ok_and(|m| m.file_type().is_fifo());
+    if !fifo {
+        return std::fs::OpenOptions::new().write(true).open(path);
+    }
+    let file = std::fs::OpenOptions::new()
+        .write(true)
+        .custom_flags(libc::O_NONBLOCK)
+        .open(path)
+        .map_err(|e| match e.raw_os_error() {
+            Some(libc::ENXIO) => std::io::Error::new(
+                std::io::ErrorKind::BrokenPipe,
+                "a FIFO (named pipe) that no process is reading",
+            ),
+            _ => e,
+        })?;
+    // A reader is there: writes may now wait for it, as to any pipe.
+    // SAFETY: fcntl on a descriptor this function owns.
+    unsafe {
+        let flags = libc::fcntl(file.as_raw_fd(), libc::F_GETFL);
+        libc::fcntl(file.as_raw_fd(), libc::F_SETFL, flags & !libc::O_NONBLOCK);
+    }
+    Ok(file)
+}
+
+#[cfg(not(unix))]
+fn open_in_place(path: &Path) -> std::io::Result<File> {
+    std::fs::OpenOptions::new().write(true).open(path)
+}
+
+impl Sink {
+    /// `None` is stdout.
+    pub fn open(path: Option<&Path>) -> Result<Sink, CliError> {
+        let Some(path) = path else {
+            return Ok(Sink::Stdout(anstream::stdout()));
+        };
+        let failed = |e| CliError::write(Some(path), e);
+        if special(path) {
+            return Ok(Sink::Direct {
+                path: path.to_path_buf(),
+                file: open_in_place(path).map_err(failed)?,
+            });
+        }
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let temp = parent(path).join(format!(".{name}.{}.tmp", std::process::id()));
+        let file = File::create(&temp).map_err(failed)?;
+        Ok(Sink::Staged {
+            path: path.to_path_buf(),
+            temp,
+            file: Some(file),
+        })
+    }
+
+    /// Whether the output is a terminal's stdout (colours, the terminal's width).
+    pub fn is_stdout(&self) -> bool {
+        matches!(self, Sink::Stdout(_))
+    }
+
+    /// Flushes, and puts a staged file in its place.
+    pub fn finish(mut self) -> Result<(), CliError> {
+        let path = self.path().map(Path::to_path_buf);
+        let failed = |e| CliError::write(path.as_deref(), e);
+        self.flush().map_err(failed)?;
+        if let Sink::Staged { path, temp, file } = &mut self {
+            if let Some(f) = file.take() {
+                f.sync_all().map_err(failed)?;
+            }
+            if let Err(e) = std::fs::rename(&*temp, &*path) {
+                let _ = std::fs::remove_file(&*temp);
+                return Err(failed(e));
+            }
+        }
+        Ok(())
+    }
+
+    fn path(&self) -> Option<&Path> {
+        match self {
+            Sink::Stdout(_) => None,
+            Sink::Direct { path, .. } | Sink::Staged { path, .. } => Some(path),
+        }
+    }
+
+    /// A write error of this output, for the command's error.
+    pub fn error(&self, e: std::io::Error) -> CliError {
+        CliError::write(self.path(), e)
+    }
+}
+
+impl Write for Sink {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        match self {
+            Sink::Stdout(out) => out.write(buf),
+            Sink::Direct { file, .. } => file.write(buf),
+            Sink::Staged { file, .. } => match file {
+                Some(f) => f.write(buf),
+                None => Err(std::io::ErrorKind::BrokenPipe.into()),
+            },
+        }
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        match self {
+            Sink::Stdout(out) => out.flush(),
+            Sink::Direct { file, .. } => file.flush(),
+            Sink::Staged { file, .. } => file.as_mut().map_or(Ok(()), Write::flush),
+        }
+    }
+}
+
+impl Drop for Sink {
+    /// A staged file that was never finished (an error, an interruption) is removed: the
+    /// file it would have replaced stays as it was.
+    fn drop(&mut self) {
+        if let Sink::Staged {
+            temp,
+            file: Some(_),
+            ..
+        } = self
+        {
+            let _ = std::fs::remove_file(&*temp);
+        }
+    }
+}
+
+/// Writes a whole report to `path`, or to stdout (`None`) followed by a newline.
+pub fn write(path: Option<&Path>, text: &str) -> Result<(), CliError> {
+    let mut sink = Sink::open(path)?;
+    let written = sink.write_all(text.as_bytes()).and_then(|()| {
+        if path.is_none() {
+            sink.write_all(b"\n")
+        } else {
+            Ok(())
+        }
+    });
+    written.map_err(|e| sink.error(e))?;
+    sink.finish()
+}
