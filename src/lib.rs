@@ -32,6 +32,7 @@ pub mod plan;
 pub mod record;
 pub mod report;
 pub mod runner;
+pub mod session;
 pub mod spec;
 pub mod sweep;
 pub mod text;

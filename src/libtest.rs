@@ -18,21 +18,18 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::{Arc, OnceLock};
+use std::sync::Arc;
 
 use libtest_mimic::{Arguments, Completion, Failed, Trial as Test};
 
-use crate::backend::external::ExternalBackend;
-use crate::backend::{Backend, Fault, Request, Response};
+use crate::backend::Backend;
 use crate::judge::{Status, Verdict};
-use crate::load::{load_known, load_project, locate_project};
-use crate::model::cross_vendor::{CodecAbilities, OperationAbilities};
-use crate::model::profile::Profiles;
-use crate::model::project::ExternalSettings;
+use crate::load::{load_project, locate_project};
 use crate::plan::Trial;
 use crate::report::console;
 use crate::report::text::{render, Palette};
-use crate::runner::{run_one, Paths, Project};
+use crate::runner::{run_one, Paths, Project, SetupError};
+use crate::session::{assemble, BackendSource, LazyStart};
 
 /// Runs the corpus under `root` as libtest trials: the built-in reference models, the project
 /// file's external backends, and `extra` backends. `binary` is the plc-conformance executable
@@ -126,31 +123,13 @@ impl Harness {
             }
         };
         let mut tests = Vec::new();
-        let mut backends = if self.builtin {
-            project.backends.clone()
-        } else {
-            Vec::new()
-        };
-        for (backend, known) in self.extra {
-            if let Some(file) = known {
-                let profile = project.profiles.get(backend.profile()).map(|p| p.as_ref());
-                match load_known(&file, profile, &project.corpus, whole_corpus) {
-                    Ok(k) => {
-                        project.known.insert(backend.name().to_string(), k);
-                    }
-                    Err(e) => {
-                        let message = e.to_string();
-                        tests.push(Test::test(
-                            format!("{}::known-differences", backend.name()),
-                            move || Err(Failed::from(message)),
-                        ));
-                        continue;
-                    }
-                }
-            }
-            backends.push(backend);
+        let mut sources = Vec::new();
+        if self.builtin {
+            sources.push(BackendSource::References);
         }
-        let mut lazies: Vec<Arc<LazyStart>> = Vec::new();
+        for (backend, known) in self.extra {
+            sources.push(BackendSource::InProcess(backend, known));
+        }
         if let Some(binary) = &self.project_file {
             let (file, explicit) = locate_project(&self.root);
             let configured = match load_project(&file, explicit, binary) {
@@ -169,22 +148,43 @@ impl Harness {
                 );
             }
             // Backends run on request only (self-checks of the harness) have tests of their own.
+            // One whose level (a profile, or codec) is declared is planned without starting it.
             for c in configured.configured.into_iter().filter(|c| !c.on_request) {
-                add_configured(
-                    c.settings,
-                    &mut project,
-                    whole_corpus,
-                    &mut tests,
-                    &mut backends,
-                    &mut lazies,
-                );
+                sources.push(if c.settings.profile.is_some() || c.settings.codec {
+                    BackendSource::ProcessOnFirstUse(c.settings)
+                } else {
+                    BackendSource::Process(c.settings)
+                });
             }
         }
+        let assembled = assemble(&mut project, sources, whole_corpus);
+        for (name, error) in assembled.failed {
+            let (what, message) = match error {
+                SetupError::Load(e) => ("known-differences", e.to_string()),
+                e => ("handshake", e.to_string()),
+            };
+            tests.push(Test::test(format!("{name}::{what}"), move || {
+                Err(Failed::from(message))
+            }));
+        }
+        for lazy in &assembled.on_first_use {
+            let handshake = lazy.clone();
+            tests.push(Test::test(
+                format!("{}::handshake", lazy.name()),
+                move || {
+                    handshake
+                        .get()
+                        .map(|_| ())
+                        .map_err(|e| Failed::from(e.to_string()))
+                },
+            ));
+        }
+        let lazies = assembled.on_first_use;
         let by_name: BTreeMap<String, Arc<LazyStart>> = lazies
             .iter()
-            .map(|l| (l.settings.name.clone(), l.clone()))
+            .map(|l| (l.name().to_string(), l.clone()))
             .collect();
-        let trials = project.plan(&backends);
+        let trials = project.plan(&assembled.backends);
         tests.extend(trials.into_iter().map(|t| {
             let lazy = by_name.get(t.backend.name()).cloned();
             test(t, lazy)
@@ -195,75 +195,6 @@ impl Harness {
         drop(project);
         conclusion.exit_code()
     }
-}
-
-/// A project-file backend: planned without starting it when its profile is declared (it
-/// starts with the first trial that runs), else started now to learn what it implements.
-fn add_configured(
-    settings: ExternalSettings,
-    project: &mut Project,
-    whole_corpus: bool,
-    tests: &mut Vec<Test>,
-    backends: &mut Vec<Arc<dyn Backend>>,
-    lazies: &mut Vec<Arc<LazyStart>>,
-) {
-    let name = settings.name.clone();
-    let fail = |tests: &mut Vec<Test>, message: String| {
-        tests.push(Test::test(format!("{name}::handshake"), move || {
-            Err(Failed::from(message))
-        }));
-    };
-    // A backend whose level (a profile, or codec) is declared is planned without starting it.
-    let profile = match (&settings.profile, settings.codec) {
-        (Some(p), _) => Some(p.clone()),
-        (None, true) => None,
-        (None, false) => {
-            match project.add_external(settings, whole_corpus) {
-                Ok(b) => backends.push(b),
-                Err(e) => fail(tests, e.to_string()),
-            }
-            return;
-        }
-    };
-    if let Some(known) = settings.known_differences.as_ref() {
-        let p = profile
-            .as_ref()
-            .and_then(|p| project.profiles.get(p))
-            .map(|p| p.as_ref());
-        match load_known(known, p, &project.corpus, whole_corpus) {
-            Ok(k) => {
-                project.known.insert(name.clone(), k);
-            }
-            Err(e) => return fail(tests, e.to_string()),
-        }
-    }
-    let lazy = Arc::new(LazyStart {
-        settings,
-        profiles: project.profiles.clone(),
-        started: OnceLock::new(),
-    });
-    let handshake = lazy.clone();
-    tests.push(Test::test(format!("{name}::handshake"), move || {
-        handshake.get().map(|_| ()).map_err(Failed::from)
-    }));
-    backends.push(Arc::new(Placeholder {
-        name,
-        // Planned as able to answer anything; the started backend's own capabilities decide
-        // each trial's skip before it runs.
-        codec: profile.is_none().then(|| {
-            let any = OperationAbilities {
-                digits: Some((0..=16).collect()),
-                width: 64,
-            };
-            CodecAbilities {
-                hex_to_value: Some(any.clone()),
-                value_to_hex: Some(any),
-            }
-        }),
-        profile: profile.unwrap_or_default(),
-        lazy: lazy.clone(),
-    }));
-    lazies.push(lazy);
 }
 
 /// With `--exact NAME` (how nextest runs each trial in a process of its own), only the vector
@@ -308,9 +239,8 @@ fn test(trial: Trial, lazy: Option<Arc<LazyStart>>) -> Test {
 /// a failure with the full report.
 fn outcome(mut trial: Trial, lazy: Option<Arc<LazyStart>>) -> Result<Completion, Failed> {
     if let Some(lazy) = lazy {
-        let real = lazy.get().map_err(Failed::from)?;
-        trial.skip = crate::plan::skip_reason(&trial, real.as_ref());
-        trial.backend = real;
+        lazy.bind(&mut trial)
+            .map_err(|e| Failed::from(e.to_string()))?;
     }
     let verdict = run_one(&trial);
     match verdict.status() {
@@ -338,58 +268,5 @@ fn ignored_text(verdict: &Verdict) -> String {
         }
         Verdict::Skipped { reason } => reason.clone(),
         other => other.label().to_string(),
-    }
-}
-
-/// An external backend started on first use, once per process.
-struct LazyStart {
-    settings: ExternalSettings,
-    profiles: Profiles,
-    started: OnceLock<Result<Arc<dyn Backend>, String>>,
-}
-
-impl LazyStart {
-    fn get(&self) -> Result<Arc<dyn Backend>, String> {
-        self.started
-            .get_or_init(|| {
-                ExternalBackend::start(self.settings.clone(), &self.profiles)
-                    .map(|b| Arc::new(b) as Arc<dyn Backend>)
-                    .map_err(|e| e.to_string())
-            })
-            .clone()
-    }
-}
-
-/// Stands in for a configured backend while planning: it claims everything its profile has, and
-/// the trial asks the started backend before running.
-struct Placeholder {
-    name: String,
-    profile: String,
-    /// For a codec-level backend.
-    codec: Option<CodecAbilities>,
-    lazy: Arc<LazyStart>,
-}
-
-impl Backend for Placeholder {
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn profile(&self) -> &str {
-        &self.profile
-    }
-    fn describe(&self) -> String {
-        format!(
-            "external, started on first use ({})",
-            self.lazy.settings.launch
-        )
-    }
-    fn claims(&self, _instruction: &str, _variant: &str) -> bool {
-        true
-    }
-    fn execute(&self, _request: &Request<'_>) -> Result<Response, Fault> {
-        Err(Fault::Unreachable("the backend was not started".into()))
-    }
-    fn codec(&self) -> Option<&CodecAbilities> {
-        self.codec.as_ref()
     }
 }

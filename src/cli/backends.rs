@@ -12,6 +12,7 @@ use crate::load::{
 };
 use crate::model::project::{ExternalSettings, Launch, ProjectBackends};
 use crate::runner::{Paths, Project};
+use crate::session::{assemble, BackendSource};
 
 /// The project folder of the command: `--root`, else the nearest project folder at or above the
 /// current one (as a relative path, so that messages stay short), else none: the data built into
@@ -179,28 +180,21 @@ pub fn start(
         };
         known_files.insert(name, PathBuf::from(path));
     }
-    let start = |project: &mut Project, settings: ExternalSettings| {
-        project
-            .add_external(settings, own_corpus)
-            .map(|b| b as Arc<dyn Backend>)
-            .map_err(CliError::Setup)
-    };
+    let mut sources = Vec::new();
     if args.backends.is_empty() {
-        let mut chosen = project.backends.clone();
+        sources.push(BackendSource::References);
         for c in file.configured.iter().filter(|c| !c.on_request) {
-            chosen.push(start(project, c.settings.clone())?);
+            sources.push(BackendSource::Process(c.settings.clone()));
         }
-        return Ok(chosen);
     }
-    let mut chosen = Vec::new();
     for name in &args.backends {
         if let Some(mut settings) = command_line_external(name, args)? {
             settings.known_differences = known_files.remove(settings.name.as_str());
-            chosen.push(start(project, settings)?);
+            sources.push(BackendSource::Process(settings));
         } else if let Some(b) = project.backends.iter().find(|b| b.name() == name) {
-            chosen.push(b.clone());
+            sources.push(BackendSource::InProcess(b.clone(), None));
         } else if let Some(c) = file.configured.iter().find(|c| c.settings.name == *name) {
-            chosen.push(start(project, c.settings.clone())?);
+            sources.push(BackendSource::Process(c.settings.clone()));
         } else if let Some(skipped) = file.skipped.iter().find(|s| s.name == *name) {
             return Err(CliError::input(skipped.to_string()));
         } else {
@@ -217,7 +211,11 @@ pub fn start(
             "--known-differences names `{name}`, which is not an `external:` backend of this run"
         )));
     }
-    Ok(chosen)
+    let assembled = assemble(project, sources, own_corpus);
+    match assembled.failed.into_iter().next() {
+        Some((_, error)) => Err(CliError::Setup(error)),
+        None => Ok(assembled.backends),
+    }
 }
 
 /// A loaded project with the chosen backends started (every external backend has agreed on

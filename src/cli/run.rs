@@ -17,7 +17,7 @@ use crate::execute::{execute, Observation};
 use crate::judge::words::rows;
 use crate::model::{error_text, Expectation};
 use crate::plan::Trial;
-use crate::report::baseline::{self, SavedRun};
+use crate::report::baseline;
 use crate::report::console;
 use crate::report::document::{self, Collector};
 use crate::report::json::{BackendInfo, RunInfo};
@@ -27,6 +27,7 @@ use crate::report::text::{memory_diff, Palette};
 use crate::report::text_reporter::TextReporter;
 use crate::report::{All, Event, Reporter};
 use crate::runner::{self, Project};
+use crate::session::{idle_backends, RunOutcome};
 
 pub fn run(cli: &Cli, args: &RunArgs) -> Outcome {
     execute_command(
@@ -206,24 +207,23 @@ fn execute_command(
         };
         idle_backends(&trials, &asked, backend_args.filter.is_some())
     };
-    for (name, why) in &idle {
+    let mut outcome = RunOutcome {
+        records,
+        summary,
+        interrupted,
+        idle,
+        baseline: None,
+    };
+    for (name, why) in &outcome.idle {
         console::status(&format!(
             "error: backend `{name}` ran no trial: {why} (--allow-empty accepts such a run)"
         ));
     }
-    let idle = if idle.is_empty() {
-        EXIT_OK
-    } else {
-        EXIT_DIFFERENCES
-    };
     if let Some(before) = before {
-        return Ok(compare_with(report.baseline.as_deref(), &before, &records).max(idle));
+        outcome.against(&before);
+        report_baseline(report.baseline.as_deref(), &outcome);
     }
-    Ok(if summary.failed > 0 {
-        EXIT_DIFFERENCES
-    } else {
-        idle
-    })
+    Ok(outcome.exit_code())
 }
 
 /// The case ids that probe an open question (every question's when `question` is empty).
@@ -257,40 +257,6 @@ fn probe_cases(
         .into_iter()
         .flat_map(|q| q.probes.iter().cloned())
         .collect())
-}
-
-/// The backends among `asked` that ran no trial, with why: every trial of theirs skipped (the
-/// most frequent reason is given), or, when no filter narrows the run, no trial at all.
-fn idle_backends(trials: &[Trial], asked: &[&str], filtered: bool) -> Vec<(String, String)> {
-    let mut out = Vec::new();
-    for name in asked {
-        let theirs: Vec<&Trial> = trials
-            .iter()
-            .filter(|t| t.backend.name() == *name)
-            .collect();
-        if theirs.iter().any(|t| t.skip.is_none()) {
-            continue;
-        }
-        if theirs.is_empty() {
-            if !filtered {
-                out.push((name.to_string(), "the corpus has no trial for it".into()));
-            }
-            continue;
-        }
-        let mut reasons: std::collections::BTreeMap<&str, usize> = Default::default();
-        for t in &theirs {
-            *reasons.entry(t.skip.as_deref().unwrap_or("")).or_default() += 1;
-        }
-        let (reason, _) = reasons
-            .iter()
-            .max_by_key(|(_, n)| **n)
-            .map_or(("", &0), |(r, n)| (*r, n));
-        out.push((
-            name.to_string(),
-            format!("all {} of its trials were skipped ({reason})", theirs.len()),
-        ));
-    }
-    out
 }
 
 /// Stops the run at the first failing trial (`--fail-fast`): no further batch starts.
@@ -375,12 +341,11 @@ fn planned(project: &Project, backends: &[Arc<dyn Backend>], filter: Option<&str
         .collect()
 }
 
-fn compare_with(
-    path: Option<&Path>,
-    before: &SavedRun,
-    records: &[crate::report::record::Record],
-) -> u8 {
-    let changes = baseline::compare(&before.records, records);
+/// The baseline comparison, on stderr beside the report.
+fn report_baseline(path: Option<&Path>, outcome: &RunOutcome) {
+    let Some(changes) = &outcome.baseline else {
+        return;
+    };
     console::status(&format!(
         "against {}: {} new, {} fixed, {} changed, {} unchanged difference(s)",
         path.map(|p| p.display().to_string()).unwrap_or_default(),
@@ -389,28 +354,14 @@ fn compare_with(
         changes.changed.len(),
         changes.unchanged
     ));
-    for r in &changes.new {
-        console::status(&format!(
-            "  new:     {} ({}: {})",
-            r.trial, r.label, r.shown
-        ));
+    for line in &changes.new {
+        console::status(&format!("  new:     {line}"));
     }
-    for (was, now) in &changes.fixed {
-        console::status(&format!(
-            "  fixed:   {} (was {}: {})",
-            now.trial, was.label, was.shown
-        ));
+    for line in &changes.fixed {
+        console::status(&format!("  fixed:   {line}"));
     }
-    for (was, now) in &changes.changed {
-        console::status(&format!(
-            "  changed: {} ({} -> {})",
-            now.trial, was.shown, now.shown
-        ));
-    }
-    if changes.new.is_empty() {
-        EXIT_OK
-    } else {
-        EXIT_DIFFERENCES
+    for line in &changes.changed {
+        console::status(&format!("  changed: {line}"));
     }
 }
 

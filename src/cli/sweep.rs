@@ -11,6 +11,7 @@ use super::{output, BackendArgs, Cli, CliError, Outcome, EXIT_DIFFERENCES, EXIT_
 use crate::backend::Backend;
 use crate::model::cross_vendor::Operation;
 use crate::report::console;
+use crate::session::{assemble, BackendSource};
 use crate::sweep::generate::{Digits, Generator, BOUNDARIES};
 use crate::sweep::target::Target;
 use crate::sweep::{emit, render, Settings, Sweep};
@@ -151,8 +152,8 @@ pub fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
     } = if args.backends.is_empty() {
         // Only the reference models: no external backend of the project file is started.
         let paths = super::backends::paths(cli, &[], "--vectors")?;
-        let project = super::backends::load(&paths)?;
-        let backends = project.backends.clone();
+        let mut project = super::backends::load(&paths)?;
+        let backends = assemble(&mut project, vec![BackendSource::References], true).backends;
         Prepared {
             file: Default::default(),
             project,

@@ -281,34 +281,49 @@ fn trial(
     t
 }
 
+/// Why a backend does not run an instruction input on a variant: it does not claim the
+/// instruction there, or declines the setting (a flag value, an operand form). The rule every
+/// planner asks: the corpus plan, the sweep's columns and its direct path.
+pub fn declined(
+    backend: &dyn Backend,
+    profile: &Profile,
+    variant: &str,
+    input: &Input,
+) -> Option<String> {
+    let instruction = &input.instruction;
+    if !backend.claims(instruction, variant) {
+        return Some(format!(
+            "{} does not implement {instruction} on {variant}",
+            backend.name(),
+        ));
+    }
+    backend.declines(&Setting {
+        instruction,
+        variant: profile.variant(variant)?,
+        flags: &input.flags,
+        operands: &input.operands,
+    })
+}
+
+/// Why a backend does not answer a cross-vendor case at the codec level.
+pub fn codec_declined(backend: &dyn Backend, case: &CrossVendorCase) -> Option<String> {
+    match backend.codec() {
+        Some(abilities) => abilities
+            .declines(case)
+            .map(|why| format!("{} {why}", backend.name())),
+        None => Some(format!("{} is not a codec-level backend", backend.name())),
+    }
+}
+
 /// Why a backend will not run a trial, if it will not: it does not claim the instruction on the
 /// variant, declines the setting (a flag value, an operand form), or does not check device
 /// ranges and the trial expects a device-range error.
 pub fn skip_reason(t: &Trial, backend: &dyn Backend) -> Option<String> {
     if let Check::Codec { case } = &t.check {
-        return match backend.codec() {
-            Some(abilities) => abilities
-                .declines(case)
-                .map(|why| format!("{} {why}", backend.name())),
-            None => Some(format!("{} is not a codec-level backend", backend.name())),
-        };
-    }
-    let instruction = &t.input.instruction;
-    if !backend.claims(instruction, &t.variant) {
-        return Some(format!(
-            "{} does not implement {instruction} on {}",
-            backend.name(),
-            t.variant
-        ));
+        return codec_declined(backend, case);
     }
     let profile = t.profile.as_ref()?;
-    let variant = profile.variant(&t.variant)?;
-    if let Some(why) = backend.declines(&Setting {
-        instruction,
-        variant,
-        flags: &t.input.flags,
-        operands: &t.input.operands,
-    }) {
+    if let Some(why) = declined(backend, profile, &t.variant, &t.input) {
         return Some(why);
     }
     let expects_range_error = match &t.check {

@@ -11,7 +11,7 @@ use crate::backend::{Request, Response};
 use crate::judge::lift::lift;
 use crate::judge::Effect;
 use crate::memory::{Fill, Image, Unit};
-use crate::plan::{lowered_input, Input};
+use crate::plan::{declined, lowered_input, Input};
 
 /// The memory of one input under both fills.
 pub struct Images([Image; 2]);
@@ -54,23 +54,9 @@ pub fn reply(column: &Column, cases: &Cases, native: Option<&(Input, Images)>) -
             (&lowered, &own_images, Some(l), case.digits)
         }
         (Ask::Instruction, Some((input, images))) => {
-            if !column.backend.claims(&input.instruction, &column.variant) {
-                return Some(Reply::Skipped {
-                    reason: format!(
-                        "{} does not implement {} on {}",
-                        column.backend.name(),
-                        input.instruction,
-                        column.variant
-                    ),
-                });
-            }
-            if let Some(why) = column.backend.declines(&crate::backend::Setting {
-                instruction: &input.instruction,
-                variant,
-                flags: &input.flags,
-                operands: &input.operands,
-            }) {
-                return Some(Reply::Skipped { reason: why });
+            if let Some(reason) = declined(column.backend.as_ref(), profile, &column.variant, input)
+            {
+                return Some(Reply::Skipped { reason });
             }
             (input, images, None, 0)
         }

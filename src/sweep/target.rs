@@ -19,7 +19,7 @@ use crate::model::cross_vendor::{CrossVendorCase, Lowering, Operation, TextLayou
 use crate::model::profile::{Profile, Profiles};
 use crate::model::{Basis, Case, Citation, Location, Operand};
 use crate::plan::lowering::{text_units, units_for, value_units};
-use crate::plan::{lowered_input, Check, Input, Trial};
+use crate::plan::{codec_declined, declined, lowered_input, Check, Input, Trial};
 use crate::text::significant_digits;
 
 /// What a sweep generates inputs for.
@@ -367,25 +367,16 @@ pub fn columns(
     Ok(out)
 }
 
-/// Why a backend does not run a lowering (the plan's rule: not claimed, or declined with the
-/// lowering's flags).
+/// Why a backend does not run a lowering: the plan's rule, with the lowering's instruction,
+/// variant, flags and operands (fixed, so asked once per column).
 fn lowering_skip(backend: &Arc<dyn Backend>, profile: &Profile, l: &Lowering) -> Option<String> {
-    if !backend.claims(&l.instruction, &l.variant) {
-        return Some(format!(
-            "{} does not implement {} on {}",
-            backend.name(),
-            l.instruction,
-            l.variant
-        ));
-    }
-    profile.variant(&l.variant).and_then(|v| {
-        backend.declines(&crate::backend::Setting {
-            instruction: &l.instruction,
-            variant: v,
-            flags: &l.flags,
-            operands: &l.operands,
-        })
-    })
+    let input = Input {
+        instruction: l.instruction.clone(),
+        flags: l.flags.clone(),
+        operands: l.operands.clone(),
+        before: BTreeMap::new(),
+    };
+    declined(backend.as_ref(), profile, &l.variant, &input)
 }
 
 /// The sweep's cases for one point: shared by every column that asks it.
@@ -503,29 +494,9 @@ impl Cases {
         let skip = match (&check, &column.profile) {
             // A lowering's instruction, variant and flags are fixed: asked once per column.
             (Check::CrossVendor { .. }, _) => column.lowering_skip.clone(),
-            (Check::Codec { case }, _) => column
-                .backend
-                .codec()
-                .and_then(|a| a.declines(case))
-                .map(|why| format!("{} {why}", column.backend.name())),
+            (Check::Codec { case }, _) => codec_declined(column.backend.as_ref(), case),
             (_, Some(profile)) => {
-                if !column.backend.claims(&input.instruction, &column.variant) {
-                    Some(format!(
-                        "{} does not implement {} on {}",
-                        column.backend.name(),
-                        input.instruction,
-                        column.variant
-                    ))
-                } else {
-                    profile.variant(&column.variant).and_then(|v| {
-                        column.backend.declines(&crate::backend::Setting {
-                            instruction: &input.instruction,
-                            variant: v,
-                            flags: &input.flags,
-                            operands: &input.operands,
-                        })
-                    })
-                }
+                declined(column.backend.as_ref(), profile, &column.variant, &input)
             }
             _ => None,
         };
