@@ -114,8 +114,7 @@ impl FromStr for Device {
 
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         let err = || DeviceSyntaxError(s.to_string());
-        let split = s.rfind(|c: char| !c.is_ascii_digit()).map_or(0, |i| i + 1);
-        let (code, number) = s.split_at(split);
+        let (code, number) = s.split_at(s.trim_end_matches(|c: char| c.is_ascii_digit()).len());
         if number.is_empty() || !valid_code(code) {
             return Err(err());
         }
@@ -194,6 +193,7 @@ mod tests {
     #[case(".DBB10")]
     #[case("1D10")]
     #[case("Db1.DBB10")]
+    #[case("D1ê00")]
     fn rejects(#[case] text: &str) {
         assert!(text.parse::<Device>().is_err());
     }

@@ -61,7 +61,39 @@ pub struct Provenance {
 }
 
 /// What a backend did on one variant (and instruction) of a case, or why it cannot be recorded.
-type VariantEffect = (String, Result<Effect, String>);
+type VariantEffect = (String, Result<Effect, Unrecordable>);
+
+/// Why what a backend did on a case cannot be written into the vector.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Unrecordable(pub String);
+
+impl std::fmt::Display for Unrecordable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+/// Why a recording could not be made at all.
+#[derive(Debug)]
+pub enum RecordError {
+    /// A vector file to edit could not be read.
+    Read {
+        file: PathBuf,
+        source: std::io::Error,
+    },
+}
+
+impl std::fmt::Display for RecordError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RecordError::Read { file, source } => {
+                write!(f, "cannot read {}: {source}", file.display())
+            }
+        }
+    }
+}
+
+impl std::error::Error for RecordError {}
 
 /// Runs every native case of the corpus that `backend` runs (and whose trial name contains
 /// `filter`) and works out the edits.
@@ -70,7 +102,7 @@ pub fn record(
     backend: &Arc<dyn Backend>,
     filter: Option<&str>,
     provenance: &Provenance,
-) -> Result<Recording, String> {
+) -> Result<Recording, RecordError> {
     let trials: Vec<Trial> = project
         .plan(std::slice::from_ref(backend))
         .into_iter()
@@ -101,8 +133,10 @@ pub fn record(
         if let Some(effect) = write {
             let file = case.location.file.clone();
             if !texts.contains_key(&file) {
-                let text = std::fs::read_to_string(&file)
-                    .map_err(|e| format!("cannot read {}: {e}", file.display()))?;
+                let text = std::fs::read_to_string(&file).map_err(|source| RecordError::Read {
+                    file: file.clone(),
+                    source,
+                })?;
                 texts.insert(file.clone(), text);
             }
             let mut variants: Vec<String> = Vec::new();
@@ -118,10 +152,12 @@ pub fn record(
                 .map(|v| v.description.clone())
                 .collect::<Vec<_>>()
                 .join("; ");
-            let text = texts.get_mut(&file).ok_or("file read above")?;
+            let Some(text) = texts.get_mut(&file) else {
+                continue;
+            };
             match edit(text, &case, &effect, &variants, &model, provenance) {
                 Ok(new) => *text = new,
-                Err(why) => {
+                Err(Unrecordable(why)) => {
                     out.entries.push(Entry {
                         case,
                         change: Change::NotRecorded(why),
@@ -137,7 +173,7 @@ pub fn record(
 }
 
 /// What the backend did on a trial (fill A), or why it cannot be recorded.
-fn effect_of(trial: &Trial) -> Result<Effect, String> {
+fn effect_of(trial: &Trial) -> Result<Effect, Unrecordable> {
     let observations = execute(trial);
     let mut effects = Vec::new();
     for o in &observations {
@@ -146,18 +182,18 @@ fn effect_of(trial: &Trial) -> Result<Effect, String> {
                 let image = trial.image(o.fill);
                 effects.push(Effect::of(&image, outcome));
             }
-            Ok(Response::Unsupported(r)) => return Err(format!("unsupported: {r}")),
-            Ok(Response::Answer(_)) => return Err("a codec answer".into()),
-            Err(f) => return Err(f.to_string()),
+            Ok(Response::Unsupported(r)) => return Err(Unrecordable(format!("unsupported: {r}"))),
+            Ok(Response::Answer(_)) => return Err(Unrecordable("a codec answer".into())),
+            Err(f) => return Err(Unrecordable(f.to_string())),
         }
     }
     match effects.as_slice() {
         [first, rest @ ..] if rest.iter().all(|e| e == first) => Ok(first.clone()),
-        [_, ..] => Err(
+        [_, ..] => Err(Unrecordable(
             "the outcome depends on the fill: the backend reads memory the case does not set"
                 .into(),
-        ),
-        [] => Err("no answer".into()),
+        )),
+        [] => Err(Unrecordable("no answer".into())),
     }
 }
 
@@ -213,14 +249,14 @@ fn edit(
     variants: &[String],
     model: &str,
     p: &Provenance,
-) -> Result<String, String> {
+) -> Result<String, Unrecordable> {
     let lines: Vec<&str> = text.lines().collect();
     let head = format!("- id: {}", case.id);
     let start = lines.iter().position(|l| l.trim() == head).ok_or_else(|| {
-        format!(
+        Unrecordable(format!(
             "`{head}` is not on a line of its own in {}",
             case.location.file.display()
-        )
+        ))
     })?;
     let dash = indent(lines[start]);
     let key_indent = dash + 2;

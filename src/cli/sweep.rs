@@ -261,7 +261,8 @@ pub fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
     if let Some(j) = args.jobs {
         settings.jobs = j.max(1);
     }
-    let sweep = Sweep::new(settings, &project.profiles, &chosen).map_err(CliError::Input)?;
+    let sweep = Sweep::new(settings, &project.profiles, &chosen)
+        .map_err(|e| CliError::input(e.to_string()))?;
     catch_interrupt();
     let bar = std::io::stderr().is_terminal().then(|| {
         let bar = indicatif::ProgressBar::new(sweep.space.total());

@@ -223,13 +223,11 @@ fn number(key: &str, v: &ScalarSpec, bits: u32, cx: &mut FileContext<'_>) -> Opt
 }
 
 /// Parses a lowering's operand: a device or a constant.
-pub(crate) fn parse_operand(text: &str) -> Result<Operand, String> {
+pub(crate) fn parse_operand(text: &str) -> Result<Operand, crate::device::DeviceSyntaxError> {
     if let Ok(k) = parse_number(text) {
         return Ok(Operand::Constant(k));
     }
-    text.parse::<Device>()
-        .map(Operand::Device)
-        .map_err(|e| e.to_string())
+    text.parse::<Device>().map(Operand::Device)
 }
 
 /// Checks a profile's `cross_vendor` section against the rest of the profile and parses it.
@@ -310,7 +308,7 @@ pub(crate) fn read_section(p: &ProfileSpec, cx: &mut FileContext<'_>) -> CrossVe
                     }
                     operands.insert(name.clone(), o);
                 }
-                Err(e) => cx.error(format!("{key}.operands.{name}"), LoadErrorKind::Invalid(e)),
+                Err(e) => cx.error(format!("{key}.operands.{name}"), LoadErrorKind::Device(e)),
             }
         }
         if let Some(count) = &l.count {

@@ -283,7 +283,7 @@ mod tests {
         .expect("profile")
     }
 
-    fn load(text: &str, strict: bool) -> Result<KnownDifferences, String> {
+    fn load(text: &str, strict: bool) -> Result<KnownDifferences, LoadErrors> {
         let dir = tempfile::tempdir().expect("temp dir");
         let file = dir.path().join("known.yaml");
         std::fs::write(&file, text).expect("write");
@@ -295,7 +295,7 @@ mod tests {
             ],
             cross_vendor: Vec::new(),
         };
-        load_known(&file, Some(&profile()), &corpus, strict).map_err(|e| e.to_string())
+        load_known(&file, Some(&profile()), &corpus, strict)
     }
 
     #[test]
@@ -310,7 +310,8 @@ mod tests {
              - {case: typo, reason: r}\n",
             true,
         )
-        .expect_err("invalid");
+        .expect_err("invalid")
+        .to_string();
         for expected in [
             ":2: differences[0].instruction: unknown instruction of this case `DHABIN`; expected one of: HABIN, HABINP",
             ":3: differences[1].variant: unknown variant of this case `b`; expected one of: a",

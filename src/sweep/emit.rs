@@ -45,7 +45,7 @@ pub fn emit(sweep: &Sweep, results: &Results, corpus: &Corpus) -> Emitted {
                 body.push_str(&text);
                 cases += 1;
             }
-            Err(why) => skipped.push(format!("{}: {why}", s.to.point)),
+            Err(NotEmitted(why)) => skipped.push(format!("{}: {why}", s.to.point)),
         }
     }
     let header = match &sweep.settings.target {
@@ -139,13 +139,16 @@ fn provenance(results: &Results, from: &Found, to: &Found, columns: &[Column]) -
     )
 }
 
+/// Why a found input is not written as a vector.
+struct NotEmitted(String);
+
 fn cross_vendor_case(
     sweep: &Sweep,
     results: &Results,
     operation: Operation,
     from: &Found,
     to: &Found,
-) -> Result<String, String> {
+) -> Result<String, NotEmitted> {
     // The reference models' answers, by lowering key.
     let mut by_key: Vec<(String, Answer)> = Vec::new();
     for (c, r) in sweep.columns.iter().zip(&to.replies) {
@@ -161,15 +164,17 @@ fn cross_vendor_case(
                 by_key.push((l.key.clone(), answer.clone()))
             }
             other => {
-                return Err(format!(
+                return Err(NotEmitted(format!(
                     "{} answered {other}, which a vector cannot expect",
                     c.name
-                ))
+                )))
             }
         }
     }
     if by_key.is_empty() {
-        return Err("no reference model answered it: nothing to expect".into());
+        return Err(NotEmitted(
+            "no reference model answered it: nothing to expect".into(),
+        ));
     }
     let mut counts: BTreeMap<&Answer, usize> = BTreeMap::new();
     for (_, a) in &by_key {
@@ -222,8 +227,11 @@ fn native_case(
     results: &Results,
     from: &Found,
     to: &Found,
-) -> Result<String, String> {
-    let shape = sweep.shape.as_ref().ok_or("no instruction")?;
+) -> Result<String, NotEmitted> {
+    let shape = sweep
+        .shape
+        .as_ref()
+        .ok_or(NotEmitted("no instruction".into()))?;
     // The variants where a column differs from its oracle, with the oracle's effect there.
     let mut expect: Option<&crate::judge::Effect> = None;
     let mut variants = Vec::new();
@@ -238,10 +246,10 @@ fn native_case(
             fill_dependent: false,
         } = theirs
         else {
-            return Err(format!(
+            return Err(NotEmitted(format!(
                 "the oracle {} answered {theirs}",
                 sweep.columns[o].name
-            ));
+            )));
         };
         match expect {
             None => expect = Some(effect),
@@ -252,7 +260,7 @@ fn native_case(
             variants.push(c.variant.clone());
         }
     }
-    let effect = expect.ok_or("no column differs from its oracle")?;
+    let effect = expect.ok_or(NotEmitted("no column differs from its oracle".into()))?;
     let input = shape.input(&to.point);
     let mut y = String::new();
     let _ = writeln!(
@@ -295,7 +303,7 @@ fn native_case(
             Operand::Device(d) => Some(d.clone()),
             Operand::Constant(_) => None,
         })
-        .ok_or("the source is not a device")?;
+        .ok_or(NotEmitted("the source is not a device".into()))?;
     // Words past the device range cannot be set by a vector (a CPU has none): they are left out,
     // and the text is then given word by word.
     let exists = |d: &crate::device::Device| shape.profile.word_exists_anywhere(d);

@@ -162,6 +162,18 @@ const CHUNK_EXTERNAL: usize = 4096;
 /// Inputs per round for the built-in models only.
 const CHUNK_IN_PROCESS: usize = 1 << 16;
 
+/// Why a sweep cannot be set up as asked.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SweepError(pub String);
+
+impl std::fmt::Display for SweepError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for SweepError {}
+
 impl Sweep {
     /// Sets up a sweep of `settings.target` on `backends`. The reference model of each profile
     /// involved should be among them: it is the oracle.
@@ -169,7 +181,7 @@ impl Sweep {
         settings: Settings,
         profiles: &Profiles,
         backends: &[Arc<dyn Backend>],
-    ) -> Result<Sweep, String> {
+    ) -> Result<Sweep, SweepError> {
         let shape = match &settings.target {
             Target::Instruction {
                 profile,
@@ -177,7 +189,7 @@ impl Sweep {
             } => {
                 let p = profiles
                     .get(profile)
-                    .ok_or_else(|| format!("no profile `{profile}`"))?;
+                    .ok_or_else(|| SweepError(format!("no profile `{profile}`")))?;
                 Some(Shape::of(p, instruction)?)
             }
             Target::Operation { .. } => None,
@@ -186,7 +198,7 @@ impl Sweep {
         let reads = settings.target.reads(shape.as_ref());
         let text = reads == crate::model::cross_vendor::Operation::HexToValue;
         if text != settings.generator.makes_text() && settings.generator.name() != "random" {
-            return Err(format!(
+            return Err(SweepError(format!(
                 "the {} generator makes {}, but {} reads {}",
                 settings.generator.name(),
                 if settings.generator.makes_text() {
@@ -196,7 +208,7 @@ impl Sweep {
                 },
                 settings.target,
                 if text { "text" } else { "a value" }
-            ));
+            )));
         }
         let counted = match &shape {
             Some(s) => s.count.is_some(),
@@ -218,7 +230,9 @@ impl Sweep {
         }
         let (k, n) = settings.shard;
         if n == 0 || k == 0 || k > n {
-            return Err(format!("shard {k}/{n}: give K/N with 1 <= K <= N"));
+            return Err(SweepError(format!(
+                "shard {k}/{n}: give K/N with 1 <= K <= N"
+            )));
         }
         Ok(Sweep {
             settings,

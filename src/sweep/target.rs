@@ -13,6 +13,7 @@ use std::sync::Arc;
 use serde::Serialize;
 
 use super::input::{Data, Point};
+use super::SweepError;
 use crate::backend::Backend;
 use crate::device::Device;
 use crate::model::cross_vendor::{CrossVendorCase, Lowering, Operation, TextLayout, ValueOrder};
@@ -119,9 +120,9 @@ pub struct Shape {
 }
 
 impl Shape {
-    pub fn of(profile: &Arc<Profile>, instruction: &str) -> Result<Shape, String> {
+    pub fn of(profile: &Arc<Profile>, instruction: &str) -> Result<Shape, SweepError> {
         let def = profile.instructions.get(instruction).ok_or_else(|| {
-            format!(
+            SweepError(format!(
                 "{} has no instruction {instruction}; it has {}",
                 profile.id,
                 profile
@@ -130,7 +131,7 @@ impl Shape {
                     .cloned()
                     .collect::<Vec<_>>()
                     .join(", ")
-            )
+            ))
         })?;
         let base = |l: &Lowering| -> Option<bool> {
             let name = instruction;
@@ -148,11 +149,11 @@ impl Shape {
             .filter_map(|l| base(l).map(|double| (l, double)))
             .collect();
         let Some(&(first, double)) = matching.first() else {
-            return Err(format!(
+            return Err(SweepError(format!(
                 "no lowering of {} describes {instruction}'s operands (its `neutral` section): a \
                  sweep needs one to know where the input and the result are",
                 profile.id
-            ));
+            )));
         };
         Ok(Shape {
             profile: profile.clone(),
@@ -260,7 +261,7 @@ pub fn columns(
     target: &Target,
     profiles: &Profiles,
     backends: &[Arc<dyn Backend>],
-) -> Result<Vec<Column>, String> {
+) -> Result<Vec<Column>, SweepError> {
     let reference = |b: &Arc<dyn Backend>| {
         profiles
             .get(b.profile())
@@ -318,7 +319,7 @@ pub fn columns(
                     continue;
                 }
                 let Some(profile) = profiles.get(id) else {
-                    return Err(format!("no profile {id}"));
+                    return Err(SweepError(format!("no profile {id}")));
                 };
                 for v in &profile.variants {
                     if backend.claims(instruction, &v.id) {
@@ -359,10 +360,10 @@ pub fn columns(
         out[i].oracle = (0..out.len()).find(|&j| out[j].in_process && keys[j] == keys[i]);
     }
     if out.is_empty() {
-        return Err(format!(
+        return Err(SweepError(format!(
             "no chosen backend answers {target}: check --backend (`plc-conformance list` shows \
              what exists)"
-        ));
+        )));
     }
     Ok(out)
 }

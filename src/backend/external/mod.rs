@@ -24,8 +24,8 @@ pub use process::{closing, kill_all, shell_line, MAX_LINE};
 use process::{describe_exit, Next, Process};
 use protocol::{
     BackendInfo, BackendMessage, Capabilities, CaseRequest, CodecRequest, ErrorReport, FillName,
-    HarnessMessage, MemoryRange, OperandValue, RunCase, SignalReport, BYTES_VERSION,
-    PROTOCOL_VERSION, SUPPORTED_VERSIONS,
+    HarnessMessage, MemoryRange, OperandValue, ProtocolViolation, RunCase, SignalReport,
+    BYTES_VERSION, PROTOCOL_VERSION, SUPPORTED_VERSIONS,
 };
 
 use super::{Backend, Fault, Outcome, Question, Request, Response, Setting};
@@ -130,16 +130,10 @@ impl ExternalBackend {
         let (profile, codec) = match &capabilities.codec {
             Some(codec) => (
                 None,
-                Some(
-                    check_codec(&spec, &capabilities, codec)
-                        .map_err(|m| error(ExternalErrorKind::Capabilities(m)))?,
-                ),
+                Some(check_codec(&spec, &capabilities, codec).map_err(error)?),
             ),
             None => (
-                Some(
-                    check_capabilities(&spec, &capabilities, profiles, version)
-                        .map_err(|m| error(ExternalErrorKind::Capabilities(m)))?,
-                ),
+                Some(check_capabilities(&spec, &capabilities, profiles, version).map_err(error)?),
                 None,
             ),
         };
@@ -358,14 +352,14 @@ impl ExternalBackend {
                     let unit = self.profile.as_ref().map_or(Unit::Word, |p| p.unit);
                     outcome(case, unit, memory, writes, error)
                         .map(Response::Done)
-                        .map_err(unexpected)
+                        .map_err(|e| unexpected(e.0))
                 }
                 RunCase::Instruction(_) => Err(unexpected(
                     "a codec answer (`value` or `text`) to an instruction request".into(),
                 )),
                 RunCase::Codec(_) => codec_answer(memory, writes, error, value, text)
                     .map(Response::Answer)
-                    .map_err(unexpected),
+                    .map_err(|e| unexpected(e.0)),
             },
             BackendMessage::Unsupported { id, reason } if id == case.id() => {
                 Ok(Response::Unsupported(reason))
@@ -680,12 +674,12 @@ fn check_codec(
     spec: &ExternalSettings,
     caps: &Capabilities,
     codec: &protocol::CodecCapabilities,
-) -> Result<CodecAbilities, String> {
+) -> Result<CodecAbilities, ExternalErrorKind> {
     if let Some(configured) = &spec.profile {
-        return Err(format!(
+        return Err(ExternalErrorKind::Capabilities(format!(
             "is configured as implementing profile `{configured}` but its handshake claims the \
              codec level; leave `profile` out for a codec-level backend"
-        ));
+        )));
     }
     if !caps.profile.is_empty()
         || !caps.instructions.is_empty()
@@ -694,21 +688,25 @@ fn check_codec(
         || !caps.operands.is_empty()
         || caps.device_ranges.is_some()
     {
-        return Err(
+        return Err(ExternalErrorKind::Capabilities(
             "claims the codec level and instruction-level capabilities at once; give either \
              `codec` or `profile` and `instructions`"
                 .into(),
-        );
+        ));
     }
     let ability = |name: &str, c: &Option<protocol::OperationCapabilities>| match c {
         None => Ok(None),
         Some(c) => {
             let width = c.width.unwrap_or(16);
             if width != 16 && width != 32 {
-                return Err(format!("claims {name} of width {width}; give 16 or 32"));
+                return Err(ExternalErrorKind::Capabilities(format!(
+                    "claims {name} of width {width}; give 16 or 32"
+                )));
             }
             if let Some(d) = c.digits.as_ref().and_then(|d| d.iter().find(|d| **d == 0)) {
-                return Err(format!("claims {name} of {d} digits"));
+                return Err(ExternalErrorKind::Capabilities(format!(
+                    "claims {name} of {d} digits"
+                )));
             }
             Ok(Some(OperationAbilities {
                 digits: c.digits.clone(),
@@ -721,7 +719,9 @@ fn check_codec(
         value_to_hex: ability("value-to-hex", &codec.value_to_hex)?,
     };
     if abilities.hex_to_value.is_none() && abilities.value_to_hex.is_none() {
-        return Err("claims the codec level but no operation".into());
+        return Err(ExternalErrorKind::Capabilities(
+            "claims the codec level but no operation".into(),
+        ));
     }
     Ok(abilities)
 }
@@ -732,28 +732,28 @@ fn check_capabilities(
     caps: &Capabilities,
     profiles: &Profiles,
     version: u32,
-) -> Result<Arc<Profile>, String> {
+) -> Result<Arc<Profile>, ExternalErrorKind> {
     if let Some(configured) = &spec.profile {
         if configured != &caps.profile {
-            return Err(format!(
+            return Err(ExternalErrorKind::Capabilities(format!(
                 "is configured as implementing profile `{configured}` but its handshake claims `{}`",
                 caps.profile
-            ));
+            )));
         }
     }
     let profile = profiles.get(&caps.profile).ok_or_else(|| {
-        format!(
+        ExternalErrorKind::Capabilities(format!(
             "claims profile `{}`, which is not loaded; known profiles: {}",
             caps.profile,
             profiles.ids().join(", ")
-        )
+        ))
     })?;
     if profile.unit == Unit::Byte && version < BYTES_VERSION {
-        return Err(format!(
+        return Err(ExternalErrorKind::Capabilities(format!(
             "answers hello with protocol version {version}, but profile `{}` is byte-addressed: \
              its memory ranges carry `bytes`, which needs version {BYTES_VERSION}",
             profile.id
-        ));
+        )));
     }
     let unknown = |what: &str, name: &str, known: Vec<String>| {
         format!(
@@ -764,20 +764,20 @@ fn check_capabilities(
     };
     for i in &caps.instructions {
         if !profile.instructions.contains_key(i) {
-            return Err(unknown(
+            return Err(ExternalErrorKind::Capabilities(unknown(
                 "instruction",
                 i,
                 profile.instructions.keys().cloned().collect(),
-            ));
+            )));
         }
     }
     for v in caps.variants.iter().flatten() {
         if profile.variant(v).is_none() {
-            return Err(unknown(
+            return Err(ExternalErrorKind::Capabilities(unknown(
                 "variant",
                 v,
                 profile.variants.iter().map(|v| v.id.clone()).collect(),
-            ));
+            )));
         }
     }
     for (op, forms) in &caps.operands {
@@ -788,28 +788,32 @@ fn check_capabilities(
                 .is_some_and(|d| d.operands.contains_key(op))
         });
         if !claimed {
-            return Err(format!(
+            return Err(ExternalErrorKind::Capabilities(format!(
                 "claims forms of operand `{op}`, which no instruction it claims has"
-            ));
+            )));
         }
         for code in forms.devices.iter().flatten() {
             if !profile.devices.contains_key(code) {
-                return Err(unknown(
+                return Err(ExternalErrorKind::Capabilities(unknown(
                     "device",
                     code,
                     profile.devices.keys().cloned().collect(),
-                ));
+                )));
             }
         }
     }
     for (f, settings) in &caps.flags {
         if !profile.flags.contains_key(f) {
-            return Err(unknown("flag", f, profile.flags.keys().cloned().collect()));
+            return Err(ExternalErrorKind::Capabilities(unknown(
+                "flag",
+                f,
+                profile.flags.keys().cloned().collect(),
+            )));
         }
         if settings.is_empty() {
-            return Err(format!(
+            return Err(ExternalErrorKind::Capabilities(format!(
                 "lists no setting for flag `{f}`; leave a flag out to claim both settings"
-            ));
+            )));
         }
     }
     Ok(profile.clone())
@@ -858,10 +862,10 @@ fn outcome(
     memory: Vec<MemoryRange>,
     writes: BTreeMap<String, u16>,
     error: Option<ErrorReport>,
-) -> Result<Outcome, String> {
+) -> Result<Outcome, ProtocolViolation> {
     let device = |name: &str| {
         name.parse::<Device>()
-            .map_err(|e| format!("bad device in the answer: {e}"))
+            .map_err(|e| ProtocolViolation(format!("bad device in the answer: {e}")))
     };
     // Only an echoed window needs the words before; a list of writes is taken as it is.
     let before: BTreeMap<Device, u16> = if memory.is_empty() {
@@ -887,14 +891,16 @@ fn outcome(
     for range in memory {
         let start = device(&range.start)?;
         for (i, word) in range.values(unit)?.into_iter().enumerate() {
-            let d = start
-                .offset(i as u32)
-                .ok_or_else(|| format!("memory from {start} runs past the last device number"))?;
+            let d = start.offset(i as u32).ok_or_else(|| {
+                ProtocolViolation(format!(
+                    "memory from {start} runs past the last device number"
+                ))
+            })?;
             if let Some(first) = in_memory.insert(d.clone(), range.start.clone()) {
-                return Err(format!(
+                return Err(ProtocolViolation(format!(
                     "{d} is given twice in `memory` (in the ranges from {first} and from {})",
                     range.start
-                ));
+                )));
             }
             if before.get(&d) != Some(&word) {
                 out.writes.insert(d, word);
@@ -905,16 +911,16 @@ fn outcome(
     for (name, word) in writes {
         let d = device(&name)?;
         if word > unit.max() {
-            return Err(format!(
+            return Err(ProtocolViolation(format!(
                 "`{name}` in `writes` is {word}, past a {} ({} at most)",
                 unit.name(),
                 unit.max()
-            ));
+            )));
         }
         if let Some(first) = in_writes.insert(d.clone(), name.clone()) {
-            return Err(format!(
+            return Err(ProtocolViolation(format!(
                 "`{first}` and `{name}` in `writes` are the same word, {d}"
-            ));
+            )));
         }
         out.writes.insert(d, word);
     }
@@ -923,9 +929,9 @@ fn outcome(
         Some(ErrorReport::Signal(SignalReport::Code(c))) => Some(ErrorSignal::Code(c)),
         Some(ErrorReport::Signal(SignalReport::Flag(f))) => Some(ErrorSignal::Flag(device(&f)?)),
         Some(ErrorReport::Class(c)) => {
-            return Err(format!(
+            return Err(ProtocolViolation(format!(
                 "an error class (`{c}`) answers a codec question, not an instruction request"
-            ))
+            )))
         }
     };
     Ok(out)
@@ -939,9 +945,11 @@ fn codec_answer(
     error: Option<ErrorReport>,
     value: Option<i64>,
     text: Option<Vec<u8>>,
-) -> Result<Answer, String> {
+) -> Result<Answer, ProtocolViolation> {
     if !memory.is_empty() || !writes.is_empty() {
-        return Err("`memory` or `writes` in the answer to a codec question".into());
+        return Err(ProtocolViolation(
+            "`memory` or `writes` in the answer to a codec question".into(),
+        ));
     }
     match (value, text, error) {
         // A negative value (some libraries return one) is an answer that differs, not garbage.
@@ -950,11 +958,15 @@ fn codec_answer(
             t.into_iter().take_while(|b| *b != 0).collect(),
         )),
         (None, None, Some(ErrorReport::Class(c))) => Ok(Answer::Error(c)),
-        (None, None, Some(ErrorReport::Signal(_))) => {
-            Err("a vendor's error signal answers a codec question; give an error class".into())
-        }
-        (None, None, None) => Err("no `value`, `text` or `error` in a codec answer".into()),
-        _ => Err("more than one of `value`, `text` and `error` in a codec answer".into()),
+        (None, None, Some(ErrorReport::Signal(_))) => Err(ProtocolViolation(
+            "a vendor's error signal answers a codec question; give an error class".into(),
+        )),
+        (None, None, None) => Err(ProtocolViolation(
+            "no `value`, `text` or `error` in a codec answer".into(),
+        )),
+        _ => Err(ProtocolViolation(
+            "more than one of `value`, `text` and `error` in a codec answer".into(),
+        )),
     }
 }
 
@@ -1045,12 +1057,12 @@ mod tests {
             None,
         )
         .expect_err("two ranges over D201");
-        assert!(e.contains("D201 is given twice in `memory`"), "{e}");
+        assert!(e.0.contains("D201 is given twice in `memory`"), "{e}");
         let writes = BTreeMap::from([("D200".to_string(), 1), ("D0200".to_string(), 2)]);
         let e =
             outcome(&request(), Unit::Word, Vec::new(), writes, None).expect_err("D200 and D0200");
         assert!(
-            e.contains("`D0200` and `D200` in `writes` are the same word, D200"),
+            e.0.contains("`D0200` and `D200` in `writes` are the same word, D200"),
             "{e}"
         );
         // `writes` wins over `memory` for a word in both, as documented.

@@ -171,23 +171,30 @@ impl MemoryRange {
     }
 
     /// The range's values in `unit`s; an error names what does not fit.
-    pub fn values(&self, unit: Unit) -> Result<Vec<u16>, String> {
+    pub fn values(&self, unit: Unit) -> Result<Vec<u16>, ProtocolViolation> {
+        let refuse =
+            |what: &str| ProtocolViolation(format!("the range from {} {what}", self.start));
         match (unit, self.words.is_empty(), self.bytes.is_empty()) {
-            (_, false, false) => Err(format!(
-                "the range from {} gives both `words` and `bytes`",
-                self.start
-            )),
+            (_, false, false) => Err(refuse("gives both `words` and `bytes`")),
             (Unit::Word, _, true) => Ok(self.words.clone()),
             (Unit::Byte, true, _) => Ok(self.bytes.iter().map(|b| u16::from(*b)).collect()),
-            (Unit::Word, true, false) => Err(format!(
-                "the range from {} gives `bytes`, but the family is word-addressed: give `words`",
-                self.start
+            (Unit::Word, true, false) => Err(refuse(
+                "gives `bytes`, but the family is word-addressed: give `words`",
             )),
-            (Unit::Byte, false, true) => Err(format!(
-                "the range from {} gives `words`, but the family is byte-addressed: give `bytes`",
-                self.start
+            (Unit::Byte, false, true) => Err(refuse(
+                "gives `words`, but the family is byte-addressed: give `bytes`",
             )),
         }
+    }
+}
+
+/// What a message does wrong against the protocol: it becomes the case's protocol-error fault.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ProtocolViolation(pub String);
+
+impl std::fmt::Display for ProtocolViolation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
     }
 }
 

@@ -18,6 +18,32 @@ use crate::memory::{Fill, Image};
 use crate::model::profile::Profile;
 use crate::model::{ErrorSignal, Operand};
 
+/// Why serving ended early.
+#[derive(Debug)]
+pub enum ServeError {
+    Read(std::io::Error),
+    Write(std::io::Error),
+    /// A line that is not a message of the harness, with the start of it.
+    NotHarness {
+        error: String,
+        line: String,
+    },
+}
+
+impl std::fmt::Display for ServeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ServeError::Read(e) => write!(f, "stdin could not be read: {e}"),
+            ServeError::Write(e) => write!(f, "stdout could not be written: {e}"),
+            ServeError::NotHarness { error, line } => {
+                write!(f, "not a harness message ({error}): {line}")
+            }
+        }
+    }
+}
+
+impl std::error::Error for ServeError {}
+
 /// Serves one backend until `shutdown` or the end of input. Errors are I/O errors and messages
 /// that are not the harness's; both end the session.
 pub fn serve(
@@ -25,26 +51,23 @@ pub fn serve(
     profile: &Profile,
     input: impl BufRead,
     mut output: impl Write,
-) -> Result<(), String> {
+) -> Result<(), ServeError> {
     let mut input = input;
     let mut line = String::new();
     loop {
         line.clear();
-        let read = input
-            .read_line(&mut line)
-            .map_err(|e| format!("stdin could not be read: {e}"))?;
+        let read = input.read_line(&mut line).map_err(ServeError::Read)?;
         if read == 0 {
             return Ok(());
         }
         if line.trim().is_empty() {
             continue;
         }
-        let message = HarnessMessage::from_line(line.as_bytes()).map_err(|e| {
-            format!(
-                "not a harness message ({e}): {}",
-                line.chars().take(200).collect::<String>()
-            )
-        })?;
+        let message =
+            HarnessMessage::from_line(line.as_bytes()).map_err(|e| ServeError::NotHarness {
+                error: e.to_string(),
+                line: line.chars().take(200).collect(),
+            })?;
         match message {
             HarnessMessage::Hello { protocol, .. } => {
                 // The version the harness asks for, up to the newest this server speaks.
@@ -65,16 +88,15 @@ pub fn serve(
             }
             HarnessMessage::Shutdown => return Ok(()),
         }
-        output
-            .flush()
-            .map_err(|e| format!("stdout could not be written: {e}"))?;
+        output.flush().map_err(ServeError::Write)?;
     }
 }
 
-fn write_message(output: &mut impl Write, message: &BackendMessage) -> Result<(), String> {
+fn write_message(output: &mut impl Write, message: &BackendMessage) -> Result<(), ServeError> {
     serde_json::to_writer(&mut *output, message)
-        .and_then(|()| output.write_all(b"\n").map_err(serde_json::Error::io))
-        .map_err(|e| format!("stdout could not be written: {e}"))
+        .map_err(std::io::Error::from)
+        .and_then(|()| output.write_all(b"\n"))
+        .map_err(ServeError::Write)
 }
 
 /// The capabilities of a built-in backend: every instruction it claims on some variant.
@@ -139,7 +161,7 @@ fn answer(backend: &dyn Backend, profile: &Profile, case: &CaseRequest) -> Backe
         let first = device.index;
         let values = match range.values(profile.unit) {
             Ok(values) => values,
-            Err(e) => return unsupported(e),
+            Err(e) => return unsupported(e.0),
         };
         for (i, word) in values.into_iter().enumerate() {
             let Some(index) = first.checked_add(i as u32) else {
