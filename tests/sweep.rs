@@ -783,12 +783,14 @@ fn ctrl_c_ends_a_sweep_with_what_it_found() {
         std::thread::sleep(Duration::from_millis(20));
     }
     let _ = child.kill();
-    let _ = child.wait();
+    let status = child.wait().expect("the sweep ends");
     assert!(
         signalled.elapsed() < Duration::from_secs(10),
         "took {:?} to stop",
         signalled.elapsed()
     );
+    // An interruption, as `run` reports one.
+    assert_eq!(status.code(), Some(130), "{status:?}");
     let mut rest = String::new();
     std::io::Read::read_to_string(&mut stderr, &mut rest).expect("stderr read");
     assert!(rest.contains("interrupted: "), "{rest}");
@@ -805,6 +807,70 @@ fn ctrl_c_ends_a_sweep_with_what_it_found() {
         .filter_map(|g| g["inputs"].as_u64())
         .sum();
     assert_eq!(counted, swept);
+}
+
+#[test]
+fn sweep_arguments_out_of_bounds_are_refused_at_once() {
+    for (args, message) in [
+        (vec!["--digits", "0-4294967295"], "a count is at most 16"),
+        (vec!["--digits", "5-1"], "an empty range"),
+        (vec!["--digits", ""], "no count given"),
+        (vec!["--digits", ","], "no count given"),
+        (vec!["--digits", "17"], "a count is at most 16"),
+        (
+            vec![
+                "--generator",
+                "full",
+                "--class-check",
+                "18446744073709551615",
+            ],
+            "--class-check 18446744073709551615: at most",
+        ),
+        (vec!["--length", "16"], "more than 2^64"),
+    ] {
+        let started = std::time::Instant::now();
+        let mut all = vec!["sweep", "--operation", "hex-to-value"];
+        all.extend(&args);
+        let out = common::cli(&all);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(message), "{args:?}: {stderr}");
+        assert!(
+            started.elapsed() < std::time::Duration::from_secs(10),
+            "{args:?} took {:?}",
+            started.elapsed()
+        );
+    }
+}
+
+#[test]
+fn only_a_seeded_generator_prints_its_seed() {
+    let out = common::cli(&[
+        "sweep",
+        "--operation",
+        "value-to-hex",
+        "--generator",
+        "values",
+        "--seed",
+        "5",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(!stderr.contains("seed"), "{stderr}");
+    assert!(!stdout.contains("seed"), "{stdout}");
+    let out = common::cli(&[
+        "sweep",
+        "--operation",
+        "hex-to-value",
+        "--generator",
+        "random",
+        "--count",
+        "100",
+        "--seed",
+        "5",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("seed 5 (--seed 5 repeats it)"), "{stderr}");
 }
 
 #[test]

@@ -12,7 +12,7 @@ use crate::backend::Backend;
 use crate::model::cross_vendor::Operation;
 use crate::report::console;
 use crate::session::{assemble, BackendSource};
-use crate::sweep::generate::{Digits, Generator, BOUNDARIES};
+use crate::sweep::generate::{Digits, Generator, BOUNDARIES, MAX_DIGITS};
 use crate::sweep::target::Target;
 use crate::sweep::{emit, render, Settings, Sweep};
 
@@ -257,30 +257,55 @@ pub fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
     settings.digits = digits(&args.digits)?;
     settings.shard = shard(&args.shard)?;
     settings.shrink = args.shrink;
+    if args.class_check > MAX_CLASS_CHECK {
+        return Err(CliError::input(format!(
+            "--class-check {}: at most {} random texts (2^32, the whole space)",
+            args.class_check,
+            render::thousands(MAX_CLASS_CHECK)
+        )));
+    }
     settings.class_check = args.class_check;
     if let Some(j) = args.jobs {
         settings.jobs = j.max(1);
     }
     let sweep = Sweep::new(settings, &project.profiles, &chosen)
         .map_err(|e| CliError::input(e.to_string()))?;
+    // A space past 2^64 inputs cannot be numbered, let alone swept.
+    if sweep.space.total() == u64::MAX {
+        return Err(CliError::input(
+            "the inputs asked for are more than 2^64: give a shorter --length, a smaller \
+             --alphabet or fewer --digits",
+        ));
+    }
     catch_interrupt();
     let bar = std::io::stderr().is_terminal().then(|| {
         let bar = indicatif::ProgressBar::new(sweep.space.total());
         bar.set_style(
             indicatif::ProgressStyle::with_template(
-                "{elapsed_precise} [{bar:40}] {human_pos}/{human_len} inputs ({per_sec}, eta {eta})",
+                "{elapsed_precise} [{bar:40}] {human_pos}/{human_len} inputs ({rate}, eta {eta})",
             )
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+            // Whole inputs per second, grouped as the other counts are.
+            .with_key(
+                "rate",
+                |state: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
+                    let _ = write!(w, "{}/s", render::thousands(state.per_sec() as u64));
+                },
+            )
             .progress_chars("=> "),
         );
         bar
     });
+    let seed = sweep.settings.seed;
     console::status(&format!(
-        "sweeping {} with the {} generator, seed {} (--seed {} repeats it): {} input(s) in this shard",
+        "sweeping {} with the {} generator{}: {} input(s) in this shard",
         sweep.settings.target,
         sweep.settings.generator.name(),
-        sweep.settings.seed,
-        sweep.settings.seed,
+        if sweep.settings.generator.uses_seed() {
+            format!(", seed {seed} (--seed {seed} repeats it)")
+        } else {
+            String::new()
+        },
         render::thousands(sweep.space.total().div_ceil(sweep.settings.shard.1))
     ));
     if matches!(sweep.settings.generator, Generator::Full { by_class: true }) {
@@ -335,12 +360,21 @@ pub fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
             path.display()
         ));
     }
-    Ok(if results.differs() {
+    Ok(if results.interrupted {
+        // As `run`: an interruption, whatever was found before it.
+        EXIT_INTERRUPTED
+    } else if results.differs() {
         EXIT_DIFFERENCES
     } else {
         EXIT_OK
     })
 }
+
+/// 128 + SIGINT, as a shell reports a command Ctrl-C ended.
+const EXIT_INTERRUPTED: u8 = 130;
+
+/// The most random texts a class check asks: the whole 4-byte space.
+const MAX_CLASS_CHECK: u64 = 1 << 32;
 
 fn text_generator(args: &SweepArgs) -> Result<Generator, CliError> {
     let alphabet = match &args.alphabet {
@@ -377,30 +411,44 @@ pub fn alphabet(list: &str) -> Result<Vec<u8>, CliError> {
     Ok(out)
 }
 
-/// `natural`, or `0-6`, `1,4,8`.
+/// `natural`, or `0-6`, `1,4,8`: counts from 0 to [`MAX_DIGITS`], at least one.
 pub fn digits(spec: &str) -> Result<Digits, CliError> {
     if spec == "natural" {
         return Ok(Digits::Natural);
     }
     let mut out = Vec::new();
-    for part in spec.split(',').filter(|s| !s.is_empty()) {
+    for part in spec.split(',').filter(|s| !s.trim().is_empty()) {
         let bad = || format!("--digits `{part}`: expected a count, a range `0-6` or `natural`");
+        let count = |text: &str| -> Result<u32, CliError> {
+            let d: u32 = text.trim().parse().map_err(|_| bad())?;
+            if d > MAX_DIGITS {
+                return Err(CliError::input(format!(
+                    "--digits `{part}`: a count is at most {MAX_DIGITS}"
+                )));
+            }
+            Ok(d)
+        };
         match part.split_once('-') {
             Some((a, b)) => {
-                let (a, b): (u32, u32) =
-                    (a.parse().map_err(|_| bad())?, b.parse().map_err(|_| bad())?);
-                out.extend(a..=b);
+                let (a, b) = (count(a)?, count(b)?);
+                if a > b {
+                    return Err(CliError::input(format!(
+                        "--digits `{part}`: an empty range; give the smaller count first"
+                    )));
+                }
+                out.extend((a..=b).filter(|d| !out.contains(d)).collect::<Vec<_>>());
             }
-            None => out.push(part.parse().map_err(|_| bad())?),
+            None => {
+                let d = count(part)?;
+                if !out.contains(&d) {
+                    out.push(d);
+                }
+            }
         }
     }
-    if let Some(d) = out
-        .iter()
-        .find(|d| **d > crate::sweep::generate::MAX_DIGITS)
-    {
+    if out.is_empty() {
         return Err(CliError::input(format!(
-            "--digits {d}: at most {}",
-            crate::sweep::generate::MAX_DIGITS
+            "--digits `{spec}`: no count given; give counts such as `4`, `0-6`, or `natural`"
         )));
     }
     Ok(Digits::Each(out))

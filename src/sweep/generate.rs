@@ -66,6 +66,24 @@ fn hex_bytes<S: serde::Serializer>(b: &[u8], s: S) -> Result<S::Ok, S::Error> {
 }
 
 impl Generator {
+    /// Whether the seed decides the inputs: the random generator's, and the random texts that
+    /// check the byte classes. The enumerations ignore it.
+    pub fn uses_seed(&self) -> bool {
+        matches!(
+            self,
+            Generator::Random { .. } | Generator::Full { by_class: true }
+        )
+    }
+
+    /// `, seed N` where the seed decides the inputs, else nothing.
+    pub fn seed_text(&self, seed: u64) -> String {
+        if self.uses_seed() {
+            format!(", seed {seed}")
+        } else {
+            String::new()
+        }
+    }
+
     pub fn name(&self) -> &'static str {
         match self {
             Generator::Values { .. } => "values",

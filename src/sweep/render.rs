@@ -84,10 +84,10 @@ pub fn text(results: &Results) -> String {
     let s = &results.settings;
     let _ = writeln!(
         out,
-        "sweep of {}: {} generator, seed {}, shard {}/{}",
+        "sweep of {}: {} generator{}, shard {}/{}",
         s.target,
         s.generator.name(),
-        s.seed,
+        s.generator.seed_text(s.seed),
         s.shard.0,
         s.shard.1
     );
@@ -317,9 +317,9 @@ pub fn html(results: &Results) -> String {
     let mut out = head(&format!("plc-conformance sweep of {}", s.target));
     let _ = writeln!(
         out,
-        "<p id=\"summary\">{} generator, seed {}, shard {}/{}: {} of {} inputs{}.</p>",
+        "<p id=\"summary\">{} generator{}, shard {}/{}: {} of {} inputs{}.</p>",
         s.generator.name(),
-        s.seed,
+        s.generator.seed_text(s.seed),
         s.shard.0,
         s.shard.1,
         thousands(results.swept),
