@@ -103,7 +103,7 @@ fn the_built_in_files_are_named_under_embedded() {
     );
     assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
     let stdout = text(&out.stdout);
-    assert!(stdout.contains(" in 1 files, 3 profiles"), "{stdout}");
+    assert!(stdout.contains(" in 1 files, 4 profiles"), "{stdout}");
     let out = run_in(
         empty.path(),
         &["run", "--vectors", "<embedded>/vectors/nowhere"],

@@ -331,9 +331,11 @@ fn a_sweep_of_the_built_in_models_finds_every_behaviour_of_the_cross_vendor_corp
     for (op, generator, digits) in [
         (
             Operation::HexToValue,
+            // Six characters: an even count past four digits is where S7 ATH (two characters
+            // a byte) meets FX5 HEXA.
             Generator::Text {
                 alphabet: b"\x00/0A8fG".to_vec(),
-                max_len: 5,
+                max_len: 6,
             },
             Digits::Each((0..=6).collect()),
         ),
@@ -646,12 +648,14 @@ fn the_full_sweep_by_class_counts_every_four_byte_text_exactly() {
             "iqr/habin-terminated",
             "fx5/hexa-16bit",
             "fx5/hexa-8bit",
-            "fc4a/atoh"
+            "fc4a/atoh",
+            "s7/ath"
         ]
     );
     // Counted by hand: every text of four hex digits, and every text that HABIN with SM705 on
-    // ends at a 00H after one to three digits (whatever follows the 00H).
-    assert_eq!(inputs_with(&r, &["value#1"; 5]), 16u64.pow(4));
+    // ends at a 00H after one to three digits (whatever follows the 00H; S7 ATH reads the 00H
+    // as an invalid character).
+    assert_eq!(inputs_with(&r, &["value#1"; 6]), 16u64.pow(4));
     assert_eq!(
         inputs_with(
             &r,
@@ -660,7 +664,8 @@ fn the_full_sweep_by_class_counts_every_four_byte_text_exactly() {
                 "value#1",
                 "invalid-digit",
                 "invalid-digit",
-                "error"
+                "error",
+                "invalid-digit"
             ]
         ),
         16 * 256 * 256 + 16 * 16 * 256 + 16 * 16 * 16

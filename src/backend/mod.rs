@@ -10,6 +10,7 @@ pub mod fc4a;
 pub mod fx5;
 pub mod iqr;
 pub mod reference;
+pub mod s7;
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -311,6 +312,7 @@ const MODELS: &[MakeBackend] = &[
     reference::backend::<iqr::Iqr>,
     reference::backend::<fx5::Fx5>,
     reference::backend::<fc4a::Fc4a>,
+    reference::backend::<s7::S71200>,
 ];
 
 /// The reference models, one per profile that has one.

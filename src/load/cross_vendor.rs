@@ -137,7 +137,19 @@ fn read_case(
                 LoadErrorKind::Missing("why: the rule that makes this vendor differ"),
             );
         }
-        if let Some(o) = outcome(
+        if e.unspecified {
+            if e.value.is_some() || e.text.is_some() || e.error.is_some() {
+                cx.error(
+                    &ekey,
+                    LoadErrorKind::Invalid(
+                        "`unspecified` leaves the answer open: give no `value`, `text` or `error`"
+                            .into(),
+                    ),
+                );
+            } else {
+                except.insert(name.clone(), (None, e.why.clone()));
+            }
+        } else if let Some(o) = outcome(
             &ekey,
             e.value.as_ref(),
             e.text.as_deref(),
@@ -145,7 +157,7 @@ fn read_case(
             file.operation,
             cx,
         ) {
-            except.insert(name.clone(), (o, e.why.clone()));
+            except.insert(name.clone(), (Some(o), e.why.clone()));
         }
     }
     (cx.errors.len() == before).then(|| CrossVendorCase {
@@ -239,7 +251,7 @@ pub(crate) fn read_section(p: &ProfileSpec, cx: &mut FileContext<'_>) -> CrossVe
     for (key, class) in &section.errors {
         let signal = match p.errors.signal {
             SignalKind::Code => parse_word(key).ok().map(ErrorSignal::Code),
-            SignalKind::Flag => (*key == p.errors.flag)
+            SignalKind::Flag => (Some(key) == p.errors.flag.as_ref())
                 .then(|| key.parse::<Device>().ok().map(ErrorSignal::Flag))
                 .flatten(),
         };

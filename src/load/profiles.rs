@@ -66,8 +66,9 @@ pub fn parse_profile(file: &Path, text: &str, errors: &mut Vec<LoadError>) -> Op
     let device = |name: &str| name.parse::<Device>().ok();
     let errors = ErrorSignalling {
         signal: spec.errors.signal,
-        flag: device(&spec.errors.flag)?,
+        flag: spec.errors.flag.as_deref().and_then(device),
         register: spec.errors.register.as_deref().and_then(device),
+        returned: spec.errors.returned.clone(),
         also: spec.errors.also.iter().filter_map(|d| device(d)).collect(),
     };
     Some(Profile {
@@ -95,13 +96,23 @@ fn check_profile(p: &ProfileSpec, cx: &mut FileContext<'_>) {
         }
     };
     let e = &p.errors;
-    device_names("errors.flag", &e.flag, cx);
-    if let Some(r) = &e.register {
-        device_names("errors.register", r, cx);
-    } else if e.signal == SignalKind::Code {
+    if let Some(f) = &e.flag {
+        device_names("errors.flag", f, cx);
+    } else if e.signal == SignalKind::Flag {
         cx.error(
             "errors",
-            LoadErrorKind::Missing("register: `signal: code` needs the register holding the code"),
+            LoadErrorKind::Missing("flag: `signal: flag` needs the flag an error turns on"),
+        );
+    }
+    if let Some(r) = &e.register {
+        device_names("errors.register", r, cx);
+    } else if e.signal == SignalKind::Code && e.returned.is_none() {
+        cx.error(
+            "errors",
+            LoadErrorKind::Missing(
+                "register: `signal: code` needs the register holding the code (or `returned`, \
+                 where the instruction returns it)",
+            ),
         );
     }
     for (i, r) in e.also.iter().enumerate() {

@@ -595,12 +595,16 @@ fn read_error(
     p: &Profile,
     cx: &mut FileContext<'_>,
 ) -> Option<ErrorSignal> {
-    let flag = &p.errors.flag;
-    let register = p
+    let flag = p
         .errors
-        .register
+        .flag
         .as_ref()
         .map_or_else(|| "?".to_string(), ToString::to_string);
+    let register = match (&p.errors.register, &p.errors.returned) {
+        (Some(r), _) => r.to_string(),
+        (None, Some(returned)) => returned.clone(),
+        (None, None) => "?".to_string(),
+    };
     match p.errors.signal {
         SignalKind::Code => {
             let code = match value {
@@ -646,8 +650,8 @@ fn read_error(
             }
         }
         SignalKind::Flag => {
-            if value.to_string() == flag.to_string() {
-                Some(ErrorSignal::Flag(flag.clone()))
+            if let Some(device) = p.errors.flag.as_ref().filter(|_| value.to_string() == flag) {
+                Some(ErrorSignal::Flag(device.clone()))
             } else {
                 cx.error(
                     key,

@@ -116,18 +116,27 @@ pub struct CrossVendorCase {
     pub digits: u32,
     /// The answer every lowering is expected to give unless listed in `except`.
     pub expect: Option<Answer>,
-    /// Lowerings that answer differently, by `<profile short>/<lowering>`, with the reason.
-    pub except: BTreeMap<String, (Answer, String)>,
+    /// Lowerings that answer differently, by `<profile short>/<lowering>`, with the reason;
+    /// `None` where no rule fixes the lowering's answer (recorded, never judged).
+    pub except: BTreeMap<String, (Option<Answer>, String)>,
     pub note: Option<String>,
 }
 
 impl CrossVendorCase {
-    /// What a lowering is expected to answer.
+    /// What a lowering is expected to answer; `None` when nothing is.
     pub fn expected_for(&self, lowering_key: &str) -> Option<&Answer> {
-        self.except
-            .get(lowering_key)
-            .map(|(o, _)| o)
-            .or(self.expect.as_ref())
+        match self.except.get(lowering_key) {
+            Some((answer, _)) => answer.as_ref(),
+            None => self.expect.as_ref(),
+        }
+    }
+
+    /// The case's basis for a lowering: `unspecified` where its `except` entry says so.
+    pub fn basis_for(&self, lowering_key: &str) -> Basis {
+        match self.except.get(lowering_key) {
+            Some((None, _)) => Basis::Unspecified,
+            _ => self.basis,
+        }
     }
 }
 

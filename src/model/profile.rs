@@ -82,10 +82,12 @@ impl DeviceTable {
 #[derive(Debug, Clone)]
 pub struct ErrorSignalling {
     pub signal: SignalKind,
-    /// The flag an error turns on (MELSEC SM0, IDEC M8004).
-    pub flag: Device,
+    /// The flag an error turns on (MELSEC SM0, IDEC M8004); always there with `signal: flag`.
+    pub flag: Option<Device>,
     /// The register holding the code (MELSEC SD0).
     pub register: Option<Device>,
+    /// Where the code is returned when no register holds it (Siemens RET_VAL).
+    pub returned: Option<String>,
     /// Further registers that receive the code (FX5: SD8067).
     pub also: Vec<Device>,
 }
@@ -170,7 +172,11 @@ impl Profile {
     pub fn error(&self, code: u16) -> ErrorSignal {
         match self.errors.signal {
             SignalKind::Code => ErrorSignal::Code(code),
-            SignalKind::Flag => ErrorSignal::Flag(self.errors.flag.clone()),
+            SignalKind::Flag => match &self.errors.flag {
+                Some(flag) => ErrorSignal::Flag(flag.clone()),
+                // The loader requires the flag of a flag-signalling profile.
+                None => ErrorSignal::Code(code),
+            },
         }
     }
 }

@@ -39,6 +39,26 @@ pub fn units_value(units: impl Iterator<Item = u16>, unit: Unit, order: ValueOrd
     }
 }
 
+/// A value as an instruction reading `digits` digits finds it at its source, in at least
+/// `min_units` units. Low first, as many units as the value needs or the digits read, the upper
+/// ones zero, so that an instruction reading past the value reads zeros, not the fill; high
+/// first, the units the digits read, ending with the least significant.
+pub fn value_memory(
+    value: u64,
+    digits: u32,
+    min_units: u32,
+    unit: Unit,
+    order: ValueOrder,
+) -> Vec<u16> {
+    let needed = match order {
+        ValueOrder::LowFirst => significant_digits(value)
+            .div_ceil(unit.digits())
+            .max(min_units),
+        ValueOrder::HighFirst => 1,
+    };
+    value_units(value, unit, order, units_for(digits, needed, unit))
+}
+
 /// How many units hold a value of `digits` hex digits, and at least the `needed` ones.
 pub fn units_for(digits: u32, needed: u32, unit: Unit) -> u32 {
     digits
@@ -68,13 +88,8 @@ pub fn input(lowering: &Lowering, case: &CrossVendorCase) -> Input {
     let words: Vec<u16> = match lowering.operation {
         Operation::HexToValue => text_units(lowering.text, &case.text),
         Operation::ValueToHex => {
-            // As many units as the value needs or the digits read, the upper ones zero, so that
-            // an instruction reading past the value reads zeros, not the fill.
-            let v = case.value;
             let digits = lowering.width.unwrap_or(case.digits);
-            let needed = significant_digits(v).div_ceil(lowering.unit.digits());
-            let count = units_for(digits, needed, lowering.unit);
-            value_units(v, lowering.unit, lowering.order, count)
+            value_memory(case.value, digits, 1, lowering.unit, lowering.order)
         }
     };
     let mut before: std::collections::BTreeMap<_, _> = words

@@ -109,7 +109,8 @@ impl Trial {
     pub fn basis(&self) -> Basis {
         match &self.check {
             Check::Native { case, .. } => case.basis,
-            Check::CrossVendor { case, .. } | Check::Codec { case } => case.basis,
+            Check::CrossVendor { case, lowering } => case.basis_for(&lowering.key),
+            Check::Codec { case } => case.basis,
         }
     }
 

@@ -195,6 +195,10 @@ pub struct CrossVendorExceptSpec {
     pub text: Option<String>,
     #[serde(default)]
     pub error: Option<ErrorClass>,
-    /// The manual rule that makes this vendor answer differently.
+    /// No rule fixes this vendor's answer: it is recorded, never judged (instead of `value`,
+    /// `text` or `error`).
+    #[serde(default)]
+    pub unspecified: bool,
+    /// The manual rule that makes this vendor answer differently (or leaves it open).
     pub why: String,
 }

@@ -66,11 +66,16 @@ pub struct Manual {
 pub struct ErrorSignallingSpec {
     /// Whether a program sees an error code or only a flag.
     pub signal: SignalKind,
-    /// The flag an error turns on (MELSEC SM0, IDEC M8004).
-    pub flag: String,
-    /// The register holding the code (MELSEC SD0); required when `signal: code`.
+    /// The flag an error turns on (MELSEC SM0, IDEC M8004); required when `signal: flag`.
+    #[serde(default)]
+    pub flag: Option<String>,
+    /// The register holding the code (MELSEC SD0); with `signal: code`, this or `returned`.
     #[serde(default)]
     pub register: Option<String>,
+    /// Where the code is returned when no register holds it, in words (Siemens: the
+    /// instruction's RET_VAL, with ENO FALSE).
+    #[serde(default)]
+    pub returned: Option<String>,
     /// Further registers that receive the code (FX5: SD8067 for FX compatibility).
     #[serde(default)]
     pub also: Vec<String>,

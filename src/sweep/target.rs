@@ -19,9 +19,8 @@ use crate::device::Device;
 use crate::model::cross_vendor::{CrossVendorCase, Lowering, Operation, TextLayout, ValueOrder};
 use crate::model::profile::{Profile, Profiles};
 use crate::model::{Basis, Case, Citation, Location, Operand};
-use crate::plan::lowering::{text_units, units_for, value_units};
+use crate::plan::lowering::{text_units, value_memory};
 use crate::plan::{codec_declined, declined, lowered_input, Check, Input, Trial};
-use crate::text::significant_digits;
 
 /// What a sweep generates inputs for.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
@@ -217,12 +216,13 @@ impl Shape {
         let unit = self.profile.unit;
         let words: Vec<u16> = match &point.data {
             Data::Text(t) => text_units(self.layout(&point.flags), t),
-            Data::Value(v) => {
-                let needed = significant_digits(*v)
-                    .div_ceil(unit.digits())
-                    .max(self.words * 16 / unit.bits());
-                value_units(*v, unit, self.order, units_for(point.digits, needed, unit))
-            }
+            Data::Value(v) => value_memory(
+                *v,
+                point.digits,
+                self.words * 16 / unit.bits(),
+                unit,
+                self.order,
+            ),
         };
         let before = words
             .into_iter()
