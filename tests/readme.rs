@@ -214,3 +214,39 @@ fn an_excerpt_matches_lines_in_order() {
         ]
     );
 }
+
+/// Every row of the README's families table names a vector folder and its case count, and
+/// every vector folder has a row: a count that goes stale, or a family left out, fails here.
+#[test]
+fn the_families_table_counts_every_family_s_cases() {
+    let readme = std::fs::read_to_string(root().join("README.md")).expect("README.md");
+    let project = common::session();
+    let mut counted = std::collections::BTreeMap::<String, usize>::new();
+    for case in &project.corpus.cases {
+        let folder = case.location.file.parent().map(|p| p.to_path_buf());
+        if let Some(name) = folder.as_ref().and_then(|p| p.file_name()) {
+            *counted.entry(name.to_string_lossy().into_owned()).or_default() += 1;
+        }
+    }
+    counted.insert("cross-vendor".into(), project.corpus.cross_vendor.len());
+    let mut rows = std::collections::BTreeMap::<String, usize>::new();
+    for line in readme.lines().filter(|l| l.starts_with("| ")) {
+        let Some(at) = line.find("`vectors/") else {
+            continue;
+        };
+        let rest = &line[at + "`vectors/".len()..];
+        let Some((folder, after)) = rest.split_once("/`, ") else {
+            continue;
+        };
+        let count: usize = after
+            .split_whitespace()
+            .next()
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("no case count in: {line}"));
+        rows.insert(folder.to_string(), count);
+    }
+    assert_eq!(
+        rows, counted,
+        "the README's families table (left) against the corpus (right)"
+    );
+}
