@@ -225,7 +225,9 @@ fn the_families_table_counts_every_family_s_cases() {
     for case in &project.corpus.cases {
         let folder = case.location.file.parent().map(|p| p.to_path_buf());
         if let Some(name) = folder.as_ref().and_then(|p| p.file_name()) {
-            *counted.entry(name.to_string_lossy().into_owned()).or_default() += 1;
+            *counted
+                .entry(name.to_string_lossy().into_owned())
+                .or_default() += 1;
         }
     }
     counted.insert("cross-vendor".into(), project.corpus.cross_vendor.len());
