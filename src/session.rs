@@ -16,11 +16,16 @@ use std::sync::{Arc, OnceLock};
 
 use crate::backend::external::{ExternalBackend, ExternalError};
 use crate::backend::{Backend, Fault, Request, Response};
+use crate::execute::Observation;
+use crate::judge::lift::lift;
+use crate::judge::{Effect, Verdict};
 use crate::load::load_known;
+use crate::model::cross_vendor::CrossVendorCase;
 use crate::model::cross_vendor::{CodecAbilities, OperationAbilities};
 use crate::model::profile::Profiles;
 use crate::model::project::ExternalSettings;
-use crate::plan::Trial;
+use crate::model::{Basis, Case, Citation, Expectation};
+use crate::plan::{Check, Trial};
 use crate::report::baseline::{self, SavedRun};
 use crate::report::record::Record;
 use crate::report::Summary;
@@ -305,4 +310,104 @@ pub fn idle_backends(trials: &[Trial], asked: &[&str], filtered: bool) -> Vec<(S
         ));
     }
     out
+}
+
+/// The second backend's trial with the first backend's answer as its expectation (`diff
+/// --against`): judging it says where the second parts from the first, with the same diffs,
+/// faults and reports as a run against the corpus. `Err` is the verdict on the first backend's
+/// trial when it gives nothing to judge against: a fault, an unsupported answer, or an outcome
+/// that depends on the fill.
+pub fn judged_against(
+    first: &Trial,
+    did: &[Observation],
+    second: &Trial,
+) -> Result<Trial, Verdict> {
+    let name = first.backend.name();
+    let mut answers = Vec::new();
+    let mut effects = Vec::new();
+    for o in did {
+        match &o.result {
+            Err(fault) => {
+                return Err(Verdict::Fault {
+                    fill: o.fill,
+                    fault: fault.clone(),
+                })
+            }
+            Ok(Response::Unsupported(reason)) => {
+                return Err(Verdict::Unsupported {
+                    reason: reason.clone(),
+                })
+            }
+            Ok(Response::Answer(a)) => answers.push(a.clone()),
+            Ok(Response::Done(outcome)) => match (&first.check, &first.profile) {
+                (Check::CrossVendor { lowering, case }, Some(profile)) => answers.push(lift(
+                    profile,
+                    lowering,
+                    case.digits,
+                    outcome,
+                    &first.image(o.fill),
+                )),
+                _ => effects.push(Effect::of(&first.image(o.fill), outcome)),
+            },
+        }
+    }
+    let fill_dependent = |what: String| Verdict::Unsupported {
+        reason: format!("{name}'s outcome depends on the fill ({what}): nothing to judge against"),
+    };
+    let citation = Citation {
+        manual: format!("backend {name}"),
+        page: String::new(),
+        text: Some("its outcome on this trial".into()),
+    };
+    let check = match (&second.check, effects.as_slice(), answers.as_slice()) {
+        (Check::Native { instruction, case }, [e, rest @ ..], []) => {
+            if let Some(other) = rest.iter().find(|x| *x != e) {
+                return Err(fill_dependent(format!("{e} / {other}")));
+            }
+            Check::Native {
+                instruction: instruction.clone(),
+                case: Arc::new(Case {
+                    basis: Basis::Observed,
+                    citation,
+                    expect: Some(Expectation {
+                        after: e.changed.clone(),
+                        error: e.error.clone(),
+                    }),
+                    ..(**case).clone()
+                }),
+            }
+        }
+        (Check::CrossVendor { case, .. } | Check::Codec { case }, [], [a, rest @ ..]) => {
+            if let Some(other) = rest.iter().find(|x| *x != a) {
+                return Err(fill_dependent(format!("{a} / {other}")));
+            }
+            let case = Arc::new(CrossVendorCase {
+                basis: Basis::Observed,
+                citation,
+                expect: Some(a.clone()),
+                except: Default::default(),
+                ..(**case).clone()
+            });
+            match &second.check {
+                Check::CrossVendor { lowering, .. } => Check::CrossVendor {
+                    lowering: lowering.clone(),
+                    case,
+                },
+                _ => Check::Codec { case },
+            }
+        }
+        _ => {
+            return Err(Verdict::Unsupported {
+                reason: format!(
+                    "{name} answered another kind of question than {} asks",
+                    second.backend.name()
+                ),
+            })
+        }
+    };
+    Ok(Trial {
+        check,
+        known: None,
+        ..second.clone()
+    })
 }

@@ -218,11 +218,18 @@ fn against_shows_the_word_diff_where_two_backends_differ() {
     assert_eq!(out.status.code(), Some(1));
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
-        text.contains("habin::habin-fixed-minus-sign-is-invalid::rcpu — iqr vs pymcprotocol"),
+        text.contains("pymcprotocol::habin::habin-fixed-minus-sign-is-invalid::rcpu differs"),
         "{text}"
     );
     assert!(text.contains("+D200     FA58H  \"X\\xFA\""), "{text}");
-    assert!(text.contains("error: 3401H vs none"), "{text}");
+    assert!(
+        text.contains("(basis: observed; backend iqr: its outcome on this trial)"),
+        "{text}"
+    );
+    assert!(
+        text.contains("error: expected 3401H, actual none"),
+        "{text}"
+    );
 }
 
 #[test]

@@ -1,5 +1,5 @@
 //! `run` and `diff`: plan, run and report, with the same report formats, saved runs and
-//! baselines; `diff --against` compares two backends word by word.
+//! baselines; `diff --against` judges one backend's trials against what another did.
 
 use std::io::Write;
 use std::path::Path;
@@ -12,10 +12,9 @@ use super::{
     BackendArgs, Cli, CliError, DiffArgs, Format, Outcome, ReportArgs, RunArgs, EXIT_DIFFERENCES,
     EXIT_OK,
 };
-use crate::backend::{Backend, Response};
-use crate::execute::{execute, Observation};
-use crate::judge::words::rows;
-use crate::model::{error_text, Expectation};
+use crate::backend::Backend;
+use crate::execute::execute;
+use crate::judge::Verdict;
 use crate::plan::Trial;
 use crate::report::baseline;
 use crate::report::console;
@@ -23,11 +22,11 @@ use crate::report::document::{self, Collector};
 use crate::report::json::{BackendInfo, RunInfo};
 use crate::report::matrix_text;
 use crate::report::progress::ProgressReporter;
-use crate::report::text::{memory_diff, Palette};
+use crate::report::text::Palette;
 use crate::report::text_reporter::TextReporter;
 use crate::report::{All, Event, Reporter};
 use crate::runner::{self, Project};
-use crate::session::{idle_backends, RunOutcome};
+use crate::session::{idle_backends, judged_against, RunOutcome};
 
 pub fn run(cli: &Cli, args: &RunArgs) -> Outcome {
     execute_command(
@@ -389,7 +388,6 @@ fn against(cli: &Cli, args: &BackendArgs, other: &str) -> Outcome {
             "no backend `{other}` to compare with"
         )));
     };
-    let mut out = Sink::open(None)?;
     let filter = args.filter.as_deref();
     let trials_a = planned(&project, std::slice::from_ref(&a), filter);
     let trials_b = planned(&project, std::slice::from_ref(&b), None);
@@ -403,10 +401,13 @@ fn against(cli: &Cli, args: &BackendArgs, other: &str) -> Outcome {
         )
     };
     let same_family = a.profile() == b.profile();
-    let palette = Palette::coloured();
-    let (mut compared, mut differing, mut faulty) = (0, 0, 0);
+    let stop = crate::interrupt::stop_flag();
+    // B's trials judged against what A did on the same question; where A gives nothing to
+    // judge against, A's trial is reported with why.
+    let mut paired: Vec<Trial> = Vec::new();
+    let mut unpaired: Vec<(Trial, Verdict)> = Vec::new();
     for ta in trials_a.iter().filter(|t| t.skip.is_none()) {
-        if crate::interrupt::stop_flag().load(std::sync::atomic::Ordering::SeqCst) {
+        if stop.load(std::sync::atomic::Ordering::SeqCst) {
             break;
         }
         let tb = if same_family {
@@ -422,29 +423,36 @@ fn against(cli: &Cli, args: &BackendArgs, other: &str) -> Outcome {
             })
         };
         let Some(tb) = tb else { continue };
-        compared += 1;
-        let (oa, ob) = (execute(ta), execute(tb));
-        let text = if same_family && !ta.is_cross_vendor() {
-            compare_outcomes(ta, &oa, &ob, palette)
-        } else {
-            compare_answers(ta, tb, &oa, &ob)
-        };
-        if oa.iter().chain(&ob).any(|o| o.result.is_err()) {
-            faulty += 1;
-        }
-        if !text.is_empty() {
-            differing += 1;
-            write!(
-                out,
-                "{}: {} — {} vs {}\n{text}",
-                ta.location(),
-                ta.name(),
-                a.name(),
-                b.name()
-            )
-            .map_err(|e| out.error(e))?;
+        match judged_against(ta, &execute(ta), tb) {
+            Ok(t) => paired.push(t),
+            Err(verdict) => unpaired.push((ta.clone(), verdict)),
         }
     }
+    let compared = paired.len() + unpaired.len();
+    if compared == 0 {
+        return Err(CliError::input(format!(
+            "{} and {} share no trial that both run",
+            a.name(),
+            b.name()
+        )));
+    }
+    let mut text = TextReporter::new(Sink::open(None)?, Palette::coloured(), false, Vec::new())
+        .quiet(cli.quiet);
+    let written = unpaired
+        .iter()
+        .enumerate()
+        .try_for_each(|(index, (trial, verdict))| {
+            text.event(&Event::TrialFinished {
+                index,
+                trial,
+                verdict,
+                elapsed: std::time::Duration::ZERO,
+            })
+        })
+        .and_then(|()| runner::run(&paired, 1, stop, &mut text));
+    let summary = written.map_err(|e| CliError::write(None, e))?;
+    let differing = summary.failed + unpaired.len();
+    let mut out = text.into_inner();
     writeln!(
         out,
         "{} vs {}: {compared} trials compared, {differing} differ",
@@ -453,87 +461,9 @@ fn against(cli: &Cli, args: &BackendArgs, other: &str) -> Outcome {
     )
     .map_err(|e| out.error(e))?;
     out.finish()?;
-    if compared == 0 {
-        return Err(CliError::input(format!(
-            "{} and {} share no trial that both run",
-            a.name(),
-            b.name()
-        )));
-    }
-    Ok(if differing == 0 && faulty == 0 {
+    Ok(if differing == 0 {
         EXIT_OK
     } else {
         EXIT_DIFFERENCES
     })
-}
-
-/// The per-word diff of B's outcome against A's, under each fill; empty when they agree.
-fn compare_outcomes(
-    trial: &Trial,
-    a: &[Observation],
-    b: &[Observation],
-    palette: Palette,
-) -> String {
-    let mut out = String::new();
-    for (oa, ob) in a.iter().zip(b) {
-        let image = trial.image(oa.fill);
-        match (&oa.result, &ob.result) {
-            (Ok(Response::Done(x)), Ok(Response::Done(y))) => {
-                let expect = Expectation {
-                    after: crate::judge::Effect::of(&image, x).changed,
-                    error: x.error.clone(),
-                };
-                let rows = rows(&image, &expect, y);
-                let words = rows.iter().any(|r| r.expected != r.actual);
-                if words || x.error != y.error {
-                    out.push_str(&format!(
-                        "  fill {} (- first backend, + second):\n",
-                        oa.fill.name()
-                    ));
-                    if words {
-                        out.push_str(&memory_diff(&rows, palette));
-                    }
-                    if x.error != y.error {
-                        out.push_str(&format!(
-                            "  error: {} vs {}\n",
-                            error_text(x.error.as_ref()),
-                            error_text(y.error.as_ref())
-                        ));
-                    }
-                }
-            }
-            (x, y) if x != y => {
-                out.push_str(&format!("  fill {}: {x:?} vs {y:?}\n", oa.fill.name()));
-            }
-            _ => {}
-        }
-    }
-    out
-}
-
-/// Cross-vendor answers of two trials (each through its own lowering), under each fill.
-fn compare_answers(ta: &Trial, tb: &Trial, a: &[Observation], b: &[Observation]) -> String {
-    let mut out = String::new();
-    for (oa, ob) in a.iter().zip(b) {
-        let answer = |t: &Trial, o: &Observation| match (&t.check, &o.result) {
-            (crate::plan::Check::CrossVendor { lowering, case }, Ok(Response::Done(x))) => match &t
-                .profile
-            {
-                Some(profile) => {
-                    let image = t.image(o.fill);
-                    crate::judge::lift::lift(profile, lowering, case.digits, x, &image).to_string()
-                }
-                None => "no profile".to_string(),
-            },
-            (_, Ok(Response::Answer(a))) => a.to_string(),
-            (_, Ok(Response::Unsupported(r))) => format!("unsupported: {r}"),
-            (_, Err(f)) => f.to_string(),
-            (_, Ok(Response::Done(_))) => "not a cross-vendor answer".to_string(),
-        };
-        let (x, y) = (answer(ta, oa), answer(tb, ob));
-        if x != y {
-            out.push_str(&format!("  fill {}: {x} vs {y}\n", oa.fill.name()));
-        }
-    }
-    out
 }
