@@ -10,7 +10,7 @@ mod common;
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
-use common::{assert_corpus_kills, failing_trials, reference, session, Mutant};
+use common::{assert_corpus_kills, failing_trials, map_done, reference, session, Mutant};
 use plc_conformance::backend::{Backend, Fault, Outcome, Request, Response};
 use plc_conformance::device::Device;
 use plc_conformance::memory::Image;
@@ -61,17 +61,6 @@ fn with_memory(
     base.execute(&Request {
         memory: &memory,
         ..*req
-    })
-}
-
-/// Changes a finished outcome.
-fn map_done(
-    result: Result<Response, Fault>,
-    f: impl FnOnce(Outcome) -> Outcome,
-) -> Result<Response, Fault> {
-    result.map(|r| match r {
-        Response::Done(o) => Response::Done(f(o)),
-        other => other,
     })
 }
 

@@ -9,23 +9,13 @@ mod common;
 
 use std::collections::BTreeMap;
 
-use common::{assert_corpus_kills, reference, session, Mutant};
-use plc_conformance::backend::{Backend, Fault, Outcome, Request, Response};
+use common::{assert_corpus_kills, map_done, reference, session, Mutant};
+use plc_conformance::backend::{Backend, Fault, Request, Response};
 use plc_conformance::device::Device;
 use plc_conformance::memory::Image;
 use plc_conformance::model::{ErrorSignal, Operand};
 
 const PROFILE: &str = "siemens-s7-1200";
-
-fn map_done(
-    result: Result<Response, Fault>,
-    f: impl FnOnce(Outcome) -> Outcome,
-) -> Result<Response, Fault> {
-    result.map(|r| match r {
-        Response::Done(o) => Response::Done(f(o)),
-        other => other,
-    })
-}
 
 fn device(req: &Request<'_>, name: &str) -> Option<Device> {
     match req.operands.get(name)? {

@@ -21,11 +21,9 @@ fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
 }
 
-/// Runs the binary on this project and kills it if it is still running after `limit`: a test
-/// of bounded time must not hang itself.
-fn cli_within(args: &[&str], limit: Duration) -> (Output, Duration) {
-    let started = Instant::now();
-    let mut child = Command::new(BIN)
+/// Starts the binary on this project, its stdout and stderr piped.
+fn spawn_cli(args: &[&str]) -> std::process::Child {
+    Command::new(BIN)
         .args(["--root", root().to_str().unwrap_or(".")])
         .args(args)
         .env("NO_COLOR", "1")
@@ -34,7 +32,14 @@ fn cli_within(args: &[&str], limit: Duration) -> (Output, Duration) {
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
-        .expect("the binary starts");
+        .expect("the binary starts")
+}
+
+/// Runs the binary on this project and kills it if it is still running after `limit`: a test
+/// of bounded time must not hang itself.
+fn cli_within(args: &[&str], limit: Duration) -> (Output, Duration) {
+    let started = Instant::now();
+    let mut child = spawn_cli(args);
     while child.try_wait().ok().flatten().is_none() {
         if started.elapsed() > limit {
             let _ = child.kill();
@@ -249,16 +254,7 @@ fn a_write_error_ends_the_run_with_a_clear_error() {
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("cannot write /dev/full"), "{err}");
     // A closed pipe on stdout: the reader has gone before the counts are written.
-    let mut child = Command::new(BIN)
-        .args(["--root", root().to_str().unwrap_or(".")])
-        .args(["run", "--backend", "iqr"])
-        .env("NO_COLOR", "1")
-        .env_remove("PLC_CONFORMANCE_CONFIG")
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("the binary starts");
+    let mut child = spawn_cli(&["run", "--backend", "iqr"]);
     drop(child.stdout.take());
     let out = child.wait_with_output().expect("the binary ends");
     let err = text(&out.stderr);

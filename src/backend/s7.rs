@@ -13,6 +13,7 @@
 
 use super::reference::{Model, Stop};
 use super::{Outcome, Request, Unsupported};
+use crate::device::Device;
 use crate::memory::Scratch;
 use crate::model::{ErrorSignal, Operand};
 use crate::text::digit_char;
@@ -65,18 +66,27 @@ fn count(req: &Request<'_>) -> Result<u32, Stop> {
     }
 }
 
-/// ATH: N characters, one per byte from IN -> ceil(N/2) bytes from OUT.
-fn ath(req: &Request<'_>) -> Result<Outcome, Stop> {
+/// IN, N and OUT, once both arrays are checked to hold what N asks: N bytes of input and
+/// `n_out(N)` of output.
+fn arrays<'r>(
+    req: &'r Request<'_>,
+    n_out: impl Fn(u32) -> u32,
+) -> Result<(&'r Device, u32, &'r Device), Stop> {
     let input = req.device("IN")?;
     let output = req.device("OUT")?;
     let n = count(req)?;
     if !req.words_exist(input, n) {
         return Err(Stop::Error(INPUT_TOO_SMALL));
     }
-    let bytes = n.div_ceil(2);
-    if !req.words_exist(output, bytes) {
+    if !req.words_exist(output, n_out(n)) {
         return Err(Stop::Error(OUTPUT_TOO_SMALL));
     }
+    Ok((input, n, output))
+}
+
+/// ATH: N characters, one per byte from IN -> ceil(N/2) bytes from OUT.
+fn ath(req: &Request<'_>) -> Result<Outcome, Stop> {
+    let (input, n, output) = arrays(req, |n| n.div_ceil(2))?;
     let mut invalid = false;
     let mut nibbles = Vec::with_capacity(n as usize + 1);
     for k in 0..n {
@@ -103,15 +113,7 @@ fn ath(req: &Request<'_>) -> Result<Outcome, Stop> {
 
 /// HTA: N bytes from IN -> 2N characters from OUT, uppercase, the high nibble first.
 fn hta(req: &Request<'_>) -> Result<Outcome, Stop> {
-    let input = req.device("IN")?;
-    let output = req.device("OUT")?;
-    let n = count(req)?;
-    if !req.words_exist(input, n) {
-        return Err(Stop::Error(INPUT_TOO_SMALL));
-    }
-    if !req.words_exist(output, 2 * n) {
-        return Err(Stop::Error(OUTPUT_TOO_SMALL));
-    }
+    let (input, n, output) = arrays(req, |n| 2 * n)?;
     let mut scratch = Scratch::new(req.memory);
     for k in 0..n {
         let byte = input.offset(k).map_or(0, |d| req.memory.read(&d));

@@ -100,6 +100,17 @@ impl Backend for Mutant {
     }
 }
 
+/// Changes a finished outcome (a mutant's one change to what the reference did).
+pub fn map_done(
+    result: Result<Response, Fault>,
+    f: impl FnOnce(plc_conformance::backend::Outcome) -> plc_conformance::backend::Outcome,
+) -> Result<Response, Fault> {
+    result.map(|r| match r {
+        Response::Done(o) => Response::Done(f(o)),
+        other => other,
+    })
+}
+
 /// The trials of the corpus that fail on a backend (recorded `unspecified` cases never do).
 pub fn failing_trials(session: &Project, backend: &Arc<dyn Backend>) -> Vec<String> {
     session
