@@ -1,5 +1,5 @@
 //! Device addresses as the manuals write them: a code and a decimal number (`D100`, `SD0`,
-//! `M1260`, `DT100`, `MB20`, `DB1.DBB10`).
+//! `M1260`, `DT100`, `MB20`, `DB1.DBB10`), or a bit of a byte (`SM1.7`, the S7-200's error bit).
 //!
 //! A device names one unit of its family's memory ([`crate::memory::Unit`]): a 16-bit word, or
 //! a byte in a byte-addressed family. The number is the unit's address, so `(s)+1` is the next
@@ -26,6 +26,10 @@ pub struct Device {
 /// The longest device code: MELSEC's are up to three letters (`ZR`, `SW`, `LCN`), a Siemens data
 /// block's bytes carry the block number (`DB65535.DBB`).
 pub const MAX_CODE_LEN: usize = 12;
+
+/// The device syntax as a JSON Schema pattern (vector files, the protocol): [`Device::from_str`]
+/// is the rule, this is the same rule for editors and other languages.
+pub const PATTERN: &str = r"^[A-Z]([A-Z0-9.]*[A-Z])?([0-9]+\.[0-7]|[0-9]+)$";
 
 /// A device code kept inline, zero-padded. Memory images and effects are maps keyed
 /// by devices, and a sweep builds millions of them: a code that is a `String` makes every
@@ -119,13 +123,22 @@ impl FromStr for Device {
             return Err(err());
         }
         let index = number.parse::<u32>().map_err(|_| err())?;
+        // A bit address (`SM1.7`) is the code `SM1.` and the bit number, which is 0-7.
+        if code.ends_with('.') && index > 7 {
+            return Err(err());
+        }
         Ok(Device::new(code, index))
     }
 }
 
 /// A code: uppercase letters, optionally with block numbers between dots (`DB1.DBB`), starting
-/// and ending with a letter.
+/// and ending with a letter; or such a code with a byte number and a dot, the head of a bit
+/// address (`SM1.` of `SM1.7`).
 fn valid_code(code: &str) -> bool {
+    if let Some(byte) = code.strip_suffix('.') {
+        let letters = byte.trim_end_matches(|c: char| c.is_ascii_digit());
+        return letters.len() < byte.len() && valid_code(letters);
+    }
     let bytes = code.as_bytes();
     !code.is_empty()
         && code.len() <= MAX_CODE_LEN
@@ -175,6 +188,8 @@ mod tests {
     #[case("DT100", "DT", 100)]
     #[case("MB20", "MB", 20)]
     #[case("DB1.DBB10", "DB1.DBB", 10)]
+    #[case("SM1.7", "SM1.", 7)]
+    #[case("V10.0", "V10.", 0)]
     fn parses(#[case] text: &str, #[case] code: &str, #[case] index: u32) {
         assert_eq!(text.parse::<Device>(), Ok(Device::new(code, index)));
     }
@@ -194,8 +209,30 @@ mod tests {
     #[case("1D10")]
     #[case("Db1.DBB10")]
     #[case("D1ê00")]
+    #[case("SM1.8")]
+    #[case("SM.7")]
+    #[case("SM1..7")]
     fn rejects(#[case] text: &str) {
         assert!(text.parse::<Device>().is_err());
+    }
+
+    /// The schema pattern and the parser accept the same names.
+    #[rstest]
+    #[case("D100")]
+    #[case("DB1.DBB10")]
+    #[case("SM1.7")]
+    #[case("SM1.8")]
+    #[case("DB1.10")]
+    #[case("d100")]
+    #[case("D")]
+    fn the_pattern_is_the_parser(#[case] text: &str) {
+        let schema = serde_json::json!({"type": "string", "pattern": PATTERN});
+        let pattern = jsonschema::validator_for(&schema).expect("the pattern compiles");
+        assert_eq!(
+            pattern.is_valid(&serde_json::json!(text)),
+            text.parse::<Device>().is_ok(),
+            "{text}"
+        );
     }
 
     #[rstest]

@@ -626,7 +626,20 @@ fn inputs_with(r: &Results, signature: &[&str]) -> u64 {
 #[test]
 fn the_full_sweep_by_class_counts_every_four_byte_text_exactly() {
     let project = session();
-    let (sweep, r) = run(&project, &project.backends, full_by_class(1 << 16));
+    // The families whose groups are counted by hand below; others only add columns.
+    let counted = [
+        "mitsubishi-iqr",
+        "mitsubishi-fx5",
+        "idec-fc4a",
+        "siemens-s7-1200",
+    ];
+    let backends: Vec<_> = project
+        .backends
+        .iter()
+        .filter(|b| counted.contains(&b.profile()))
+        .cloned()
+        .collect();
+    let (sweep, r) = run(&project, &backends, full_by_class(1 << 16));
     let classes = r
         .classes
         .as_ref()

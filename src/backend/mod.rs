@@ -11,6 +11,7 @@ pub mod fx5;
 pub mod iqr;
 pub mod reference;
 pub mod s7;
+pub mod s7_200;
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -313,6 +314,7 @@ const MODELS: &[MakeBackend] = &[
     reference::backend::<fx5::Fx5>,
     reference::backend::<fc4a::Fc4a>,
     reference::backend::<s7::S71200>,
+    reference::backend::<s7_200::S7200>,
 ];
 
 /// The reference models, one per profile that has one.

@@ -49,7 +49,7 @@ impl Model for S71200 {
 
 /// The value of an ASCII hex digit as the S7-1200 reads it: 0-9 and uppercase A-F
 /// (`docs/semantics.md#s7-ath-lowercase`).
-fn digit(ch: u16) -> Option<u8> {
+pub(super) fn digit(ch: u16) -> Option<u8> {
     match u8::try_from(ch).ok()? {
         c @ b'0'..=b'9' => Some(c - b'0'),
         c @ b'A'..=b'F' => Some(c - b'A' + 10),

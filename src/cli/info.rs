@@ -32,15 +32,24 @@ pub fn validate(cli: &Cli, given: &[PathBuf]) -> Outcome {
     output::write(
         None,
         &format!(
-            "ok: {} cases and {} cross-vendor cases in {} files, {} profiles, {open} open \
-             questions",
-            corpus.cases.len(),
-            corpus.cross_vendor.len(),
-            files.len(),
-            profiles.iter().count()
+            "ok: {} and {} in {}, {}, {}",
+            counted(corpus.cases.len(), "case"),
+            counted(corpus.cross_vendor.len(), "cross-vendor case"),
+            counted(files.len(), "file"),
+            counted(profiles.iter().count(), "profile"),
+            counted(open, "open question"),
         ),
     )?;
     Ok(EXIT_OK)
+}
+
+/// `1 file`, `2 files`: English nouns of the summary line, all of which take an `s`.
+fn counted(n: usize, noun: &str) -> String {
+    if n == 1 {
+        format!("1 {noun}")
+    } else {
+        format!("{n} {noun}s")
+    }
 }
 
 pub fn list(cli: &Cli, filter: Option<&str>) -> Outcome {

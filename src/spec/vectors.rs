@@ -101,7 +101,7 @@ pub struct CaseSpec {
     pub variants: Option<Vec<String>>,
     /// Mode flags, e.g. `{SM705: on}`. Flags not given hold the profile's default.
     #[serde(default)]
-    #[schemars(extend("propertyNames" = {"pattern": "^[A-Z]([A-Z0-9.]*[A-Z])?[0-9]+$"}))]
+    #[schemars(extend("propertyNames" = {"pattern": crate::device::PATTERN}))]
     pub flags: BTreeMap<String, FlagSpec>,
     /// Operands by the names the manual uses (`s`, `d`, `n`; `S1`, `S2`, `D1`): a device such as
     /// `D100` or a constant such as `K4` / `H0ABC`.
@@ -109,7 +109,7 @@ pub struct CaseSpec {
     pub operands: BTreeMap<String, ScalarSpec>,
     /// Memory before execution, by device (`D100`). Every word not listed holds a fill pattern.
     #[serde(default)]
-    #[schemars(extend("propertyNames" = {"pattern": "^[A-Z]([A-Z0-9.]*[A-Z])?[0-9]+$"}))]
+    #[schemars(extend("propertyNames" = {"pattern": crate::device::PATTERN}))]
     pub before: BTreeMap<String, ValueSpec>,
     /// The expected outcome; optional only for `basis: unspecified`.
     #[serde(default)]
@@ -149,7 +149,7 @@ pub struct ExpectSpec {
     /// The words that change, by device, with their new values. Any other change is a
     /// difference.
     #[serde(default)]
-    #[schemars(extend("propertyNames" = {"pattern": "^[A-Z]([A-Z0-9.]*[A-Z])?[0-9]+$"}))]
+    #[schemars(extend("propertyNames" = {"pattern": crate::device::PATTERN}))]
     pub after: BTreeMap<String, ValueSpec>,
     /// `none`, the vendor's error code (`3401H`), or the error flag the profile signals with
     /// (`M8004`). An empty `error:` is refused: `none` is the one way to say "no error".
@@ -324,7 +324,7 @@ mod schema_shapes {
         Number(i64),
         Text(
             #[schemars(regex(
-                pattern = r"^\s*(K-?[0-9]+|0[xX][0-9A-Fa-f]+|[0-9A-Fa-f]+[Hh]|H[0-9A-Fa-f]+|-?[0-9]+|[A-Z]([A-Z0-9.]*[A-Z])?[0-9]+|none)\s*$"
+                pattern = r"^\s*(K-?[0-9]+|0[xX][0-9A-Fa-f]+|[0-9A-Fa-f]+[Hh]|H[0-9A-Fa-f]+|-?[0-9]+|[A-Z]([A-Z0-9.]*[A-Z])?([0-9]+\.[0-7]|[0-9]+)|none)\s*$"
             ))]
             String,
         ),

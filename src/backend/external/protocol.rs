@@ -24,7 +24,7 @@ pub const BYTES_VERSION: u32 = 3;
 
 /// A device name as the protocol carries it: a code and a decimal number (`D100`, `MB20`,
 /// `DB1.DBB10`).
-const DEVICE_PATTERN: &str = r"^[A-Z]([A-Z0-9.]*[A-Z])?[0-9]+$";
+const DEVICE_PATTERN: &str = crate::device::PATTERN;
 
 /// A message from the harness to a backend.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
