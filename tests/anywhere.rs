@@ -248,3 +248,25 @@ fn the_manual_page_parses() {
         text(&done.stderr)
     );
 }
+
+/// A JUnit report names real files only (a dashboard opens them) and carries the run's time.
+#[test]
+fn junit_outside_a_project_names_no_embedded_file_and_times_the_run() {
+    let empty = scratch();
+    let out = run_in(
+        empty.path(),
+        &["run", "--backend", "iqr", "--format", "junit"],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let xml = text(&out.stdout);
+    assert!(xml.contains("<testcase "), "{xml}");
+    assert!(!xml.contains("file=\"&lt;embedded"), "{xml}");
+    let time = xml
+        .split("<testsuites ")
+        .nth(1)
+        .and_then(|t| t.split(" time=\"").nth(1))
+        .and_then(|t| t.split('"').next())
+        .and_then(|t| t.parse::<f64>().ok())
+        .expect("the report's time");
+    assert!(time > 0.0, "{xml}");
+}

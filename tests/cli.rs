@@ -277,3 +277,38 @@ fn progress_lines_show_on_a_terminal_and_nothing_when_piped() {
         );
     }
 }
+
+/// A backend left out because its program is missing is said on stderr, whatever the format:
+/// stdout is the report, which a pipe or a file takes whole.
+#[test]
+fn a_backend_left_out_is_a_note_on_stderr_not_in_the_report() {
+    let dir = common::scratch();
+    std::fs::write(
+        dir.path().join("plc-conformance.yaml"),
+        "backends:\n  - name: absent\n    command: [missing/python, adapter.py]\n    \
+         profile: mitsubishi-iqr\n    requires: [missing/python]\n",
+    )
+    .expect("write");
+    for format in ["text", "json"] {
+        let out = common::bin()
+            .current_dir(dir.path())
+            // Where backends are required, a missing one is an error, not a note.
+            .env_remove(plc_conformance::load::ENV_REQUIRE)
+            .args([
+                "run",
+                "--filter",
+                "habin-fixed-4-digits-example",
+                "--format",
+                format,
+            ])
+            .output()
+            .expect("runs");
+        assert_eq!(out.status.code(), Some(0));
+        let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+        assert!(!stdout.contains("absent"), "{format}: {stdout}");
+        assert!(
+            stderr.contains("note: skipped: external backend `absent`"),
+            "{format}: {stderr}"
+        );
+    }
+}

@@ -531,9 +531,8 @@ fn deep_nesting_is_refused_in_bounded_time() {
 
 #[test]
 fn a_lowering_on_a_device_the_variant_lacks_is_a_profile_error() {
-    let dir = std::env::temp_dir().join(format!("plc-conformance-lowering-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let scratch = tempfile::tempdir().expect("temp dir");
+    let dir = scratch.path();
     let vendors = Path::new(env!("CARGO_MANIFEST_DIR")).join("vendors");
     let iqr = std::fs::read_to_string(vendors.join("mitsubishi-iqr.yaml")).expect("profile");
     let lowering = "      operands: {s: D100, d: D200}\n      source: s\n      destination: d\n      text: packed\n      width: 4\n    - name: habin-terminated";
@@ -554,11 +553,10 @@ fn a_lowering_on_a_device_the_variant_lacks_is_a_profile_error() {
             1,
         );
         std::fs::write(dir.join("mitsubishi-iqr.yaml"), changed).expect("write");
-        let errors = load_profiles(&dir).expect_err("the profile loaded").to_string();
+        let errors = load_profiles(dir).expect_err("the profile loaded").to_string();
         assert!(
             errors.contains(&format!("mitsubishi-iqr.yaml:99: {message}")),
             "{message}\nin:\n{errors}"
         );
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -23,8 +23,8 @@ fn every_open_question_has_probes_in_the_corpus() {
 #[test]
 fn a_probe_that_is_not_a_case_is_a_load_error() {
     let s = session();
-    let dir = tempdir("open-questions");
-    let file = dir.join("q.yaml");
+    let dir = common::scratch();
+    let file = dir.path().join("q.yaml");
     std::fs::write(
         &file,
         "questions:\n  - id: q\n    title: t\n    profile: mitsubishi-iqr\n    instructions: [HABIN]\n    \
@@ -75,10 +75,4 @@ fn run_probes_runs_the_probes_of_a_question() {
     let probes: BTreeSet<String> = q.probes.iter().cloned().collect();
     assert!(!cases.is_empty());
     assert!(cases.is_subset(&probes), "{cases:?} not within {probes:?}");
-}
-
-fn tempdir(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("plc-conformance-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
 }

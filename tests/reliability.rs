@@ -803,3 +803,21 @@ fn hostile_text_never_reaches_a_terminal_or_breaks_xml() {
         assert!(xml.contains("\\u{FFFE}"), "{format}");
     }
 }
+
+/// Temporary folders come from `tempfile`, which removes them when the test ends, passes or
+/// fails: a folder named by hand under the temporary directory outlives every run.
+#[test]
+fn tests_make_temporary_folders_only_through_tempfile() {
+    let mut named_by_hand = Vec::new();
+    for entry in std::fs::read_dir(root().join("tests")).expect("tests/") {
+        let path = entry.expect("entry").path();
+        if path.extension().is_some_and(|x| x == "rs") {
+            let text = std::fs::read_to_string(&path).expect("readable");
+            let needle = ["std::env::", "temp_dir()"].concat();
+            if text.contains(&needle) {
+                named_by_hand.push(path.display().to_string());
+            }
+        }
+    }
+    assert!(named_by_hand.is_empty(), "{named_by_hand:?}");
+}

@@ -169,11 +169,26 @@ fn a_failing_trial_is_a_junit_failure_with_its_explanation() {
     }
 }
 
-/// Errors of a JSON report against `schema/results.schema.json`.
+/// Errors of a JSON report against `schema/results.schema.json`, made strict: the schema lets
+/// readers accept fields added later, but a field the report writes into an object marked
+/// `x-closed` is a schema to update.
 fn schema_errors(report: &serde_json::Value) -> Vec<String> {
+    fn closed(v: &mut serde_json::Value) {
+        match v {
+            serde_json::Value::Object(map) => {
+                if map.get("x-closed") == Some(&serde_json::Value::Bool(true)) {
+                    map.insert("additionalProperties".into(), false.into());
+                }
+                map.values_mut().for_each(closed);
+            }
+            serde_json::Value::Array(items) => items.iter_mut().for_each(closed),
+            _ => {}
+        }
+    }
     let text =
         std::fs::read_to_string(root().join("schema/results.schema.json")).expect("the schema");
-    let schema: serde_json::Value = serde_json::from_str(&text).expect("the schema is JSON");
+    let mut schema: serde_json::Value = serde_json::from_str(&text).expect("the schema is JSON");
+    closed(&mut schema);
     let validator = jsonschema::validator_for(&schema).expect("a valid draft-07 schema");
     validator
         .iter_errors(report)
@@ -286,4 +301,34 @@ fn html_from_run_lists_failures_with_links_metadata_and_places() {
     if root().join(".git").exists() {
         assert!(html.contains("<th>commit</th><td>"), "{html}");
     }
+}
+
+/// The shipped results schema is what `schema --kind results` prints, and it lets a reader of a
+/// later report of the same version accept the fields added since.
+#[test]
+fn the_results_schema_is_printed_and_open_to_added_fields() {
+    let out = cli(&["schema", "--kind", "results"]);
+    assert_eq!(out.status.code(), Some(0));
+    let printed: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let text =
+        std::fs::read_to_string(root().join("schema/results.schema.json")).expect("the schema");
+    let shipped: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    assert_eq!(printed, shipped);
+    let mut report = json_of(&[
+        "run",
+        "--backend",
+        "iqr",
+        "--format",
+        "json",
+        "--filter",
+        "habin-fixed-4-digits-example",
+    ]);
+    report["added_later"] = serde_json::json!(1);
+    report["records"][0]["added_later"] = serde_json::json!("x");
+    let validator = jsonschema::validator_for(&shipped).expect("draft-07");
+    assert!(validator.is_valid(&report));
+    assert!(
+        !schema_errors(&report).is_empty(),
+        "the strict check sees the added field"
+    );
 }

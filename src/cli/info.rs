@@ -138,6 +138,9 @@ pub fn list(cli: &Cli, filter: Option<&str>) -> Outcome {
     Ok(EXIT_OK)
 }
 
+/// The JSON report's schema, as shipped in `schema/`.
+const RESULTS_SCHEMA: &str = include_str!("../../schema/results.schema.json");
+
 pub fn schema(kind: SchemaKind) -> Outcome {
     let schema = match kind {
         SchemaKind::Vectors => spec::schema(spec::SchemaKind::Vectors),
@@ -147,6 +150,8 @@ pub fn schema(kind: SchemaKind) -> Outcome {
         SchemaKind::Known => spec::schema(spec::SchemaKind::Known),
         SchemaKind::OpenQuestions => spec::schema(spec::SchemaKind::OpenQuestions),
         SchemaKind::Protocol => protocol::protocol_schema(),
+        // Written by hand: the report's types serialize by hand too (`report::json`).
+        SchemaKind::Results => serde_json::from_str(RESULTS_SCHEMA).unwrap_or_default(),
     };
     output::write(
         None,

@@ -234,6 +234,8 @@ pub enum SchemaKind {
     Known,
     /// The open-questions file, `docs/open-questions.yaml`.
     OpenQuestions,
+    /// The JSON report (`--format json`, `--save`).
+    Results,
 }
 
 /// Parses the arguments, runs the command and returns its exit status.

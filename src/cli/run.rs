@@ -91,20 +91,22 @@ fn execute_command(
     let mut collector = Collector::default();
     let mut stopper = StopAtFailure { stop };
     let mut text = None;
+    // Backends left out are a fact about this machine, not a result: stderr, whatever the format.
+    if backend_args.backends.is_empty() && !cli.quiet {
+        for skipped in &file.skipped {
+            console::note(&format!("skipped: {skipped}"));
+        }
+    }
     if format == Format::Text {
-        let notes = if backend_args.backends.is_empty() {
-            file.skipped.iter().map(ToString::to_string).collect()
-        } else {
-            Vec::new()
-        };
         let sink = Sink::open(report.output.as_deref())?;
         let palette = if sink.is_stdout() {
             Palette::coloured()
         } else {
             Palette::plain()
         };
-        text = Some(TextReporter::new(sink, palette, show_recorded, notes).quiet(cli.quiet));
+        text = Some(TextReporter::new(sink, palette, show_recorded).quiet(cli.quiet));
     }
+    let started = std::time::Instant::now();
     let ran = {
         let mut reporters: Vec<&mut dyn Reporter> = vec![&mut collector];
         if let Some(text) = &mut text {
@@ -145,6 +147,7 @@ fn execute_command(
             })
             .collect(),
         interrupted,
+        seconds: started.elapsed().as_secs_f64(),
     };
     if format != Format::Text {
         let doc_format = match format {
@@ -436,8 +439,8 @@ fn against(cli: &Cli, args: &BackendArgs, other: &str) -> Outcome {
             b.name()
         )));
     }
-    let mut text = TextReporter::new(Sink::open(None)?, Palette::coloured(), false, Vec::new())
-        .quiet(cli.quiet);
+    let mut text =
+        TextReporter::new(Sink::open(None)?, Palette::coloured(), false).quiet(cli.quiet);
     let written = unpaired
         .iter()
         .enumerate()

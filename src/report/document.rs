@@ -81,7 +81,7 @@ pub fn render(
     match format {
         Format::Matrix => super::matrix_text::render(&matrices, coloured, width),
         Format::Json => super::json::render(records, &matrices, summary, meta),
-        Format::Junit => super::junit::render(records),
+        Format::Junit => super::junit::render(records, meta),
         Format::Html => super::html::render(&matrices, records, meta),
     }
 }

@@ -30,6 +30,10 @@ pub struct RunInfo {
     pub backends: Vec<BackendInfo>,
     /// Whether the run stopped before every trial finished.
     pub interrupted: bool,
+    /// How long the run took, wall clock, in seconds (the trials' own times add up to less
+    /// when backends run side by side, and to nothing measurable for the built-in models).
+    #[serde(default)]
+    pub seconds: f64,
 }
 
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]

@@ -22,8 +22,6 @@ pub struct TextReporter<W: Write> {
     show_recorded: bool,
     /// Only failures and the closing counts.
     quiet: bool,
-    /// Lines printed after the results, before the counts (backends left out, and why).
-    notes: Vec<String>,
     known: BTreeMap<String, KnownGroup>,
     skipped: BTreeMap<String, usize>,
     /// Counts per backend; cross-vendor trials count apart.
@@ -33,13 +31,12 @@ pub struct TextReporter<W: Write> {
 }
 
 impl<W: Write> TextReporter<W> {
-    pub fn new(out: W, palette: Palette, show_recorded: bool, notes: Vec<String>) -> Self {
+    pub fn new(out: W, palette: Palette, show_recorded: bool) -> Self {
         TextReporter {
             out,
             palette,
             show_recorded,
             quiet: false,
-            notes,
             known: BTreeMap::new(),
             skipped: BTreeMap::new(),
             per_backend: BTreeMap::new(),
@@ -53,7 +50,7 @@ impl<W: Write> TextReporter<W> {
         self.out
     }
 
-    /// Prints only failures and the closing counts (no known differences, skips, notes or
+    /// Prints only failures and the closing counts (no known differences, skips or
     /// per-backend counts).
     pub fn quiet(mut self, quiet: bool) -> Self {
         self.quiet = quiet;
@@ -96,9 +93,6 @@ impl<W: Write> TextReporter<W> {
         }
         for (reason, count) in &self.skipped {
             writeln!(out, "skipped {count} trial(s): {}", terminal(reason))?;
-        }
-        for note in &self.notes {
-            writeln!(out, "skipped: {}", terminal(note))?;
         }
         for (backend, n) in &self.restarts {
             writeln!(
