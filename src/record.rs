@@ -36,6 +36,8 @@ pub enum Change {
     KeptManual { effect: Effect, differs: bool },
     /// Not recorded, and why.
     NotRecorded(String),
+    /// Not recorded because the backend faulted (crashed, hung, answered garbage): a failure.
+    Faulted(String),
 }
 
 /// One case and what happened to it.
@@ -61,7 +63,16 @@ pub struct Provenance {
 }
 
 /// What a backend did on one variant (and instruction) of a case, or why it cannot be recorded.
-type VariantEffect = (String, Result<Effect, Unrecordable>);
+type VariantEffect = (String, Result<Effect, NoEffect>);
+
+/// Why a trial gave nothing to record.
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum NoEffect {
+    /// The backend faulted.
+    Fault(String),
+    /// It answered, but not something a vector can hold.
+    Unrecordable(Unrecordable),
+}
 
 /// Why what a backend did on a case cannot be written into the vector.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -173,7 +184,8 @@ pub fn record(
 }
 
 /// What the backend did on a trial (fill A), or why it cannot be recorded.
-fn effect_of(trial: &Trial) -> Result<Effect, Unrecordable> {
+fn effect_of(trial: &Trial) -> Result<Effect, NoEffect> {
+    let not = |why: &str| NoEffect::Unrecordable(Unrecordable(why.to_string()));
     let observations = execute(trial);
     let mut effects = Vec::new();
     for o in &observations {
@@ -182,18 +194,17 @@ fn effect_of(trial: &Trial) -> Result<Effect, Unrecordable> {
                 let image = trial.image(o.fill);
                 effects.push(Effect::of(&image, outcome));
             }
-            Ok(Response::Unsupported(r)) => return Err(Unrecordable(format!("unsupported: {r}"))),
-            Ok(Response::Answer(_)) => return Err(Unrecordable("a codec answer".into())),
-            Err(f) => return Err(Unrecordable(f.to_string())),
+            Ok(Response::Unsupported(r)) => return Err(not(&format!("unsupported: {r}"))),
+            Ok(Response::Answer(_)) => return Err(not("a codec answer")),
+            Err(f) => return Err(NoEffect::Fault(f.to_string())),
         }
     }
     match effects.as_slice() {
         [first, rest @ ..] if rest.iter().all(|e| e == first) => Ok(first.clone()),
-        [_, ..] => Err(Unrecordable(
-            "the outcome depends on the fill: the backend reads memory the case does not set"
-                .into(),
+        [_, ..] => Err(not(
+            "the outcome depends on the fill: the backend reads memory the case does not set",
         )),
-        [] => Err(Unrecordable("no answer".into())),
+        [] => Err(not("no answer")),
     }
 }
 
@@ -201,7 +212,10 @@ fn decide(case: &Case, results: &[VariantEffect]) -> Change {
     let mut effect: Option<&Effect> = None;
     for (variant, r) in results {
         match r {
-            Err(why) => return Change::NotRecorded(format!("on {variant}: {why}")),
+            Err(NoEffect::Fault(why)) => return Change::Faulted(format!("on {variant}: {why}")),
+            Err(NoEffect::Unrecordable(why)) => {
+                return Change::NotRecorded(format!("on {variant}: {why}"))
+            }
             Ok(e) => match effect {
                 None => effect = Some(e),
                 Some(first) if first != e => {
@@ -234,6 +248,9 @@ fn decide(case: &Case, results: &[VariantEffect]) -> Change {
 fn expectation_matches(x: &Expectation, e: &Effect) -> bool {
     x.after == e.changed && x.error == e.error
 }
+
+/// Where a recorded cite says what the expectation rested on before.
+const BEFORE: &str = "; before, ";
 
 /// The indent of a line (spaces).
 fn indent(line: &str) -> usize {
@@ -300,9 +317,14 @@ fn edit(
         i += 1;
     }
     let pad = " ".repeat(key_indent);
-    let was = match &case.citation.text {
-        Some(t) => format!("; before, {}: {t}", case.basis),
-        None => format!("; before, {}", case.basis),
+    // Recording again keeps what the expectation rested on before it was first observed,
+    // rather than stacking "before, observed" on it each time.
+    let was = match (&case.citation.text, case.basis) {
+        (Some(t), Basis::Observed) => t
+            .find(BEFORE)
+            .map_or_else(String::new, |at| t[at..].to_string()),
+        (Some(t), basis) => format!("{BEFORE}{basis}: {t}"),
+        (None, basis) => format!("{BEFORE}{basis}"),
     };
     let cite = format!("observed on {} ({}), {}{was}", p.backend, p.version, p.date);
     let mut replacement: BTreeMap<&str, String> = BTreeMap::new();

@@ -89,3 +89,95 @@ fn recording_a_backend_fills_in_unspecified_cases_and_keeps_manual_ones() {
         "{shown}"
     );
 }
+
+/// Recording twice keeps what the expectation rested on before it was first observed: the cite
+/// does not grow a "before, observed" each time.
+#[test]
+fn recording_again_keeps_one_before_in_every_cite() {
+    let scratch_dir = scratch();
+    let dir = scratch_dir.path().join("vectors");
+    copy_dir(&root().join("vectors/mitsubishi-iqr"), &dir);
+    let record = || {
+        let out = cli(&[
+            "record",
+            "--backend",
+            "iqr",
+            "--vectors",
+            dir.to_str().expect("utf-8"),
+            "--date",
+            "2026-01-02",
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        corpus(&dir)
+    };
+    let once = record();
+    let twice = record();
+    let mut observed = 0;
+    for (a, b) in once.cases.iter().zip(&twice.cases) {
+        assert_eq!(a.citation, b.citation, "{}", a.id);
+        if a.basis == Basis::Observed {
+            observed += 1;
+            let cite = a.citation.text.as_deref().unwrap_or_default();
+            assert_eq!(cite.matches("; before, ").count(), 1, "{}: {cite}", a.id);
+            assert!(!cite.contains("before, observed"), "{}: {cite}", a.id);
+        }
+    }
+    assert!(observed > 0);
+}
+
+/// A backend that faults on every case records nothing and fails the command; the files stay
+/// as they were.
+#[test]
+fn a_backend_that_faults_records_nothing_and_fails() {
+    if !common::python() {
+        return;
+    }
+    let scratch_dir = scratch();
+    let dir = scratch_dir.path().join("vectors");
+    let fixtures = root().join("tests/fixtures/external");
+    copy_dir(&fixtures.join("vectors"), &dir);
+    let before: Vec<String> = std::fs::read_dir(&dir)
+        .expect("dir")
+        .map(|e| std::fs::read_to_string(e.expect("entry").path()).expect("read"))
+        .collect();
+    let backend = format!(
+        "external:faulty=python3 {} garbage '*'",
+        fixtures.join("faulty_adapter.py").display()
+    );
+    let out = cli(&[
+        "record",
+        "--backend",
+        &backend,
+        "--vectors",
+        dir.to_str().expect("utf-8"),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    assert!(stdout.contains("the backend faulted"), "{stdout}");
+    assert!(stdout.contains(" 0 expectation(s) replaced"), "{stdout}");
+    let after: Vec<String> = std::fs::read_dir(&dir)
+        .expect("dir")
+        .map(|e| std::fs::read_to_string(e.expect("entry").path()).expect("read"))
+        .collect();
+    assert_eq!(before, after);
+}
+
+/// Outside a project the vectors are the binary's own copies, which record cannot edit: it
+/// says so before it runs anything.
+#[test]
+fn record_outside_a_project_says_where_to_run_it() {
+    let empty = scratch();
+    let out = common::bin()
+        .current_dir(empty.path())
+        .args(["record", "--backend", "iqr"])
+        .output()
+        .expect("runs");
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("built into the binary"), "{stderr}");
+    assert!(out.stdout.is_empty());
+}

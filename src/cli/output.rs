@@ -123,6 +123,17 @@ impl Sink {
         matches!(self, Sink::Stdout(_))
     }
 
+    /// Flushes, and syncs a staged file to disk, without putting it in place yet.
+    fn sync(&mut self) -> Result<(), CliError> {
+        let path = self.path().map(Path::to_path_buf);
+        let failed = |e| CliError::write(path.as_deref(), e);
+        self.flush().map_err(failed)?;
+        if let Sink::Staged { file: Some(f), .. } = self {
+            f.sync_all().map_err(failed)?;
+        }
+        Ok(())
+    }
+
     /// Flushes, and puts a staged file in its place.
     pub fn finish(mut self) -> Result<(), CliError> {
         let path = self.path().map(Path::to_path_buf);
@@ -189,6 +200,22 @@ impl Drop for Sink {
     }
 }
 
+/// Writes several files all or none: each is written whole and synced beside its target before
+/// any replaces its target, so an error on one (a full disk, a missing folder) leaves every
+/// file as it was.
+pub fn write_every<'a>(
+    files: impl IntoIterator<Item = (&'a Path, &'a str)>,
+) -> Result<(), CliError> {
+    let mut staged = Vec::new();
+    for (path, text) in files {
+        let mut sink = Sink::open(Some(path))?;
+        sink.write_all(text.as_bytes()).map_err(|e| sink.error(e))?;
+        sink.sync()?;
+        staged.push(sink);
+    }
+    staged.into_iter().try_for_each(Sink::finish)
+}
+
 /// Writes a whole report to `path`, or to stdout (`None`) followed by a newline.
 pub fn write(path: Option<&Path>, text: &str) -> Result<(), CliError> {
     let mut sink = Sink::open(path)?;
@@ -201,4 +228,33 @@ pub fn write(path: Option<&Path>, text: &str) -> Result<(), CliError> {
     });
     written.map_err(|e| sink.error(e))?;
     sink.finish()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_file_or_none_is_written() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let first = dir.path().join("a.yaml");
+        std::fs::write(&first, "before").expect("write");
+        let unwritable = dir.path().join("missing-folder").join("b.yaml");
+        let result = write_every([(first.as_path(), "after"), (unwritable.as_path(), "after")]);
+        assert!(result.is_err());
+        assert_eq!(std::fs::read_to_string(&first).expect("read"), "before");
+        let left: Vec<_> = std::fs::read_dir(dir.path())
+            .expect("dir")
+            .map(|e| e.expect("entry").file_name())
+            .collect();
+        assert_eq!(
+            left,
+            [std::ffi::OsString::from("a.yaml")],
+            "no staged file left"
+        );
+        let second = dir.path().join("b.yaml");
+        write_every([(first.as_path(), "after"), (second.as_path(), "new")]).expect("written");
+        assert_eq!(std::fs::read_to_string(&first).expect("read"), "after");
+        assert_eq!(std::fs::read_to_string(&second).expect("read"), "new");
+    }
 }

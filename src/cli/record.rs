@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::fmt::Write as _;
 
 use super::backends::{prepare, Prepared};
-use super::{output, BackendArgs, Cli, CliError, Outcome, EXIT_OK};
+use super::{output, BackendArgs, Cli, CliError, Outcome, EXIT_DIFFERENCES, EXIT_OK};
 use crate::record::{record, today, Change, Provenance};
 
 /// What `record` takes.
@@ -49,6 +49,22 @@ pub fn record_command(cli: &Cli, args: &RecordArgs) -> Outcome {
     let Some(backend) = backends.first() else {
         return Err(CliError::input("record needs a --backend"));
     };
+    // Recording edits vector files in place: the copies built into the binary are not files.
+    if !args.dry_run {
+        if let Some(case) = project
+            .corpus
+            .cases
+            .iter()
+            .find(|c| c.location.file.starts_with(crate::load::EMBEDDED))
+        {
+            return Err(CliError::input(format!(
+                "record writes into the vector files, and {} is built into the binary: run it in \
+                 a project folder (one with vendors/ and vectors/), give --vectors FOLDER, or \
+                 add --dry-run",
+                case.location.file.display()
+            )));
+        }
+    }
     let provenance = Provenance {
         backend: backend.name().to_string(),
         version: backend.describe(),
@@ -56,7 +72,7 @@ pub fn record_command(cli: &Cli, args: &RecordArgs) -> Outcome {
     };
     let recording = record(&project, backend, args.filter.as_deref(), &provenance)
         .map_err(|e| CliError::input(e.to_string()))?;
-    let (mut filled, mut replaced, mut kept, mut skipped) = (0, 0, 0, 0);
+    let (mut filled, mut replaced, mut kept, mut skipped, mut faulted) = (0, 0, 0, 0, 0);
     let mut out = String::new();
     for e in &recording.entries {
         let at = &e.case.location;
@@ -96,20 +112,36 @@ pub fn record_command(cli: &Cli, args: &RecordArgs) -> Outcome {
                 skipped += 1;
                 let _ = writeln!(out, "{at}: {}: not recorded: {why}", e.case.id);
             }
+            Change::Faulted(why) => {
+                faulted += 1;
+                let _ = writeln!(
+                    out,
+                    "{at}: {}: not recorded, the backend faulted: {why}",
+                    e.case.id
+                );
+            }
         }
     }
     if !args.dry_run {
-        for (path, text) in &recording.files {
-            output::write(Some(path), text)?;
-        }
+        output::write_every(
+            recording
+                .files
+                .iter()
+                .map(|(path, text)| (path.as_path(), text.as_str())),
+        )?;
     }
     let _ = write!(
         out,
         "{}{filled} unspecified case(s) filled in, {replaced} expectation(s) replaced, {kept} manual \
-         kept, {skipped} not recorded, in {} file(s)",
+         kept, {skipped} not recorded, {faulted} faulted, in {} file(s)",
         if args.dry_run { "dry run: " } else { "" },
         recording.files.len()
     );
     output::write(None, &out)?;
-    Ok(EXIT_OK)
+    // A backend that faulted did not answer: the recording is incomplete.
+    Ok(if faulted > 0 {
+        EXIT_DIFFERENCES
+    } else {
+        EXIT_OK
+    })
 }
