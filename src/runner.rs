@@ -184,7 +184,12 @@ pub fn run(
     execute_all(trials, &indices, jobs, stop, |progress| {
         let written = match progress {
             Progress::Observed(i, observations, elapsed) => {
-                let verdict = judge(&trials[i], &observations);
+                let mut verdict = judge(&trials[i], &observations);
+                // Once the run is interrupted, its backends are killed: a trial that then
+                // faults was cancelled, not failed.
+                if stop.load(Ordering::Relaxed) && matches!(verdict, Verdict::Fault { .. }) {
+                    verdict = Verdict::cancelled();
+                }
                 finished(reporter, &mut summary, trials, i, verdict, elapsed)
             }
             Progress::Restarted { backend, restarts } => reporter.event(&Event::BackendRestarted {

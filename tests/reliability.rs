@@ -599,10 +599,30 @@ fn a_crashed_adapters_helpers_are_killed_with_it() {
     );
 }
 
-/// Runs the binary with an adapter that starts helpers, signals it once the adapter has
-/// started them (and `settle` more), and returns its output with the adapter's processes.
+/// Runs `diff` with an adapter that starts helpers, signals it once the adapter has started
+/// them (and `settle` more), and returns its output with the adapter's processes.
 #[cfg(target_os = "linux")]
 fn interrupted_run(
+    mode: &str,
+    trigger: &str,
+    signal: i32,
+    settle: Duration,
+) -> (Output, Vec<i32>, String) {
+    let vectors = fixtures().join("vectors");
+    interrupted(
+        &["diff", "--vectors", path(&vectors)],
+        mode,
+        trigger,
+        signal,
+        settle,
+    )
+}
+
+/// Runs the command `what` (with `--format json --output REPORT`, the adapter as its backend)
+/// and interrupts it as [`interrupted_run`] does.
+#[cfg(target_os = "linux")]
+fn interrupted(
+    what: &[&str],
     mode: &str,
     trigger: &str,
     signal: i32,
@@ -615,8 +635,8 @@ fn interrupted_run(
     let backend = format!("external:slow={}", faulty_command(mode, trigger));
     let mut child = Command::new(BIN)
         .args(["--root", path(root())])
-        .args(["diff", "--format", "json", "--output", path(&report)])
-        .args(["--vectors", path(&fixtures().join("vectors"))])
+        .args(what)
+        .args(["--format", "json", "--output", path(&report)])
         .args(["--backend", &backend, "--timeout", "60"])
         .env("NO_COLOR", "1")
         .env("FAULTY_PIDS", &file)
@@ -670,6 +690,10 @@ fn sigint_ends_a_run_with_what_it_has_and_no_backend_process_survives() {
     assert_eq!(all_ended(&pids, Duration::from_secs(5)), Vec::<i32>::new());
     assert!(report.contains("\"interrupted\": true"), "{report}");
     assert!(report.contains("slow::habin::ext-before::rcpu"), "{report}");
+    // The trial the interruption killed and those after it were not run: none failed.
+    let report: serde_json::Value = serde_json::from_str(&report).expect("JSON");
+    assert_eq!(report["summary"]["failed"], 0, "{report}");
+    assert!(report["summary"]["skipped"].as_u64() > Some(0), "{report}");
 }
 
 #[cfg(target_os = "linux")]
@@ -688,6 +712,36 @@ fn sigterm_during_the_handshake_kills_the_backend_and_its_helpers() {
     assert_eq!(out.status.code(), Some(143), "{err}");
     assert_eq!(pids.len(), 2, "{pids:?}");
     assert_eq!(all_ended(&pids, Duration::from_secs(5)), Vec::<i32>::new());
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn sigterm_ends_a_sweep_whose_backend_hangs_and_no_backend_process_survives() {
+    if !python() {
+        return;
+    }
+    let sweep = [
+        "sweep",
+        "--operation",
+        "hex-to-value",
+        "--generator",
+        "random",
+        "--count",
+        "50",
+        "--seed",
+        "1",
+        "--digits",
+        "4",
+    ];
+    for signal in [libc::SIGTERM, libc::SIGINT] {
+        let (out, pids, report) =
+            interrupted(&sweep, "hang", "*", signal, Duration::from_millis(500));
+        let err = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(128 + signal), "{err}");
+        assert_eq!(pids.len(), 3, "{pids:?}");
+        assert_eq!(all_ended(&pids, Duration::from_secs(5)), Vec::<i32>::new());
+        assert!(report.contains("\"interrupted\": true"), "{report}");
+    }
 }
 
 // --- exit statuses that do not lie ------------------------------------------------------------

@@ -213,17 +213,18 @@ fn a_mutant_shrinks_to_a_minimal_input_that_still_differs_and_emits_a_failing_ve
     }
     // Emitted, the vectors load, pass on the reference model and fail on the mutant.
     let emitted = emit::emit(&sweep, &results, &project.corpus);
-    assert!(emitted.cases > 0, "{:?}", emitted.skipped);
+    assert!(!emitted.cases.is_empty(), "{:?}", emitted.skipped);
+    let yaml = emitted.yaml(emitted.cases.iter().map(|(_, c)| c.as_str()));
     let scratch_dir = scratch();
     let dir = scratch_dir.path().to_path_buf();
     let file = dir.join("habin-sweep.yaml");
-    std::fs::write(&file, &emitted.yaml).expect("write");
+    std::fs::write(&file, &yaml).expect("write");
     let out = common::cli(&["validate", file.to_str().expect("utf-8")]);
     assert!(
         out.status.success(),
         "{}\n{}",
         String::from_utf8_lossy(&out.stderr),
-        emitted.yaml
+        yaml
     );
     let profiles = load_profiles(&root().join("vendors")).expect("profiles");
     let corpus = load_corpus(std::slice::from_ref(&file), &profiles).expect("emitted corpus loads");
@@ -918,4 +919,168 @@ fn a_full_sweep_by_class_of_an_instruction_covers_every_flag_setting() {
         pairs[0].inputs,
         16 * 256 * 256 + 16 * 16 * 256 + 16 * 16 * 16
     );
+}
+
+/// `--emit` never writes a file the loader would refuse, never replaces a file `sweep` did not
+/// write unless told to, and a wrong `--output` or `--emit` is refused before the sweep.
+#[test]
+fn emit_and_output_are_settled_before_the_sweep_and_write_only_what_loads() {
+    let scratch_dir = scratch();
+    let dir = scratch_dir.path();
+    let sweep = |extra: &[&str]| {
+        let mut args = vec![
+            "sweep",
+            "--operation",
+            "hex-to-value",
+            "--generator",
+            "random",
+            "--count",
+            "3000",
+            "--seed",
+            "3",
+        ];
+        args.extend_from_slice(extra);
+        common::bin()
+            .current_dir(dir)
+            .args(&args)
+            .output()
+            .expect("runs")
+    };
+    let text = |b: &[u8]| String::from_utf8_lossy(b).into_owned();
+
+    // A hand-written file is refused before anything is swept, and left as it was.
+    std::fs::write(dir.join("hand.yaml"), "# mine\n").expect("write");
+    let out = sweep(&["--emit", "hand.yaml"]);
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stderr).contains("--force"),
+        "{}",
+        text(&out.stderr)
+    );
+    assert!(
+        !text(&out.stderr).contains("sweeping"),
+        "{}",
+        text(&out.stderr)
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("hand.yaml")).expect("read"),
+        "# mine\n"
+    );
+
+    // A results file in a folder that does not exist: refused before the sweep.
+    let out = sweep(&["--output", "no-such-folder/r.txt"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        !text(&out.stderr).contains("sweeping"),
+        "{}",
+        text(&out.stderr)
+    );
+
+    // What is written loads; written again, the file (written by sweep) is replaced.
+    for _ in 0..2 {
+        let out = sweep(&["--emit", "found.yaml"]);
+        assert!(
+            matches!(out.status.code(), Some(0 | 1)),
+            "{}",
+            text(&out.stderr)
+        );
+        let emitted = dir.join("found.yaml");
+        assert!(emitted.exists(), "{}", text(&out.stderr));
+        let out = common::cli(&["validate", emitted.to_str().expect("utf-8")]);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+    }
+    let out = sweep(&["--emit", "hand.yaml", "--force"]);
+    assert!(
+        matches!(out.status.code(), Some(0 | 1)),
+        "{}",
+        text(&out.stderr)
+    );
+    assert_ne!(
+        std::fs::read_to_string(dir.join("hand.yaml")).expect("read"),
+        "# mine\n"
+    );
+
+    // Nothing found: no file, and a word saying so (an empty `cases:` would not load).
+    let out = common::bin()
+        .current_dir(dir)
+        .args([
+            "sweep",
+            "--instruction",
+            "ATOH",
+            "--generator",
+            "random",
+            "--count",
+            "200",
+            "--seed",
+            "1",
+            "--emit",
+            "none.yaml",
+        ])
+        .output()
+        .expect("runs");
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert!(!dir.join("none.yaml").exists());
+    assert!(
+        text(&out.stderr).contains("nothing to write to none.yaml"),
+        "{}",
+        text(&out.stderr)
+    );
+}
+
+/// A codec that faults on every input it is asked makes the sweep fail and says so, whatever
+/// the other columns did.
+#[test]
+fn a_sweep_whose_codec_faults_fails_and_names_it() {
+    if !common::python() {
+        return;
+    }
+    let script = root().join("tests/fixtures/external/faulty_codec.py");
+    for mode in ["crash", "garbage"] {
+        let backend = format!("external:faulty=python3 {} {mode}", script.display());
+        let out = common::cli(&[
+            "sweep",
+            "--operation",
+            "hex-to-value",
+            "--generator",
+            "random",
+            "--count",
+            "60",
+            "--seed",
+            "1",
+            "--digits",
+            "4",
+            "--backend",
+            &backend,
+        ]);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert_eq!(out.status.code(), Some(1), "{mode}: {stdout}");
+        assert!(stdout.contains("FAULTED: faulty "), "{mode}: {stdout}");
+    }
+}
+
+/// Two classes of a group that shrink to the same input show it once.
+#[test]
+fn a_shrunk_input_is_shown_once_per_group() {
+    let out = common::cli(&[
+        "sweep",
+        "--operation",
+        "hex-to-value",
+        "--generator",
+        "random",
+        "--count",
+        "3000",
+        "--seed",
+        "3",
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let mut shrunk = 0;
+    for group in stdout.split("\n#").skip(1) {
+        let mut seen = BTreeSet::new();
+        for line in group.lines().filter(|l| l.starts_with("   shrunk (")) {
+            shrunk += 1;
+            let input = line.split_once("): ").map_or(line, |(_, i)| i);
+            assert!(seen.insert(input), "shown twice: {input}\n{group}");
+        }
+    }
+    assert!(shrunk > 0, "{stdout}");
 }

@@ -246,7 +246,10 @@ pub fn main() -> ExitCode {
         Color::Never => anstream::ColorChoice::Never.write_global(),
         Color::Auto => {}
     }
-    if matches!(cli.command, Command::Run(_) | Command::Diff(_)) {
+    if matches!(
+        cli.command,
+        Command::Run(_) | Command::Diff(_) | Command::Sweep(_) | Command::Record(_)
+    ) {
         if let Err(e) = crate::interrupt::install(crate::interrupt::OnSignal::Finish) {
             console::warning(&format!("SIGINT and SIGTERM are not handled: {e}"));
         }

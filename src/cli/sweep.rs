@@ -1,15 +1,17 @@
 //! `sweep`: generated inputs on several backends, disagreements grouped, shrunk and written as
 //! vectors.
 
-use std::io::IsTerminal;
-use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::io::{IsTerminal, Write as _};
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use super::backends::{prepare, Prepared};
+use super::output::Sink;
 use super::{output, BackendArgs, Cli, CliError, Outcome, EXIT_DIFFERENCES, EXIT_OK};
 use crate::backend::Backend;
+use crate::load::CorpusBuilder;
 use crate::model::cross_vendor::Operation;
+use crate::model::profile::Profiles;
 use crate::report::console;
 use crate::session::{assemble, BackendSource};
 use crate::sweep::generate::{Digits, Generator, BOUNDARIES, MAX_DIGITS};
@@ -79,9 +81,51 @@ pub struct SweepArgs {
     /// Write the results to this file instead of standard output.
     #[arg(long, value_name = "FILE")]
     pub output: Option<PathBuf>,
-    /// Write the shrunk inputs as a vector file (cross-vendor for an operation).
+    /// Write the shrunk inputs as a vector file (cross-vendor for an operation). Every case
+    /// written loads; a file not written by `sweep` is replaced only with --force.
     #[arg(long, value_name = "FILE")]
     pub emit: Option<PathBuf>,
+    /// Let --emit replace a file that `sweep` did not write.
+    #[arg(long, requires = "emit")]
+    pub force: bool,
+}
+
+/// Refuses to let `--emit` replace a file that `sweep` did not write (a hand-written vector
+/// file, or anything else), before the sweep.
+fn refuse_hand_written(path: &Path) -> Result<(), CliError> {
+    output::check(path)?;
+    if !path.is_file() {
+        return Ok(());
+    }
+    let head: String = std::fs::read_to_string(path)
+        .map(|t| t.lines().take(3).collect::<Vec<_>>().join("\n"))
+        .unwrap_or_default();
+    if head.contains(emit::WRITTEN_BY) {
+        return Ok(());
+    }
+    Err(CliError::input(format!(
+        "--emit {}: the file exists and was not written by sweep; give --force to replace it, or \
+         another file",
+        path.display()
+    )))
+}
+
+/// The emitted cases that load as the corpus would load them, each checked in a file of its
+/// own; the others are set aside with the loader's reason.
+fn loadable<'e>(path: &Path, emitted: &'e emit::Emitted, profiles: &Profiles) -> Vec<&'e str> {
+    let mut kept = Vec::new();
+    for (input, case) in &emitted.cases {
+        let mut builder = CorpusBuilder::default();
+        builder.add_file(path, &emitted.yaml([case.as_str()]), profiles);
+        match builder.finish() {
+            Ok(_) => kept.push(case.as_str()),
+            Err(e) => console::note(&format!(
+                "not written as a vector: {input}: it would not load: {}",
+                e.to_string().lines().next().unwrap_or_default()
+            )),
+        }
+    }
+    kept
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -109,30 +153,6 @@ pub enum SweepFormat {
     Text,
     Json,
     Html,
-}
-
-/// Set by Ctrl-C: the sweep stops after the round under way and reports what it found.
-static STOP: AtomicBool = AtomicBool::new(false);
-
-#[cfg(unix)]
-extern "C" fn on_interrupt(_: libc::c_int) {
-    STOP.store(true, Ordering::Relaxed);
-    // A second Ctrl-C ends the process at once.
-    // SAFETY: restoring the default disposition is async-signal-safe.
-    unsafe {
-        libc::signal(libc::SIGINT, libc::SIG_DFL);
-    }
-}
-
-fn catch_interrupt() {
-    #[cfg(unix)]
-    // SAFETY: the handler only stores to an atomic and resets the disposition.
-    unsafe {
-        libc::signal(
-            libc::SIGINT,
-            on_interrupt as extern "C" fn(libc::c_int) as libc::sighandler_t,
-        );
-    }
 }
 
 pub fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
@@ -277,7 +297,20 @@ pub fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
              --alphabet or fewer --digits",
         ));
     }
-    catch_interrupt();
+    // Where the results go is settled before the sweep, not found wrong after it.
+    if let (Some(path), false) = (&args.emit, args.force) {
+        refuse_hand_written(path)?;
+    }
+    let mut output_sink = args
+        .output
+        .as_deref()
+        .map(|p| Sink::open(Some(p)))
+        .transpose()?;
+    let emit_sink = args
+        .emit
+        .as_deref()
+        .map(|p| Sink::open(Some(p)))
+        .transpose()?;
     let bar = std::io::stderr().is_terminal().then(|| {
         let bar = indicatif::ProgressBar::new(sweep.space.total());
         bar.set_style(
@@ -315,7 +348,9 @@ pub fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
             render::thousands(sweep.settings.class_check)
         ));
     }
-    let results = sweep.run(&STOP, &mut |done, of| {
+    // SIGINT and SIGTERM (handled in `cli::main`) stop the sweep after the round under way and
+    // kill every backend process group, so a hung backend ends the round too.
+    let results = sweep.run(crate::interrupt::stop_flag(), &mut |done, of| {
         if let Some(bar) = &bar {
             bar.set_length(of);
             bar.set_position(done);
@@ -336,8 +371,12 @@ pub fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
         SweepFormat::Json => render::json(&results),
         SweepFormat::Html => render::html(&results),
     };
-    match &args.output {
-        Some(path) => output::write(Some(path), &rendered)?,
+    match output_sink.take() {
+        Some(mut sink) => {
+            sink.write_all(rendered.as_bytes())
+                .map_err(|e| sink.error(e))?;
+            sink.finish()?;
+        }
         None => output::write(None, rendered.trim_end())?,
     }
     if let Some(m) = results.classes.as_ref().and_then(|c| c.mismatch.as_ref()) {
@@ -348,22 +387,34 @@ pub fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
         ));
         return Ok(EXIT_DIFFERENCES);
     }
-    if let Some(path) = &args.emit {
+    if let (Some(path), Some(mut sink)) = (&args.emit, emit_sink) {
         let emitted = emit::emit(&sweep, &results, &project.corpus);
         for why in &emitted.skipped {
             console::note(&format!("not written as a vector: {why}"));
         }
-        output::write(Some(path), &emitted.yaml)?;
-        console::status(&format!(
-            "wrote {} vector(s) to {}",
-            emitted.cases,
-            path.display()
-        ));
+        let cases = loadable(path, &emitted, &project.profiles);
+        if cases.is_empty() {
+            // Dropped unfinished: a staged file is removed and the target left as it was.
+            drop(sink);
+            console::status(&format!(
+                "nothing to write to {}: no shrunk input makes a vector",
+                path.display()
+            ));
+        } else {
+            let yaml = emitted.yaml(cases.iter().copied());
+            sink.write_all(yaml.as_bytes()).map_err(|e| sink.error(e))?;
+            sink.finish()?;
+            console::status(&format!(
+                "wrote {} vector(s) to {}",
+                cases.len(),
+                path.display()
+            ));
+        }
     }
     Ok(if results.interrupted {
         // As `run`: an interruption, whatever was found before it.
         EXIT_INTERRUPTED
-    } else if results.differs() {
+    } else if results.differs() || !results.faulted().is_empty() {
         EXIT_DIFFERENCES
     } else {
         EXIT_OK

@@ -60,6 +60,23 @@ pub enum Verdict {
     },
 }
 
+/// Why a trial is not run when the run is interrupted before it, or its backend is killed by
+/// the interruption while it runs.
+pub const CANCELLED: &str = "not run: the run was interrupted";
+
+impl Verdict {
+    /// A trial the interruption cancelled: skipped, counted apart from failures.
+    pub fn cancelled() -> Verdict {
+        Verdict::Skipped {
+            reason: CANCELLED.into(),
+        }
+    }
+
+    pub fn is_cancelled(&self) -> bool {
+        matches!(self, Verdict::Skipped { reason } if reason == CANCELLED)
+    }
+}
+
 /// How a trial differed.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case", tag = "kind")]

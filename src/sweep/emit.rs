@@ -16,19 +16,31 @@ use crate::model::cross_vendor::{Answer, Operation};
 use crate::model::{Corpus, ErrorSignal, Operand};
 use crate::value::hex_word;
 
-/// A vector file holding one case per shrunk input that can be written, and the inputs that
-/// could not be (with why).
+/// A vector file's header and one case per shrunk input that can be written (the input, and
+/// the case's lines), and the inputs that could not be (with why).
 pub struct Emitted {
-    pub yaml: String,
-    pub cases: usize,
+    pub header: String,
+    pub cases: Vec<(String, String)>,
     pub skipped: Vec<String>,
 }
 
+impl Emitted {
+    /// The file with the given cases.
+    pub fn yaml<'a>(&self, cases: impl IntoIterator<Item = &'a str>) -> String {
+        let mut text = self.header.clone();
+        cases.into_iter().for_each(|c| text.push_str(c));
+        text
+    }
+}
+
+/// The line every emitted file starts its comment with: a file without it was not written by
+/// `sweep`, and `--emit` replaces it only with `--force`.
+pub const WRITTEN_BY: &str = "# Written by `plc-conformance sweep`";
+
 /// The vector file of a sweep's shrunk inputs.
 pub fn emit(sweep: &Sweep, results: &Results, corpus: &Corpus) -> Emitted {
-    let mut body = String::new();
+    let mut cases = Vec::new();
     let mut skipped = Vec::new();
-    let mut cases = 0;
     let mut seen = std::collections::HashSet::new();
     for s in &results.shrunk {
         if !seen.insert(s.to.point.clone()) {
@@ -41,17 +53,14 @@ pub fn emit(sweep: &Sweep, results: &Results, corpus: &Corpus) -> Emitted {
             Target::Instruction { .. } => native_case(sweep, results, &s.from, &s.to),
         };
         match made {
-            Ok(text) => {
-                body.push_str(&text);
-                cases += 1;
-            }
+            Ok(text) => cases.push((s.to.point.to_string(), text)),
             Err(NotEmitted(why)) => skipped.push(format!("{}: {why}", s.to.point)),
         }
     }
     let header = match &sweep.settings.target {
         Target::Operation { operation } => format!(
             "# yaml-language-server: $schema=../../schema/cross-vendor.schema.json\n\
-             # Written by `plc-conformance sweep`: {}.\n\
+             {WRITTEN_BY}: {}.\n\
              operation: {operation}\n\
              source: \"plc-conformance sweep of the reference models; their rules: docs/semantics.md#cross-vendor\"\n\
              cases:\n",
@@ -76,7 +85,7 @@ pub fn emit(sweep: &Sweep, results: &Results, corpus: &Corpus) -> Emitted {
                 .unwrap_or_default();
             format!(
                 "# yaml-language-server: $schema=../../schema/vectors.schema.json\n\
-                 # Written by `plc-conformance sweep`: {}.\n\
+                 {WRITTEN_BY}: {}.\n\
                  instructions: [{instruction}]\n\
                  profiles: [{profile}]\n\
                  source: {{manual: {manual}, page: {}}}\n\
@@ -87,7 +96,7 @@ pub fn emit(sweep: &Sweep, results: &Results, corpus: &Corpus) -> Emitted {
         }
     };
     Emitted {
-        yaml: format!("{header}{body}"),
+        header,
         cases,
         skipped,
     }

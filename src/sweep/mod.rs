@@ -151,10 +151,44 @@ impl Results {
         self.groups.sorted()
     }
 
+    /// The columns whose backend faulted (crashed, hung, answered garbage or not at all, or
+    /// said `unsupported` of an input it claimed), with how and on how many inputs: a sweep with
+    /// one is a failure, whatever else it found, since those inputs were never answered.
+    pub fn faulted(&self) -> Vec<Faulted> {
+        let mut out: Vec<Faulted> = Vec::new();
+        for g in self.groups.by_key.values() {
+            for (column, reply) in self.columns.iter().zip(&g.representative.replies) {
+                let group::Reply::Failed { label, .. } = reply else {
+                    continue;
+                };
+                match out
+                    .iter_mut()
+                    .find(|f| f.column == column.name && f.label == *label)
+                {
+                    Some(f) => f.inputs += g.inputs,
+                    None => out.push(Faulted {
+                        column: column.name.clone(),
+                        label: label.clone(),
+                        inputs: g.inputs,
+                    }),
+                }
+            }
+        }
+        out
+    }
+
     /// Whether any column differs from its oracle.
     pub fn differs(&self) -> bool {
         self.groups.by_key.values().any(|g| !g.differing.is_empty())
     }
+}
+
+/// A column that faulted: how, and on how many inputs.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Faulted {
+    pub column: String,
+    pub label: String,
+    pub inputs: u64,
 }
 
 /// Inputs per round for a sweep with an external backend (one `runner::run` each).
@@ -366,7 +400,7 @@ impl Sweep {
         progress(0, shard_inputs);
         loop {
             if stop.load(Ordering::Relaxed) {
-                interrupted = swept < shard_inputs;
+                interrupted = true;
                 break;
             }
             let points: Vec<(u64, Point)> = indices
@@ -453,7 +487,8 @@ struct Keep<'a> {
 impl Reporter for Keep<'_> {
     fn event(&mut self, event: &Event<'_>) -> std::io::Result<()> {
         if let Event::TrialFinished { index, verdict, .. } = event {
-            if let Some(&(p, c)) = self.place.get(*index) {
+            // A cancelled trial leaves its input unanswered: it is not counted as swept.
+            if let (Some(&(p, c)), false) = (self.place.get(*index), verdict.is_cancelled()) {
                 self.out[p][c] = Some(Reply::of(verdict));
             }
         }

@@ -124,6 +124,16 @@ pub fn text(results: &Results) -> String {
             what(results)
         );
     }
+    for f in results.faulted() {
+        let _ = writeln!(
+            out,
+            "  FAULTED: {} {} on {} {}: those were never answered",
+            f.column,
+            f.label,
+            thousands(f.inputs),
+            what(results)
+        );
+    }
     if let Some(c) = &results.classes {
         class_text(&mut out, c);
     }
@@ -225,7 +235,12 @@ fn group_text(
         "   first: {}",
         found_line(&results.columns, &g.representative)
     );
+    // Two classes may shrink to the same input: it is shown once.
+    let mut shown = std::collections::HashSet::new();
     for s in shrunk.unwrap_or_default() {
+        if !shown.insert(&s.to.point) {
+            continue;
+        }
         let _ = writeln!(
             out,
             "   shrunk ({}): {}",
@@ -247,6 +262,8 @@ pub struct Document<'a> {
     pub swept: u64,
     pub interrupted: bool,
     pub elapsed_seconds: f64,
+    /// The columns whose backend faulted: a failure of the sweep.
+    pub faulted: Vec<super::Faulted>,
     pub pairs: Vec<Pair>,
     pub groups: Vec<GroupDoc<'a>>,
     /// The full generator by class: the byte classes and their check.
@@ -279,6 +296,7 @@ pub fn document(results: &Results) -> Document<'_> {
         swept: results.swept,
         interrupted: results.interrupted,
         elapsed_seconds: results.elapsed.as_secs_f64(),
+        faulted: results.faulted(),
         pairs: pairs(results),
         groups: results
             .ordered()
