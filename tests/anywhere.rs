@@ -270,3 +270,25 @@ fn junit_outside_a_project_names_no_embedded_file_and_times_the_run() {
         .expect("the report's time");
     assert!(time > 0.0, "{xml}");
 }
+
+/// Every page the manual page names is written by `man --dir`.
+#[test]
+fn man_dir_writes_every_page_the_manual_names() {
+    let out = run_in(scratch().path(), &["man"]);
+    let page = text(&out.stdout);
+    let named: Vec<String> = page
+        .lines()
+        .filter_map(|l| l.strip_suffix("(1)"))
+        .map(|n| format!("{}.1", n.replace("\\-", "-")))
+        .collect();
+    assert!(named.len() >= 8, "{page}");
+    let dir = scratch();
+    let out = run_in(
+        dir.path(),
+        &["man", "--dir", dir.path().to_str().expect("utf-8")],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    for name in named.iter().chain([&"plc-conformance.1".to_string()]) {
+        assert!(dir.path().join(name).is_file(), "{name} was not written");
+    }
+}

@@ -195,8 +195,26 @@ pub fn completions(shell: clap_complete::Shell) -> Outcome {
 }
 
 /// `man`: the manual page, in roff.
-pub fn man() -> Outcome {
-    let page = clap_mangen::Man::new(Cli::command());
+/// The command as the manual describes it: `help` is clap's, with no page of its own.
+fn manual_command() -> clap::Command {
+    Cli::command().disable_help_subcommand(true)
+}
+
+/// The main page names a page per command (`plc-conformance-run(1)`): `--dir` writes them all,
+/// so that every page named exists.
+pub fn man(dir: Option<&std::path::Path>) -> Outcome {
+    if let Some(dir) = dir {
+        if !dir.is_dir() {
+            return Err(CliError::input(format!(
+                "{}: not a folder; create it first",
+                dir.display()
+            )));
+        }
+        clap_mangen::generate_to(manual_command(), dir)
+            .map_err(|e| CliError::write(Some(dir), e))?;
+        return Ok(EXIT_OK);
+    }
+    let page = clap_mangen::Man::new(manual_command());
     let mut roff = Vec::new();
     page.render(&mut roff)
         .map_err(|e| CliError::write(None, e))?;

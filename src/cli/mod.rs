@@ -110,8 +110,13 @@ pub enum Command {
         #[arg(value_enum)]
         shell: clap_complete::Shell,
     },
-    /// Print the manual page (roff), e.g. `plc-conformance man | man -l -`.
-    Man,
+    /// Print the manual page (roff), e.g. `plc-conformance man | man -l -`; with --dir, write
+    /// it and the page of every command it names (`plc-conformance-run.1`, ...) into a folder.
+    Man {
+        /// The folder to write every page into (`man1/` of a MANPATH entry, say).
+        #[arg(long, value_name = "DIR")]
+        dir: Option<PathBuf>,
+    },
     /// Generate inputs for an operation or an instruction, run them on several backends, group
     /// the inputs they disagree on by behaviour and shrink each group to a minimal vector.
     Sweep(sweep::SweepArgs),
@@ -262,7 +267,7 @@ pub fn main() -> ExitCode {
         Command::Schema { kind } => info::schema(*kind),
         Command::Serve { profile } => info::serve(&cli, profile),
         Command::Completions { shell } => info::completions(*shell),
-        Command::Man => info::man(),
+        Command::Man { dir } => info::man(dir.as_deref()),
         Command::Sweep(args) => sweep::sweep(&cli, args),
         Command::Record(args) => record::record_command(&cli, args),
     };

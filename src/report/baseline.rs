@@ -12,7 +12,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::json::{FORMAT, VERSION};
-use super::record::Record;
+use super::record::{Behaviour, Record};
 
 /// The part of a JSON report a baseline needs.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -75,10 +75,22 @@ pub struct Changes<'a> {
     pub new: Vec<&'a Record>,
     /// Failing before, passing now.
     pub fixed: Vec<(&'a Record, &'a Record)>,
-    /// Failing both times, but not in the same way.
+    /// Differing both times (failing, or a listed known difference), but not in the same way:
+    /// another status, behaviour or answer.
     pub changed: Vec<(&'a Record, &'a Record)>,
-    /// Failing both times in the same way.
+    /// Differing both times in the same way.
     pub unchanged: usize,
+}
+
+/// A trial that does not conform: it fails, or its difference is a known one.
+fn differs(r: &Record) -> bool {
+    r.status.is_failure() || matches!(r.behaviour, Behaviour::Known { .. })
+}
+
+/// The same outcome: status, behaviour, and the answer as shown and explained (`5A8DH` and
+/// `508DH` are both wrong words, but not the same answer).
+fn same(a: &Record, b: &Record) -> bool {
+    a.status == b.status && a.behaviour == b.behaviour && a.shown == b.shown && a.detail == b.detail
 }
 
 pub fn compare<'a>(before: &'a [Record], now: &'a [Record]) -> Changes<'a> {
@@ -91,13 +103,21 @@ pub fn compare<'a>(before: &'a [Record], now: &'a [Record]) -> Changes<'a> {
             (false, true) => changes.new.push(r),
             (true, false) => changes.fixed.push((was.unwrap_or(r), r)),
             (true, true) => match was {
-                Some(w) if w.status == r.status && w.behaviour == r.behaviour => {
-                    changes.unchanged += 1
-                }
+                Some(w) if same(w, r) => changes.unchanged += 1,
                 Some(w) => changes.changed.push((w, r)),
                 None => changes.new.push(r),
             },
-            (false, false) => {}
+            // A known difference both times is still a difference: its answer may change.
+            (false, false) => match was {
+                Some(w) if differs(w) && differs(r) => {
+                    if same(w, r) {
+                        changes.unchanged += 1;
+                    } else {
+                        changes.changed.push((w, r));
+                    }
+                }
+                _ => {}
+            },
         }
     }
     changes
@@ -108,7 +128,6 @@ mod tests {
     use super::*;
     use crate::judge::Status;
     use crate::model::Basis;
-    use crate::report::record::Behaviour;
 
     fn r(trial: &str, status: Status, shown: &str) -> Record {
         let behaviour = match shown {
@@ -160,5 +179,26 @@ mod tests {
         assert_eq!(c.changed.len(), 1);
         assert_eq!(c.changed[0].1.trial, "c");
         assert_eq!(c.unchanged, 1);
+    }
+
+    #[test]
+    fn another_answer_of_the_same_kind_is_a_change() {
+        let known = |shown: &str| Record {
+            status: Status::Ignored,
+            behaviour: Behaviour::Known {
+                difference: Box::new(Behaviour::WrongWords),
+            },
+            ..r("k", Status::Ignored, shown)
+        };
+        let before = vec![r("w", Status::Fail, "x"), known("5A8DH")];
+        let mut wrong = r("w", Status::Fail, "x");
+        wrong.detail = "D200 508DH".into();
+        let now = vec![wrong, known("508DH")];
+        let c = compare(&before, &now);
+        let changed: Vec<&str> = c.changed.iter().map(|(_, r)| r.trial.as_str()).collect();
+        assert_eq!(changed, ["w", "k"]);
+        assert_eq!(c.unchanged, 0);
+        assert!(compare(&before, &before).changed.is_empty());
+        assert_eq!(compare(&before, &before).unchanged, 2);
     }
 }
