@@ -148,9 +148,20 @@ impl Harness {
                 );
             }
             // Backends run on request only (self-checks of the harness) have tests of their own.
-            // One whose level (a profile, or codec) is declared is planned without starting it.
+            // One whose level (a profile, or codec) is declared is planned without starting it,
+            // except when the trials are listed: nextest lists once, then runs each trial in a
+            // process of its own and shows a trial that returns "ignored" as passed, so what a
+            // backend declines is decided from its handshake when listing and marked ignored.
+            // A trial run alone by name (`--exact`, as nextest runs one) starts its own backend
+            // the same way, so that it is ignored or not as it was listed.
+            let alone = args
+                .exact
+                .then(|| args.filter.as_deref().map(backend_of))
+                .flatten();
             for c in configured.configured.into_iter().filter(|c| !c.on_request) {
-                sources.push(if c.settings.profile.is_some() || c.settings.codec {
+                let declared = c.settings.profile.is_some() || c.settings.codec;
+                let now = args.list || alone == Some(c.settings.name.as_str());
+                sources.push(if declared && !now {
                     BackendSource::ProcessOnFirstUse(c.settings)
                 } else {
                     BackendSource::Process(c.settings)
@@ -187,13 +198,22 @@ impl Harness {
         let trials = project.plan(&assembled.backends);
         tests.extend(trials.into_iter().map(|t| {
             let lazy = by_name.get(t.backend.name()).cloned();
-            test(t, lazy)
+            test(t, lazy, args.exact)
         }));
         let conclusion = libtest_mimic::run(&args, tests);
         // Started processes get their shutdown message before the harness exits.
         drop(lazies);
         drop(project);
         conclusion.exit_code()
+    }
+}
+
+/// The backend of a trial's name: `backend::...`, or `cross-vendor::backend::...`.
+fn backend_of(name: &str) -> &str {
+    let mut parts = name.split("::");
+    match parts.next() {
+        Some("cross-vendor") => parts.next().unwrap_or_default(),
+        first => first.unwrap_or_default(),
     }
 }
 
@@ -228,16 +248,20 @@ fn exact_files(args: &Arguments, paths: &Paths) -> Option<Vec<std::path::PathBuf
 }
 
 /// One planned trial as a libtest trial; `lazy` starts its backend when the backend is only
-/// planned so far.
-fn test(trial: Trial, lazy: Option<Arc<LazyStart>>) -> Test {
+/// planned so far; `exact` when the trial runs alone (`--exact`, as under nextest).
+fn test(trial: Trial, lazy: Option<Arc<LazyStart>>, exact: bool) -> Test {
     let name = trial.name();
     let ignored = trial.ignored_because().is_some();
-    Test::ignorable_test(name, move || outcome(trial, lazy)).with_ignored_flag(ignored)
+    Test::ignorable_test(name, move || outcome(trial, lazy, exact)).with_ignored_flag(ignored)
 }
 
 /// Runs a trial and maps its verdict onto libtest: a pass, an ignored trial with its reason, or
 /// a failure with the full report.
-fn outcome(mut trial: Trial, lazy: Option<Arc<LazyStart>>) -> Result<Completion, Failed> {
+fn outcome(
+    mut trial: Trial,
+    lazy: Option<Arc<LazyStart>>,
+    exact: bool,
+) -> Result<Completion, Failed> {
     if let Some(lazy) = lazy {
         lazy.bind(&mut trial)
             .map_err(|e| Failed::from(e.to_string()))?;
@@ -246,6 +270,13 @@ fn outcome(mut trial: Trial, lazy: Option<Arc<LazyStart>>) -> Result<Completion,
     match verdict.status() {
         Status::Pass => Ok(Completion::Completed),
         Status::Fail => Err(Failed::from(render(&trial, &verdict, Palette::plain()))),
+        // Run alone (`--exact`, as nextest runs a trial), a trial skipped only now would show as
+        // passed: listing marks such trials ignored, so reaching one here means it was asked for
+        // by name, and it fails rather than pass without running.
+        Status::Skipped if exact => Err(Failed::from(format!(
+            "not run: {}; the listing marks this trial ignored",
+            ignored_text(&verdict)
+        ))),
         Status::Skipped | Status::Ignored => Ok(Completion::ignored_with(ignored_text(&verdict))),
     }
 }

@@ -832,3 +832,64 @@ fn capabilities_skip_what_a_backend_does_not_model() {
         assert!(!v.is_failure(), "{}: {v:?}", t.name());
     }
 }
+
+/// The corpus's own test binary (`tests/conformance.rs`), built beside this one.
+fn conformance_binary() -> Option<std::path::PathBuf> {
+    let deps = std::env::current_exe().ok()?.parent()?.to_path_buf();
+    std::fs::read_dir(deps)
+        .ok()?
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .filter(|p| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.starts_with("conformance-") && !n.contains('.'))
+        })
+        .max_by_key(|p| std::fs::metadata(p).and_then(|m| m.modified()).ok())
+}
+
+/// nextest lists the trials once, then runs each alone and shows one that returns "ignored" as
+/// passed. So what a backend declines is known when listing (its handshake), listed ignored,
+/// and a declined trial run alone by name fails rather than pass without running.
+#[test]
+fn trials_a_backend_declines_are_listed_ignored_and_never_pass_alone() {
+    let project = load_project(&root().join(FILE_NAME), true, Path::new(BIN)).expect("loads");
+    if !project
+        .configured
+        .iter()
+        .any(|c| c.settings.name == "pymcprotocol")
+    {
+        eprintln!("skipped: pymcprotocol is not installed (.ci/run installs it)");
+        return;
+    }
+    let Some(binary) = conformance_binary() else {
+        panic!("the conformance test binary is built with the tests");
+    };
+    let list = |ignored: bool| {
+        let mut command = std::process::Command::new(&binary);
+        command.args(["--list", "--format", "terse"]);
+        if ignored {
+            command.arg("--ignored");
+        }
+        let out = command.output().expect("the test binary lists");
+        String::from_utf8_lossy(&out.stdout)
+            .lines()
+            .filter_map(|l| l.strip_suffix(": test"))
+            .map(str::to_string)
+            .collect::<Vec<_>>()
+    };
+    // pymcprotocol does not implement SM705 on: those trials are declined.
+    let declined = "pymcprotocol::binha::binha-sm705-on-0abc-example::rcpu";
+    assert!(list(false).iter().any(|t| t == declined), "not listed");
+    assert!(
+        list(true).iter().any(|t| t == declined),
+        "not listed ignored"
+    );
+    let out = std::process::Command::new(&binary)
+        .args(["--exact", declined, "--ignored"])
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(!out.status.success(), "{stdout}");
+    assert!(stdout.contains("1 failed"), "{stdout}");
+}

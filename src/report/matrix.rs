@@ -7,12 +7,17 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 
 use super::record::{Behaviour, Record};
+use crate::judge::Status;
 
 /// Rows that behave alike: one representative, and how many rows share its behaviour.
 #[derive(Debug, Clone, Serialize)]
 pub struct Group<'a> {
     /// The behaviour in each column (`None` where the row has no cell).
     pub behaviour: Vec<Option<&'a Behaviour>>,
+    /// The status in each column: rows that behave alike but of which one fails and another
+    /// only records (an `unspecified` case) are not one group, so a failure is never hidden
+    /// behind a representative that cannot fail.
+    pub status: Vec<Option<Status>>,
     pub rows: Vec<&'a str>,
     /// The representative row's cells, by column.
     pub cells: Vec<Option<&'a Record>>,
@@ -60,10 +65,16 @@ pub fn sections(records: &[Record]) -> Vec<Section<'_>> {
                     .collect();
                 let behaviour: Vec<Option<&Behaviour>> =
                     row_cells.iter().map(|c| c.map(|r| &r.behaviour)).collect();
-                match groups.iter_mut().find(|g| g.behaviour == behaviour) {
+                let status: Vec<Option<Status>> =
+                    row_cells.iter().map(|c| c.map(|r| r.status)).collect();
+                match groups
+                    .iter_mut()
+                    .find(|g| g.behaviour == behaviour && g.status == status)
+                {
                     Some(g) => g.rows.push(row),
                     None => groups.push(Group {
                         behaviour,
+                        status,
                         rows: vec![row],
                         cells: row_cells,
                     }),
@@ -108,6 +119,20 @@ mod tests {
             seconds: std::time::Duration::ZERO,
             verdict: None,
         }
+    }
+
+    #[test]
+    fn a_failing_row_is_not_grouped_behind_one_that_cannot_fail() {
+        let mut recorded = record("r1", "a", "invalid-digit");
+        recorded.status = Status::Ignored;
+        let mut failing = record("r2", "a", "invalid-digit");
+        failing.status = Status::Fail;
+        let records = vec![recorded, failing];
+        let s = sections(&records);
+        assert_eq!(s[0].groups.len(), 2);
+        let failing_group = &s[0].groups[1];
+        assert_eq!(failing_group.rows, ["r2"]);
+        assert_eq!(failing_group.cells[0].map(|r| r.status), Some(Status::Fail));
     }
 
     #[test]
