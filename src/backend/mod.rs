@@ -7,6 +7,7 @@
 
 pub mod external;
 pub mod fc4a;
+pub mod fx3;
 pub mod fx5;
 pub mod iqr;
 pub mod reference;
@@ -315,6 +316,8 @@ const MODELS: &[MakeBackend] = &[
     reference::backend::<fc4a::Fc4a>,
     reference::backend::<s7::S71200>,
     reference::backend::<s7_200::S7200>,
+    reference::backend::<fx3::AsciHex<fx3::Fx3>>,
+    reference::backend::<fx3::AsciHex<fx3::Delta>>,
 ];
 
 /// The reference models, one per profile that has one.
