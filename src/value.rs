@@ -38,6 +38,27 @@ impl std::error::Error for ValueError {}
 /// Reads a number in any of the accepted notations, without a width check (a number past 64
 /// bits is too wide for any).
 pub fn parse_number(text: &str) -> Result<i64, ValueError> {
+    parse_wide(text).and_then(|n| {
+        i64::try_from(n).map_err(|_| ValueError::TooWide {
+            text: text.to_string(),
+            bits: 64,
+        })
+    })
+}
+
+/// Reads a non-negative number of up to 64 bits (a 64-bit value such as `0EFCDAB8967452301H`,
+/// past the signed range [`parse_number`] keeps to).
+pub fn parse_unsigned(text: &str) -> Result<u64, ValueError> {
+    parse_wide(text).and_then(|n| {
+        u64::try_from(n).map_err(|_| ValueError::TooWide {
+            text: text.to_string(),
+            bits: 64,
+        })
+    })
+}
+
+/// Any accepted notation, read into a number wide enough for every 64-bit value, signed or not.
+fn parse_wide(text: &str) -> Result<i128, ValueError> {
     let syntax = || ValueError::Syntax(text.to_string());
     let too_wide = || ValueError::TooWide {
         text: text.to_string(),
@@ -48,14 +69,20 @@ pub fn parse_number(text: &str) -> Result<i64, ValueError> {
         if digits.is_empty() || !digits.chars().all(|c| c.is_ascii_hexdigit()) {
             return Err(syntax());
         }
-        i64::from_str_radix(digits, 16).map_err(|_| too_wide())
+        u64::from_str_radix(digits, 16)
+            .map(i128::from)
+            .map_err(|_| too_wide())
     };
     let dec = |digits: &str| {
         let unsigned = digits.strip_prefix('-').unwrap_or(digits);
         if unsigned.is_empty() || !unsigned.chars().all(|c| c.is_ascii_digit()) {
             return Err(syntax());
         }
-        digits.parse::<i64>().map_err(|_| too_wide())
+        digits
+            .parse::<i64>()
+            .map(i128::from)
+            .or_else(|_| digits.parse::<u64>().map(i128::from))
+            .map_err(|_| too_wide())
     };
     if let Some(rest) = t.strip_prefix('K') {
         dec(rest)
@@ -113,6 +140,18 @@ pub fn hex_word(word: u16) -> String {
 mod tests {
     use super::*;
     use rstest::rstest;
+
+    #[test]
+    fn sixty_four_bit_values_read_past_the_signed_range() {
+        assert_eq!(
+            parse_unsigned("0EFCDAB8967452301H"),
+            Ok(0xEFCD_AB89_6745_2301)
+        );
+        assert_eq!(parse_unsigned("18446744073709551615"), Ok(u64::MAX));
+        assert!(parse_unsigned("-1").is_err());
+        assert!(parse_unsigned("10000000000000000H").is_err());
+        assert!(parse_number("0EFCDAB8967452301H").is_err());
+    }
 
     #[rstest]
     #[case("4135H", 0x4135)]

@@ -329,33 +329,55 @@ fn corpus_behaviours(project: &Project, op: Operation) -> BTreeSet<Vec<String>> 
 #[test]
 fn a_sweep_of_the_built_in_models_finds_every_behaviour_of_the_cross_vendor_corpus() {
     let project = session();
-    for (op, generator, digits) in [
+    let sweeps = [
         (
             Operation::HexToValue,
-            // Six characters: an even count past four digits is where S7 ATH (two characters
-            // a byte) meets FX5 HEXA.
-            Generator::Text {
-                alphabet: b"\x00/0A8fG".to_vec(),
-                max_len: 6,
-            },
-            Digits::Each((0..=6).collect()),
+            vec![
+                // Six characters: an even count past four digits is where S7 ATH (two
+                // characters a byte) meets FX5 HEXA.
+                (
+                    Generator::Text {
+                        alphabet: b"\x00/0A8fG".to_vec(),
+                        max_len: 6,
+                    },
+                    Digits::Each((0..=6).collect()),
+                ),
+                // Eight digits of two kinds: where Panasonic F72's whole words (an even number
+                // of bytes) read byte-swapped past four digits.
+                (
+                    Generator::Text {
+                        alphabet: b"0A".to_vec(),
+                        max_len: 8,
+                    },
+                    Digits::Each(vec![8]),
+                ),
+            ],
         ),
         (
             Operation::ValueToHex,
-            Generator::Values { bits: 16 },
-            Digits::Each((0..=6).collect()),
+            vec![(
+                Generator::Values { bits: 16 },
+                Digits::Each((0..=6).collect()),
+            )],
         ),
-    ] {
-        let mut settings = Settings::new(operation(op), generator, 1);
-        settings.digits = digits;
-        settings.shrink = 0;
-        let (_, results) = run(&project, &project.backends, settings);
-        let found: BTreeSet<Vec<String>> = results
-            .groups
-            .by_key
-            .keys()
-            .map(|k| k.signature.clone())
-            .collect();
+    ];
+    for (op, runs) in sweeps {
+        let mut found: BTreeSet<Vec<String>> = BTreeSet::new();
+        let mut groups = Vec::new();
+        for (generator, digits) in runs {
+            let mut settings = Settings::new(operation(op), generator, 1);
+            settings.digits = digits;
+            settings.shrink = 0;
+            let (_, results) = run(&project, &project.backends, settings);
+            found.extend(results.groups.by_key.keys().map(|k| k.signature.clone()));
+            groups.extend(results.ordered().into_iter().map(|g| {
+                (
+                    g.inputs,
+                    g.key.signature.clone(),
+                    g.representative.point.to_string(),
+                )
+            }));
+        }
         let wanted = corpus_behaviours(&project, op);
         let missing: Vec<_> = wanted.difference(&found).collect();
         assert!(
@@ -366,12 +388,9 @@ fn a_sweep_of_the_built_in_models_finds_every_behaviour_of_the_cross_vendor_corp
             found.len() > wanted.len(),
             "{op}: nothing beyond the corpus"
         );
-        for g in results.ordered() {
-            if !wanted.contains(&g.key.signature) {
-                eprintln!(
-                    "{op}: beyond the corpus: {} inputs {:?} {:?}, e.g. {}",
-                    g.inputs, g.key.signature, g.key.features, g.representative.point
-                );
+        for (inputs, signature, example) in groups {
+            if !wanted.contains(&signature) {
+                eprintln!("{op}: beyond the corpus: {inputs} inputs {signature:?}, e.g. {example}");
             }
         }
     }

@@ -7,6 +7,7 @@
 
 pub mod external;
 pub mod fc4a;
+pub mod fp;
 pub mod fx3;
 pub mod fx5;
 pub mod iqr;
@@ -318,6 +319,7 @@ const MODELS: &[MakeBackend] = &[
     reference::backend::<s7_200::S7200>,
     reference::backend::<fx3::AsciHex<fx3::Fx3>>,
     reference::backend::<fx3::AsciHex<fx3::Delta>>,
+    reference::backend::<fp::Fp>,
 ];
 
 /// The reference models, one per profile that has one.

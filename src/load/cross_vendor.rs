@@ -215,6 +215,11 @@ fn outcome(
 }
 
 fn number(key: &str, v: &ScalarSpec, bits: u32, cx: &mut FileContext<'_>) -> Option<u64> {
+    if let (ScalarSpec::Text(t), true) = (v, bits >= 64) {
+        return crate::value::parse_unsigned(t)
+            .map_err(|e| cx.error(key, LoadErrorKind::Value(e)))
+            .ok();
+    }
     let parsed = match v {
         ScalarSpec::Number(n) => Ok(*n),
         ScalarSpec::Text(t) => parse_number(t),

@@ -1,0 +1,148 @@
+//! Teeth for the Panasonic FP corpus: deliberately wrong F72/F71 implementations, each of which
+//! some vector must tell apart from the help pages. Most are another vendor's packing (the
+//! first pair in the high byte, as Mitsubishi and Siemens read), or what a MEWTOCOL codec gets
+//! wrong (lowercase accepted, a zero count passed over, the digits of a byte swapped).
+
+mod common;
+
+use std::collections::BTreeMap;
+
+use common::{assert_corpus_kills, map_done, reference, session, Mutant};
+use plc_conformance::backend::{Backend, Fault, Request, Response};
+use plc_conformance::device::Device;
+use plc_conformance::memory::Image;
+use plc_conformance::model::Operand;
+
+const PROFILE: &str = "panasonic-fp";
+
+fn count(req: &Request<'_>) -> i64 {
+    match req.operands.get("s2") {
+        Some(Operand::Constant(k)) => *k,
+        Some(Operand::Device(d)) => i64::from(req.memory.read(d) as i16),
+        None => 0,
+    }
+}
+
+/// Runs the base with every word of memory rewritten by `f`.
+fn with_memory(
+    req: &Request<'_>,
+    base: &dyn Backend,
+    f: impl Fn(u16) -> u16,
+) -> Result<Response, Fault> {
+    let words: BTreeMap<Device, u16> = req
+        .memory
+        .explicit()
+        .iter()
+        .map(|(d, v)| (d.clone(), f(*v)))
+        .collect();
+    let memory = Image::of_units(words, req.memory.fill(), req.memory.unit());
+    base.execute(&Request {
+        memory: &memory,
+        ..*req
+    })
+}
+
+fn swap_written(
+    req: &Request<'_>,
+    base: &dyn Backend,
+    instruction: &str,
+) -> Result<Response, Fault> {
+    let swap = req.instruction == instruction;
+    map_done(base.execute(req), |mut o| {
+        if swap {
+            for v in o.writes.values_mut() {
+                *v = v.swap_bytes();
+            }
+        }
+        o
+    })
+}
+
+#[test]
+fn the_panasonic_corpus_kills_every_mutant() {
+    let project = session();
+    let base = reference(&project, PROFILE);
+    let mutants = vec![
+        // F72 bytes in the other order: the first pair in the high byte.
+        Mutant::new("f72-first-pair-high", &base, |req, base| {
+            swap_written(req, base, "F72")
+        }),
+        // F71 characters the other way round in each word: the low digit's in the low byte.
+        Mutant::new("f71-low-digit-first", &base, |req, base| {
+            swap_written(req, base, "F71")
+        }),
+        // F71 reads the high byte of each source word first.
+        Mutant::new("f71-high-byte-first", &base, |req, base| {
+            if req.instruction != "F71" {
+                return base.execute(req);
+            }
+            with_memory(req, base, u16::swap_bytes)
+        }),
+        // An odd count keeps the last low nibble instead of writing 0 there.
+        Mutant::new("f72-odd-keeps-nibble", &base, |req, base| {
+            let n = count(req);
+            let odd = req.instruction == "F72" && n > 0 && n % 2 == 1;
+            let d = match req.operands.get("d") {
+                Some(Operand::Device(d)) => d.clone(),
+                _ => return base.execute(req),
+            };
+            let bytes = (n as u32).div_ceil(2);
+            let last = d.offset((bytes - u32::from(bytes > 0)) / 2);
+            let high = bytes % 2 == 0;
+            let old = last.as_ref().map(|l| req.memory.read(l));
+            map_done(base.execute(req), |mut o| {
+                if let (true, Some(l), Some(old)) = (odd, last, old) {
+                    if let Some(v) = o.writes.get_mut(&l) {
+                        let keep = if high { old & 0x0F00 } else { old & 0x000F };
+                        *v |= keep;
+                    }
+                }
+                o
+            })
+        }),
+        // Lowercase a-f read as digits.
+        Mutant::new("f72-lowercase-accepted", &base, |req, base| {
+            if req.instruction != "F72" {
+                return base.execute(req);
+            }
+            with_memory(req, base, |w| {
+                let up = |b: u16| {
+                    if (0x61..=0x66).contains(&b) {
+                        b - 0x20
+                    } else {
+                        b
+                    }
+                };
+                up(w & 0xFF) | up(w >> 8) << 8
+            })
+        }),
+        // An operation error reported nowhere.
+        Mutant::new("error-silent", &base, |req, base| {
+            map_done(base.execute(req), |mut o| {
+                o.error = None;
+                o
+            })
+        }),
+        // A count of 0 converts nothing, without an error.
+        Mutant::new("count-zero-silent", &base, |req, base| {
+            if count(req) == 0 {
+                return Ok(Response::Done(Default::default()));
+            }
+            base.execute(req)
+        }),
+        // On an error, the destination is cleared as well.
+        Mutant::new("error-clears-destination", &base, |req, base| {
+            let d = match req.operands.get("d") {
+                Some(Operand::Device(d)) => Some(d.clone()),
+                _ => None,
+            };
+            map_done(base.execute(req), |mut o| {
+                if let (Some(_), Some(d)) = (&o.error, d) {
+                    o.writes.insert(d, 0);
+                }
+                o
+            })
+        }),
+    ];
+    assert_corpus_kills(&project, &base, &mutants);
+}
