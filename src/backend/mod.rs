@@ -11,6 +11,7 @@ pub mod fp;
 pub mod fx3;
 pub mod fx5;
 pub mod iqr;
+pub mod kv;
 pub mod reference;
 pub mod s7;
 pub mod s7_200;
@@ -320,6 +321,7 @@ const MODELS: &[MakeBackend] = &[
     reference::backend::<fx3::AsciHex<fx3::Fx3>>,
     reference::backend::<fx3::AsciHex<fx3::Delta>>,
     reference::backend::<fp::Fp>,
+    reference::backend::<kv::Kv>,
 ];
 
 /// The reference models, one per profile that has one.

@@ -39,14 +39,17 @@ pub fn lift(
             let mut text = Vec::new();
             for k in 0..digits {
                 let ch = match lowering.text {
-                    TextLayout::Packed => destination.offset(k / 2).map(|d| {
-                        let w = read(&d);
-                        if k % 2 == 0 {
-                            w as u8
-                        } else {
-                            (w >> 8) as u8
-                        }
-                    }),
+                    TextLayout::Packed | TextLayout::PackedHighFirst => {
+                        let high_first = lowering.text == TextLayout::PackedHighFirst;
+                        destination.offset(k / 2).map(|d| {
+                            let w = read(&d);
+                            if (k % 2 == 0) != high_first {
+                                w as u8
+                            } else {
+                                (w >> 8) as u8
+                            }
+                        })
+                    }
                     TextLayout::Words => destination.offset(k).map(|d| read(&d) as u8),
                 };
                 match ch {

@@ -407,7 +407,9 @@ pub(crate) fn read_section(p: &ProfileSpec, cx: &mut FileContext<'_>) -> CrossVe
                 ),
             );
         }
-        if p.memory_unit == Unit::Byte && l.text == TextLayout::Packed {
+        if p.memory_unit == Unit::Byte
+            && matches!(l.text, TextLayout::Packed | TextLayout::PackedHighFirst)
+        {
             cx.error(
                 format!("{key}.text"),
                 LoadErrorKind::Invalid(

@@ -14,6 +14,10 @@ pub fn text_units(layout: TextLayout, text: &[u8]) -> Vec<u16> {
     chars.push(0);
     match layout {
         TextLayout::Packed => pack_low_first(&chars),
+        TextLayout::PackedHighFirst => pack_low_first(&chars)
+            .into_iter()
+            .map(u16::swap_bytes)
+            .collect(),
         TextLayout::Words => chars.iter().map(|c| u16::from(*c)).collect(),
     }
 }

@@ -62,6 +62,9 @@ impl fmt::Display for ErrorClass {
 pub enum TextLayout {
     /// Two characters per word, first character in the low byte (word-addressed memory only).
     Packed,
+    /// Two characters per word, first character in the high byte (KEYENCE's ASC/RASC word:
+    /// `A5` is 4135H).
+    PackedHighFirst,
     /// One character per device: in the low byte of a word, or the whole byte of
     /// byte-addressed memory.
     Words,

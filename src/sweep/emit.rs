@@ -322,15 +322,23 @@ fn native_case(
     } else {
         let _ = writeln!(y, "    before: {{}}");
     }
+    // The notations `ascii` and `ascii_words` read two characters a word low byte first, or one
+    // a word; a text stored high byte first is written as its words.
+    let key = match shape.layout(&to.point.flags) {
+        crate::model::cross_vendor::TextLayout::Packed => Some("ascii"),
+        crate::model::cross_vendor::TextLayout::Words => Some("ascii_words"),
+        crate::model::cross_vendor::TextLayout::PackedHighFirst => None,
+    };
     match &to.point.data {
-        Data::Text(t) if whole => {
+        Data::Text(t) if whole && key.is_some() => {
             let mut text = t.clone();
             text.push(0);
-            let key = match shape.layout(&to.point.flags) {
-                crate::model::cross_vendor::TextLayout::Packed => "ascii",
-                crate::model::cross_vendor::TextLayout::Words => "ascii_words",
-            };
-            let _ = writeln!(y, "      {source}: {{{key}: {}}}", quote(&text));
+            let _ = writeln!(
+                y,
+                "      {source}: {{{}: {}}}",
+                key.unwrap_or_default(),
+                quote(&text)
+            );
         }
         _ => {
             for (d, w) in input.before.iter().filter(|(d, _)| exists(d)) {

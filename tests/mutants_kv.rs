@@ -1,0 +1,116 @@
+//! Teeth for the KEYENCE KV corpus: deliberately wrong ASC/RASC implementations, each of which
+//! some vector must tell apart from the manual: the characters the other way round in the word
+//! (the low byte first, as MELSEC packs them), lowercase accepted, an invalid character passed
+//! over in silence, the register cleared instead of kept.
+
+mod common;
+
+use common::{assert_corpus_kills, map_done, reference, session, Mutant};
+use plc_conformance::backend::{Request, Response};
+use plc_conformance::memory::Image;
+use plc_conformance::model::Operand;
+
+const PROFILE: &str = "keyence-kv";
+
+/// The word LDA loads.
+fn loaded(req: &Request<'_>) -> Option<u16> {
+    match req.operands.get("s")? {
+        Operand::Device(d) => Some(req.memory.read(d)),
+        Operand::Constant(k) => Some(*k as u16),
+    }
+}
+
+#[test]
+fn the_keyence_corpus_kills_every_mutant() {
+    let project = session();
+    let base = reference(&project, PROFILE);
+    let mutants = vec![
+        // ASC stores the first character in the low byte.
+        Mutant::new("asc-low-byte-first", &base, |req, base| {
+            let asc = req.instruction == "ASC";
+            map_done(base.execute(req), |mut o| {
+                if asc {
+                    for v in o.writes.values_mut() {
+                        *v = v.swap_bytes();
+                    }
+                }
+                o
+            })
+        }),
+        // RASC reads the low byte as the first character.
+        Mutant::new("rasc-low-byte-first", &base, |req, base| {
+            let (true, Some(Operand::Device(s))) =
+                (req.instruction == "RASC", req.operands.get("s"))
+            else {
+                return base.execute(req);
+            };
+            let mut words = req.memory.explicit().clone();
+            let w = req.memory.read(s);
+            words.insert(s.clone(), w.swap_bytes());
+            let memory = Image::of_units(words, req.memory.fill(), req.memory.unit());
+            let answer = base.execute(&Request {
+                memory: &memory,
+                ..*req
+            });
+            // Only the conversion swaps: what STA stores on an error is the word as loaded.
+            map_done(answer, |mut o| {
+                if o.error.is_some() {
+                    for v in o.writes.values_mut() {
+                        *v = w;
+                    }
+                }
+                o
+            })
+        }),
+        // RASC reads lowercase a-f as digits.
+        Mutant::new("rasc-lowercase-accepted", &base, |req, base| {
+            let Some(w) = loaded(req).filter(|_| req.instruction == "RASC") else {
+                return base.execute(req);
+            };
+            let up = |b: u16| {
+                if (0x61..=0x66).contains(&b) {
+                    b - 0x20
+                } else {
+                    b
+                }
+            };
+            let fixed = up(w >> 8) << 8 | up(w & 0xFF);
+            if fixed == w {
+                return base.execute(req);
+            }
+            let mut operands = req.operands.clone();
+            operands.insert("s".into(), Operand::Constant(i64::from(fixed)));
+            base.execute(&Request {
+                operands: &operands,
+                ..*req
+            })
+        }),
+        // An invalid character passed over in silence.
+        Mutant::new("rasc-error-silent", &base, |req, base| {
+            map_done(base.execute(req), |mut o| {
+                o.error = None;
+                o
+            })
+        }),
+        // On an error the register is cleared, and STA stores 0.
+        Mutant::new("rasc-error-clears", &base, |req, base| {
+            map_done(base.execute(req), |mut o| {
+                if o.error.is_some() {
+                    for v in o.writes.values_mut() {
+                        *v = 0;
+                    }
+                }
+                o
+            })
+        }),
+        // ASC converts the high-order byte too (four characters' worth, the low word kept).
+        Mutant::new("asc-reads-high-byte", &base, |req, base| {
+            let high = loaded(req).is_some_and(|w| w >> 8 != 0) && req.instruction == "ASC";
+            if high {
+                return Ok(Response::Done(Default::default()));
+            }
+            base.execute(req)
+        }),
+    ];
+    assert_corpus_kills(&project, &base, &mutants);
+}
