@@ -5,12 +5,8 @@
 
 mod common;
 
-use std::collections::BTreeMap;
-
-use common::{assert_corpus_kills, map_done, reference, session, Mutant};
+use common::{assert_corpus_kills, map_done, reference, session, with_memory, Mutant};
 use plc_conformance::backend::{Backend, Fault, Request, Response};
-use plc_conformance::device::Device;
-use plc_conformance::memory::Image;
 use plc_conformance::model::Operand;
 
 const PROFILE: &str = "panasonic-fp";
@@ -21,25 +17,6 @@ fn count(req: &Request<'_>) -> i64 {
         Some(Operand::Device(d)) => i64::from(req.memory.read(d) as i16),
         None => 0,
     }
-}
-
-/// Runs the base with every word of memory rewritten by `f`.
-fn with_memory(
-    req: &Request<'_>,
-    base: &dyn Backend,
-    f: impl Fn(u16) -> u16,
-) -> Result<Response, Fault> {
-    let words: BTreeMap<Device, u16> = req
-        .memory
-        .explicit()
-        .iter()
-        .map(|(d, v)| (d.clone(), f(*v)))
-        .collect();
-    let memory = Image::of_units(words, req.memory.fill(), req.memory.unit());
-    base.execute(&Request {
-        memory: &memory,
-        ..*req
-    })
 }
 
 fn swap_written(

@@ -6,12 +6,11 @@
 
 mod common;
 
-use std::collections::BTreeMap;
-
-use common::{assert_corpus_kills, map_done, reference, session, Mutant};
-use plc_conformance::backend::{Backend, Fault, Request, Response};
+use common::{
+    assert_corpus_kills, map_done, reference, session, with_constant, with_memory, Mutant,
+};
+use plc_conformance::backend::{Backend, Request, Response};
 use plc_conformance::device::Device;
-use plc_conformance::memory::Image;
 use plc_conformance::model::Operand;
 
 fn count(req: &Request<'_>) -> u32 {
@@ -31,42 +30,6 @@ fn device(req: &Request<'_>, name: &str) -> Option<Device> {
 
 fn is_hex(req: &Request<'_>) -> bool {
     req.instruction.starts_with("HEX")
-}
-
-/// Runs the base with every word of memory rewritten by `f`.
-fn with_memory(
-    req: &Request<'_>,
-    base: &dyn Backend,
-    f: impl Fn(u16) -> u16,
-) -> Result<Response, Fault> {
-    let words: BTreeMap<Device, u16> = req
-        .memory
-        .explicit()
-        .iter()
-        .map(|(d, v)| (d.clone(), f(*v)))
-        .collect();
-    let memory = Image::of_units(words, req.memory.fill(), req.memory.unit());
-    base.execute(&Request {
-        memory: &memory,
-        ..*req
-    })
-}
-
-/// Runs the base with n replaced by `f(n)` (a constant n only).
-fn with_n(
-    req: &Request<'_>,
-    base: &dyn Backend,
-    f: impl Fn(i64) -> i64,
-) -> Result<Response, Fault> {
-    let Some(Operand::Constant(k)) = req.operands.get("n") else {
-        return base.execute(req);
-    };
-    let mut operands = req.operands.clone();
-    operands.insert("n".into(), Operand::Constant(f(*k)));
-    base.execute(&Request {
-        operands: &operands,
-        ..*req
-    })
 }
 
 fn mutants(
@@ -155,7 +118,7 @@ fn mutants(
         }),
         // n up to 32767, as the FX5: 257 converts 256 characters.
         Mutant::new("n-up-to-32767", base, |req, base| {
-            with_n(req, base, |k| if k == 257 { 256 } else { k })
+            with_constant(req, base, "n", |k| if k == 257 { 256 } else { k })
         }),
         // n = 0 converts nothing, without an error.
         Mutant::new("n-zero-silent", base, |req, base| {
@@ -174,7 +137,7 @@ fn mutants(
                     .values()
                     .any(|w| w >> 8 != 0 && w >> 8 != 0x5A);
             if high {
-                return with_n(req, base, |_| 0);
+                return with_constant(req, base, "n", |_| 0);
             }
             base.execute(req)
         }),

@@ -8,7 +8,7 @@ mod common;
 
 use std::collections::BTreeMap;
 
-use common::{assert_corpus_kills, map_done, reference, session, Mutant};
+use common::{assert_corpus_kills, map_done, reference, session, with_constant, Mutant};
 use plc_conformance::backend::{Backend, Fault, Request, Response};
 use plc_conformance::device::Device;
 use plc_conformance::memory::Image;
@@ -48,23 +48,6 @@ fn with_input(
     let memory = Image::of_units(bytes, req.memory.fill(), req.memory.unit());
     base.execute(&Request {
         memory: &memory,
-        ..*req
-    })
-}
-
-/// Runs the base with LEN replaced by `f(LEN)` (a constant LEN only).
-fn with_len(
-    req: &Request<'_>,
-    base: &dyn Backend,
-    f: impl Fn(i64) -> i64,
-) -> Result<Response, Fault> {
-    let Some(Operand::Constant(k)) = req.operands.get("LEN") else {
-        return base.execute(req);
-    };
-    let mut operands = req.operands.clone();
-    operands.insert("LEN".into(), Operand::Constant(f(*k)));
-    base.execute(&Request {
-        operands: &operands,
         ..*req
     })
 }
@@ -140,7 +123,7 @@ fn the_s7_200_corpus_kills_every_mutant() {
             let n = len(req);
             let nul = (0..n).find(|k| input.offset(*k).is_some_and(|d| req.memory.read(&d) == 0));
             match (req.instruction, nul) {
-                ("ATH", Some(k)) => with_len(req, base, |_| i64::from(k)),
+                ("ATH", Some(k)) => with_constant(req, base, "LEN", |_| i64::from(k)),
                 _ => base.execute(req),
             }
         }),
@@ -149,7 +132,7 @@ fn the_s7_200_corpus_kills_every_mutant() {
             if req.instruction != "ATH" {
                 return base.execute(req);
             }
-            with_len(req, base, |k| (2 * k).min(255))
+            with_constant(req, base, "LEN", |k| (2 * k).min(255))
         }),
         // HTA writes lowercase letters.
         Mutant::new("hta-lowercase", &base, |req, base| {
@@ -179,7 +162,7 @@ fn the_s7_200_corpus_kills_every_mutant() {
             if req.instruction != "HTA" {
                 return base.execute(req);
             }
-            with_len(req, base, |k| (2 * k).min(255))
+            with_constant(req, base, "LEN", |k| (2 * k).min(255))
         }),
         // HTA ends its text with 00H.
         Mutant::new("hta-terminated", &base, |req, base| {

@@ -10,12 +10,11 @@
 //! digit's in the low byte. Every error (a count of 0, a character that is not 0-9 or A-F, an
 //! area too small) is an operation error: the flag, and nothing written.
 
-use super::reference::{Model, Stop};
+use super::reference::{constant_word, Model, Stop};
 use super::{Outcome, Request, Unsupported};
 use crate::memory::Scratch;
 use crate::model::Operand;
 use crate::text::{digit_char, digit_value};
-use crate::value::to_bits;
 
 /// The profile this model implements.
 pub const PROFILE: &str = "panasonic-fp";
@@ -46,9 +45,7 @@ impl Model for Fp {
 /// A 16-bit operand: a constant as the CPU holds it, or a word of memory.
 fn word(req: &Request<'_>, name: &str) -> Result<u16, Stop> {
     match req.operand(name)? {
-        Operand::Constant(k) => to_bits(&format!("K{k}"), *k, 16)
-            .map(|w| w as u16)
-            .map_err(|e| Unsupported(format!("operand `{name}`: {e}")).into()),
+        Operand::Constant(k) => Ok(constant_word(name, *k)?),
         Operand::Device(d) => {
             if !req.words_exist(d, 1) {
                 return Err(Stop::Error(OPERATION_ERROR));

@@ -13,11 +13,10 @@
 use std::marker::PhantomData;
 
 use super::fx5::{asci_digits, asci_source_words, asci_stores, hex_chars, hex_words, Packing};
-use super::reference::{Model, Stop};
+use super::reference::{constant_word, Model, Stop};
 use super::{Outcome, Request, Unsupported};
 use crate::memory::Scratch;
 use crate::model::Operand;
-use crate::value::to_bits;
 
 /// What an FX3-style family names its own way.
 pub trait Dialect: Send + Sync + 'static {
@@ -83,13 +82,6 @@ impl<D: Dialect> Model for AsciHex<D> {
             None => Err(Unsupported(format!("{} is not modelled", req.instruction)).into()),
         }
     }
-}
-
-/// A 16-bit constant operand as the CPU holds it (`K-1` is FFFFH).
-fn constant_word(name: &str, k: i64) -> Result<u16, Unsupported> {
-    to_bits(&format!("K{k}"), k, 16)
-        .map(|w| w as u16)
-        .map_err(|e| Unsupported(format!("operand `{name}`: {e}")))
 }
 
 /// n, read as 16-bit unsigned and checked for 1..256.

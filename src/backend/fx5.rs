@@ -14,13 +14,12 @@
 //! (2820H); then, for HEXA, the characters (3401H). The manual does not fix the order between
 //! the codes; vectors that break two rules at once are `unspecified`.
 
-use super::reference::{Model, Stop};
+use super::reference::{constant_word, Model, Stop};
 use super::{Outcome, Request, Unsupported};
 use crate::device::Device;
 use crate::memory::{Image, Scratch};
 use crate::model::Operand;
 use crate::text::{digit_char, digit_value, packed_char};
-use crate::value::to_bits;
 
 /// The profile this model implements.
 pub const PROFILE: &str = "mitsubishi-fx5";
@@ -203,13 +202,6 @@ impl Model for Fx5 {
             None => Err(Unsupported(format!("{} is not modelled", req.instruction)).into()),
         }
     }
-}
-
-/// A 16-bit constant operand as the CPU holds it (`K-1` is FFFFH).
-fn constant_word(name: &str, k: i64) -> Result<u16, Unsupported> {
-    to_bits(&format!("K{k}"), k, 16)
-        .map(|w| w as u16)
-        .map_err(|e| Unsupported(format!("operand `{name}`: {e}")))
 }
 
 /// n, read as 16-bit unsigned (a D register holding 8000H is 32768) and checked for 1..32767.

@@ -9,12 +9,11 @@
 //! then `STA` stores the register as it was loaded. Which byte holds the first character is
 //! read from the manual's figure, whose labels disagree (open question `kv-asc-byte-order`).
 
-use super::reference::{Model, Stop};
+use super::reference::{constant_word, Model, Stop};
 use super::{Outcome, Request, Unsupported};
 use crate::memory::Scratch;
 use crate::model::Operand;
 use crate::text::{digit_char, digit_value};
-use crate::value::to_bits;
 
 /// The profile this model implements.
 pub const PROFILE: &str = "keyence-kv";
@@ -54,9 +53,7 @@ impl Model for Kv {
 /// What `LDA s` puts in the internal register.
 fn loaded(req: &Request<'_>) -> Result<u16, Stop> {
     Ok(match req.operand("s")? {
-        Operand::Constant(k) => to_bits(&format!("K{k}"), *k, 16)
-            .map(|w| w as u16)
-            .map_err(|e| Unsupported(format!("operand `s`: {e}")))?,
+        Operand::Constant(k) => constant_word("s", *k)?,
         Operand::Device(d) => req.memory.read(d),
     })
 }

@@ -6,6 +6,7 @@ use std::sync::Arc;
 
 use super::{Backend, Fault, Outcome, Request, Response, Unsupported};
 use crate::model::profile::{Profile, Profiles};
+use crate::value::to_bits;
 
 /// One vendor family's reference model.
 pub trait Model: Send + Sync + 'static {
@@ -15,6 +16,14 @@ pub trait Model: Send + Sync + 'static {
     fn models(instruction: &str) -> bool;
     /// Executes one request.
     fn run(req: &Request<'_>) -> Result<Outcome, Stop>;
+}
+
+/// A 16-bit constant operand as the CPU holds it (`K-1` is FFFFH); one past 16 bits is not
+/// programmable, so a model declines it.
+pub fn constant_word(name: &str, k: i64) -> Result<u16, Unsupported> {
+    to_bits(&format!("K{k}"), k, 16)
+        .map(|w| w as u16)
+        .map_err(|e| Unsupported(format!("operand `{name}`: {e}")))
 }
 
 /// Why an instruction stopped short.

@@ -111,6 +111,48 @@ pub fn map_done(
     })
 }
 
+/// Runs the base with every word (or byte) the case sets rewritten by `f`.
+pub fn with_memory(
+    req: &Request<'_>,
+    base: &dyn Backend,
+    f: impl Fn(u16) -> u16,
+) -> Result<Response, Fault> {
+    let units: std::collections::BTreeMap<plc_conformance::device::Device, u16> = req
+        .memory
+        .explicit()
+        .iter()
+        .map(|(d, v)| (d.clone(), f(*v)))
+        .collect();
+    let memory =
+        plc_conformance::memory::Image::of_units(units, req.memory.fill(), req.memory.unit());
+    base.execute(&Request {
+        memory: &memory,
+        ..*req
+    })
+}
+
+/// Runs the base with the constant operand `name` replaced by `f(k)` (as is when it is a
+/// device).
+pub fn with_constant(
+    req: &Request<'_>,
+    base: &dyn Backend,
+    name: &str,
+    f: impl Fn(i64) -> i64,
+) -> Result<Response, Fault> {
+    let Some(plc_conformance::model::Operand::Constant(k)) = req.operands.get(name) else {
+        return base.execute(req);
+    };
+    let mut operands = req.operands.clone();
+    operands.insert(
+        name.into(),
+        plc_conformance::model::Operand::Constant(f(*k)),
+    );
+    base.execute(&Request {
+        operands: &operands,
+        ..*req
+    })
+}
+
 /// The trials of the corpus that fail on a backend (recorded `unspecified` cases never do).
 pub fn failing_trials(session: &Project, backend: &Arc<dyn Backend>) -> Vec<String> {
     session
