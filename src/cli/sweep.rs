@@ -515,3 +515,91 @@ pub fn shard(spec: &str) -> Result<(u64, u64), CliError> {
     }
     Ok((k, n))
 }
+
+#[cfg(test)]
+mod tests {
+    //! The sweep's argument parsing, fuzzed: whatever a user types, a list is bounded or refused
+    //! with a message, never a panic, an allocation past reason or a silent default. Run longer
+    //! with `PROPTEST_CASES=100000 cargo test --lib cli::sweep`.
+
+    use super::*;
+    use clap::Parser;
+    use proptest::prelude::*;
+
+    /// What the list arguments are made of, hostile pieces included.
+    fn piece() -> impl Strategy<Value = String> {
+        prop_oneof![
+            "[0-9]{1,22}",
+            Just("-".to_string()),
+            Just(",".to_string()),
+            Just("/".to_string()),
+            Just(" ".to_string()),
+            Just("H".to_string()),
+            Just("natural".to_string()),
+            Just("4294967295".to_string()),
+            Just("18446744073709551616".to_string()),
+            "\\PC{0,3}",
+        ]
+    }
+
+    fn spec() -> impl Strategy<Value = String> {
+        prop::collection::vec(piece(), 0..8).prop_map(|v| v.concat())
+    }
+
+    proptest! {
+        #[test]
+        fn digits_are_bounded_or_refused(spec in spec()) {
+            match digits(&spec) {
+                Ok(Digits::Each(d)) => {
+                    prop_assert!(!d.is_empty());
+                    prop_assert!(d.len() <= MAX_DIGITS as usize + 1);
+                    prop_assert!(d.iter().all(|x| *x <= MAX_DIGITS));
+                }
+                Ok(Digits::Natural) => prop_assert_eq!(spec.as_str(), "natural"),
+                Err(e) => prop_assert!(!e.to_string().is_empty()),
+            }
+        }
+
+        #[test]
+        fn shards_are_k_of_n_or_refused(spec in spec()) {
+            if let Ok((k, n)) = shard(&spec) {
+                prop_assert!(1 <= k && k <= n);
+            }
+        }
+
+        #[test]
+        fn alphabets_are_bytes_or_refused(spec in spec()) {
+            if let Ok(a) = alphabet(&spec) {
+                prop_assert!(!a.is_empty() && a.len() <= 256);
+            }
+        }
+
+        #[test]
+        fn sweep_command_lines_parse_or_are_refused(
+            args in prop::collection::vec(
+                prop_oneof![
+                    Just("--digits".to_string()),
+                    Just("--shard".to_string()),
+                    Just("--alphabet".to_string()),
+                    Just("--length".to_string()),
+                    Just("--count".to_string()),
+                    Just("--class-check".to_string()),
+                    Just("--generator".to_string()),
+                    Just("full".to_string()),
+                    spec(),
+                ],
+                0..10,
+            )
+        ) {
+            let mut argv = vec!["plc-conformance".to_string(), "sweep".to_string()];
+            argv.extend(args);
+            if let Ok(cli) = crate::cli::Cli::try_parse_from(argv) {
+                if let crate::cli::Command::Sweep(a) = &cli.command {
+                    let _ = digits(&a.digits);
+                    let _ = shard(&a.shard);
+                    let _ = a.alphabet.as_deref().map(alphabet);
+                }
+            }
+        }
+    }
+}
