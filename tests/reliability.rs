@@ -875,3 +875,39 @@ fn tests_make_temporary_folders_only_through_tempfile() {
     }
     assert!(named_by_hand.is_empty(), "{named_by_hand:?}");
 }
+
+/// A backend that starts a helper in a session of its own (`setsid`, so neither its process
+/// group nor its session ends with it) and then exits: the helper, which still holds the
+/// backend's stdout, is adopted by the command and ended with the backend.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_helper_that_leaves_the_backend_s_session_does_not_outlive_the_run() {
+    if !python() {
+        return;
+    }
+    let scratch_dir = scratch();
+    let file = scratch_dir.path().join("pids");
+    let backend = format!(
+        "external:orphaning={}",
+        faulty_command("orphan", "ext-target")
+    );
+    let out = Command::new(BIN)
+        .args(["--root", path(root())])
+        .args(["run", "--vectors", path(&fixtures().join("vectors"))])
+        .args(["--backend", &backend, "--timeout", "10"])
+        .env("NO_COLOR", "1")
+        .env("FAULTY_PIDS", &file)
+        .env_remove("PLC_CONFORMANCE_CONFIG")
+        .stdin(Stdio::null())
+        .output()
+        .expect("the binary runs");
+    let stdout = text(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}{}", text(&out.stderr));
+    assert!(stdout.contains("crashed"), "{stdout}");
+    let helpers = pids(&file);
+    assert!(!helpers.is_empty(), "the adapter started no helper");
+    assert_eq!(
+        all_ended(&helpers, Duration::from_secs(5)),
+        Vec::<i32>::new()
+    );
+}

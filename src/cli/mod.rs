@@ -258,6 +258,7 @@ pub fn main() -> ExitCode {
         if let Err(e) = crate::interrupt::install(crate::interrupt::OnSignal::Finish) {
             console::warning(&format!("SIGINT and SIGTERM are not handled: {e}"));
         }
+        crate::backend::external::adopt_orphans();
     }
     let outcome = match &cli.command {
         Command::Run(args) => run::run(&cli, args),

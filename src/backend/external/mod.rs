@@ -20,7 +20,7 @@ use std::time::{Duration, Instant};
 
 use serde::Serialize;
 
-pub use process::{closing, kill_all, shell_line, MAX_LINE};
+pub use process::{adopt_orphans, closing, kill_all, shell_line, MAX_LINE};
 use process::{describe_exit, Next, Process};
 use protocol::{
     BackendInfo, BackendMessage, Capabilities, CaseRequest, CodecRequest, ErrorReport, FillName,

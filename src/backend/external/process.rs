@@ -51,9 +51,62 @@ fn groups() -> MutexGuard<'static, BTreeSet<i32>> {
 /// The processes are reaped by their owners, which see their backends' stdout close.
 pub fn kill_all() {
     CLOSING.store(true, Ordering::SeqCst);
-    for &pgid in groups().iter() {
+    let registry = groups();
+    for &pgid in registry.iter() {
         signal_group(pgid);
     }
+    kill_orphans(&registry);
+}
+
+/// Set once this process reaps the orphans of its backends (see [`adopt_orphans`]).
+static ADOPTING: AtomicBool = AtomicBool::new(false);
+
+/// Makes this process the reaper of its orphaned descendants (Linux): a backend's helper that
+/// leaves the backend's process group and session (`setsid`) and outlives the backend becomes a
+/// child of this process, which ends it with the backend. For the command line only: in a test
+/// binary, other children are not the harness's to end.
+pub fn adopt_orphans() {
+    #[cfg(target_os = "linux")]
+    {
+        // SAFETY: prctl(2) with PR_SET_CHILD_SUBREAPER takes integer arguments only.
+        let set = unsafe { libc::prctl(libc::PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0) };
+        ADOPTING.store(set == 0, Ordering::SeqCst);
+    }
+}
+
+/// Kills and reaps the orphans this process adopted: its children that lead no backend group
+/// (`leaders`), which can only be descendants of backends whose parents have ended.
+fn kill_orphans(leaders: &BTreeSet<i32>) {
+    #[cfg(target_os = "linux")]
+    {
+        if !ADOPTING.load(Ordering::SeqCst) {
+            return;
+        }
+        let me = std::process::id() as i32;
+        let Ok(entries) = std::fs::read_dir("/proc") else {
+            return;
+        };
+        for pid in entries.filter_map(|e| e.ok()?.file_name().to_str()?.parse::<i32>().ok()) {
+            let Ok(stat) = std::fs::read_to_string(format!("/proc/{pid}/stat")) else {
+                continue;
+            };
+            // `pid (comm) state ppid ...`: the name may hold spaces and parentheses.
+            let ppid = stat
+                .rsplit_once(')')
+                .and_then(|(_, rest)| rest.split_whitespace().nth(1))
+                .and_then(|p| p.parse::<i32>().ok());
+            if ppid == Some(me) && !leaders.contains(&pid) {
+                // SAFETY: kill(2) and waitpid(2) on a child of this process; no pointers but
+                // the null status.
+                unsafe {
+                    libc::kill(pid, libc::SIGKILL);
+                    libc::waitpid(pid, std::ptr::null_mut(), 0);
+                }
+            }
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = leaders;
 }
 
 /// Whether [`kill_all`] has been called.
@@ -352,6 +405,8 @@ impl Process {
         if let Some(pgid) = self.group.take() {
             let mut registry = groups();
             signal_group(pgid);
+            // While this backend's leader is still a registered child (not yet reaped).
+            kill_orphans(&registry);
             registry.remove(&pgid);
         }
     }
