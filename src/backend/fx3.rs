@@ -12,11 +12,9 @@
 
 use std::marker::PhantomData;
 
-use super::fx5::{asci_digits, asci_source_words, asci_stores, hex_chars, hex_words, Packing};
-use super::reference::{constant_word, Model, Stop};
+use super::fx5::{asci_with, hex_with, Packing, Rules};
+use super::reference::{Model, Stop};
 use super::{Outcome, Request, Unsupported};
-use crate::memory::Scratch;
-use crate::model::Operand;
 
 /// What an FX3-style family names its own way.
 pub trait Dialect: Send + Sync + 'static {
@@ -84,79 +82,20 @@ impl<D: Dialect> Model for AsciHex<D> {
     }
 }
 
-/// n, read as 16-bit unsigned and checked for 1..256.
-fn count(req: &Request<'_>) -> Result<u32, Stop> {
-    let n = match req.operand("n")? {
-        Operand::Constant(k) => constant_word("n", *k)?,
-        Operand::Device(dev) => {
-            if !req.words_exist(dev, 1) {
-                return Err(Stop::Error(OPERATION_ERROR));
-            }
-            req.memory.read(dev)
-        }
-    };
-    let n = u32::from(n);
-    if (1..=MAX_CHARS).contains(&n) {
-        Ok(n)
-    } else {
-        Err(Stop::Error(OPERATION_ERROR))
-    }
-}
+/// One operation error for every kind: the flag is what the program sees.
+const RULES: Rules = Rules {
+    max_chars: MAX_CHARS,
+    range: OPERATION_ERROR,
+    count: OPERATION_ERROR,
+    invalid: OPERATION_ERROR,
+};
 
 /// ASCI: hex code at (s) -> n ASCII characters at (d), nothing after them.
 fn asci(req: &Request<'_>, packing: Packing) -> Result<Outcome, Stop> {
-    let n = count(req)?;
-    let source: Vec<u16> = match req.operand("s")? {
-        Operand::Constant(k) => vec![constant_word("s", *k)?],
-        Operand::Device(s) => {
-            let words = asci_source_words(n);
-            if !req.words_exist(s, words) {
-                return Err(Stop::Error(OPERATION_ERROR));
-            }
-            (0..words)
-                .filter_map(|i| s.offset(i))
-                .map(|dev| req.memory.read(&dev))
-                .collect()
-        }
-    };
-    let d = req.device("d")?;
-    if !req.words_exist(d, packing.words_for(n)) {
-        return Err(Stop::Error(OPERATION_ERROR));
-    }
-    let mut out = Scratch::new(req.memory);
-    for (i, store) in asci_stores(&asci_digits(&source, n), packing, false)
-        .into_iter()
-        .enumerate()
-    {
-        if let Some(dev) = d.offset(i as u32) {
-            let old = out.read(&dev);
-            out.write(dev, store.apply(old));
-        }
-    }
-    Ok(Outcome {
-        writes: out.into_writes(),
-        error: None,
-    })
+    asci_with(req, packing, false, &RULES)
 }
 
 /// HEX: n ASCII characters at (s) -> hex code at (d), right-justified.
 fn hex(req: &Request<'_>, packing: Packing) -> Result<Outcome, Stop> {
-    let n = count(req)?;
-    let s = req.device("s")?;
-    let d = req.device("d")?;
-    if !req.words_exist(s, packing.words_for(n)) || !req.words_exist(d, n.div_ceil(4)) {
-        return Err(Stop::Error(OPERATION_ERROR));
-    }
-    let words = hex_words(&hex_chars(req.memory, s, n, packing))
-        .map_err(|_| Stop::Error(OPERATION_ERROR))?;
-    let mut out = Scratch::new(req.memory);
-    for (i, word) in words.into_iter().enumerate() {
-        if let Some(dev) = d.offset(i as u32) {
-            out.write(dev, word);
-        }
-    }
-    Ok(Outcome {
-        writes: out.into_writes(),
-        error: None,
-    })
+    hex_with(req, packing, &RULES)
 }

@@ -204,22 +204,40 @@ impl Model for Fx5 {
     }
 }
 
-/// n, read as 16-bit unsigned (a D register holding 8000H is 32768) and checked for 1..32767.
-fn count(req: &Request<'_>) -> Result<u32, Stop> {
+/// What an FX-style family varies in ASCI and HEX(A): the most characters and the error of each
+/// kind (the FX3 and the Delta DVP give one operation error for all, [`super::fx3`]).
+pub(super) struct Rules {
+    pub max_chars: u32,
+    pub range: u16,
+    pub count: u16,
+    pub invalid: u16,
+}
+
+/// The FX5's: n up to 32767, 2820H past a device range, 3405H for n, 3401H for a character.
+const FX5: Rules = Rules {
+    max_chars: MAX_CHARS,
+    range: ERR_DEVICE_RANGE,
+    count: ERR_COUNT,
+    invalid: ERR_INVALID_DATA,
+};
+
+/// n, read as 16-bit unsigned (a D register holding 8000H is 32768) and checked for
+/// 1..`max_chars`.
+fn count(req: &Request<'_>, rules: &Rules) -> Result<u32, Stop> {
     let n = match req.operand("n")? {
         Operand::Constant(k) => constant_word("n", *k)?,
         Operand::Device(dev) => {
             if !req.words_exist(dev, 1) {
-                return Err(Stop::Error(ERR_DEVICE_RANGE));
+                return Err(Stop::Error(rules.range));
             }
             req.memory.read(dev)
         }
     };
     let n = u32::from(n);
-    if (1..=MAX_CHARS).contains(&n) {
+    if (1..=rules.max_chars).contains(&n) {
         Ok(n)
     } else {
-        Err(Stop::Error(ERR_COUNT))
+        Err(Stop::Error(rules.count))
     }
 }
 
@@ -227,17 +245,25 @@ fn packing(req: &Request<'_>) -> Packing {
     Packing::from_sm8161(req.flag("SM8161"))
 }
 
-/// ASCI: hex code at (s) -> n ASCII characters at (d).
+/// ASCI: hex code at (s) -> n ASCII characters at (d), and a NULL after them when SM701 is off.
 fn asci(req: &Request<'_>) -> Result<Outcome, Stop> {
-    let n = count(req)?;
-    let packing = packing(req);
-    let terminate = !req.flag("SM701");
+    asci_with(req, packing(req), !req.flag("SM701"), &FX5)
+}
+
+/// ASCI of an FX-style family: `terminate` stores a NULL after the last character.
+pub(super) fn asci_with(
+    req: &Request<'_>,
+    packing: Packing,
+    terminate: bool,
+    rules: &Rules,
+) -> Result<Outcome, Stop> {
+    let n = count(req, rules)?;
     let source: Vec<u16> = match req.operand("s")? {
         Operand::Constant(k) => vec![constant_word("s", *k)?],
         Operand::Device(s) => {
             let words = asci_source_words(n);
             if !req.words_exist(s, words) {
-                return Err(Stop::Error(ERR_DEVICE_RANGE));
+                return Err(Stop::Error(rules.range));
             }
             (0..words)
                 .filter_map(|i| s.offset(i))
@@ -247,7 +273,7 @@ fn asci(req: &Request<'_>) -> Result<Outcome, Stop> {
     };
     let d = req.device("d")?;
     if !req.words_exist(d, asci_destination_words(n, packing, terminate)) {
-        return Err(Stop::Error(ERR_DEVICE_RANGE));
+        return Err(Stop::Error(rules.range));
     }
     let stores = asci_stores(&asci_digits(&source, n), packing, terminate);
     let mut out = Scratch::new(req.memory);
@@ -265,18 +291,26 @@ fn asci(req: &Request<'_>) -> Result<Outcome, Stop> {
 
 /// HEXA: n ASCII characters at (s) -> hex code at (d), right-justified.
 fn hex(req: &Request<'_>) -> Result<Outcome, Stop> {
-    let n = count(req)?;
-    let packing = packing(req);
+    hex_with(req, packing(req), &FX5)
+}
+
+/// HEX(A) of an FX-style family.
+pub(super) fn hex_with(
+    req: &Request<'_>,
+    packing: Packing,
+    rules: &Rules,
+) -> Result<Outcome, Stop> {
+    let n = count(req, rules)?;
     let s = req.device("s")?;
     if !req.words_exist(s, packing.words_for(n)) {
-        return Err(Stop::Error(ERR_DEVICE_RANGE));
+        return Err(Stop::Error(rules.range));
     }
     let d = req.device("d")?;
     if !req.words_exist(d, hex_destination_words(n)) {
-        return Err(Stop::Error(ERR_DEVICE_RANGE));
+        return Err(Stop::Error(rules.range));
     }
-    let words = hex_words(&hex_chars(req.memory, s, n, packing))
-        .map_err(|_| Stop::Error(ERR_INVALID_DATA))?;
+    let words =
+        hex_words(&hex_chars(req.memory, s, n, packing)).map_err(|_| Stop::Error(rules.invalid))?;
     let mut out = Scratch::new(req.memory);
     for (i, word) in words.into_iter().enumerate() {
         if let Some(dev) = d.offset(i as u32) {
