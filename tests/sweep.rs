@@ -652,6 +652,7 @@ fn the_full_sweep_by_class_counts_every_four_byte_text_exactly() {
         "mitsubishi-fx5",
         "idec-fc4a",
         "siemens-s7-1200",
+        "omron-cs-cj",
     ];
     let backends: Vec<_> = project
         .backends
@@ -682,13 +683,18 @@ fn the_full_sweep_by_class_counts_every_four_byte_text_exactly() {
             "fx5/hexa-16bit",
             "fx5/hexa-8bit",
             "fc4a/atoh",
-            "s7/ath"
+            "s7/ath",
+            "omron/hex"
         ]
     );
     // Counted by hand: every text of four hex digits, and every text that HABIN with SM705 on
     // ends at a 00H after one to three digits (whatever follows the 00H; S7 ATH reads the 00H
-    // as an invalid character).
-    assert_eq!(inputs_with(&r, &["value#1"; 6]), 16u64.pow(4));
+    // as an invalid character). Omron HEX reads the text back to front: it agrees on the 16 * 16
+    // texts that read the same both ways, and gives another value for the rest.
+    assert_eq!(inputs_with(&r, &["value#1"; 7]), 16 * 16);
+    let mut reversed = ["value#1"; 7];
+    reversed[6] = "value#2";
+    assert_eq!(inputs_with(&r, &reversed), 16u64.pow(4) - 16 * 16);
     assert_eq!(
         inputs_with(
             &r,
@@ -698,7 +704,8 @@ fn the_full_sweep_by_class_counts_every_four_byte_text_exactly() {
                 "invalid-digit",
                 "invalid-digit",
                 "error",
-                "invalid-digit"
+                "invalid-digit",
+                "error"
             ]
         ),
         16 * 256 * 256 + 16 * 16 * 256 + 16 * 16 * 16

@@ -12,6 +12,7 @@ pub mod fx3;
 pub mod fx5;
 pub mod iqr;
 pub mod kv;
+pub mod omron;
 pub mod reference;
 pub mod s7;
 pub mod s7_200;
@@ -322,6 +323,7 @@ const MODELS: &[MakeBackend] = &[
     reference::backend::<fx3::AsciHex<fx3::Delta>>,
     reference::backend::<fp::Fp>,
     reference::backend::<kv::Kv>,
+    reference::backend::<omron::Omron>,
 ];
 
 /// The reference models, one per profile that has one.

@@ -281,6 +281,19 @@ pub struct Variant {
     /// The instructions this variant has; all of the profile's when absent.
     #[serde(default)]
     pub instructions: Option<Vec<String>>,
+    /// Rules in which this variant's instructions differ from the rest of its family, by name,
+    /// for the family's reference model to read (Omron C200H-series HEX: `lowercase-hex`,
+    /// 61H-66H taken as digits). A manual states such a rule per CPU model, so which models
+    /// have it is data in the profile, and adding a model is an edit to the profile.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub features: Vec<String>,
+}
+
+impl Variant {
+    /// Whether the variant has a rule the profile names in its `features`.
+    pub fn has_feature(&self, feature: &str) -> bool {
+        self.features.iter().any(|f| f == feature)
+    }
 }
 
 #[cfg(test)]
@@ -298,6 +311,17 @@ mod tests {
         assert_eq!(n.point(1277), Some(1023));
         assert_eq!(n.point(1278), None);
         assert_eq!(Numbering::Decimal.point(1278), Some(1278));
+    }
+
+    #[test]
+    fn a_variant_names_its_features() {
+        let v: Variant =
+            serde_yaml::from_str("id: c200h\ndescription: d\nfeatures: [lowercase-hex]\n")
+                .expect("a variant with features");
+        assert!(v.has_feature("lowercase-hex"));
+        assert!(!v.has_feature("lowercase"));
+        let plain: Variant = serde_yaml::from_str("id: cs-cj\ndescription: d\n").expect("plain");
+        assert!(plain.features.is_empty() && !plain.has_feature("lowercase-hex"));
     }
 
     #[test]
