@@ -251,17 +251,17 @@ const GOOD: &str = "  - id: xv-good
 )]
 #[case::two_answers(
     "expect: {value: 5A8DH}",
-    "expect: {value: 5A8DH, error: invalid-digit}",
+    "expect: {value: 5A8DH, text: \"5A8D\"}",
     9,
     "cases[0].expect",
-    "give exactly one of `value` or `error`"
+    "give `value`, `error`, or both"
 )]
 #[case::text_answer_for_value(
     "expect: {value: 5A8DH}",
     "expect: {text: \"5A8D\"}",
     9,
     "cases[0].expect",
-    "give exactly one of `value` or `error`"
+    "give `value`, `error`, or both"
 )]
 #[case::empty_why(
     "why: same",

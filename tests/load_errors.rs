@@ -560,3 +560,30 @@ fn a_lowering_on_a_device_the_variant_lacks_is_a_profile_error() {
         );
     }
 }
+
+#[test]
+fn written_on_error_must_name_one_of_the_section_s_errors() {
+    let scratch = tempfile::tempdir().expect("temp dir");
+    let dir = scratch.path();
+    let vendors = Path::new(env!("CARGO_MANIFEST_DIR")).join("vendors");
+    let s7 = std::fs::read_to_string(vendors.join("siemens-s7-1200.yaml")).expect("profile");
+    let declared = "  written_on_error: [0007H]\n";
+    assert!(s7.contains(declared), "the S7-1200 profile changed");
+    let line = s7[..s7.find(declared).expect("found")].lines().count() + 1;
+    for (listed, message) in [
+        ("[0008H]", "`0008H` is not one of this section's `errors`"),
+        ("[M8004]", "`M8004` is not one of this section's `errors`"),
+    ] {
+        let changed = s7.replacen(declared, &format!("  written_on_error: {listed}\n"), 1);
+        std::fs::write(dir.join("siemens-s7-1200.yaml"), changed).expect("write");
+        let errors = load_profiles(dir)
+            .expect_err("the profile loaded")
+            .to_string();
+        assert!(
+            errors.contains(&format!(
+                "siemens-s7-1200.yaml:{line}: cross_vendor.written_on_error[0]: {message}"
+            )),
+            "{message}\nin:\n{errors}"
+        );
+    }
+}

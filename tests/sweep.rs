@@ -689,7 +689,7 @@ fn the_full_sweep_by_class_counts_every_four_byte_text_exactly() {
     );
     // Counted by hand: every text of four hex digits, and every text that HABIN with SM705 on
     // ends at a 00H after one to three digits (whatever follows the 00H; S7 ATH reads the 00H
-    // as an invalid character). Omron HEX reads the text back to front: it agrees on the 16 * 16
+    // as an invalid character, converts it as 0 and goes on). Omron HEX reads the text back to front: it agrees on the 16 * 16
     // texts that read the same both ways, and gives another value for the rest.
     assert_eq!(inputs_with(&r, &["value#1"; 7]), 16 * 16);
     let mut reversed = ["value#1"; 7];
@@ -704,7 +704,7 @@ fn the_full_sweep_by_class_counts_every_four_byte_text_exactly() {
                 "invalid-digit",
                 "invalid-digit",
                 "error",
-                "invalid-digit",
+                "invalid-digit and value#1",
                 "error"
             ]
         ),

@@ -15,8 +15,17 @@ pub fn lift(
     outcome: &Outcome,
     memory: &Image,
 ) -> Answer {
+    let mut error = None;
     if let Some(signal) = &outcome.error {
-        return profile.cross_vendor.classify(signal);
+        match profile.cross_vendor.classify(signal) {
+            Answer::Error(class)
+                if lowering.operation == Operation::HexToValue
+                    && profile.cross_vendor.writes_on(signal) =>
+            {
+                error = Some(class)
+            }
+            answer => return answer,
+        }
     }
     let read = |d: &crate::device::Device| {
         outcome
@@ -33,7 +42,11 @@ pub fn lift(
             let values = (0..units)
                 .filter_map(|i| destination.offset(i))
                 .map(|d| read(&d));
-            Answer::Value(units_value(values, lowering.unit, lowering.order))
+            let value = units_value(values, lowering.unit, lowering.order);
+            match error {
+                Some(class) => Answer::ErrorAndValue(class, value),
+                None => Answer::Value(value),
+            }
         }
         Operation::ValueToHex => {
             let mut text = Vec::new();

@@ -197,17 +197,21 @@ fn outcome(
             text_bytes(&format!("{key}.text"), t, cx).map(Answer::Text)
         }
         (None, None, Some(e)) => Some(Answer::Error(e.clone())),
+        (Some(v), None, Some(e)) if op == Operation::HexToValue => {
+            number(&format!("{key}.value"), v, 64, cx).map(|v| Answer::ErrorAndValue(e.clone(), v))
+        }
         _ => {
             cx.error(
                 key,
-                LoadErrorKind::Invalid(format!(
-                    "give exactly one of `{}` or `error`",
+                LoadErrorKind::Invalid(
                     if op == Operation::HexToValue {
-                        "value"
+                        "give `value`, `error`, or both (an error after which the destination \
+                         still holds a value)"
                     } else {
-                        "text"
+                        "give exactly one of `text` or `error`"
                     }
-                )),
+                    .to_string(),
+                ),
             );
             None
         }
@@ -253,18 +257,27 @@ pub(crate) fn read_section(p: &ProfileSpec, cx: &mut FileContext<'_>) -> CrossVe
     let Some(section) = &p.cross_vendor else {
         return out;
     };
+    let signal_of = |key: &String| match p.errors.signal {
+        SignalKind::Code => parse_word(key).ok().map(ErrorSignal::Code),
+        SignalKind::Flag => (Some(key) == p.errors.flag.as_ref())
+            .then(|| key.parse::<Device>().ok().map(ErrorSignal::Flag))
+            .flatten(),
+    };
     for (key, class) in &section.errors {
-        let signal = match p.errors.signal {
-            SignalKind::Code => parse_word(key).ok().map(ErrorSignal::Code),
-            SignalKind::Flag => (Some(key) == p.errors.flag.as_ref())
-                .then(|| key.parse::<Device>().ok().map(ErrorSignal::Flag))
-                .flatten(),
-        };
-        match signal {
+        match signal_of(key) {
             Some(s) => out.errors.push((s, class.clone())),
             None => cx.error(
                 format!("cross_vendor.errors.{key}"),
                 LoadErrorKind::Invalid(format!("`{key}` is not an error signal of this profile")),
+            ),
+        }
+    }
+    for (i, key) in section.written_on_error.iter().enumerate() {
+        match signal_of(key) {
+            Some(s) if out.errors.iter().any(|(e, _)| *e == s) => out.written_on_error.push(s),
+            _ => cx.error(
+                format!("cross_vendor.written_on_error[{i}]"),
+                LoadErrorKind::Invalid(format!("`{key}` is not one of this section's `errors`")),
             ),
         }
     }

@@ -25,6 +25,10 @@ pub enum Answer {
     /// Characters as bytes, up to the first 00H.
     Text(Vec<u8>),
     Error(ErrorClass),
+    /// An error after which the instruction has still written its destination, so that what it
+    /// wrote is part of the answer (Siemens ATH: an invalid character converts as 0 and
+    /// RET_VAL is 0007H). Only the signals a profile lists in `written_on_error` lift so.
+    ErrorAndValue(ErrorClass, u64),
     /// An error signal the profile does not classify (shown as the vendor wrote it).
     OtherError(String),
 }
@@ -44,6 +48,7 @@ impl fmt::Display for Answer {
                 write!(f, "\"")
             }
             Answer::Error(c) => write!(f, "{c}"),
+            Answer::ErrorAndValue(c, v) => write!(f, "{c} and {v:04X}H"),
             Answer::OtherError(e) => write!(f, "error {e}"),
         }
     }
@@ -54,6 +59,8 @@ impl fmt::Display for Answer {
 pub struct CrossVendorSection {
     /// How the profile's error signals read as shared classes.
     pub errors: Vec<(ErrorSignal, ErrorClass)>,
+    /// The signals after which the destination still holds the conversion.
+    pub written_on_error: Vec<ErrorSignal>,
     pub lowerings: Vec<Arc<Lowering>>,
 }
 
@@ -64,6 +71,11 @@ impl CrossVendorSection {
             Some((_, class)) => Answer::Error(class.clone()),
             None => Answer::OtherError(signal.to_string()),
         }
+    }
+
+    /// Whether the destination still holds the conversion after this signal.
+    pub fn writes_on(&self, signal: &ErrorSignal) -> bool {
+        self.written_on_error.contains(signal)
     }
 }
 

@@ -255,7 +255,7 @@ fn behaviour(trial: &Trial, verdict: &Verdict) -> Behaviour {
     if let Some(case) = trial.cross_vendor_case() {
         if let Some(a) = cross_vendor_answer(trial, verdict) {
             let class = match a {
-                Answer::Error(c) => AnswerClass::Error(c.clone()),
+                Answer::Error(c) | Answer::ErrorAndValue(c, _) => AnswerClass::Error(c.clone()),
                 Answer::OtherError(e) => AnswerClass::OtherError(e.clone()),
                 a if Some(a) == case.expect.as_ref() => AnswerClass::Plain,
                 Answer::Value(_) => AnswerClass::OtherValue,

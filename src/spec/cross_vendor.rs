@@ -89,6 +89,11 @@ pub struct CrossVendorSectionSpec {
     /// for a code, `M8004: error` for a flag.
     #[serde(default)]
     pub errors: BTreeMap<String, ErrorClass>,
+    /// Error signals of `errors` after which the instruction has still written its destination
+    /// (Siemens ATH's 0007H: an invalid character converted as 0): a hex-to-value answer is then
+    /// the error and the value (`{error: invalid-digit, value: 1034H}`), so the matrix shows it.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub written_on_error: Vec<String>,
     #[serde(default)]
     pub lowerings: Vec<LoweringSpec>,
 }

@@ -378,6 +378,7 @@ fn answer_yaml(a: &Answer) -> String {
         Answer::Value(v) => format!("value: {}", hex_value(*v)),
         Answer::Text(t) => format!("text: {}", quote(t)),
         Answer::Error(c) => format!("error: {c}"),
+        Answer::ErrorAndValue(c, v) => format!("error: {c}, value: {}", hex_value(*v)),
         Answer::OtherError(e) => format!("error: {e}"),
     }
 }

@@ -93,6 +93,7 @@ impl Reply {
                 Answer::Value(_) => (Cow::Borrowed("value"), true),
                 Answer::Text(_) => (Cow::Borrowed("text"), true),
                 Answer::Error(c) => (Cow::Owned(c.to_string()), false),
+                Answer::ErrorAndValue(c, _) => (Cow::Owned(format!("{c} and value")), true),
                 Answer::OtherError(e) => (Cow::Owned(format!("error {e}")), false),
             },
             Reply::Memory { effect, .. } => match (&effect.error, effect.changed.is_empty()) {
