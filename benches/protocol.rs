@@ -164,7 +164,7 @@ fn main() {
         let rounds = if setup.persistent { 3 } else { 1 };
         let best = best_of(rounds, || {
             let start = Instant::now();
-            let answers = backend.execute_batch(&requests);
+            let answers = backend.execute_batch(&requests, &mut |_| {});
             let elapsed = start.elapsed();
             let faults = answers.iter().filter(|a| a.is_err()).count();
             assert_eq!(faults, 0, "{}: {faults} faults", setup.name);

@@ -35,6 +35,36 @@ pub enum Progress {
     Observed(usize, Vec<Observation>, Duration),
     /// A backend's process was started again after a fault; `restarts` counts them so far.
     Restarted { backend: String, restarts: usize },
+    /// A backend is still answering its current chunk: `answered` of its `of` requests so far.
+    /// Sent at most every [`ANSWERING_EVERY`], so that only a slow chunk sends any.
+    Answering {
+        backend: String,
+        answered: usize,
+        of: usize,
+    },
+}
+
+/// How often a chunk still being answered is reported.
+pub const ANSWERING_EVERY: Duration = Duration::from_millis(250);
+
+/// A callback for a backend's batch that reports, at most every [`ANSWERING_EVERY`], how many
+/// of its `of` requests are answered.
+fn answering<'a>(
+    backend: &'a str,
+    of: usize,
+    tx: &'a mpsc::Sender<Progress>,
+) -> impl FnMut(usize) + 'a {
+    let mut last = Instant::now();
+    move |answered| {
+        if answered < of && last.elapsed() >= ANSWERING_EVERY {
+            last = Instant::now();
+            let _ = tx.send(Progress::Answering {
+                backend: backend.to_string(),
+                answered,
+                of,
+            });
+        }
+    }
 }
 
 /// The memory before a trial, once per fill (in [`Fill::ALL`] order).
@@ -82,10 +112,12 @@ pub fn question(trial: &Trial) -> Option<Question<'_>> {
 /// Runs one trial under every fill (a codec-level trial once).
 pub fn execute(trial: &Trial) -> Vec<Observation> {
     if let Some(q) = question(trial) {
-        return pair(trial.backend.convert_batch(&[q]));
+        return pair(trial.backend.convert_batch(&[q], &mut |_| {}));
     }
     let images = images(trial);
-    let results = trial.backend.execute_batch(&requests(trial, &images));
+    let results = trial
+        .backend
+        .execute_batch(&requests(trial, &images), &mut |_| {});
     pair(results)
 }
 
@@ -157,7 +189,12 @@ fn run_backend(trials: &[Trial], group: &[usize], stop: &AtomicBool, tx: &mpsc::
         if backend.codec().is_some() {
             let questions: Vec<Question<'_>> =
                 chunk.iter().filter_map(|&i| question(&trials[i])).collect();
-            let mut answers = backend.convert_batch(&questions).into_iter();
+            let mut answers = backend
+                .convert_batch(
+                    &questions,
+                    &mut answering(backend.name(), questions.len(), tx),
+                )
+                .into_iter();
             let time = each(started);
             for &i in chunk {
                 let answer = answers.next().unwrap_or_else(|| {
@@ -179,7 +216,9 @@ fn run_backend(trials: &[Trial], group: &[usize], stop: &AtomicBool, tx: &mpsc::
                 spans.push((i, r.len()));
                 all.extend(r);
             }
-            let mut results = backend.execute_batch(&all).into_iter();
+            let mut results = backend
+                .execute_batch(&all, &mut answering(backend.name(), all.len(), tx))
+                .into_iter();
             let time = each(started);
             for (i, len) in spans {
                 let answers: Vec<_> = results.by_ref().take(len).collect();

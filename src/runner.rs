@@ -196,6 +196,15 @@ pub fn run(
                 backend: &backend,
                 restarts,
             }),
+            Progress::Answering {
+                backend,
+                answered,
+                of,
+            } => reporter.event(&Event::BackendAnswering {
+                backend: &backend,
+                answered,
+                of,
+            }),
         };
         match written {
             Ok(()) => ControlFlow::Continue(()),

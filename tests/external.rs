@@ -893,3 +893,70 @@ fn trials_a_backend_declines_are_listed_ignored_and_never_pass_alone() {
     assert!(!out.status.success(), "{stdout}");
     assert!(stdout.contains("1 failed"), "{stdout}");
 }
+
+/// A backend that answers slowly is seen working while it answers its batch: the executor
+/// reports how many of the batch's requests are answered, several times before the batch's
+/// first trial is judged, and the live progress line shows it.
+#[test]
+fn a_slow_batch_reports_its_answers_as_they_come() {
+    use plc_conformance::execute::{execute_all, Progress};
+    use plc_conformance::report::progress::ProgressReporter;
+    use plc_conformance::report::{Event, Reporter};
+    use std::sync::atomic::AtomicBool;
+
+    let mut session = fixture_session();
+    let slow = python_backend(
+        "slow",
+        &fixtures().join("faulty_adapter.py"),
+        &["slow", "*"],
+    );
+    session
+        .add_external(slow, true)
+        .unwrap_or_else(|e| panic!("the slow backend does not start: {e}"));
+    let trials = trials_of(&session, "slow");
+    let indices: Vec<usize> = (0..trials.len()).collect();
+    let mut answering = Vec::new();
+    let mut observed = 0;
+    execute_all(&trials, &indices, 1, &AtomicBool::new(false), |p| {
+        match p {
+            Progress::Answering { answered, of, .. } if observed == 0 => {
+                answering.push((answered, of))
+            }
+            Progress::Observed(..) => observed += 1,
+            _ => {}
+        }
+        std::ops::ControlFlow::Continue(())
+    });
+    assert_eq!(observed, trials.len());
+    // 3 trials under 2 fills, 0.15 s an answer: about 0.9 s, reported every 0.25 s.
+    assert!(answering.len() >= 2, "{answering:?}");
+    assert!(
+        answering
+            .windows(2)
+            .all(|w| w[0].0 < w[1].0 && w[1].0 < w[1].1),
+        "{answering:?}"
+    );
+
+    let mut sink = Keep;
+    let mut progress =
+        ProgressReporter::with_target(&trials, &mut sink, indicatif::ProgressDrawTarget::hidden());
+    progress
+        .event(&Event::BackendAnswering {
+            backend: "slow",
+            answered: 4,
+            of: 6,
+        })
+        .expect("event");
+    assert_eq!(
+        progress.message("slow").as_deref(),
+        Some("0 failed, answering: 4 of 6 requests")
+    );
+}
+
+struct Keep;
+
+impl plc_conformance::report::Reporter for Keep {
+    fn event(&mut self, _: &plc_conformance::report::Event<'_>) -> std::io::Result<()> {
+        Ok(())
+    }
+}

@@ -222,10 +222,20 @@ pub trait Backend: Send + Sync {
         128
     }
     fn execute(&self, request: &Request<'_>) -> Result<Response, Fault>;
-    /// Executes several requests, answers in order. A backend in another process answers a
-    /// batch in one exchange, which is what makes it fast.
-    fn execute_batch(&self, requests: &[Request<'_>]) -> Vec<Result<Response, Fault>> {
-        requests.iter().map(|r| self.execute(r)).collect()
+    /// Executes several requests, answers in order, calling `answered` with how many are
+    /// answered so far as they come in. A backend in another process answers a batch in one
+    /// exchange, which is what makes it fast; `answered` is what shows a slow one working.
+    fn execute_batch(
+        &self,
+        requests: &[Request<'_>],
+        answered: &mut dyn FnMut(usize),
+    ) -> Vec<Result<Response, Fault>> {
+        let mut out = Vec::with_capacity(requests.len());
+        for r in requests {
+            out.push(self.execute(r));
+            answered(out.len());
+        }
+        out
     }
     /// How many times the backend's process has been started again after a fault: the
     /// executor reports each restart as an event.
@@ -237,8 +247,13 @@ pub trait Backend: Send + Sync {
     fn codec(&self) -> Option<&CodecAbilities> {
         None
     }
-    /// Answers cross-vendor questions, in order (codec-level backends).
-    fn convert_batch(&self, questions: &[Question<'_>]) -> Vec<Result<Response, Fault>> {
+    /// Answers cross-vendor questions, in order (codec-level backends), calling `answered` as
+    /// [`Backend::execute_batch`] does.
+    fn convert_batch(
+        &self,
+        questions: &[Question<'_>],
+        _answered: &mut dyn FnMut(usize),
+    ) -> Vec<Result<Response, Fault>> {
         questions
             .iter()
             .map(|_| {
@@ -295,7 +310,11 @@ impl<C: Codec> Backend for CodecBackend<C> {
     fn codec(&self) -> Option<&CodecAbilities> {
         Some(&self.abilities)
     }
-    fn convert_batch(&self, questions: &[Question<'_>]) -> Vec<Result<Response, Fault>> {
+    fn convert_batch(
+        &self,
+        questions: &[Question<'_>],
+        _answered: &mut dyn FnMut(usize),
+    ) -> Vec<Result<Response, Fault>> {
         questions
             .iter()
             .map(|q| {

@@ -61,7 +61,9 @@ impl Reporter for Collector {
                 self.summary = **summary;
                 self.interrupted = *interrupted;
             }
-            Event::RunStarted { .. } | Event::BackendRestarted { .. } => {}
+            Event::RunStarted { .. }
+            | Event::BackendRestarted { .. }
+            | Event::BackendAnswering { .. } => {}
         }
         Ok(())
     }

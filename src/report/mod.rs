@@ -39,6 +39,12 @@ pub enum Event<'a> {
     },
     /// A backend's process was started again after a fault.
     BackendRestarted { backend: &'a str, restarts: usize },
+    /// A backend is still answering the requests it was handed: `answered` of `of` so far.
+    BackendAnswering {
+        backend: &'a str,
+        answered: usize,
+        of: usize,
+    },
     /// Every trial is reported; `interrupted` when the run stopped early.
     RunFinished {
         summary: &'a Summary,

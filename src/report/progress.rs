@@ -58,6 +58,11 @@ impl<'a> ProgressReporter<'a> {
         }
     }
 
+    /// What a backend's line says after its bar.
+    pub fn message(&self, backend: &str) -> Option<String> {
+        self.lines.get(backend).map(|(bar, _)| bar.message())
+    }
+
     /// Cases done and failures so far of a backend's line.
     pub fn position(&self, backend: &str) -> Option<(u64, usize)> {
         self.lines
@@ -80,11 +85,22 @@ impl Reporter for ProgressReporter<'_> {
                     bar.inc(1);
                     if verdict.is_failure() {
                         *failed += 1;
-                        bar.set_message(format!("{failed} failed"));
                     }
+                    bar.set_message(format!("{failed} failed"));
                     if bar.position() == bar.length().unwrap_or(0) {
                         bar.finish();
                     }
+                }
+            }
+            Event::BackendAnswering {
+                backend,
+                answered,
+                of,
+            } => {
+                if let Some((bar, failed)) = self.lines.get(*backend) {
+                    bar.set_message(format!(
+                        "{failed} failed, answering: {answered} of {of} requests"
+                    ));
                 }
             }
             Event::RunFinished { .. } => {

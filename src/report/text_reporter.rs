@@ -158,6 +158,8 @@ impl<W: Write> Reporter for TextReporter<W> {
             Event::BackendRestarted { backend, restarts } => {
                 self.restarts.insert(backend.to_string(), *restarts);
             }
+            // The live progress line shows it; the report does not.
+            Event::BackendAnswering { .. } => {}
             Event::RunFinished {
                 summary,
                 interrupted,

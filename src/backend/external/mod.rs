@@ -191,6 +191,7 @@ impl ExternalBackend {
         cases: &[RunCase],
         mut sent: bool,
         mut ahead: impl FnMut(&mut Process) -> bool,
+        answered: &mut dyn FnMut(usize),
     ) -> (Vec<Result<Response, Fault>>, bool) {
         let mut results: Vec<Result<Response, Fault>> = Vec::with_capacity(cases.len());
         let mut ahead_sent = false;
@@ -243,6 +244,7 @@ impl ExternalBackend {
                 match self.answer(process, case, deadline) {
                     Ok(response) => {
                         results.push(Ok(response));
+                        answered(results.len());
                         state.faults_in_a_row = 0;
                         deadline = Instant::now() + self.settings.timeout;
                     }
@@ -260,6 +262,7 @@ impl ExternalBackend {
                             state.down = Some(self.breaker(&fault));
                         }
                         results.push(Err(with_stderr(fault, &stderr)));
+                        answered(results.len());
                         break;
                     }
                 }
@@ -399,8 +402,12 @@ impl Backend for ExternalBackend {
         self.codec.as_ref()
     }
 
-    fn convert_batch(&self, questions: &[Question<'_>]) -> Vec<Result<Response, Fault>> {
-        self.send_all(questions.len(), |i, id| {
+    fn convert_batch(
+        &self,
+        questions: &[Question<'_>],
+        answered: &mut dyn FnMut(usize),
+    ) -> Vec<Result<Response, Fault>> {
+        self.send_all(questions.len(), answered, |i, id| {
             let q = &questions[i];
             RunCase::Codec(CodecRequest {
                 id,
@@ -491,7 +498,7 @@ impl Backend for ExternalBackend {
     }
 
     fn execute(&self, request: &Request<'_>) -> Result<Response, Fault> {
-        self.execute_batch(std::slice::from_ref(request))
+        self.execute_batch(std::slice::from_ref(request), &mut |_| {})
             .pop()
             .unwrap_or_else(|| Err(Fault::Protocol("no answer".into())))
     }
@@ -500,8 +507,12 @@ impl Backend for ExternalBackend {
         self.restarts.load(std::sync::atomic::Ordering::Relaxed)
     }
 
-    fn execute_batch(&self, requests: &[Request<'_>]) -> Vec<Result<Response, Fault>> {
-        self.send_all(requests.len(), |i, id| {
+    fn execute_batch(
+        &self,
+        requests: &[Request<'_>],
+        answered: &mut dyn FnMut(usize),
+    ) -> Vec<Result<Response, Fault>> {
+        self.send_all(requests.len(), answered, |i, id| {
             RunCase::Instruction(case_request(&requests[i], id))
         })
     }
@@ -512,9 +523,11 @@ impl ExternalBackend {
     /// `i`-th with its id. A persistent process gets the next batch as soon as the current one
     /// is sent, built while the process works on the current one: both sides stay busy, where
     /// sending a batch only once the last is answered would leave each waiting on the other.
+    /// `answered` hears of every answer as it is read.
     fn send_all(
         &self,
         count: usize,
+        answered: &mut dyn FnMut(usize),
         make: impl Fn(usize, u64) -> RunCase,
     ) -> Vec<Result<Response, Fault>> {
         let mut state = match self.state.lock() {
@@ -541,14 +554,20 @@ impl ExternalBackend {
             let cases = next.take().unwrap_or_else(|| build(k));
             let mut ahead: Option<Vec<RunCase>> = None;
             let pipelined = self.settings.persistent && k + 1 < batches;
-            let (answers, ahead_sent) =
-                self.run_chunk(&mut state, &cases, sent, |process: &mut Process| {
+            let done = results.len();
+            let (answers, ahead_sent) = self.run_chunk(
+                &mut state,
+                &cases,
+                sent,
+                |process: &mut Process| {
                     if !pipelined {
                         return false;
                     }
                     process.send(run_message(ahead.get_or_insert_with(|| build(k + 1))));
                     true
-                });
+                },
+                &mut |n| answered(done + n),
+            );
             results.extend(answers);
             sent = ahead_sent;
             next = ahead;
