@@ -188,6 +188,7 @@ impl Placeholder {
                 let any = OperationAbilities {
                     digits: Some((0..=16).collect()),
                     width: 64,
+                    reading: None,
                 };
                 CodecAbilities {
                     hex_to_value: Some(any.clone()),

@@ -1110,3 +1110,139 @@ fn a_shrunk_input_is_shown_once_per_group() {
     }
     assert!(shrunk > 0, "{stdout}");
 }
+
+/// `sweep --operation --backend CODEC` over a random sample, with `extra` arguments.
+fn judged_sweep(mode: &str, extra: &[&str]) -> std::process::Output {
+    let script = root().join("tests/fixtures/external/judged_codec.py");
+    let backend = format!("external:judged=python3 {} {mode}", script.display());
+    let mut args = vec![
+        "sweep",
+        "--operation",
+        "hex-to-value",
+        "--generator",
+        "random",
+        "--count",
+        "400",
+        "--seed",
+        "5",
+        "--digits",
+        "4",
+        "--backend",
+        &backend,
+    ];
+    args.extend_from_slice(extra);
+    common::cli(&args)
+}
+
+/// A codec is judged against the reading it declares: a deviating one fails the sweep, which
+/// shows only where it parts from that reading (no vendor-against-vendor disagreement), and
+/// its JSON names the oracle; a conforming one passes.
+#[test]
+fn a_codec_is_judged_against_the_reading_it_declares() {
+    if !common::python() {
+        return;
+    }
+    let out = judged_sweep("lenient", &[]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    assert!(
+        stdout.contains("column judged (judged against fx5/hexa-16bit)"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("judged against fx5/hexa-16bit: differs on "),
+        "{stdout}"
+    );
+    assert!(!stdout.contains(" disagree on "), "{stdout}");
+    let groups: Vec<&str> = stdout.split("\n#").skip(1).collect();
+    assert!(!groups.is_empty(), "{stdout}");
+    for g in &groups {
+        assert!(g.contains("differs from its oracle: judged"), "{g}");
+        // Only the judged column and its oracle are shown.
+        assert!(!g.contains("iqr/habin-fixed"), "{g}");
+    }
+
+    let out = judged_sweep("lenient", &["--format", "json"]);
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let judged = doc["columns"]
+        .as_array()
+        .and_then(|c| c.iter().find(|c| c["name"] == "judged"))
+        .expect("the codec's column");
+    assert_eq!(judged["oracle"], "fx5/hexa-16bit");
+    assert_eq!(doc["judged"][0]["oracle"], "fx5/hexa-16bit");
+    assert!(doc["judged"][0]["inputs"].as_u64().unwrap_or(0) > 0);
+
+    let out = judged_sweep("strict", &[]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    assert!(
+        stdout.contains("judged against fx5/hexa-16bit: differs on 0 of 400 inputs"),
+        "{stdout}"
+    );
+}
+
+/// `--oracle` judges a codec against another reading, `none` against none; a reading that is
+/// not a built-in column is refused with the list of those that are.
+#[test]
+fn the_oracle_can_be_named_or_refused() {
+    if !common::python() {
+        return;
+    }
+    // The strict FX5 codec parts from HABIN with SM705 on, which ends a text at 00H.
+    let out = judged_sweep("strict", &["--oracle", "iqr/habin-terminated"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    assert!(
+        stdout.contains("judged against iqr/habin-terminated: differs on "),
+        "{stdout}"
+    );
+    let out = judged_sweep("lenient", &["--oracle", "none"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(!stdout.contains("judged against"), "{stdout}");
+    assert!(stdout.contains(" disagree on "), "{stdout}");
+    let out = judged_sweep("strict", &["--oracle", "fx9/nothing"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("`fx9/nothing`, which is not a built-in reading of hex-to-value; the readings are: iqr/habin-fixed,"),
+        "{stderr}"
+    );
+}
+
+/// A judged sweep writes as vectors only the inputs where the codec parts from its oracle.
+#[test]
+fn a_judged_sweep_emits_only_where_the_codec_differs() {
+    if !common::python() {
+        return;
+    }
+    let dir = common::scratch();
+    let file = dir.path().join("found.yaml");
+    let file_arg = file.display().to_string();
+    let out = judged_sweep("lenient", &["--emit", &file_arg]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    let shrunk: BTreeSet<&str> = stdout
+        .lines()
+        .filter(|l| l.starts_with("   shrunk ("))
+        .filter_map(|l| {
+            l.split_once("): ")
+                .map(|(_, i)| i.split(" digits").next().unwrap_or(i))
+        })
+        .collect();
+    let written = std::fs::read_to_string(&file).expect("the emitted file");
+    let texts: Vec<&str> = written
+        .lines()
+        .filter_map(|l| l.strip_prefix("    text: "))
+        .collect();
+    assert!(!texts.is_empty(), "{written}");
+    for text in &texts {
+        assert!(
+            shrunk.contains(text),
+            "{text} is not a shrunk input:\n{stdout}"
+        );
+    }
+    // What is not written is said, one note per input.
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let notes = stderr.matches("not written as a vector: ").count();
+    assert_eq!(texts.len() + notes, shrunk.len(), "{stderr}\n{written}");
+}

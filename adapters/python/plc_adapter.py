@@ -309,10 +309,12 @@ def serve(run, name, version, profile, instructions, variants=None, flags=None,
     _serving(lambda i, o: _loop(i, o, hello, answer), stdin, stdout)
 
 
-def _codec_capability(digits, width):
+def _codec_capability(digits, width, reading):
     if width not in (16, 32):
         raise ValueError("width must be 16 or 32, not %r" % (width,))
     capability = {"width": width}
+    if reading is not None:
+        capability["reading"] = str(reading)
     if digits is not None:
         digits = sorted(set(int(d) for d in digits))
         if not digits or not all(1 <= d <= 8 for d in digits):
@@ -342,7 +344,8 @@ def _text_bytes(text):
 
 
 def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits=None,
-                encode_digits=None, width=16, errors=None, stdin=None, stdout=None):
+                encode_digits=None, width=16, errors=None, stdin=None, stdout=None,
+                decode_reading=None, encode_reading=None):
     """Answers the harness as a codec-level backend (protocol version 2) until it says shutdown
     or closes stdin.
 
@@ -355,6 +358,9 @@ def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits
     width: the value width in bits, 16 or 32: cases whose value does not fit are skipped.
     errors: {exception class: error class}, e.g. {ValueError: "invalid-digit"}: how the
       library's exceptions answer. A subclass maps like its nearest listed base class.
+    decode_reading, encode_reading: the built-in reading each follows, as `plc-conformance
+      sweep` names it (e.g. "fx5/hexa-16bit", "fx5/asci-16bit"): a sweep of the operation
+      judges the codec against it.
     """
     if name is None or version is None:
         raise TypeError("serve_codec needs name= and version=")
@@ -368,9 +374,9 @@ def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits
             raise ValueError("errors: %r is not one of %s" % (error_class, ", ".join(ERROR_CLASSES)))
     codec = {}
     if decode is not None:
-        codec[HEX_TO_VALUE] = _codec_capability(decode_digits, width)
+        codec[HEX_TO_VALUE] = _codec_capability(decode_digits, width, decode_reading)
     if encode is not None:
-        codec[VALUE_TO_HEX] = _codec_capability(encode_digits, width)
+        codec[VALUE_TO_HEX] = _codec_capability(encode_digits, width, encode_reading)
 
     def hello(message):
         if message.get("protocol", 1) < 2:

@@ -16,7 +16,7 @@ use crate::report::console;
 use crate::session::{assemble, BackendSource};
 use crate::sweep::generate::{Digits, Generator, BOUNDARIES, MAX_DIGITS};
 use crate::sweep::target::Target;
-use crate::sweep::{emit, render, Settings, Sweep};
+use crate::sweep::{emit, render, Oracle, Settings, Sweep};
 
 /// What `sweep` takes.
 #[derive(Debug, clap::Args)]
@@ -66,6 +66,12 @@ pub struct SweepArgs {
     /// a name or `external:NAME=COMMAND`, as for `run`; repeat for several.
     #[arg(long = "backend", value_name = "NAME")]
     pub backends: Vec<String>,
+    /// What the codec-level backends of an operation sweep are judged against: a built-in
+    /// reading such as `fx5/hexa-16bit`, or `none` to judge none [default: the reading each
+    /// codec declares]. A judged sweep shows only the groups where a backend parts from its
+    /// oracle, and fails when there is one.
+    #[arg(long, value_name = "READING", requires = "operation")]
+    pub oracle: Option<String>,
     /// Seconds an `external:` backend may take to answer one case.
     #[arg(long, value_name = "SECONDS", default_value_t = 5.0)]
     pub timeout: f64,
@@ -285,6 +291,11 @@ pub fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
         )));
     }
     settings.class_check = args.class_check;
+    settings.oracle = match args.oracle.as_deref() {
+        None => Oracle::Declared,
+        Some("none") => Oracle::None,
+        Some(reading) => Oracle::Named(reading.to_string()),
+    };
     if let Some(j) = args.jobs {
         settings.jobs = j.max(1);
     }

@@ -167,6 +167,8 @@ pub struct OperationAbilities {
     pub digits: Option<Vec<u32>>,
     /// The value width in bits.
     pub width: u32,
+    /// The built-in reading it claims to follow (`fx5/hexa-16bit`), the oracle of its sweeps.
+    pub reading: Option<String>,
 }
 
 impl Default for OperationAbilities {
@@ -174,6 +176,7 @@ impl Default for OperationAbilities {
         OperationAbilities {
             digits: None,
             width: 16,
+            reading: None,
         }
     }
 }

@@ -158,8 +158,10 @@ fn cross_vendor_case(
     from: &Found,
     to: &Found,
 ) -> Result<String, NotEmitted> {
-    // The reference models' answers, by lowering key.
+    // The reference models' answers, by lowering key; those that depend on memory the case
+    // does not set are `unspecified` for that lowering.
     let mut by_key: Vec<(String, Answer)> = Vec::new();
+    let mut unset: Vec<String> = Vec::new();
     for (c, r) in sweep.columns.iter().zip(&to.replies) {
         let Ask::Lowering(l) = &c.ask else { continue };
         if !c.in_process {
@@ -172,6 +174,10 @@ fn cross_vendor_case(
             } if !matches!(answer, Answer::OtherError(_)) => {
                 by_key.push((l.key.clone(), answer.clone()))
             }
+            Reply::Answer {
+                fill_dependent: true,
+                ..
+            } => unset.push(l.key.clone()),
             other => {
                 return Err(NotEmitted(format!(
                     "{} answered {other}, which a vector cannot expect",
@@ -217,7 +223,7 @@ fn cross_vendor_case(
     let _ = writeln!(y, "    digits: {}", to.point.digits);
     let _ = writeln!(y, "    expect: {{{}}}", answer_yaml(&most));
     let except: Vec<&(String, Answer)> = by_key.iter().filter(|(_, a)| *a != most).collect();
-    if !except.is_empty() {
+    if !except.is_empty() || !unset.is_empty() {
         let _ = writeln!(y, "    except:");
         for (key, a) in except {
             let _ = writeln!(
@@ -225,6 +231,15 @@ fn cross_vendor_case(
                 "      {key}: {{{}, why: {}}}",
                 answer_yaml(a),
                 quote_str(&format!("the reference model's answer through {key}"))
+            );
+        }
+        for key in &unset {
+            let _ = writeln!(
+                y,
+                "      {key}: {{unspecified: true, why: {}}}",
+                quote_str(&format!(
+                    "through {key} the answer depends on memory the case does not set"
+                ))
             );
         }
     }

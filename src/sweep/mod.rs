@@ -46,6 +46,7 @@ use crate::report::{Event, Reporter};
 use generate::{shard_indices, Digits, Generator, Space};
 use group::{Found, Groups, Reply};
 use input::Point;
+pub use target::Oracle;
 use target::{columns, Cases, Column, Shape, Target};
 
 /// Random texts that check the byte classes of a full sweep by class.
@@ -75,6 +76,8 @@ pub struct Settings {
     pub direct: bool,
     /// The full generator by class: random texts asked as they are, to check the classes.
     pub class_check: u64,
+    /// What codec columns are judged against (operation sweeps).
+    pub oracle: Oracle,
 }
 
 impl Settings {
@@ -90,6 +93,7 @@ impl Settings {
             shrink: 4,
             direct: true,
             class_check: DEFAULT_CLASS_CHECK,
+            oracle: Oracle::Declared,
         }
     }
 }
@@ -228,7 +232,7 @@ impl Sweep {
             }
             Target::Operation { .. } => None,
         };
-        let columns = columns(&settings.target, profiles, backends)?;
+        let columns = columns(&settings.target, profiles, backends, &settings.oracle)?;
         let reads = settings.target.reads(shape.as_ref());
         let text = reads == crate::model::cross_vendor::Operation::HexToValue;
         if text != settings.generator.makes_text() && settings.generator.name() != "random" {

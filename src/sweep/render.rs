@@ -47,6 +47,76 @@ pub fn pairs(results: &Results) -> Vec<Pair> {
     out
 }
 
+/// Groups shown as one, each with its index among the results' groups.
+type Shown<'a> = Vec<(usize, &'a Group)>;
+
+/// A column judged against an oracle, and where it parts from it.
+#[derive(Debug, Clone, Serialize)]
+pub struct Judged {
+    pub column: String,
+    pub oracle: String,
+    /// Inputs on which the column differs from its oracle.
+    pub inputs: u64,
+    pub groups: usize,
+}
+
+/// Every column that has an oracle, in column order; its groups are counted as the text
+/// shows them (groups that only columns not shown tell apart are one).
+pub fn judged(results: &Results) -> Vec<Judged> {
+    let shown = shown_columns(results);
+    results
+        .columns
+        .iter()
+        .filter_map(|c| {
+            let oracle = c.oracle.clone()?;
+            let mut inputs = 0;
+            let mut keys = std::collections::BTreeSet::new();
+            for g in results
+                .groups
+                .by_key
+                .values()
+                .filter(|g| g.differing.contains(&c.name))
+            {
+                inputs += g.inputs;
+                keys.insert(shown_key(g, &shown));
+            }
+            Some(Judged {
+                column: c.name.clone(),
+                oracle,
+                inputs,
+                groups: keys.len(),
+            })
+        })
+        .collect()
+}
+
+/// What tells groups apart in the columns shown: their labels there, and their features.
+fn shown_key(g: &Group, shown: &[usize]) -> Vec<String> {
+    let mut key = shown_labels(&g.key.signature, shown);
+    key.extend(g.key.features.iter().cloned());
+    key
+}
+
+/// The columns a judged sweep shows: those judged and their oracles (every column when none
+/// is judged).
+fn shown_columns(results: &Results) -> Vec<usize> {
+    let judged: Vec<usize> = (0..results.columns.len())
+        .filter(|&i| {
+            let c = &results.columns[i];
+            c.oracle.is_some()
+                || results
+                    .columns
+                    .iter()
+                    .any(|o| o.oracle.as_deref() == Some(c.name.as_str()))
+        })
+        .collect();
+    if judged.is_empty() {
+        (0..results.columns.len()).collect()
+    } else {
+        judged
+    }
+}
+
 /// `1234567` as `1,234,567`.
 pub fn thousands(n: u64) -> String {
     let s = n.to_string();
@@ -60,11 +130,10 @@ pub fn thousands(n: u64) -> String {
     out
 }
 
-fn found_line(columns: &[ColumnInfo], f: &Found) -> String {
-    let answers: Vec<String> = columns
+fn found_line(columns: &[ColumnInfo], shown: &[usize], f: &Found) -> String {
+    let answers: Vec<String> = shown
         .iter()
-        .zip(&f.replies)
-        .map(|(c, r)| format!("{} {r}", c.name))
+        .filter_map(|&i| Some(format!("{} {}", columns.get(i)?.name, f.replies.get(i)?)))
         .collect();
     format!("{} -> {}", f.point, answers.join(", "))
 }
@@ -78,7 +147,9 @@ fn what(results: &Results) -> &'static str {
 }
 
 /// The results as text: the settings, the disagreements between columns, then every group
-/// with its classes and shrunk inputs.
+/// with its classes and shrunk inputs. Where columns are judged against an oracle, the
+/// disagreements are theirs alone, and only the groups where one differs are shown, with the
+/// judged columns and their oracles: what the author of the judged code acts on.
 pub fn text(results: &Results) -> String {
     let mut out = String::new();
     let s = &results.settings;
@@ -138,21 +209,64 @@ pub fn text(results: &Results) -> String {
         class_text(&mut out, c);
     }
     let swept = thousands(results.swept);
-    for p in pairs(results) {
+    let judged = judged(results);
+    for j in &judged {
         let _ = writeln!(
             out,
-            "  {} and {} disagree on {} of {swept} {}, in {} group(s)",
-            p.a,
-            p.b,
-            thousands(p.inputs),
+            "  {} against {}: differs on {} of {swept} {}, in {} group(s)",
+            j.column,
+            j.oracle,
+            thousands(j.inputs),
             what(results),
-            p.groups
+            j.groups
         );
     }
+    if judged.is_empty() {
+        for p in pairs(results) {
+            let _ = writeln!(
+                out,
+                "  {} and {} disagree on {} of {swept} {}, in {} group(s)",
+                p.a,
+                p.b,
+                thousands(p.inputs),
+                what(results),
+                p.groups
+            );
+        }
+    }
+    let shown = shown_columns(results);
     let shrunk = shrunk_by_group(&results.shrunk);
+    let mut agreeing = (0, 0u64);
+    // Judged, the groups that look alike in the columns shown are shown as one.
+    let mut merged: Vec<(Vec<String>, Shown<'_>)> = Vec::new();
     for (i, g) in groups.iter().enumerate() {
+        if judged.is_empty() {
+            merged.push((Vec::new(), vec![(i, g)]));
+            continue;
+        }
+        if g.differing.is_empty() {
+            agreeing = (agreeing.0 + 1, agreeing.1 + g.inputs);
+            continue;
+        }
+        let key = shown_key(g, &shown);
+        match merged.iter_mut().find(|(k, _)| *k == key) {
+            Some((_, those)) => those.push((i, g)),
+            None => merged.push((key, vec![(i, g)])),
+        }
+    }
+    for (n, (_, those)) in merged.iter().enumerate() {
         let _ = writeln!(out);
-        group_text(&mut out, results, i, g, shrunk.get(&i).map(Vec::as_slice));
+        group_text(&mut out, results, &shown, n + 1, those, &shrunk);
+    }
+    if agreeing.0 > 0 {
+        let _ = writeln!(
+            out,
+            "\n{} more group(s) of {} {} where every judged column agrees with its oracle \
+             (--format json lists every group)",
+            agreeing.0,
+            thousands(agreeing.1),
+            what(results)
+        );
     }
     out
 }
@@ -196,24 +310,48 @@ fn shrunk_by_group(shrunk: &[Shrunk]) -> BTreeMap<usize, Vec<&Shrunk>> {
     by
 }
 
+/// The labels of `shown` columns, with equal answers numbered again among them alone
+/// (`value#2` where another column took `value#1` reads `value#1`).
+fn shown_labels(signature: &[String], shown: &[usize]) -> Vec<String> {
+    let mut numbers: Vec<&str> = Vec::new();
+    shown
+        .iter()
+        .filter_map(|&c| signature.get(c))
+        .map(|label| match label.rsplit_once('#') {
+            Some((head, n)) => {
+                let k = numbers.iter().position(|m| *m == n).unwrap_or_else(|| {
+                    numbers.push(n);
+                    numbers.len() - 1
+                });
+                format!("{head}#{}", k + 1)
+            }
+            None => label.clone(),
+        })
+        .collect()
+}
+
+/// One group as text; `merged` are the groups shown as one (the first gives the answers): a
+/// judged sweep shows groups that only columns it does not show tell apart as one.
 fn group_text(
     out: &mut String,
     results: &Results,
-    i: usize,
-    g: &Group,
-    shrunk: Option<&[&Shrunk]>,
+    shown: &[usize],
+    number: usize,
+    merged: &[(usize, &Group)],
+    shrunk: &BTreeMap<usize, Vec<&Shrunk>>,
 ) {
+    let Some((_, g)) = merged.first() else {
+        return;
+    };
+    let classes: usize = merged.iter().map(|(_, g)| g.classes.len()).sum();
+    let full = merged
+        .iter()
+        .any(|(_, g)| g.classes.len() >= results.groups.max_classes);
     let _ = writeln!(
         out,
-        "#{} {} input(s) in {}{} class(es) [{}]",
-        i + 1,
-        thousands(g.inputs),
-        g.classes.len(),
-        if g.classes.len() >= results.groups.max_classes {
-            "+"
-        } else {
-            ""
-        },
+        "#{number} {} input(s) in {classes}{} class(es) [{}]",
+        thousands(merged.iter().map(|(_, g)| g.inputs).sum()),
+        if full { "+" } else { "" },
         g.key.features.join("; ")
     );
     if !g.differing.is_empty() {
@@ -223,29 +361,28 @@ fn group_text(
             g.differing.join(", ")
         );
     }
-    let sig: Vec<String> = results
-        .columns
+    let sig: Vec<String> = shown
         .iter()
-        .zip(&g.key.signature)
-        .map(|(c, l)| format!("{}={l}", c.name))
+        .zip(shown_labels(&g.key.signature, shown))
+        .filter_map(|(&c, label)| Some(format!("{}={label}", results.columns.get(c)?.name)))
         .collect();
     let _ = writeln!(out, "   {}", sig.join("  "));
     let _ = writeln!(
         out,
         "   first: {}",
-        found_line(&results.columns, &g.representative)
+        found_line(&results.columns, shown, &g.representative)
     );
     // Two classes may shrink to the same input: it is shown once.
-    let mut shown = std::collections::HashSet::new();
-    for s in shrunk.unwrap_or_default() {
-        if !shown.insert(&s.to.point) {
+    let mut seen = std::collections::HashSet::new();
+    for s in merged.iter().filter_map(|(i, _)| shrunk.get(i)).flatten() {
+        if !seen.insert(&s.to.point) {
             continue;
         }
         let _ = writeln!(
             out,
             "   shrunk ({}): {}",
             s.class,
-            found_line(&results.columns, &s.to)
+            found_line(&results.columns, shown, &s.to)
         );
     }
 }
@@ -264,6 +401,8 @@ pub struct Document<'a> {
     pub elapsed_seconds: f64,
     /// The columns whose backend faulted: a failure of the sweep.
     pub faulted: Vec<super::Faulted>,
+    /// The columns judged against an oracle, and where each parts from it.
+    pub judged: Vec<Judged>,
     pub pairs: Vec<Pair>,
     pub groups: Vec<GroupDoc<'a>>,
     /// The full generator by class: the byte classes and their check.
@@ -297,6 +436,7 @@ pub fn document(results: &Results) -> Document<'_> {
         interrupted: results.interrupted,
         elapsed_seconds: results.elapsed.as_secs_f64(),
         faulted: results.faulted(),
+        judged: judged(results),
         pairs: pairs(results),
         groups: results
             .ordered()

@@ -69,6 +69,19 @@ pub enum Ask {
     Instruction,
 }
 
+/// What a codec-level column of an operation sweep is judged against.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Oracle {
+    /// The built-in reading the codec declares (`reading` in its capabilities), if any.
+    #[default]
+    Declared,
+    /// A built-in reading by its column name (`fx5/hexa-16bit`).
+    Named(String),
+    /// None: every column side by side, none judged.
+    None,
+}
+
 /// One backend asked one way: a column of the sweep's results.
 #[derive(Clone)]
 pub struct Column {
@@ -252,6 +265,48 @@ impl OperandName for Lowering {
     }
 }
 
+/// Judges each codec column against a built-in reading: the one `oracle` names, or the one the
+/// codec declares. A reading that is not a built-in column is an error that lists them.
+fn codec_oracles(
+    out: &mut [Column],
+    operation: Operation,
+    oracle: &Oracle,
+) -> Result<(), SweepError> {
+    for i in 0..out.len() {
+        if !matches!(out[i].ask, Ask::Codec) {
+            continue;
+        }
+        let declared = out[i]
+            .backend
+            .codec()
+            .and_then(|c| match operation {
+                Operation::HexToValue => c.hex_to_value.as_ref(),
+                Operation::ValueToHex => c.value_to_hex.as_ref(),
+            })
+            .and_then(|a| a.reading.clone());
+        let name = match (oracle, declared) {
+            (Oracle::None, _) | (Oracle::Declared, None) => continue,
+            (Oracle::Named(name), _) => name.clone(),
+            (Oracle::Declared, Some(name)) => name,
+        };
+        let Some(j) = (0..out.len()).find(|&j| out[j].in_process && out[j].name == name) else {
+            let readings: Vec<&str> = out
+                .iter()
+                .filter(|c| c.in_process)
+                .map(|c| c.name.as_str())
+                .collect();
+            return Err(SweepError(format!(
+                "{} is judged against `{name}`, which is not a built-in reading of {operation}; \
+                 the readings are: {}",
+                out[i].name,
+                readings.join(", ")
+            )));
+        };
+        out[i].oracle = Some(j);
+    }
+    Ok(())
+}
+
 /// The columns of a sweep over `backends`. An instruction sweep runs every backend of the
 /// profile on every variant it claims the instruction on; an operation sweep runs every lowering
 /// of every backend's profile, and codecs directly. Each column that is not the profile's
@@ -261,6 +316,7 @@ pub fn columns(
     target: &Target,
     profiles: &Profiles,
     backends: &[Arc<dyn Backend>],
+    oracle: &Oracle,
 ) -> Result<Vec<Column>, SweepError> {
     let reference = |b: &Arc<dyn Backend>| {
         profiles
@@ -358,6 +414,9 @@ pub fn columns(
             continue;
         }
         out[i].oracle = (0..out.len()).find(|&j| out[j].in_process && keys[j] == keys[i]);
+    }
+    if let Target::Operation { operation } = target {
+        codec_oracles(&mut out, *operation, oracle)?;
     }
     if out.is_empty() {
         return Err(SweepError(format!(

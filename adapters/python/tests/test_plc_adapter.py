@@ -205,6 +205,14 @@ class InProcess(unittest.TestCase):
         self.assertEqual(answers[0]["capabilities"], {"codec": {"hex-to-value": {"width": 16}}})
         self.assertEqual(answers[1]["type"], "unsupported")
 
+    def test_a_declared_reading_is_in_the_hello(self):
+        answers = self.serve_codec([HELLO_2, SHUTDOWN], decode=lambda t, d: 0,
+                                   encode=lambda v, d: "0", name="x", version="1",
+                                   decode_reading="fx5/hexa-16bit")
+        self.assertEqual(answers[0]["capabilities"], {"codec": {
+            "hex-to-value": {"width": 16, "reading": "fx5/hexa-16bit"},
+            "value-to-hex": {"width": 16}}})
+
     def test_what_the_protocol_cannot_say_is_refused(self):
         with self.assertRaises(ValueError):
             plc_adapter.CodecError("bad-class")

@@ -730,6 +730,7 @@ fn check_codec(
             Ok(Some(OperationAbilities {
                 digits: c.digits.clone(),
                 width,
+                reading: c.reading.clone(),
             }))
         }
     };

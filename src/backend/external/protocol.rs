@@ -323,6 +323,10 @@ pub struct OperationCapabilities {
     /// The value width in bits, 16 or 32 (16 when absent).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub width: Option<u32>,
+    /// The built-in reading the codec follows, as a sweep names it (`fx5/hexa-16bit`): what
+    /// `sweep --operation` judges the codec against unless `--oracle` says otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reading: Option<String>,
 }
 
 /// An operation error: the vendor's code or flag (instruction level), or an error class (codec
