@@ -104,6 +104,10 @@ export interface CodecOptions extends LoopOptions {
   encodeDigits?: number[];
   /** The value width in bits (default 16). */
   width?: 16 | 32;
+  /** The built-in reading decode follows, as `plc-conformance sweep` names it ('fx5/hexa-16bit'). */
+  decodeReading?: string;
+  /** The built-in reading encode follows ('fx5/asci-16bit'). */
+  encodeReading?: string;
   /** How the library's exceptions answer: by constructor, or by error name. */
   errors?: ErrorMap;
 }

@@ -291,9 +291,10 @@ function serve(run, options) {
   return loop(hello, answer, options);
 }
 
-function codecCapability(digits, width) {
+function codecCapability(digits, width, reading) {
   if (width !== 16 && width !== 32) throw new TypeError(`width must be 16 or 32, not ${width}`);
   const capability = { width };
+  if (reading !== undefined && reading !== null) capability.reading = String(reading);
   if (digits !== undefined && digits !== null) {
     const counts = [...new Set(digits)].sort((a, b) => a - b);
     if (!counts.length || !counts.every((d) => Number.isInteger(d) && d >= 1 && d <= 8)) {
@@ -350,16 +351,20 @@ function textBytes(text) {
  *   name, version; decodeDigits, encodeDigits: the digit counts implemented (absent: 1-8);
  *   width: 16 (default) or 32; errors: how the library's exceptions answer, a Map of error
  *   constructors or an object keyed by error name, to 'invalid-digit', 'invalid-count',
- *   'device-range' or 'error'. Either function may return a promise.
+ *   'device-range' or 'error'. Either function may return a promise. decodeReading,
+ *   encodeReading: the built-in reading each follows, as `plc-conformance sweep` names it
+ *   ('fx5/hexa-16bit'): a sweep of the operation judges the codec against it.
  */
 function serveCodec(options) {
-  const { decode, encode, name, version, decodeDigits, encodeDigits, width = 16 } = options || {};
+  const {
+    decode, encode, name, version, decodeDigits, encodeDigits, width = 16, decodeReading, encodeReading,
+  } = options || {};
   if (!name || !version) throw new TypeError('serveCodec needs name and version');
   if (!decode && !encode) throw new TypeError('serveCodec needs decode, encode or both');
   const errors = errorTable(options.errors);
   const codec = {};
-  if (decode) codec[HEX_TO_VALUE] = codecCapability(decodeDigits, width);
-  if (encode) codec[VALUE_TO_HEX] = codecCapability(encodeDigits, width);
+  if (decode) codec[HEX_TO_VALUE] = codecCapability(decodeDigits, width, decodeReading);
+  if (encode) codec[VALUE_TO_HEX] = codecCapability(encodeDigits, width, encodeReading);
 
   const hello = (message, log) => {
     if (!(message.protocol >= 2)) {

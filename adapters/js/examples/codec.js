@@ -40,4 +40,7 @@ serveCodec({
   encodeDigits: [4, 8],
   width: 32,
   errors: new Map([[BadDigit, 'invalid-digit']]),
+  // What it means to follow: `plc-conformance sweep --operation` judges it against these.
+  decodeReading: 'fx5/hexa-16bit',
+  encodeReading: 'fx5/asci-16bit',
 });

@@ -62,8 +62,8 @@ test('a codec answers hello with protocol 2 and its codec capabilities', async (
     protocol: 2,
     backend: { name: 'codec-strict', version: '1' },
     capabilities: { codec: {
-      'hex-to-value': { width: 32, digits: [4, 8] },
-      'value-to-hex': { width: 32, digits: [4, 8] },
+      'hex-to-value': { width: 32, reading: 'fx5/hexa-16bit', digits: [4, 8] },
+      'value-to-hex': { width: 32, reading: 'fx5/asci-16bit', digits: [4, 8] },
     } },
   }]);
 });
