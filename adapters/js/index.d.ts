@@ -110,6 +110,10 @@ export interface CodecOptions extends LoopOptions {
   encodeReading?: string;
   /** How the library's exceptions answer: by constructor, or by error name. */
   errors?: ErrorMap;
+  /** The same for decode alone, before `errors`. */
+  decodeErrors?: ErrorMap;
+  /** The same for encode alone, before `errors`. */
+  encodeErrors?: ErrorMap;
 }
 
 export function serveCodec(options: CodecOptions): Promise<number>;

@@ -351,7 +351,8 @@ function textBytes(text) {
  *   name, version; decodeDigits, encodeDigits: the digit counts implemented (absent: 1-8);
  *   width: 16 (default) or 32; errors: how the library's exceptions answer, a Map of error
  *   constructors or an object keyed by error name, to 'invalid-digit', 'invalid-count',
- *   'device-range' or 'error'. Either function may return a promise. decodeReading,
+ *   'device-range' or 'error'; decodeErrors, encodeErrors: the same for one direction, before
+ *   `errors`. Either function may return a promise. decodeReading,
  *   encodeReading: the built-in reading each follows, as `plc-conformance sweep` names it
  *   ('fx5/hexa-16bit'): a sweep of the operation judges the codec against it.
  */
@@ -361,7 +362,9 @@ function serveCodec(options) {
   } = options || {};
   if (!name || !version) throw new TypeError('serveCodec needs name and version');
   if (!decode && !encode) throw new TypeError('serveCodec needs decode, encode or both');
-  const errors = errorTable(options.errors);
+  // Each direction's table: its own entries (decodeErrors, encodeErrors) before the shared ones.
+  const shared = errorTable(options.errors);
+  const own = { [HEX_TO_VALUE]: errorTable(options.decodeErrors), [VALUE_TO_HEX]: errorTable(options.encodeErrors) };
   const codec = {};
   if (decode) codec[HEX_TO_VALUE] = codecCapability(decodeDigits, width, decodeReading);
   if (encode) codec[VALUE_TO_HEX] = codecCapability(encodeDigits, width, encodeReading);
@@ -397,7 +400,7 @@ function serveCodec(options) {
       throw new Unsupported(`${what} is not implemented by ${name}`);
     } catch (error) {
       if (error instanceof Unsupported) return { type: 'unsupported', id, reason: error.message };
-      const errorClass = errorClassOf(error, errors);
+      const errorClass = (own[operation] && errorClassOf(error, own[operation])) || errorClassOf(error, shared);
       if (errorClass === undefined) throw error;
       return { type: 'result', id, error: errorClass };
     }

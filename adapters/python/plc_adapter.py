@@ -345,7 +345,8 @@ def _text_bytes(text):
 
 def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits=None,
                 encode_digits=None, width=16, errors=None, stdin=None, stdout=None,
-                decode_reading=None, encode_reading=None):
+                decode_reading=None, encode_reading=None, decode_errors=None,
+                encode_errors=None):
     """Answers the harness as a codec-level backend (protocol version 2) until it says shutdown
     or closes stdin.
 
@@ -358,6 +359,9 @@ def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits
     width: the value width in bits, 16 or 32: cases whose value does not fit are skipped.
     errors: {exception class: error class}, e.g. {ValueError: "invalid-digit"}: how the
       library's exceptions answer. A subclass maps like its nearest listed base class.
+    decode_errors, encode_errors: the same for one direction, over `errors` (a library that
+      raises ValueError for a bad digit when decoding and for a value too wide when encoding:
+      decode_errors={ValueError: "invalid-digit"}, encode_errors={ValueError: "error"}).
     decode_reading, encode_reading: the built-in reading each follows, as `plc-conformance
       sweep` names it (e.g. "fx5/hexa-16bit", "fx5/asci-16bit"): a sweep of the operation
       judges the codec against it.
@@ -366,12 +370,19 @@ def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits
         raise TypeError("serve_codec needs name= and version=")
     if decode is None and encode is None:
         raise TypeError("serve_codec needs decode=, encode= or both")
-    errors = dict(errors or {})
-    for klass, error_class in errors.items():
-        if not (isinstance(klass, type) and issubclass(klass, BaseException)):
-            raise TypeError("errors: %r is not an exception class" % (klass,))
-        if error_class not in ERROR_CLASSES:
-            raise ValueError("errors: %r is not one of %s" % (error_class, ", ".join(ERROR_CLASSES)))
+    for label, table in (("errors", errors), ("decode_errors", decode_errors),
+                         ("encode_errors", encode_errors)):
+        for klass, error_class in (table or {}).items():
+            if not (isinstance(klass, type) and issubclass(klass, BaseException)):
+                raise TypeError("%s: %r is not an exception class" % (label, klass))
+            if error_class not in ERROR_CLASSES:
+                raise ValueError("%s: %r is not one of %s"
+                                 % (label, error_class, ", ".join(ERROR_CLASSES)))
+    # Each direction's table: its own entries over the shared ones.
+    by_operation = {
+        HEX_TO_VALUE: {**(errors or {}), **(decode_errors or {})},
+        VALUE_TO_HEX: {**(errors or {}), **(encode_errors or {})},
+    }
     codec = {}
     if decode is not None:
         codec[HEX_TO_VALUE] = _codec_capability(decode_digits, width, decode_reading)
@@ -412,7 +423,7 @@ def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits
         except Unsupported as why:
             return {"type": "unsupported", "id": ident, "reason": str(why)}
         except Exception as error:  # noqa: BLE001 - mapped, or re-raised to crash
-            error_class = _error_class(error, errors)
+            error_class = _error_class(error, by_operation.get(operation, {}))
             if error_class is None:
                 raise
             return {"type": "result", "id": ident, "error": error_class}

@@ -290,3 +290,19 @@ test('privateFunctions reaches a module\'s unexported functions without changing
     fs.rmSync(dir, { recursive: true, force: true });
   }
 });
+
+test('each direction maps its own errors before the shared ones', async () => {
+  const answers = await inProcess({
+    name: 'x',
+    version: '1',
+    decode() { throw new RangeError('not a digit'); },
+    encode() { throw new RangeError('too wide'); },
+    errors: { RangeError: 'error' },
+    decodeErrors: { RangeError: 'invalid-digit' },
+  }, [HELLO_2, { type: 'run', cases: [h2v(1, '5a8D', 4), v2h(2, 0x1234, 4)] }, SHUTDOWN]);
+  assert.deepEqual(answers.slice(1), [
+    { type: 'result', id: 1, error: 'invalid-digit' },
+    { type: 'result', id: 2, error: 'error' },
+  ]);
+  assert.throws(() => helper.serveCodec({ name: 'x', version: '1', decode: () => 0, encodeErrors: { Error: 'wrong' } }), TypeError);
+});

@@ -205,6 +205,25 @@ class InProcess(unittest.TestCase):
         self.assertEqual(answers[0]["capabilities"], {"codec": {"hex-to-value": {"width": 16}}})
         self.assertEqual(answers[1]["type"], "unsupported")
 
+    def test_each_direction_maps_its_own_errors(self):
+        def decode(text, digits):
+            raise ValueError("not a digit")
+
+        def encode(value, digits):
+            raise ValueError("too wide")
+
+        answers = self.serve_codec(
+            [HELLO_2, {"type": "run", "cases": [h2v(1, "5a8D", 4), v2h(2, 0x1234, 4)]}, SHUTDOWN],
+            decode=decode, encode=encode, name="x", version="1",
+            errors={ValueError: "error"}, decode_errors={ValueError: "invalid-digit"})
+        self.assertEqual(answers[1:], [
+            {"type": "result", "id": 1, "error": "invalid-digit"},
+            {"type": "result", "id": 2, "error": "error"},
+        ])
+        with self.assertRaises(ValueError):
+            plc_adapter.serve_codec(decode=decode, name="x", version="1",
+                                    encode_errors={ValueError: "wrong"})
+
     def test_a_declared_reading_is_in_the_hello(self):
         answers = self.serve_codec([HELLO_2, SHUTDOWN], decode=lambda t, d: 0,
                                    encode=lambda v, d: "0", name="x", version="1",
