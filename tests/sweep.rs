@@ -1200,11 +1200,24 @@ fn the_oracle_can_be_named_or_refused() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(!stdout.contains("judged against"), "{stdout}");
     assert!(stdout.contains(" disagree on "), "{stdout}");
+    let out = common::cli(&[
+        "sweep",
+        "--instruction",
+        "HABIN",
+        "--oracle",
+        "fx5/hexa-16bit",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("--oracle applies to --operation"),
+        "{stderr}"
+    );
     let out = judged_sweep("strict", &["--oracle", "fx9/nothing"]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(
-        stderr.contains("`fx9/nothing`, which is not a built-in reading of hex-to-value; the readings are: iqr/habin-fixed,"),
+        stderr.contains("`fx9/nothing` (from --oracle), which is not a built-in reading of hex-to-value; the readings are: iqr/habin-fixed,"),
         "{stderr}"
     );
 }

@@ -70,7 +70,7 @@ pub struct SweepArgs {
     /// reading such as `fx5/hexa-16bit`, or `none` to judge none [default: the reading each
     /// codec declares]. A judged sweep shows only the groups where a backend parts from its
     /// oracle, and fails when there is one.
-    #[arg(long, value_name = "READING", requires = "operation")]
+    #[arg(long, value_name = "READING")]
     pub oracle: Option<String>,
     /// Seconds an `external:` backend may take to answer one case.
     #[arg(long, value_name = "SECONDS", default_value_t = 5.0)]
@@ -291,6 +291,12 @@ pub fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
         )));
     }
     settings.class_check = args.class_check;
+    if args.oracle.is_some() && args.operation.is_none() {
+        return Err(CliError::input(
+            "--oracle applies to --operation: an instruction sweep judges each backend against \
+             its profile's reference model",
+        ));
+    }
     settings.oracle = match args.oracle.as_deref() {
         None => Oracle::Declared,
         Some("none") => Oracle::None,

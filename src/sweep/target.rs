@@ -284,10 +284,10 @@ fn codec_oracles(
                 Operation::ValueToHex => c.value_to_hex.as_ref(),
             })
             .and_then(|a| a.reading.clone());
-        let name = match (oracle, declared) {
+        let (name, from) = match (oracle, declared) {
             (Oracle::None, _) | (Oracle::Declared, None) => continue,
-            (Oracle::Named(name), _) => name.clone(),
-            (Oracle::Declared, Some(name)) => name,
+            (Oracle::Named(name), _) => (name.clone(), "--oracle"),
+            (Oracle::Declared, Some(name)) => (name, "its capabilities (--oracle overrides)"),
         };
         let Some(j) = (0..out.len()).find(|&j| out[j].in_process && out[j].name == name) else {
             let readings: Vec<&str> = out
@@ -296,8 +296,8 @@ fn codec_oracles(
                 .map(|c| c.name.as_str())
                 .collect();
             return Err(SweepError(format!(
-                "{} is judged against `{name}`, which is not a built-in reading of {operation}; \
-                 the readings are: {}",
+                "{} is judged against `{name}` (from {from}), which is not a built-in reading of \
+                 {operation}; the readings are: {}",
                 out[i].name,
                 readings.join(", ")
             )));
