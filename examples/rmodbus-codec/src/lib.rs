@@ -23,6 +23,7 @@ impl Codec for Rmodbus {
         let field = OperationAbilities {
             digits: Some(vec![2, 4]),
             width: 16,
+            ..OperationAbilities::default()
         };
         CodecAbilities {
             hex_to_value: Some(field.clone()),
