@@ -15,6 +15,7 @@ pub mod kv;
 pub mod reference;
 pub mod s7;
 pub mod s7_200;
+pub mod slmp;
 
 use std::collections::BTreeMap;
 use std::fmt;
