@@ -86,6 +86,9 @@ struct Live {
     client: Client,
     /// The interlocks passed on the current connection.
     verified: bool,
+    /// The connection (by count) the interlocks passed on: a read retried on a new connection
+    /// leaves `verified` set, and the next write must not go out before they run again.
+    verified_on: u64,
     /// The last trigger written (or found acknowledged).
     trigger: u16,
     /// The CPU's type name, once read.
@@ -213,6 +216,7 @@ impl SlmpBackend {
             state: Mutex::new(Live {
                 client: Client::new(settings.client.clone()),
                 verified: false,
+                verified_on: 0,
                 trigger: 0,
                 cpu: None,
                 down: None,
@@ -387,6 +391,7 @@ impl SlmpBackend {
         }
         live.trigger = tw[1];
         live.verified = true;
+        live.verified_on = live.client.connections;
         Ok(())
     }
 
@@ -422,7 +427,10 @@ impl SlmpBackend {
         req: &Request<'_>,
         plan: &Plan,
     ) -> Result<Outcome, CaseError> {
-        if !live.verified {
+        if !live.verified
+            || live.verified_on != live.client.connections
+            || !live.client.is_connected()
+        {
             if live.client.connections > 0 {
                 self.reconnects.fetch_add(1, Ordering::Relaxed);
             }

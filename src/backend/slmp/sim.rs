@@ -223,7 +223,12 @@ impl Simulator {
             rungs,
             allowed,
         });
-        shared.lock().set_status();
+        {
+            // A CPU in RUN has scanned before anyone can connect to it.
+            let mut cpu = shared.lock();
+            cpu.set_status();
+            scan(&shared, &mut cpu);
+        }
         let mut threads = Vec::new();
         let s = shared.clone();
         threads.push(std::thread::spawn(move || scan_loop(&s)));
