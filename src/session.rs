@@ -47,7 +47,7 @@ pub enum BackendSource {
     /// A live CPU over SLMP (`backend::slmp`): built without a socket, then connected and its
     /// read-only interlocks run, so that a bench that is not ready is an error before any case
     /// and before any write.
-    Slmp(SlmpSettings),
+    Slmp(Box<SlmpSettings>),
 }
 
 /// The backends of a run, in the order of their sources.
@@ -106,7 +106,7 @@ pub fn assemble(
                 out.on_first_use.push(lazy);
             }
             BackendSource::Slmp(settings) => {
-                let live = SlmpBackend::new(settings, &project.profiles)
+                let live = SlmpBackend::new(*settings, &project.profiles)
                     .and_then(|b| b.connect().map(|()| b));
                 match live {
                     Ok(b) => out.backends.push(Arc::new(b)),

@@ -192,7 +192,7 @@ pub fn start(
         if let Some(settings) =
             SlmpSettings::parse(name, Path::new(".")).map_err(CliError::input)?
         {
-            sources.push(BackendSource::Slmp(settings));
+            sources.push(BackendSource::Slmp(Box::new(settings)));
         } else if let Some(mut settings) = command_line_external(name, args)? {
             settings.known_differences = known_files.remove(settings.name.as_str());
             sources.push(BackendSource::Process(settings));
