@@ -557,3 +557,76 @@ fn every_generated_rung_sits_outside_if_and_case() {
     assert_eq!(g.manifest.error.extra.as_deref(), Some("SD8067"));
     assert!(g.program.contains(":= SD8067;"));
 }
+
+/// `record` through the simulated CPU, as a bench user would run it: the unspecified cases of a
+/// copy of the corpus become observed with the CPU, program and transport in the provenance,
+/// manual ones are untouched, and the copy still validates.
+#[test]
+fn record_through_the_simulated_cpu_writes_observed_vectors_with_provenance() {
+    let project = session();
+    let scratch_dir = common::scratch();
+    let dir = scratch_dir.path().join("vectors");
+    std::fs::create_dir_all(&dir).expect("mkdir");
+    for entry in std::fs::read_dir(common::root().join("vectors/mitsubishi-iqr")).expect("dir") {
+        let entry = entry.expect("entry");
+        std::fs::copy(entry.path(), dir.join(entry.file_name())).expect("copy");
+    }
+    let m = iqr_manifest();
+    let manifest_file = scratch_dir.path().join("manifest.json");
+    std::fs::write(
+        &manifest_file,
+        serde_json::to_string_pretty(m).expect("json"),
+    )
+    .expect("write");
+    let sim = iqr_sim(&project, |_| {});
+    let spec = format!(
+        "slmp:bench={}?manifest={}&confirm=R04CPU&sandbox=manifest&variant=rcpu",
+        sim.address(),
+        manifest_file.display()
+    );
+    let manual_before = count(&dir, "basis: manual");
+    let out = common::cli(&[
+        "record",
+        "--backend",
+        &spec,
+        "--vectors",
+        dir.to_str().expect("utf-8"),
+        "--date",
+        "2026-11-25",
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("unspecified -> observed"), "{stdout}");
+    assert_eq!(
+        count(&dir, "basis: manual"),
+        manual_before,
+        "a manual expectation was replaced"
+    );
+    let habin = std::fs::read_to_string(dir.join("habin.yaml")).expect("habin.yaml");
+    let wanted = format!("live CPU R04CPU (4800H), mitsubishi-iqr variant rcpu, program {} (mailbox layout 1), SLMP 4E binary TCP", m.hash);
+    assert!(habin.contains("backend: bench"), "{habin}");
+    assert!(habin.contains(&wanted), "{habin}");
+    let valid = common::cli(&["validate", dir.to_str().expect("utf-8")]);
+    assert!(
+        valid.status.success(),
+        "{}",
+        String::from_utf8_lossy(&valid.stderr)
+    );
+    assert_eq!(sim.audit().stray_writes, Vec::<String>::new());
+}
+
+fn count(dir: &std::path::Path, text: &str) -> usize {
+    std::fs::read_dir(dir)
+        .expect("dir")
+        .map(|e| {
+            std::fs::read_to_string(e.expect("entry").path())
+                .expect("read")
+                .matches(text)
+                .count()
+        })
+        .sum()
+}

@@ -555,12 +555,19 @@ impl Backend for SlmpBackend {
         &self.profile.id
     }
 
+    /// What a recording names as the backend's version: the CPU as it reported itself (0101
+    /// type name and model code, once connected), the profile variant, the program (manifest
+    /// hash and mailbox layout) and the transport; both fills of every case are executed.
     fn describe(&self) -> String {
+        let cpu = self
+            .cpu()
+            .unwrap_or_else(|| format!("`{}` (not yet read)", self.settings.confirm));
         format!(
-            "live CPU `{}` ({} variant {}) over {}",
-            self.settings.confirm,
+            "live CPU {cpu}, {} variant {}, program {} (mailbox layout {}), {}, both fills",
             self.profile.id,
             self.settings.variant,
+            self.settings.manifest.hash,
+            mailbox::LAYOUT,
             self.settings.client.describe()
         )
     }
