@@ -160,8 +160,9 @@ fn same_verdicts(profile: &str, variant: &str) -> usize {
         "only 0101, 0401, 0403 and 1401 are ever sent: {sent:04X?}"
     );
     eprintln!(
-        "{profile} {variant}: {ran} trials, {} executions in {:.2} s",
+        "{profile} {variant}: {ran} trials, {} executions, {} requests in {:.2} s",
         audit.executions,
+        audit.commands.values().sum::<usize>(),
         elapsed.as_secs_f64()
     );
     assert!(ran > 0);
