@@ -631,3 +631,34 @@ fn count(dir: &std::path::Path, text: &str) -> usize {
         })
         .sum()
 }
+
+/// The pitfall the generator avoids, simulated: with its rungs inside a CASE a pulse rung fires
+/// on its first case only, and the corpus run through the live backend shows it.
+#[test]
+fn a_program_with_its_rungs_in_a_case_is_caught() {
+    let project = session();
+    let sim = iqr_sim(&project, |s| s.rungs_in_case = true);
+    let backend = iqr_backend(&project, &sim, |_| {});
+    backend.connect().expect("interlocks");
+    let trial = first_trial(&project, &backend, "BINHAP");
+    let first = execute_once(&backend, &trial).expect("first");
+    let second = execute_once(&backend, &trial).expect("second");
+    assert_ne!(first, second, "the second run of a pulse rung did the same");
+    let b: Arc<dyn Backend> = backend.clone();
+    let trials: Vec<Trial> = project
+        .plan(&[b])
+        .into_iter()
+        .filter(|t| t.skip.is_none())
+        .collect();
+    let failed: Vec<(String, String)> = trials
+        .iter()
+        .zip(verdicts(&trials))
+        .filter(|(_, v)| v.is_failure())
+        .map(|(t, _)| (t.input.instruction.clone(), t.name()))
+        .collect();
+    assert!(!failed.is_empty(), "no trial failed");
+    assert!(
+        failed.iter().all(|(i, _)| i.ends_with('P')),
+        "a trial of a non-pulse form failed: {failed:?}"
+    );
+}

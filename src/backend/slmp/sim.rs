@@ -82,6 +82,11 @@ pub struct SimSettings {
     pub long_form: bool,
     /// The port on 127.0.0.1 (0: any free one).
     pub port: u16,
+    /// Evaluate a rung only in the scan it is selected, as a program with its rungs inside a
+    /// CASE would: a pulse form's enable then never falls, and the rung fires on its first
+    /// case only. The generator never writes such a program; tests use this to show that the
+    /// corpus catches one.
+    pub rungs_in_case: bool,
     pub faults: Vec<FaultRule>,
 }
 
@@ -102,6 +107,7 @@ impl SimSettings {
             run: true,
             long_form,
             port: 0,
+            rungs_in_case: false,
             faults: Vec::new(),
         }
     }
@@ -419,6 +425,9 @@ fn scan(shared: &Shared, cpu: &mut Cpu) {
     for (id, instruction, operands, pulse) in &shared.rungs {
         let enable = exec && selected == *id;
         let i = usize::from(*id);
+        if shared.settings.rungs_in_case && !enable {
+            continue;
+        }
         let fire = if *pulse {
             enable && !cpu.prev[i]
         } else {
