@@ -662,3 +662,74 @@ fn a_program_with_its_rungs_in_a_case_is_caught() {
         "a trial of a non-pulse form failed: {failed:?}"
     );
 }
+
+/// The `hil` commands through the binary: `generate` writes the three files, `doctor` reads a
+/// running simulated CPU without writing, `dry-run` plans every case without a socket, and a
+/// live backend that is not ready stops `run` before any case (exit 2).
+#[test]
+fn the_hil_commands_through_the_binary() {
+    let project = session();
+    let dir = common::scratch();
+    let out_dir = dir.path().join("bench");
+    let out = common::cli(&[
+        "hil",
+        "generate",
+        "--profile",
+        "mitsubishi-iqr",
+        "--variant",
+        "rcpu",
+        "--mailbox",
+        "D11000",
+        "--out",
+        out_dir.to_str().expect("utf-8"),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("mailbox D11000"), "{stdout}");
+    for f in ["executive.st", "manifest.json", "SETUP.md"] {
+        assert!(out_dir.join(f).is_file(), "{f}");
+    }
+    let manifest_file = out_dir.join("manifest.json");
+    let m = Manifest::load(&manifest_file).expect("the written manifest loads");
+    // The same program as the one generated for both variants (the variants are not hashed).
+    assert_eq!(m.hash, iqr_manifest().hash, "generate is deterministic");
+    assert_eq!(m.rungs, iqr_manifest().rungs);
+    let sim = iqr_sim(&project, |_| {});
+    let spec = format!(
+        "slmp:bench={}?manifest={}&confirm=R04CPU&sandbox=manifest",
+        sim.address(),
+        manifest_file.display()
+    );
+    let doctor = common::cli(&["hil", "doctor", "--backend", &spec]);
+    let shown = String::from_utf8_lossy(&doctor.stdout);
+    assert!(doctor.status.success(), "{shown}");
+    assert!(shown.contains("ok    program signature"), "{shown}");
+    assert!(shown.contains("nothing written"), "{shown}");
+    assert_eq!(writes_sent(&sim), 0);
+    let connections = sim.audit().connections;
+    let dry = common::cli(&["hil", "dry-run", "--backend", &spec]);
+    let shown = String::from_utf8_lossy(&dry.stdout);
+    assert!(dry.status.success(), "{shown}");
+    assert!(
+        shown.contains("no socket opened") && shown.contains("0 refused"),
+        "{shown}"
+    );
+    assert_eq!(
+        sim.audit().connections,
+        connections,
+        "the dry run connected"
+    );
+    sim.set_running(false);
+    let run = common::cli(&["run", "--backend", &spec]);
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("live CPU backend `bench` not started") && err.contains("STOP"),
+        "{err}"
+    );
+    assert_eq!(writes_sent(&sim), 0);
+}

@@ -218,7 +218,7 @@ pub fn setup_text(manifest: &Manifest, profile: &Profile, trials: usize) -> Stri
     );
     t.push_str(
         "2. CPU parameter, RAS setting, operation at an error: operation errors must **continue** \
-         (not stop), or the first error case stops the CPU and ends the session. *check* the \
+         (not stop), or the first error case stops the CPU and ends the run. *check* the \
          item's name and default on your model.\n",
     );
     t.push_str(
