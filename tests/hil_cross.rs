@@ -12,7 +12,7 @@ use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 
-use plc_conformance::backend::slmp::client::{Client, ClientError, ClientSettings};
+use plc_conformance::backend::slmp::client::{Client, ClientError, ClientSettings, Code};
 use plc_conformance::backend::slmp::fault_of;
 use plc_conformance::backend::slmp::fence::{WordRange, WriteFence};
 use plc_conformance::backend::slmp::frame::{DeviceForm, FrameKind};
@@ -97,19 +97,25 @@ fn client(address: &str, frame: FrameKind, form: DeviceForm) -> Client {
     Client::new(s)
 }
 
-/// The client's four commands against virtual-plc in both frames and both device forms: what it
-/// writes reads back, from a batch and from a random read, and 0101 decodes.
+/// The client's four commands against virtual-plc in both frames, both device forms and both
+/// codes: what it writes reads back, from a batch and from a random read, and 0101 decodes.
 #[test]
 fn the_client_talks_to_virtual_plc() {
     let Some(python) = venv_python() else { return };
-    for (profile, frame, form) in [
-        ("iQ-R", FrameKind::E4, DeviceForm::Long),
-        ("iQ-R", FrameKind::E3, DeviceForm::Long),
-        ("Q", FrameKind::E3, DeviceForm::Short),
-        ("Q", FrameKind::E4, DeviceForm::Short),
+    for (profile, frame, form, code) in [
+        ("iQ-R", FrameKind::E4, DeviceForm::Long, Code::Binary),
+        ("iQ-R", FrameKind::E3, DeviceForm::Long, Code::Binary),
+        ("Q", FrameKind::E3, DeviceForm::Short, Code::Binary),
+        ("Q", FrameKind::E4, DeviceForm::Short, Code::Binary),
+        ("iQ-R", FrameKind::E4, DeviceForm::Long, Code::Ascii),
+        ("iQ-R", FrameKind::E3, DeviceForm::Long, Code::Ascii),
+        ("Q", FrameKind::E3, DeviceForm::Short, Code::Ascii),
+        ("Q", FrameKind::E4, DeviceForm::Short, Code::Ascii),
     ] {
         let server = VirtualPlc::start(&python, profile, &[]);
         let mut c = client(&server.address, frame, form);
+        c.settings_mut().code = code;
+        let frame = format!("{frame} {code}");
         let name = c
             .type_name()
             .unwrap_or_else(|e| panic!("{profile} {frame}: {e}"));

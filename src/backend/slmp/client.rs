@@ -14,6 +14,7 @@ use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
 use std::time::{Duration, Instant};
 
+use super::ascii;
 use super::fence::FencedWrite;
 use super::frame::{
     self, hex, message_len, DeviceForm, DeviceRef, FrameError, FrameKind, Request, Response, Route,
@@ -27,6 +28,8 @@ pub struct ClientSettings {
     /// `host:port`.
     pub address: String,
     pub frame: FrameKind,
+    /// Binary code unless the port is configured for ASCII.
+    pub code: Code,
     pub form: DeviceForm,
     pub route: Route,
     /// The monitoring timer sent with each request, in units of 250 ms.
@@ -47,6 +50,7 @@ impl ClientSettings {
         ClientSettings {
             address: address.into(),
             frame: FrameKind::E4,
+            code: Code::Binary,
             form: DeviceForm::Long,
             route: Route::default(),
             timer: 8,
@@ -58,7 +62,24 @@ impl ClientSettings {
 
     /// The transport as provenance names it: `SLMP 4E binary TCP 192.0.2.10:5007`.
     pub fn describe(&self) -> String {
-        format!("SLMP {} binary TCP {}", self.frame, self.address)
+        format!("SLMP {} {} TCP {}", self.frame, self.code, self.address)
+    }
+}
+
+/// How a port codes its messages.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Code {
+    Binary,
+    /// Every field as hexadecimal text ([`ascii`]).
+    Ascii,
+}
+
+impl fmt::Display for Code {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Code::Binary => "binary",
+            Code::Ascii => "ASCII",
+        })
     }
 }
 
@@ -164,6 +185,11 @@ impl Client {
         &self.settings
     }
 
+    /// The settings, to change before the first request (a connection made keeps its frame).
+    pub fn settings_mut(&mut self) -> &mut ClientSettings {
+        &mut self.settings
+    }
+
     pub fn is_connected(&self) -> bool {
         self.stream.is_some()
     }
@@ -223,8 +249,15 @@ impl Client {
             command: body.command,
             subcommand: body.subcommand,
             data: body.data.clone(),
-        }
-        .encode();
+        };
+        let code = self.settings.code;
+        let request = match code {
+            Code::Binary => request.encode(),
+            Code::Ascii => ascii::encode_request(&request).map_err(|e| ClientError::Request {
+                what: what.into(),
+                detail: e.to_string(),
+            })?,
+        };
         let timeout = self.settings.reply_timeout;
         let result = (|| {
             self.connect()?;
@@ -240,12 +273,15 @@ impl Client {
                     what: what.into(),
                     error: e.to_string(),
                 })?;
-            let bytes = read_reply(stream, frame_kind, deadline, what, timeout)?;
-            let response =
-                Response::decode(frame_kind, &bytes).map_err(|e| ClientError::Frame {
-                    what: what.into(),
-                    detail: with_bytes(&e, &bytes),
-                })?;
+            let bytes = read_reply(stream, frame_kind, code, deadline, what, timeout)?;
+            let response = match code {
+                Code::Binary => Response::decode(frame_kind, &bytes),
+                Code::Ascii => ascii::decode_response(frame_kind, body.command, &bytes),
+            }
+            .map_err(|e| ClientError::Frame {
+                what: what.into(),
+                detail: with_bytes(&e, &bytes),
+            })?;
             if response.serial != serial {
                 return Err(ClientError::Frame {
                     what: what.into(),
@@ -389,10 +425,31 @@ fn with_bytes(e: &FrameError, bytes: &[u8]) -> String {
 fn read_reply(
     stream: &mut TcpStream,
     frame_kind: FrameKind,
+    code: Code,
     deadline: Instant,
     what: &str,
     waited: Duration,
 ) -> Result<Vec<u8>, ClientError> {
+    if code == Code::Ascii {
+        let header = ascii::header_len(frame_kind);
+        let mut buf = vec![0u8; header];
+        read_full(stream, &mut buf, deadline, what, waited)?;
+        let total = ascii::message_len(frame_kind, &buf)
+            .and_then(|total| {
+                // A reply that does not start like one is refused before its length is believed.
+                ascii::decode_response(frame_kind, 0, &buf)
+                    .err()
+                    .filter(|e| !matches!(e, FrameError::Short { .. }))
+                    .map_or(Ok(total), Err)
+            })
+            .map_err(|e| ClientError::Frame {
+                what: what.into(),
+                detail: with_bytes(&e, &buf),
+            })?;
+        buf.resize(total, 0);
+        read_full(stream, &mut buf[header..], deadline, what, waited)?;
+        return Ok(buf);
+    }
     let header = frame_kind.header_len();
     let mut buf = vec![0u8; header];
     read_full(stream, &mut buf, deadline, what, waited)?;

@@ -22,6 +22,7 @@
 //! inconsistent capture a protocol error, and a CPU that cannot be reached or leaves RUN is
 //! unreachable. After `max_consecutive_faults` faults in a row the remaining trials are not run.
 
+pub mod ascii;
 pub mod client;
 pub mod doctor;
 pub mod fence;

@@ -4,7 +4,7 @@
 use std::path::Path;
 use std::time::Duration;
 
-use super::client::ClientSettings;
+use super::client::{ClientSettings, Code};
 use super::fence::{parse_ranges, WordRange};
 use super::frame::{DeviceForm, FrameKind};
 use super::manifest::Manifest;
@@ -70,7 +70,7 @@ impl SlmpSettings {
     /// Reads `slmp:NAME=HOST:PORT?key=value&...`; `None` when `text` is not of this form.
     /// Keys: `manifest` (path), `confirm` (the CPU type name), `sandbox` (ranges such as
     /// `D0-D4359,D7900-D7999`, or `manifest` for the manifest's `writes`), and optionally
-    /// `variant`, `frame` (3e, 4e), `form` (short, long), `timeout` (case seconds), `monitor`
+    /// `variant`, `frame` (3e, 4e), `code` (binary, ascii), `form` (short, long), `timeout` (case seconds), `monitor`
     /// (monitoring timer, units of 250 ms), `max_faults`, `poll_ms`.
     pub fn parse(text: &str, base: &Path) -> Result<Option<SlmpSettings>, String> {
         let Some(rest) = text.strip_prefix("slmp:") else {
@@ -110,6 +110,7 @@ impl SlmpSettings {
             "sandbox",
             "variant",
             "frame",
+            "code",
             "form",
             "timeout",
             "monitor",
@@ -147,6 +148,13 @@ impl SlmpSettings {
                 "3e" | "3E" => FrameKind::E3,
                 "4e" | "4E" => FrameKind::E4,
                 _ => return Err(format!("`frame={f}`: give 3e or 4e")),
+            };
+        }
+        if let Some(c) = get("code") {
+            s.client.code = match c {
+                "binary" => Code::Binary,
+                "ascii" => Code::Ascii,
+                _ => return Err(format!("`code={c}`: give binary or ascii")),
             };
         }
         if let Some(f) = get("form") {
