@@ -11,7 +11,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use plc_conformance::backend::slmp::fence::{parse_ranges, WordRange};
-use plc_conformance::backend::slmp::frame::command;
+use plc_conformance::backend::slmp::frame::{command, DeviceForm, FrameKind};
 use plc_conformance::backend::slmp::manifest::Manifest;
 use plc_conformance::backend::slmp::sim::{FaultAction, FaultRule, SimSettings, Simulator};
 use plc_conformance::backend::slmp::{SlmpBackend, SlmpSettings};
@@ -732,4 +732,75 @@ fn the_hil_commands_through_the_binary() {
         "{err}"
     );
     assert_eq!(writes_sent(&sim), 0);
+}
+
+/// An FX5 refuses the long device form (C059H), which the FX5 default avoids: asked for anyway,
+/// the interlocks stop on the end code, before any write.
+#[test]
+fn the_long_device_form_on_an_fx5_is_refused_before_any_write() {
+    let project = session();
+    let m = manifest(&project, "mitsubishi-fx5");
+    let variant = m.variants[0].clone();
+    let sim = simulator(&project, &m, &variant, vec![]);
+    let mut s = settings(&m, &variant, &sim);
+    assert_eq!(
+        (s.client.frame, s.client.form),
+        (FrameKind::E3, DeviceForm::Short),
+        "the FX5 default"
+    );
+    s.client.form = DeviceForm::Long;
+    let backend = SlmpBackend::new(s, &project.profiles).expect("backend");
+    let e = backend.connect().expect_err("C059H");
+    assert!(e.contains("end code C059H"), "{e}");
+    assert_eq!(writes_sent(&sim), 0);
+}
+
+/// `hil sim` serves until it is ended, on 127.0.0.1, and a live backend runs against it.
+#[test]
+fn hil_sim_serves_a_simulated_cpu_on_loopback() {
+    use std::io::{BufRead, BufReader};
+    let dir = common::scratch();
+    let manifest_file = dir.path().join("manifest.json");
+    std::fs::write(
+        &manifest_file,
+        serde_json::to_string_pretty(iqr_manifest()).expect("json"),
+    )
+    .expect("write");
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin!("plc-conformance"))
+        .args([
+            "--root",
+            common::root().to_str().expect("utf-8"),
+            "hil",
+            "sim",
+        ])
+        .args(["--manifest", manifest_file.to_str().expect("utf-8")])
+        .args(["--variant", "rcpu"])
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .expect("hil sim starts");
+    let stdout = child.stdout.take().expect("stdout");
+    let line = BufReader::new(stdout)
+        .lines()
+        .next()
+        .expect("a line")
+        .expect("text");
+    let address = line
+        .strip_prefix("listening on ")
+        .unwrap_or_else(|| panic!("{line}"))
+        .to_string();
+    assert!(address.starts_with("127.0.0.1:"), "{address}");
+    let spec = format!(
+        "slmp:bench={address}?manifest={}&confirm=R04CPU&sandbox=manifest&variant=rcpu",
+        manifest_file.display()
+    );
+    let run = common::cli(&["run", "--backend", &spec, "--filter", "binha"]);
+    let _ = child.kill();
+    let _ = child.wait();
+    let shown = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success(),
+        "{shown}{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(shown.contains(" 0 failed"), "{shown}");
 }
