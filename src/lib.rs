@@ -22,6 +22,7 @@ pub mod backend;
 pub mod cli;
 pub mod device;
 pub mod execute;
+pub mod hil;
 pub mod interrupt;
 pub mod judge;
 pub mod libtest;

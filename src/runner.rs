@@ -85,6 +85,9 @@ pub enum SetupError {
     External(ExternalError),
     /// Its name is already taken.
     Duplicate(String),
+    /// A live CPU backend whose settings, program manifest or interlocks (type name, RUN, the
+    /// program's signature) refused it before anything was written: the backend and why.
+    Live { backend: String, why: String },
 }
 
 impl fmt::Display for SetupError {
@@ -93,6 +96,9 @@ impl fmt::Display for SetupError {
             SetupError::Load(e) => write!(f, "{e}"),
             SetupError::External(e) => write!(f, "{e}"),
             SetupError::Duplicate(name) => write!(f, "there are two backends named `{name}`"),
+            SetupError::Live { backend, why } => {
+                write!(f, "live CPU backend `{backend}` not started: {why}")
+            }
         }
     }
 }

@@ -15,6 +15,7 @@ use std::path::PathBuf;
 use std::sync::{Arc, OnceLock};
 
 use crate::backend::external::{ExternalBackend, ExternalError};
+use crate::backend::slmp::{SlmpBackend, SlmpSettings};
 use crate::backend::{Backend, Fault, Request, Response};
 use crate::execute::Observation;
 use crate::judge::lift::lift;
@@ -43,6 +44,10 @@ pub enum BackendSource {
     ProcessOnFirstUse(ExternalSettings),
     /// A backend in this process, with its known-differences file.
     InProcess(Arc<dyn Backend>, Option<PathBuf>),
+    /// A live CPU over SLMP (`backend::slmp`): built without a socket, then connected and its
+    /// read-only interlocks run, so that a bench that is not ready is an error before any case
+    /// and before any write.
+    Slmp(Box<SlmpSettings>),
 }
 
 /// The backends of a run, in the order of their sources.
@@ -100,6 +105,16 @@ pub fn assemble(
                     .push(Arc::new(Placeholder::new(name, profile, lazy.clone())));
                 out.on_first_use.push(lazy);
             }
+            BackendSource::Slmp(settings) => {
+                let live = SlmpBackend::new(*settings, &project.profiles)
+                    .and_then(|b| b.connect().map(|()| b));
+                match live {
+                    Ok(b) => out.backends.push(Arc::new(b)),
+                    Err(why) => out
+                        .failed
+                        .push((name.clone(), SetupError::Live { backend: name, why })),
+                }
+            }
             BackendSource::InProcess(backend, known) => {
                 if out.backends.iter().any(|b| b.name() == name) {
                     out.failed.push((name.clone(), SetupError::Duplicate(name)));
@@ -131,6 +146,7 @@ impl BackendSource {
             BackendSource::References => String::new(),
             BackendSource::Process(s) | BackendSource::ProcessOnFirstUse(s) => s.name.clone(),
             BackendSource::InProcess(b, _) => b.name().to_string(),
+            BackendSource::Slmp(s) => s.name.clone(),
         }
     }
 }

@@ -16,6 +16,7 @@ pub mod omron;
 pub mod reference;
 pub mod s7;
 pub mod s7_200;
+pub mod slmp;
 
 use std::collections::BTreeMap;
 use std::fmt;

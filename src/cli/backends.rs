@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use super::{BackendArgs, Cli, CliError};
+use crate::backend::slmp::SlmpSettings;
 use crate::backend::Backend;
 use crate::load::{
     embedded_files, find_project_root, is_project_root, load_project, locate_project, valid_name,
@@ -188,7 +189,11 @@ pub fn start(
         }
     }
     for name in &args.backends {
-        if let Some(mut settings) = command_line_external(name, args)? {
+        if let Some(settings) =
+            SlmpSettings::parse(name, Path::new(".")).map_err(CliError::input)?
+        {
+            sources.push(BackendSource::Slmp(Box::new(settings)));
+        } else if let Some(mut settings) = command_line_external(name, args)? {
             settings.known_differences = known_files.remove(settings.name.as_str());
             sources.push(BackendSource::Process(settings));
         } else if let Some(b) = project.backends.iter().find(|b| b.name() == name) {
@@ -201,7 +206,8 @@ pub fn start(
             let mut known: Vec<&str> = project.backends.iter().map(|b| b.name()).collect();
             known.extend(file.configured.iter().map(|c| c.settings.name.as_str()));
             return Err(CliError::input(format!(
-                "unknown backend `{name}`; expected one of: {}, or external:NAME=COMMAND",
+                "unknown backend `{name}`; expected one of: {}, external:NAME=COMMAND, or \
+                 slmp:NAME=HOST:PORT?manifest=FILE&confirm=TYPE&sandbox=RANGES",
                 known.join(", ")
             )));
         }

@@ -7,6 +7,7 @@
 
 mod backends;
 mod error;
+mod hil;
 mod info;
 mod output;
 mod record;
@@ -123,6 +124,12 @@ pub enum Command {
     /// Write what a backend did into the vectors as `observed` expectations, with provenance;
     /// fill in the outcome of `unspecified` cases; never overwrite a `manual` expectation.
     Record(record::RecordArgs),
+    /// A real MELSEC CPU on a bench: generate its test program, look at the bench read-only,
+    /// dry-run a live backend, or serve a simulated CPU on 127.0.0.1.
+    Hil {
+        #[command(subcommand)]
+        command: hil::HilCommand,
+    },
 }
 
 #[derive(Debug, clap::Args)]
@@ -271,6 +278,7 @@ pub fn main() -> ExitCode {
         Command::Man { dir } => info::man(dir.as_deref()),
         Command::Sweep(args) => sweep::sweep(&cli, args),
         Command::Record(args) => record::record_command(&cli, args),
+        Command::Hil { command } => hil::hil(&cli, command),
     };
     // Errors are rendered here and nowhere else.
     let code = outcome.unwrap_or_else(|e| {

@@ -1,0 +1,669 @@
+//! An SLMP client over one TCP connection, binary code, one request in flight.
+//!
+//! One request at a time is a rule, not a simplification: an FX5U answered two pipelined
+//! requests with one reply (for the last) and end code 0, which on 3E nothing can detect. Every
+//! reply is read by its declared length, since a CPU's reply may arrive in several segments. A
+//! timeout, a closed connection or a reply that does not decode drops the connection: a late
+//! reply must never be read as the answer to the next request, and 3E has no serial number to
+//! tell them apart. Reads are sent again (on a new connection) a bounded number of times, since
+//! reading twice changes nothing; writes never are, so that no write can land twice or late
+//! without the caller knowing.
+
+use std::fmt;
+use std::io::{Read, Write};
+use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
+use std::time::{Duration, Instant};
+
+use super::ascii;
+use super::fence::FencedWrite;
+use super::frame::{
+    self, hex, message_len, DeviceForm, DeviceRef, FrameError, FrameKind, Request, Response, Route,
+    TypeName, MAX_BATCH_WORDS, MAX_RANDOM_WORDS,
+};
+use crate::device::Device;
+
+/// How to reach and talk to one CPU port.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ClientSettings {
+    /// `host:port`.
+    pub address: String,
+    pub frame: FrameKind,
+    /// Binary code unless the port is configured for ASCII.
+    pub code: Code,
+    pub form: DeviceForm,
+    pub route: Route,
+    /// The monitoring timer sent with each request, in units of 250 ms.
+    pub timer: u16,
+    /// How long to wait for one reply.
+    pub reply_timeout: Duration,
+    /// How long to wait for a connection.
+    pub connect_timeout: Duration,
+    /// How many times a read is sent again after a timeout or a lost connection.
+    pub read_retries: u32,
+}
+
+impl ClientSettings {
+    /// Defaults for a port: 4E frames and the long device form (iQ-R) unless told otherwise; a
+    /// monitoring timer of 2 s, and a reply timeout half a second past it, so that the CPU's own
+    /// timeout answer arrives before the client gives up.
+    pub fn new(address: impl Into<String>) -> Self {
+        ClientSettings {
+            address: address.into(),
+            frame: FrameKind::E4,
+            code: Code::Binary,
+            form: DeviceForm::Long,
+            route: Route::default(),
+            timer: 8,
+            reply_timeout: Duration::from_millis(2500),
+            connect_timeout: Duration::from_secs(3),
+            read_retries: 2,
+        }
+    }
+
+    /// The transport as provenance names it: `SLMP 4E binary TCP 192.0.2.10:5007`.
+    pub fn describe(&self) -> String {
+        format!("SLMP {} {} TCP {}", self.frame, self.code, self.address)
+    }
+}
+
+/// How a port codes its messages.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Code {
+    Binary,
+    /// Every field as hexadecimal text ([`ascii`]).
+    Ascii,
+}
+
+impl fmt::Display for Code {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Code::Binary => "binary",
+            Code::Ascii => "ASCII",
+        })
+    }
+}
+
+/// Why a request got no usable answer.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ClientError {
+    /// No connection could be made.
+    Connect { address: String, error: String },
+    /// No (whole) reply within the reply timeout.
+    Timeout { what: String, waited: Duration },
+    /// The CPU closed the connection, or the socket failed.
+    Closed { what: String, error: String },
+    /// A reply that does not decode, or answers another request.
+    Frame { what: String, detail: String },
+    /// The CPU answered with an error end code.
+    EndCode { what: String, code: u16 },
+    /// A request this client refuses to build (a limit of the protocol).
+    Request { what: String, detail: String },
+}
+
+impl fmt::Display for ClientError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ClientError::Connect { address, error } => {
+                write!(f, "no connection to {address}: {error}")
+            }
+            ClientError::Timeout { what, waited } => write!(
+                f,
+                "no reply to {what} within {} s; a CPU stays silent when the frame (3E/4E), the \
+                 code (binary/ASCII) or the device form does not match its port, or when the \
+                 port is not open to this host",
+                waited.as_secs_f64()
+            ),
+            ClientError::Closed { what, error } => {
+                write!(f, "the connection was lost during {what}: {error}")
+            }
+            ClientError::Frame { what, detail } => {
+                write!(
+                    f,
+                    "the reply to {what} is not a valid SLMP response: {detail}"
+                )
+            }
+            ClientError::EndCode { what, code } => {
+                write!(f, "the CPU answered {what} with end code {code:04X}H")?;
+                if let Some(meaning) = end_code_meaning(*code) {
+                    write!(f, " ({meaning})")?;
+                }
+                Ok(())
+            }
+            ClientError::Request { what, detail } => write!(f, "{what}: {detail}"),
+        }
+    }
+}
+
+impl std::error::Error for ClientError {}
+
+/// What the common end codes mean, in a few words, for messages. The SLMP manuals list them;
+/// these few are the ones a misconfigured bench meets.
+pub fn end_code_meaning(code: u16) -> Option<&'static str> {
+    Some(match code {
+        0xC051..=0xC054 => "too many points for one request",
+        0xC056 => "a device past the end of its range",
+        0xC059 => "command or subcommand not supported (an FX5 refuses the long device form)",
+        0xC05B | 0xC05C => "device not supported or request malformed",
+        0xC061 => "request data length does not match",
+        _ => return None,
+    })
+}
+
+/// A device as a command names it.
+pub fn device_ref(device: &Device) -> Result<DeviceRef, String> {
+    let code = frame::device_code(device.code())
+        .ok_or_else(|| format!("{} has no SLMP device code", device.code()))?;
+    Ok(DeviceRef {
+        code,
+        number: device.index,
+    })
+}
+
+/// One connection to a CPU (made on first use, dropped after a fault).
+pub struct Client {
+    settings: ClientSettings,
+    stream: Option<TcpStream>,
+    serial: u16,
+    /// Requests sent and connections made, for a run's figures.
+    pub requests: u64,
+    pub connections: u64,
+}
+
+impl Client {
+    /// A client that has not connected yet: nothing is opened until the first request.
+    pub fn new(settings: ClientSettings) -> Self {
+        Client {
+            settings,
+            stream: None,
+            serial: 0,
+            requests: 0,
+            connections: 0,
+        }
+    }
+
+    pub fn settings(&self) -> &ClientSettings {
+        &self.settings
+    }
+
+    /// The settings, to change before the first request (a connection made keeps its frame).
+    pub fn settings_mut(&mut self) -> &mut ClientSettings {
+        &mut self.settings
+    }
+
+    pub fn is_connected(&self) -> bool {
+        self.stream.is_some()
+    }
+
+    /// Drops the connection; the next request makes a new one.
+    pub fn disconnect(&mut self) {
+        self.stream = None;
+    }
+
+    fn connect(&mut self) -> Result<&mut TcpStream, ClientError> {
+        if self.stream.is_none() {
+            let address = self.settings.address.clone();
+            let fail = |error: String| ClientError::Connect {
+                address: address.clone(),
+                error,
+            };
+            let addrs: Vec<SocketAddr> = address
+                .to_socket_addrs()
+                .map_err(|e| fail(e.to_string()))?
+                .collect();
+            let mut last = String::from("the address resolves to nothing");
+            let mut stream = None;
+            for a in addrs {
+                match TcpStream::connect_timeout(&a, self.settings.connect_timeout) {
+                    Ok(s) => {
+                        stream = Some(s);
+                        break;
+                    }
+                    Err(e) => last = e.to_string(),
+                }
+            }
+            let stream = stream.ok_or_else(|| fail(last))?;
+            let _ = stream.set_nodelay(true);
+            self.connections += 1;
+            self.stream = Some(stream);
+        }
+        self.stream.as_mut().ok_or_else(|| ClientError::Connect {
+            address: address_of(&self.settings),
+            error: "not connected".into(),
+        })
+    }
+
+    /// Sends one request and reads its reply; drops the connection on any fault.
+    fn exchange(&mut self, what: &str, body: &frame::Body) -> Result<Vec<u8>, ClientError> {
+        let frame_kind = self.settings.frame;
+        self.serial = self.serial.wrapping_add(1);
+        let serial = if frame_kind == FrameKind::E4 {
+            self.serial
+        } else {
+            0
+        };
+        let request = Request {
+            frame: frame_kind,
+            serial,
+            route: self.settings.route,
+            timer: self.settings.timer,
+            command: body.command,
+            subcommand: body.subcommand,
+            data: body.data.clone(),
+        };
+        let code = self.settings.code;
+        let request = match code {
+            Code::Binary => request.encode(),
+            Code::Ascii => ascii::encode_request(&request).map_err(|e| ClientError::Request {
+                what: what.into(),
+                detail: e.to_string(),
+            })?,
+        };
+        let timeout = self.settings.reply_timeout;
+        let result = (|| {
+            self.connect()?;
+            self.requests += 1;
+            let stream = self.stream.as_mut().ok_or_else(|| ClientError::Closed {
+                what: what.into(),
+                error: "not connected".into(),
+            })?;
+            let deadline = Instant::now() + timeout;
+            stream
+                .write_all(&request)
+                .map_err(|e| ClientError::Closed {
+                    what: what.into(),
+                    error: e.to_string(),
+                })?;
+            let bytes = read_reply(stream, frame_kind, code, deadline, what, timeout)?;
+            let response = match code {
+                Code::Binary => Response::decode(frame_kind, &bytes),
+                Code::Ascii => ascii::decode_response(frame_kind, body.command, &bytes),
+            }
+            .map_err(|e| ClientError::Frame {
+                what: what.into(),
+                detail: with_bytes(&e, &bytes),
+            })?;
+            if response.serial != serial {
+                return Err(ClientError::Frame {
+                    what: what.into(),
+                    detail: format!(
+                        "it carries serial {:04X}H, the request {serial:04X}H",
+                        response.serial
+                    ),
+                });
+            }
+            if response.end_code != 0 {
+                return Err(ClientError::EndCode {
+                    what: what.into(),
+                    code: response.end_code,
+                });
+            }
+            Ok(response.data)
+        })();
+        match &result {
+            // An error answer is a whole, well-formed reply: the connection is still in step.
+            Ok(_) | Err(ClientError::EndCode { .. }) => {}
+            Err(_) => self.stream = None,
+        }
+        result
+    }
+
+    /// A read, sent again on a new connection after a timeout or a lost connection.
+    fn read_exchange(&mut self, what: &str, body: &frame::Body) -> Result<Vec<u8>, ClientError> {
+        let mut attempt = 0;
+        loop {
+            match self.exchange(what, body) {
+                Err(ClientError::Timeout { .. } | ClientError::Closed { .. })
+                    if attempt < self.settings.read_retries =>
+                {
+                    attempt += 1;
+                    std::thread::sleep(Duration::from_millis(20 * u64::from(attempt)));
+                }
+                other => return other,
+            }
+        }
+    }
+
+    /// 0101: the CPU's type name.
+    pub fn type_name(&mut self) -> Result<TypeName, ClientError> {
+        let what = "0101 (read type name)";
+        let data = self.read_exchange(what, &frame::read_type_name())?;
+        frame::type_name_of(&data).map_err(|e| ClientError::Frame {
+            what: what.into(),
+            detail: e.to_string(),
+        })
+    }
+
+    /// 0401: `count` words from `head`, in batches of at most 960.
+    pub fn read_words(&mut self, head: &Device, count: u32) -> Result<Vec<u16>, ClientError> {
+        let mut out = Vec::with_capacity(count as usize);
+        let first = device_ref(head).map_err(|detail| ClientError::Request {
+            what: format!("reading {head}"),
+            detail,
+        })?;
+        while out.len() < count as usize {
+            let n = (count as usize - out.len()).min(MAX_BATCH_WORDS);
+            let at = DeviceRef {
+                number: first.number + out.len() as u32,
+                ..first
+            };
+            let what = format!("0401 (read {at} x{n})");
+            let body =
+                frame::read_words(self.settings.form, at, n).map_err(|e| ClientError::Request {
+                    what: what.clone(),
+                    detail: e.to_string(),
+                })?;
+            let data = self.read_exchange(&what, &body)?;
+            out.extend(frame::words_of(&data, n).map_err(|e| ClientError::Frame {
+                what,
+                detail: e.to_string(),
+            })?);
+        }
+        Ok(out)
+    }
+
+    /// 0403: one word from each device, in one request (at most 192).
+    pub fn random_read(&mut self, devices: &[Device]) -> Result<Vec<u16>, ClientError> {
+        let names: Vec<String> = devices.iter().map(ToString::to_string).collect();
+        let what = format!("0403 (read {})", names.join(" "));
+        let refs = devices
+            .iter()
+            .map(device_ref)
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|detail| ClientError::Request {
+                what: what.clone(),
+                detail,
+            })?;
+        if refs.len() > MAX_RANDOM_WORDS {
+            return Err(ClientError::Request {
+                what,
+                detail: format!("more than {MAX_RANDOM_WORDS} points"),
+            });
+        }
+        let body =
+            frame::random_read(self.settings.form, &refs).map_err(|e| ClientError::Request {
+                what: what.clone(),
+                detail: e.to_string(),
+            })?;
+        let data = self.read_exchange(&what, &body)?;
+        frame::words_of(&data, refs.len()).map_err(|e| ClientError::Frame {
+            what,
+            detail: e.to_string(),
+        })
+    }
+
+    /// 1401: one write the fence let through; never sent twice.
+    pub fn write(&mut self, write: &FencedWrite) -> Result<(), ClientError> {
+        let what = format!("1401 (write {})", write.range());
+        let data = self.exchange(&what, write.body())?;
+        if data.is_empty() {
+            Ok(())
+        } else {
+            self.stream = None;
+            Err(ClientError::Frame {
+                what,
+                detail: format!("{} bytes of data after a write", data.len()),
+            })
+        }
+    }
+}
+
+fn address_of(settings: &ClientSettings) -> String {
+    settings.address.clone()
+}
+
+fn with_bytes(e: &FrameError, bytes: &[u8]) -> String {
+    let shown = &bytes[..bytes.len().min(32)];
+    let more = if bytes.len() > shown.len() {
+        " ..."
+    } else {
+        ""
+    };
+    format!("{e}; received: {}{more}", hex(shown))
+}
+
+/// Reads one whole reply: the header, then as many bytes as it declares.
+fn read_reply(
+    stream: &mut TcpStream,
+    frame_kind: FrameKind,
+    code: Code,
+    deadline: Instant,
+    what: &str,
+    waited: Duration,
+) -> Result<Vec<u8>, ClientError> {
+    if code == Code::Ascii {
+        let header = ascii::header_len(frame_kind);
+        let mut buf = vec![0u8; header];
+        read_full(stream, &mut buf, deadline, what, waited)?;
+        let total = ascii::message_len(frame_kind, &buf)
+            .and_then(|total| {
+                // A reply that does not start like one is refused before its length is believed.
+                ascii::decode_response(frame_kind, 0, &buf)
+                    .err()
+                    .filter(|e| !matches!(e, FrameError::Short { .. }))
+                    .map_or(Ok(total), Err)
+            })
+            .map_err(|e| ClientError::Frame {
+                what: what.into(),
+                detail: with_bytes(&e, &buf),
+            })?;
+        buf.resize(total, 0);
+        read_full(stream, &mut buf[header..], deadline, what, waited)?;
+        return Ok(buf);
+    }
+    let header = frame_kind.header_len();
+    let mut buf = vec![0u8; header];
+    read_full(stream, &mut buf, deadline, what, waited)?;
+    // A reply that does not start like one is refused before its "length" is believed.
+    let expected = match frame_kind {
+        FrameKind::E3 => 0xD0,
+        FrameKind::E4 => 0xD4,
+    };
+    if buf[0] != expected || buf[1] != 0 {
+        return Err(ClientError::Frame {
+            what: what.into(),
+            detail: format!(
+                "subheader {} where {:02X} 00 was expected; received: {}",
+                hex(&buf[..2]),
+                expected,
+                hex(&buf)
+            ),
+        });
+    }
+    let total = message_len(frame_kind, &buf).map_err(|e| ClientError::Frame {
+        what: what.into(),
+        detail: with_bytes(&e, &buf),
+    })?;
+    buf.resize(total, 0);
+    read_full(stream, &mut buf[header..], deadline, what, waited)?;
+    Ok(buf)
+}
+
+fn read_full(
+    stream: &mut TcpStream,
+    buf: &mut [u8],
+    deadline: Instant,
+    what: &str,
+    waited: Duration,
+) -> Result<(), ClientError> {
+    let mut at = 0;
+    while at < buf.len() {
+        let left = deadline.saturating_duration_since(Instant::now());
+        if left.is_zero() {
+            return Err(ClientError::Timeout {
+                what: what.into(),
+                waited,
+            });
+        }
+        let _ = stream.set_read_timeout(Some(left));
+        match stream.read(&mut buf[at..]) {
+            Ok(0) => {
+                return Err(ClientError::Closed {
+                    what: what.into(),
+                    error: format!("closed by the other side after {at} of {} bytes", buf.len()),
+                })
+            }
+            Ok(n) => at += n,
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                ) =>
+            {
+                return Err(ClientError::Timeout {
+                    what: what.into(),
+                    waited,
+                })
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => {
+                return Err(ClientError::Closed {
+                    what: what.into(),
+                    error: e.to_string(),
+                })
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::backend::slmp::fence::{WordRange, WriteFence};
+    use std::net::TcpListener;
+
+    /// A server that answers each request with the given byte chunks (with a pause between
+    /// chunks), then closes; it returns every byte it received.
+    fn scripted(replies: Vec<Vec<Vec<u8>>>) -> (String, std::thread::JoinHandle<Vec<u8>>) {
+        let listener = TcpListener::bind("127.0.0.1:0").expect("bind");
+        let address = listener.local_addr().expect("addr").to_string();
+        let handle = std::thread::spawn(move || {
+            let mut received = Vec::new();
+            let Ok((mut s, _)) = listener.accept() else {
+                return received;
+            };
+            for chunks in replies {
+                let mut head = [0u8; 13];
+                let Ok(()) = s.read_exact(&mut head[..9]) else {
+                    break;
+                };
+                let frame = FrameKind::of_request(head[0]).unwrap_or(FrameKind::E3);
+                if frame == FrameKind::E4 {
+                    let _ = s.read_exact(&mut head[9..13]);
+                }
+                let total = message_len(frame, &head[..frame.header_len()]).unwrap_or(0);
+                let mut rest = vec![0u8; total - frame.header_len()];
+                let _ = s.read_exact(&mut rest);
+                received.extend_from_slice(&head[..frame.header_len()]);
+                received.extend_from_slice(&rest);
+                for c in chunks {
+                    let _ = s.write_all(&c);
+                    std::thread::sleep(Duration::from_millis(30));
+                }
+            }
+            // Hold the connection until the client lets it go, as a silent CPU would.
+            let _ = s.read_to_end(&mut Vec::new());
+            received
+        });
+        (address, handle)
+    }
+
+    fn settings(address: &str) -> ClientSettings {
+        let mut s = ClientSettings::new(address);
+        s.frame = FrameKind::E3;
+        s.form = DeviceForm::Short;
+        s.reply_timeout = Duration::from_millis(400);
+        s.read_retries = 0;
+        s
+    }
+
+    fn reply(data: &[u8]) -> Vec<u8> {
+        Response {
+            frame: FrameKind::E3,
+            serial: 0,
+            route: Route::default(),
+            end_code: 0,
+            data: data.to_vec(),
+        }
+        .encode()
+    }
+
+    #[test]
+    fn a_reply_in_several_segments_is_read_whole() {
+        let r = reply(&[0x8D, 0x5A, 0x34, 0x12]);
+        let (address, server) = scripted(vec![vec![
+            r[..5].to_vec(),
+            r[5..12].to_vec(),
+            r[12..].to_vec(),
+        ]]);
+        let mut c = Client::new(settings(&address));
+        let words = c.read_words(&Device::new("D", 200), 2).expect("read");
+        assert_eq!(words, [0x5A8D, 0x1234]);
+        drop(c);
+        let sent = server.join().expect("server");
+        assert_eq!(
+            hex(&sent),
+            "50 00 00 FF FF 03 00 0C 00 08 00 01 04 00 00 C8 00 00 A8 02 00"
+        );
+    }
+
+    #[test]
+    fn garbage_is_a_frame_error_quoting_the_bytes() {
+        let (address, _server) = scripted(vec![vec![b"HTTP/1.1 400 Bad".to_vec()]]);
+        let mut c = Client::new(settings(&address));
+        let e = c.read_words(&Device::new("D", 0), 1).expect_err("garbage");
+        assert!(matches!(e, ClientError::Frame { .. }), "{e}");
+        assert!(e.to_string().contains("received: 48 54 54 50"), "{e}");
+        assert!(!c.is_connected(), "the connection is dropped after garbage");
+    }
+
+    #[test]
+    fn silence_is_a_timeout_with_its_likely_causes() {
+        let (address, _server) = scripted(vec![vec![]]);
+        let mut c = Client::new(settings(&address));
+        let e = c.type_name().expect_err("silent");
+        assert!(matches!(e, ClientError::Timeout { .. }), "{e}");
+        assert!(
+            e.to_string()
+                .contains("the frame (3E/4E), the code (binary/ASCII)"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn an_error_end_code_keeps_the_connection() {
+        let r = Response {
+            frame: FrameKind::E3,
+            serial: 0,
+            route: Route::default(),
+            end_code: 0xC056,
+            data: vec![0, 0xFF, 0xFF, 3, 0, 1, 4, 0, 0],
+        }
+        .encode();
+        let (address, _server) = scripted(vec![vec![r]]);
+        let mut c = Client::new(settings(&address));
+        let e = c
+            .read_words(&Device::new("D", 18432), 1)
+            .expect_err("end code");
+        assert_eq!(
+            e.to_string(),
+            "the CPU answered 0401 (read D18432 x1) with end code C056H (a device past the end \
+             of its range)"
+        );
+        assert!(c.is_connected());
+    }
+
+    #[test]
+    fn a_refused_write_sends_nothing() {
+        let (address, server) = scripted(vec![]);
+        let fence = WriteFence::new(vec![WordRange::new("D", 0, 99)]);
+        let refused = fence.writes(DeviceForm::Short, &Device::new("D", 99), &[1, 2]);
+        assert!(refused.is_err());
+        let c = Client::new(settings(&address));
+        assert!(!c.is_connected(), "a client connects only when it sends");
+        drop(c);
+        // Wake the scripted server so that it returns what it got: nothing.
+        let _ = TcpStream::connect(&address);
+        assert!(server.join().expect("server").is_empty());
+    }
+}

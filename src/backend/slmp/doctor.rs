@@ -1,0 +1,113 @@
+//! A read-only look at a bench: what `plc-conformance hil doctor` prints. It sends only 0101,
+//! 0401 and 0403, so it can be pointed at a CPU before anything is trusted.
+
+use std::time::{Duration, Instant};
+
+use super::client::Client;
+use super::mailbox::{self, off, Signature};
+use super::settings::SlmpSettings;
+use super::{is_run, status_text};
+use crate::device::Device;
+
+/// One finding: what was looked at, and what was found (`Err` when it stops a run).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Finding {
+    pub what: &'static str,
+    pub result: Result<String, String>,
+}
+
+/// Looks at the bench in the order the backend's interlocks do, and stops at the first thing
+/// that makes the rest meaningless (no connection). Returns the findings and the requests sent.
+pub fn doctor(settings: &SlmpSettings) -> (Vec<Finding>, u64) {
+    let mut client = Client::new(settings.client.clone());
+    let mut out = Vec::new();
+    let mut push = |what, result| out.push(Finding { what, result });
+    match client.type_name() {
+        Ok(t) if t.name == settings.confirm => push("type name", Ok(format!("{t}, as confirmed"))),
+        Ok(t) => push(
+            "type name",
+            Err(format!("{t}, but `confirm` says `{}`", settings.confirm)),
+        ),
+        Err(e) => {
+            push("connection", Err(e.to_string()));
+            return (out, client.requests);
+        }
+    }
+    match client.random_read(&[Device::new("SD", 203)]) {
+        Ok(w) => {
+            let v = w.first().copied().unwrap_or(u16::MAX);
+            let text = status_text(v);
+            push(
+                "operating status",
+                if is_run(v) { Ok(text) } else { Err(text) },
+            );
+        }
+        Err(e) => push("operating status", Err(e.to_string())),
+    }
+    let Ok(head) = settings.manifest.mailbox_head() else {
+        push(
+            "mailbox",
+            Err("the manifest's mailbox is not a device".into()),
+        );
+        return (out, client.requests);
+    };
+    match client.read_words(&head, mailbox::WORDS) {
+        Ok(words) => {
+            let read = Signature::of(&words);
+            let expected = settings.manifest.signature();
+            push(
+                "program signature",
+                match read.and_then(|r| r.mismatch(&expected)) {
+                    None => Ok(format!(
+                        "program {} (layout {}, {} rungs) at {}",
+                        settings.manifest.hash, expected.layout, expected.rungs, head
+                    )),
+                    Some(why) => Err(why),
+                },
+            );
+            let get = |o: u32| words.get(o as usize).copied().unwrap_or(0);
+            let (trigger, ack, st) = (get(off::TRIGGER), get(off::ACK), get(off::STATE));
+            push(
+                "program state",
+                if trigger == ack {
+                    Ok(format!("idle (trigger {trigger}, ack {ack})"))
+                } else {
+                    Err(format!(
+                        "busy with case {trigger} (ack {ack}, state {st}); it finishes or the \
+                         backend waits for it"
+                    ))
+                },
+            );
+            push(
+                "error flag",
+                Ok(if get(off::FLAG_NOW) != 0 {
+                    format!(
+                        "{} on now; the program resets it ({}) before each case",
+                        settings.manifest.error.flag, settings.manifest.error.reset
+                    )
+                } else {
+                    format!("{} off", settings.manifest.error.flag)
+                }),
+            );
+            let counter = mailbox::at(&head, off::SCANS);
+            let first = get(off::SCANS);
+            let since = Instant::now();
+            let moved = loop {
+                match client.read_words(&counter, 1) {
+                    Ok(w) if w.first().copied() != Some(first) => break Ok(()),
+                    Ok(_) if since.elapsed() > Duration::from_secs(1) => {
+                        break Err(format!("{counter} did not move in 1 s"))
+                    }
+                    Ok(_) => std::thread::sleep(Duration::from_millis(5)),
+                    Err(e) => break Err(e.to_string()),
+                }
+            };
+            push(
+                "scan counter",
+                moved.map(|()| format!("{counter} moves: the program runs")),
+            );
+        }
+        Err(e) => push("mailbox", Err(e.to_string())),
+    }
+    (out, client.requests)
+}

@@ -1,0 +1,318 @@
+//! The write fence: the only way to build an SLMP write.
+//!
+//! A live CPU's memory outside the words a bench user gave the harness may hold anything,
+//! including what a machine depends on. Every batch write is therefore built here, from a
+//! declared set of word ranges (the sandbox the case windows go to, and the mailbox words the PC
+//! owns), and a write that touches one word outside them is refused while it is still a value in
+//! memory: before any byte is encoded, let alone sent. [`FencedWrite`] has no other constructor,
+//! and the client's only write method takes one.
+
+use std::fmt;
+use std::str::FromStr;
+
+use super::frame::{self, Body, DeviceForm, DeviceRef, MAX_BATCH_WORDS};
+use crate::device::Device;
+
+/// A run of words of one device code, both ends included: `D0-D11999`, or `D12000` alone.
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct WordRange {
+    pub code: String,
+    pub first: u32,
+    pub last: u32,
+}
+
+impl WordRange {
+    pub fn new(code: &str, first: u32, last: u32) -> Self {
+        WordRange {
+            code: code.to_string(),
+            first,
+            last,
+        }
+    }
+
+    /// The words `count` from `head` (at least one).
+    pub fn of(head: &Device, count: u32) -> Self {
+        WordRange::new(
+            head.code(),
+            head.index,
+            head.index.saturating_add(count.max(1) - 1),
+        )
+    }
+
+    pub fn contains(&self, other: &WordRange) -> bool {
+        self.code == other.code && self.first <= other.first && other.last <= self.last
+    }
+
+    pub fn overlaps(&self, other: &WordRange) -> bool {
+        self.code == other.code && self.first <= other.last && other.first <= self.last
+    }
+
+    pub fn len(&self) -> u32 {
+        self.last - self.first + 1
+    }
+
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+}
+
+impl fmt::Display for WordRange {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.first == self.last {
+            write!(f, "{}{}", self.code, self.first)
+        } else {
+            write!(f, "{}{}-{}{}", self.code, self.first, self.code, self.last)
+        }
+    }
+}
+
+impl FromStr for WordRange {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let s = s.trim();
+        let parse = |t: &str| {
+            t.parse::<Device>()
+                .map_err(|e| format!("`{s}`: {e}; a range is written `D0-D11999` or `D12000`"))
+        };
+        let (first, last) = match s.split_once('-') {
+            Some((a, b)) => (parse(a)?, parse(b)?),
+            None => (parse(s)?, parse(s)?),
+        };
+        if first.code() != last.code() {
+            return Err(format!(
+                "`{s}`: both ends must be the same device ({} and {})",
+                first.code(),
+                last.code()
+            ));
+        }
+        if first.index > last.index {
+            return Err(format!("`{s}`: the first word is after the last"));
+        }
+        Ok(WordRange::new(first.code(), first.index, last.index))
+    }
+}
+
+/// Reads a comma-separated list of ranges.
+pub fn parse_ranges(text: &str) -> Result<Vec<WordRange>, String> {
+    text.split(',')
+        .filter(|t| !t.trim().is_empty())
+        .map(str::parse)
+        .collect()
+}
+
+/// Ranges sorted and merged where they touch or overlap.
+pub fn merged(mut ranges: Vec<WordRange>) -> Vec<WordRange> {
+    ranges.sort();
+    let mut out: Vec<WordRange> = Vec::with_capacity(ranges.len());
+    for r in ranges {
+        match out.last_mut() {
+            Some(prev) if prev.code == r.code && r.first <= prev.last.saturating_add(1) => {
+                prev.last = prev.last.max(r.last);
+            }
+            _ => out.push(r),
+        }
+    }
+    out
+}
+
+/// A write the fence refused.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Refused {
+    /// The words asked for.
+    pub asked: WordRange,
+    /// What the fence allows.
+    pub allowed: Vec<WordRange>,
+    /// Why, when it is not "outside" (a device with no SLMP code, an encoding limit).
+    pub detail: Option<String>,
+}
+
+impl fmt::Display for Refused {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.detail {
+            Some(d) => write!(f, "a write to {} is refused: {d}", self.asked),
+            None => write!(
+                f,
+                "a write to {} is refused: it lies outside the words the harness may write ({})",
+                self.asked,
+                list(&self.allowed)
+            ),
+        }
+    }
+}
+
+impl std::error::Error for Refused {}
+
+/// Ranges as one line.
+pub fn list(ranges: &[WordRange]) -> String {
+    if ranges.is_empty() {
+        return "none".into();
+    }
+    ranges
+        .iter()
+        .map(ToString::to_string)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The words the harness may write.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct WriteFence {
+    allowed: Vec<WordRange>,
+}
+
+/// One batch write the fence let through: the request body, and what it writes, for messages.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FencedWrite {
+    body: Body,
+    range: WordRange,
+}
+
+impl FencedWrite {
+    pub fn body(&self) -> &Body {
+        &self.body
+    }
+    pub fn range(&self) -> &WordRange {
+        &self.range
+    }
+}
+
+impl WriteFence {
+    pub fn new(allowed: Vec<WordRange>) -> Self {
+        WriteFence {
+            allowed: merged(allowed),
+        }
+    }
+
+    pub fn allowed(&self) -> &[WordRange] {
+        &self.allowed
+    }
+
+    /// Whether every word of `asked` may be written.
+    pub fn check(&self, asked: &WordRange) -> Result<(), Refused> {
+        if self.allowed.iter().any(|r| r.contains(asked)) {
+            Ok(())
+        } else {
+            Err(Refused {
+                asked: asked.clone(),
+                allowed: self.allowed.clone(),
+                detail: None,
+            })
+        }
+    }
+
+    /// The batch writes of `words` from `head`, at most [`MAX_BATCH_WORDS`] each, once every
+    /// word is inside the fence; nothing is built when one is not.
+    pub fn writes(
+        &self,
+        form: DeviceForm,
+        head: &Device,
+        words: &[u16],
+    ) -> Result<Vec<FencedWrite>, Refused> {
+        let asked = WordRange::of(head, words.len() as u32);
+        let refuse = |detail: String| Refused {
+            asked: asked.clone(),
+            allowed: self.allowed.clone(),
+            detail: Some(detail),
+        };
+        if words.is_empty() {
+            return Err(refuse("no words".into()));
+        }
+        if u32::try_from(words.len()).is_err()
+            || head.index.checked_add(words.len() as u32).is_none()
+        {
+            return Err(refuse("the range runs past the last device number".into()));
+        }
+        self.check(&asked)?;
+        let code = frame::device_code(head.code())
+            .ok_or_else(|| refuse(format!("{} has no SLMP device code", head.code())))?;
+        let mut out = Vec::with_capacity(words.len().div_ceil(MAX_BATCH_WORDS));
+        for (i, chunk) in words.chunks(MAX_BATCH_WORDS).enumerate() {
+            let number = head.index + (i * MAX_BATCH_WORDS) as u32;
+            let body = frame::write_words(form, DeviceRef { code, number }, chunk)
+                .map_err(|e| refuse(e.to_string()))?;
+            out.push(FencedWrite {
+                body,
+                range: WordRange::new(head.code(), number, number + chunk.len() as u32 - 1),
+            });
+        }
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rstest::rstest;
+
+    fn fence() -> WriteFence {
+        WriteFence::new(parse_ranges("D0-D11999, D12008-D12011, D12100-D18431").expect("ranges"))
+    }
+
+    #[rstest]
+    #[case("D0", 1, true)]
+    #[case("D11999", 1, true)]
+    #[case("D11999", 2, false)]
+    #[case("D12000", 1, false)]
+    #[case("D12008", 4, true)]
+    #[case("D12008", 5, false)]
+    #[case("D12007", 2, false)]
+    #[case("D18431", 1, true)]
+    #[case("D18432", 1, false)]
+    #[case("R0", 1, false)]
+    #[case("SD0", 1, false)]
+    fn allows_only_inside(#[case] head: &str, #[case] count: usize, #[case] ok: bool) {
+        let head: Device = head.parse().expect("device");
+        let r = fence().writes(DeviceForm::Short, &head, &vec![0; count]);
+        assert_eq!(r.is_ok(), ok, "{head} x{count}: {r:?}");
+    }
+
+    #[test]
+    fn touching_ranges_merge_and_long_writes_split() {
+        let f = WriteFence::new(parse_ranges("D0-D99,D100-D2000").expect("ranges"));
+        assert_eq!(f.allowed(), &[WordRange::new("D", 0, 2000)]);
+        let writes = f
+            .writes(DeviceForm::Short, &Device::new("D", 0), &[7; 2001])
+            .expect("inside");
+        let ranges: Vec<String> = writes.iter().map(|w| w.range().to_string()).collect();
+        assert_eq!(ranges, ["D0-D959", "D960-D1919", "D1920-D2000"]);
+    }
+
+    #[test]
+    fn a_refusal_names_the_words_and_the_fence() {
+        let e = fence()
+            .writes(DeviceForm::Short, &Device::new("D", 11990), &[0; 20])
+            .expect_err("outside");
+        assert_eq!(
+            e.to_string(),
+            "a write to D11990-D12009 is refused: it lies outside the words the harness may \
+             write (D0-D11999, D12008-D12011, D12100-D18431)"
+        );
+    }
+
+    #[rstest]
+    #[case("D0-", "not a device name")]
+    #[case("D5-D4", "after the last")]
+    #[case("D0-R5", "same device")]
+    #[case("d0", "not a device name")]
+    fn bad_ranges(#[case] text: &str, #[case] message: &str) {
+        let e = parse_ranges(text).expect_err("bad");
+        assert!(e.contains(message), "{e}");
+    }
+
+    proptest::proptest! {
+        /// Whatever is asked, a write is built exactly when every word is inside an allowed range.
+        #[test]
+        fn the_fence_never_lets_a_word_out(
+            allowed in proptest::collection::vec((0u32..200, 0u32..50), 0..4),
+            head in 0u32..300,
+            count in 1usize..80,
+        ) {
+            let ranges: Vec<WordRange> = allowed.iter().map(|(a, n)| WordRange::new("D", *a, a + n)).collect();
+            let fence = WriteFence::new(ranges.clone());
+            let inside = (head..head + count as u32).all(|w| ranges.iter().any(|r| r.first <= w && w <= r.last));
+            let built = fence.writes(DeviceForm::Short, &Device::new("D", head), &vec![0; count]);
+            proptest::prop_assert_eq!(built.is_ok(), inside);
+        }
+    }
+}

@@ -1,0 +1,197 @@
+//! The mailbox: 32 data registers through which the PC hands the CPU's test program one case at
+//! a time and reads back what happened (layout 1).
+//!
+//! The PC writes the case's memory window, then the rung and the flags, then the trigger alone,
+//! a sequence number. The program answers with `ack` equal to the trigger once the case is done,
+//! having reset the error state first, executed the selected rung for exactly one scan, and
+//! captured the error flag and registers in that scan and in the next. Everything else here is
+//! written by the program every scan: a signature (magic, layout, program hash, rung count) that
+//! says which program runs, the scan counter that says it runs, and the error flag now.
+
+use super::fence::WordRange;
+use crate::device::Device;
+
+/// The layout version the program and the PC agree on.
+pub const LAYOUT: u16 = 1;
+/// Words in the mailbox.
+pub const WORDS: u32 = 32;
+/// `'P','C'`, `'H','I'` as two characters per word, low byte first.
+pub const MAGIC: [u16; 2] = [0x4350, 0x4948];
+
+/// Word offsets from the mailbox head.
+pub mod off {
+    /// Magic, two words (program).
+    pub const MAGIC: u32 = 0;
+    /// Layout version (program).
+    pub const LAYOUT: u32 = 2;
+    /// Low and high word of the program hash's low 32 bits (program).
+    pub const HASH: u32 = 3;
+    /// Rung count (program).
+    pub const RUNGS: u32 = 5;
+    /// Sequence number of the case asked for, 1-65535 (PC; written last, alone).
+    pub const TRIGGER: u32 = 8;
+    /// Sequence number of the case done (program).
+    pub const ACK: u32 = 9;
+    /// Rung to execute (PC).
+    pub const RUNG: u32 = 10;
+    /// Flag bits, in the manifest's flag order (PC).
+    pub const FLAGS: u32 = 11;
+    /// The program's state, see [`super::state`] (program).
+    pub const STATE: u32 = 12;
+    /// Scan counter (program).
+    pub const SCANS: u32 = 13;
+    /// The error flag this scan, 0 or 1 (program).
+    pub const FLAG_NOW: u32 = 14;
+    /// The error flag after the reset, before the instruction (program).
+    pub const FLAG_BEFORE: u32 = 16;
+    /// The error flag right after the instruction, same scan (program).
+    pub const FLAG_AFTER: u32 = 17;
+    /// The error register right after the instruction (program).
+    pub const CODE: u32 = 18;
+    /// The profile's further error register (FX5 SD8067), same scan (program).
+    pub const CODE_EXTRA: u32 = 19;
+    /// The error register one scan later (program).
+    pub const CODE_NEXT: u32 = 20;
+    /// Words read in one status poll, from [`TRIGGER`] on.
+    pub const STATUS_WORDS: u32 = 13;
+}
+
+/// The program's states.
+pub mod state {
+    pub const IDLE: u16 = 0;
+    pub const RESETTING: u16 = 1;
+    pub const EXECUTING: u16 = 2;
+    pub const DONE: u16 = 3;
+    /// The error flag stayed on after the error reset: the case was not executed.
+    pub const RESET_FAILED: u16 = 8;
+}
+
+/// The words of the mailbox the PC writes: the trigger, the rung and the flags. Nothing else of
+/// the mailbox is in the write fence.
+pub fn pc_words(head: &Device) -> Vec<WordRange> {
+    vec![
+        WordRange::new(
+            head.code(),
+            head.index + off::TRIGGER,
+            head.index + off::TRIGGER,
+        ),
+        WordRange::new(head.code(), head.index + off::RUNG, head.index + off::FLAGS),
+    ]
+}
+
+/// The whole mailbox.
+pub fn range(head: &Device) -> WordRange {
+    WordRange::new(head.code(), head.index, head.index + WORDS - 1)
+}
+
+/// The device at an offset.
+pub fn at(head: &Device, offset: u32) -> Device {
+    Device::new(head.code(), head.index + offset)
+}
+
+/// What the program writes every scan, read back.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Signature {
+    pub magic: [u16; 2],
+    pub layout: u16,
+    pub hash: u32,
+    pub rungs: u16,
+}
+
+impl Signature {
+    /// From the mailbox's first six words.
+    pub fn of(words: &[u16]) -> Option<Signature> {
+        (words.len() >= 6).then(|| Signature {
+            magic: [words[0], words[1]],
+            layout: words[2],
+            hash: u32::from(words[3]) | u32::from(words[4]) << 16,
+            rungs: words[5],
+        })
+    }
+
+    /// What a program with this hash and rung count writes.
+    pub fn expected(hash: u32, rungs: u16) -> Signature {
+        Signature {
+            magic: MAGIC,
+            layout: LAYOUT,
+            hash,
+            rungs,
+        }
+    }
+
+    /// Why `self` (read) is not `expected`, if it is not.
+    pub fn mismatch(&self, expected: &Signature) -> Option<String> {
+        if self.magic != MAGIC {
+            return Some(format!(
+                "no test program signature in the mailbox (magic {:04X}H {:04X}H, expected \
+                 {:04X}H {:04X}H): is the generated program written to the CPU and the mailbox \
+                 where the manifest says?",
+                self.magic[0], self.magic[1], MAGIC[0], MAGIC[1]
+            ));
+        }
+        if self.layout != expected.layout {
+            return Some(format!(
+                "the program uses mailbox layout {}, this harness layout {}",
+                self.layout, expected.layout
+            ));
+        }
+        if self.hash != expected.hash || self.rungs != expected.rungs {
+            return Some(format!(
+                "the program on the CPU is another one than the manifest's (hash {:08X}H with {} \
+                 rungs on the CPU, {:08X}H with {} in the manifest): write the program generated \
+                 with this manifest",
+                self.hash, self.rungs, expected.hash, expected.rungs
+            ));
+        }
+        None
+    }
+}
+
+/// The next trigger after `last`: 1-65535, never 0 (0 is what a cleared mailbox holds).
+pub fn next_trigger(last: u16) -> u16 {
+    match last.wrapping_add(1) {
+        0 => 1,
+        n => n,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn magic_reads_as_pchi() {
+        let bytes: Vec<u8> = MAGIC.iter().flat_map(|w| w.to_le_bytes()).collect();
+        assert_eq!(bytes, b"PCHI");
+    }
+
+    #[test]
+    fn triggers_skip_zero() {
+        assert_eq!(next_trigger(0), 1);
+        assert_eq!(next_trigger(65535), 1);
+        assert_eq!(next_trigger(7), 8);
+    }
+
+    #[test]
+    fn the_pc_writes_three_words() {
+        let words: u32 = pc_words(&Device::new("D", 12000))
+            .iter()
+            .map(WordRange::len)
+            .sum();
+        assert_eq!(words, 3);
+    }
+
+    #[test]
+    fn signature_mismatches_are_explained() {
+        let good = Signature::expected(0xDEADBEEF, 12);
+        assert_eq!(good.mismatch(&good), None);
+        let cleared = Signature::of(&[0; 6]).expect("six words");
+        assert!(cleared
+            .mismatch(&good)
+            .is_some_and(|m| m.contains("no test program")));
+        let other = Signature::expected(0x1234, 12);
+        assert!(other
+            .mismatch(&good)
+            .is_some_and(|m| m.contains("another one")));
+    }
+}

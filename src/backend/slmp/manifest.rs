@@ -1,0 +1,315 @@
+//! The manifest of a generated test program: which rung runs which instruction on which
+//! operands, where the mailbox is, which flags the mailbox's flag word sets, and the hash that
+//! the program writes into the mailbox so that the PC knows the CPU runs this very program.
+//!
+//! The simulator and the live backend both read the rung table from here, so neither parses the
+//! program text. A manifest whose hash does not match its content (edited by hand) is refused:
+//! the program on the CPU would then say one thing and the table another.
+
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use super::mailbox;
+use crate::device::Device;
+use crate::model::Operand;
+
+/// The manifest format this harness reads and writes.
+pub const FORMAT: u32 = 1;
+
+/// One rung: an instruction on fixed operands, selected by its id.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Rung {
+    /// 1 upwards; 0 in the mailbox selects no rung.
+    pub id: u16,
+    pub instruction: String,
+    /// Operand name -> `D100`, or a constant as `K-1`.
+    pub operands: BTreeMap<String, String>,
+}
+
+/// An instruction and operands the corpus uses but the program cannot hold, with why.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Unrealisable {
+    pub instruction: String,
+    pub operands: BTreeMap<String, String>,
+    pub reason: String,
+}
+
+/// Where the program finds an operation error.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ErrorDevices {
+    /// The flag an error turns on (SM0).
+    pub flag: String,
+    /// The register with the code (SD0).
+    pub register: String,
+    /// A further register the profile says receives the code (FX5: SD8067).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub extra: Option<String>,
+    /// The flag that resets the error state on its rising edge (SM50).
+    pub reset: String,
+}
+
+/// A generated program's manifest.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Manifest {
+    pub format: u32,
+    /// `plc-conformance <version>`.
+    pub generator: String,
+    /// The profile id.
+    pub profile: String,
+    /// The variants the rung table was collected for.
+    pub variants: Vec<String>,
+    /// The mailbox's first word.
+    pub mailbox: String,
+    pub layout: u16,
+    /// The mailbox flag word: bit i sets `flags[i]` for the executed scan.
+    pub flags: Vec<String>,
+    pub error: ErrorDevices,
+    pub rungs: Vec<Rung>,
+    #[serde(default)]
+    pub unrealisable: Vec<Unrealisable>,
+    /// Every word a case window writes, merged: what a sandbox must at least allow.
+    pub writes: Vec<String>,
+    /// FNV-1a 64 of the program-defining fields, 16 hex digits.
+    pub hash: String,
+}
+
+/// The fields that define the program: what the hash covers.
+#[derive(Serialize)]
+struct Program<'a> {
+    profile: &'a str,
+    mailbox: &'a str,
+    layout: u16,
+    flags: &'a [String],
+    error: &'a ErrorDevices,
+    rungs: &'a [Rung],
+}
+
+fn fnv1a64(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ u64::from(*b)).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+/// The key a request and a rung share: instruction and operands in one canonical text.
+pub fn rung_key(instruction: &str, operands: &BTreeMap<String, Operand>) -> String {
+    let mut key = instruction.to_string();
+    for (name, value) in operands {
+        key.push_str(&format!(" {name}={value}"));
+    }
+    key
+}
+
+/// Reads an operand as the manifest writes it.
+pub fn parse_operand(text: &str) -> Result<Operand, String> {
+    // Constants are written `K<decimal>`, as [`Operand`]'s display does; no device code is K.
+    if text.starts_with('K') {
+        return crate::value::parse_number(text)
+            .map(Operand::Constant)
+            .map_err(|e| e.to_string());
+    }
+    text.parse::<Device>()
+        .map(Operand::Device)
+        .map_err(|e| e.to_string())
+}
+
+impl Manifest {
+    /// The hash of the program-defining fields.
+    pub fn compute_hash(&self) -> String {
+        let program = Program {
+            profile: &self.profile,
+            mailbox: &self.mailbox,
+            layout: self.layout,
+            flags: &self.flags,
+            error: &self.error,
+            rungs: &self.rungs,
+        };
+        let bytes = serde_json::to_vec(&program).unwrap_or_default();
+        format!("{:016X}", fnv1a64(&bytes))
+    }
+
+    /// The low 32 bits of the hash: what the program writes into the mailbox.
+    pub fn hash32(&self) -> u32 {
+        u64::from_str_radix(&self.hash, 16).map_or(0, |h| h as u32)
+    }
+
+    /// The mailbox head.
+    pub fn mailbox_head(&self) -> Result<Device, String> {
+        self.mailbox
+            .parse::<Device>()
+            .map_err(|e| format!("`mailbox`: {e}"))
+    }
+
+    /// What the program writes into the mailbox's signature words.
+    pub fn signature(&self) -> mailbox::Signature {
+        mailbox::Signature::expected(self.hash32(), self.rungs.len() as u16)
+    }
+
+    /// The rungs by [`rung_key`].
+    pub fn rung_index(&self) -> Result<HashMap<String, u16>, String> {
+        let mut index = HashMap::new();
+        for rung in &self.rungs {
+            let operands = rung
+                .operands
+                .iter()
+                .map(|(k, v)| {
+                    parse_operand(v)
+                        .map(|o| (k.clone(), o))
+                        .map_err(|e| format!("rung {} operand `{k}`: {e}", rung.id))
+                })
+                .collect::<Result<BTreeMap<_, _>, _>>()?;
+            if index
+                .insert(rung_key(&rung.instruction, &operands), rung.id)
+                .is_some()
+            {
+                return Err(format!(
+                    "rung {} repeats an earlier rung's instruction and operands",
+                    rung.id
+                ));
+            }
+        }
+        Ok(index)
+    }
+
+    /// Checks what the file cannot: the format, the hash, the mailbox, rung ids 1..n in order.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.format != FORMAT {
+            return Err(format!(
+                "`format` is {}; this harness reads format {FORMAT}",
+                self.format
+            ));
+        }
+        if self.layout != mailbox::LAYOUT {
+            return Err(format!(
+                "`layout` is {}; this harness speaks mailbox layout {}",
+                self.layout,
+                mailbox::LAYOUT
+            ));
+        }
+        self.mailbox_head()?;
+        for (i, rung) in self.rungs.iter().enumerate() {
+            if usize::from(rung.id) != i + 1 {
+                return Err(format!(
+                    "rung {} is at position {}; rungs are numbered 1, 2, ... in order",
+                    rung.id,
+                    i + 1
+                ));
+            }
+        }
+        if self.flags.len() > 16 {
+            return Err("more than 16 flags do not fit the mailbox flag word".into());
+        }
+        self.rung_index()?;
+        let computed = self.compute_hash();
+        if computed != self.hash {
+            return Err(format!(
+                "`hash` is {} but the content hashes to {computed}: the manifest was changed \
+                 after it was generated; generate it again (and the program with it)",
+                self.hash
+            ));
+        }
+        Ok(())
+    }
+
+    /// Reads and validates a manifest file; errors name the file.
+    pub fn load(path: &Path) -> Result<Manifest, String> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| format!("{}: cannot be read: {e}", path.display()))?;
+        let manifest: Manifest = serde_json::from_str(&text).map_err(|e| {
+            format!(
+                "{}:{}: not a plc-conformance manifest: {e}",
+                path.display(),
+                e.line()
+            )
+        })?;
+        manifest
+            .validate()
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        Ok(manifest)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    pub fn sample() -> Manifest {
+        let mut m = Manifest {
+            format: FORMAT,
+            generator: "test".into(),
+            profile: "mitsubishi-iqr".into(),
+            variants: vec!["rcpu".into()],
+            mailbox: "D12000".into(),
+            layout: mailbox::LAYOUT,
+            flags: vec!["SM701".into(), "SM705".into()],
+            error: ErrorDevices {
+                flag: "SM0".into(),
+                register: "SD0".into(),
+                extra: None,
+                reset: "SM50".into(),
+            },
+            rungs: vec![
+                Rung {
+                    id: 1,
+                    instruction: "HABIN".into(),
+                    operands: BTreeMap::from([
+                        ("s".into(), "D100".into()),
+                        ("d".into(), "D200".into()),
+                    ]),
+                },
+                Rung {
+                    id: 2,
+                    instruction: "BINHA".into(),
+                    operands: BTreeMap::from([
+                        ("s".into(), "K-1".into()),
+                        ("d".into(), "D200".into()),
+                    ]),
+                },
+            ],
+            unrealisable: vec![],
+            writes: vec!["D100-D263".into()],
+            hash: String::new(),
+        };
+        m.hash = m.compute_hash();
+        m
+    }
+
+    #[test]
+    fn a_generated_manifest_validates_and_finds_its_rungs() {
+        let m = sample();
+        m.validate().expect("valid");
+        let index = m.rung_index().expect("index");
+        let ops = BTreeMap::from([
+            ("s".to_string(), Operand::Constant(-1)),
+            ("d".to_string(), Operand::Device(Device::new("D", 200))),
+        ]);
+        assert_eq!(index.get(&rung_key("BINHA", &ops)), Some(&2));
+    }
+
+    #[test]
+    fn an_edited_manifest_is_refused() {
+        let mut m = sample();
+        m.rungs[0].operands.insert("s".into(), "D101".into());
+        let e = m.validate().expect_err("stale hash");
+        assert!(e.contains("changed after it was generated"), "{e}");
+        // Fields outside the program do not change the hash.
+        let mut m = sample();
+        m.writes.push("D0".into());
+        m.validate().expect("writes are not hashed");
+    }
+
+    #[test]
+    fn operands_read_back() {
+        assert_eq!(parse_operand("K-1"), Ok(Operand::Constant(-1)));
+        assert_eq!(
+            parse_operand("D100"),
+            Ok(Operand::Device(Device::new("D", 100)))
+        );
+        assert!(parse_operand("x").is_err());
+    }
+}

@@ -1,0 +1,645 @@
+//! A real MELSEC CPU as a backend, over SLMP (binary, TCP).
+//!
+//! An SLMP client can read and write devices but cannot execute an instruction, so the CPU runs
+//! a generated test program (`plc-conformance hil generate`) with one rung per instruction and
+//! operand tuple of the corpus, and the PC hands it one case at a time through a mailbox of data
+//! registers ([`mailbox`]): write the case's memory window, the rung and the flags, then the
+//! trigger; poll until the program acknowledges; read the window and the captured error flag and
+//! registers back. The words that changed are the case's writes.
+//!
+//! Safety comes first, because the other end is a CPU that might be wired to something:
+//! - every write is built by the [`fence::WriteFence`] from the declared sandbox and the
+//!   mailbox's PC words, and refused before a byte is encoded when one word lies outside;
+//! - nothing is written before the interlocks pass: the CPU's type name equals the configured
+//!   `confirm`, the CPU is in RUN, the mailbox carries the signature (magic, layout, hash) of
+//!   the very program the manifest describes, and its scan counter moves;
+//! - the backend is built without a socket ([`SlmpBackend::new`]): a dry run or planning never
+//!   connects, and [`SlmpBackend::connect`] is the one step that does;
+//! - no command beyond 0101, 0401, 0403 and 1401 can be encoded: no remote RUN/STOP/RESET.
+//!
+//! Faults map onto the kinds every backend reports: no reply or no acknowledgement in time is a
+//! timeout, a lost connection a crash, a reply that is not SLMP, an error end code or an
+//! inconsistent capture a protocol error, and a CPU that cannot be reached or leaves RUN is
+//! unreachable. After `max_consecutive_faults` faults in a row the remaining trials are not run.
+
+pub mod ascii;
+pub mod client;
+pub mod doctor;
+pub mod fence;
+pub mod frame;
+pub mod mailbox;
+pub mod manifest;
+pub mod settings;
+pub mod sim;
+
+use std::collections::{BTreeMap, HashMap};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use client::{Client, ClientError};
+use fence::{WordRange, WriteFence};
+use mailbox::{off, state, Signature};
+pub use settings::SlmpSettings;
+
+use super::external::{closing, window};
+use super::{Backend, Fault, Outcome, Request, Response, Setting};
+use crate::device::Device;
+use crate::model::profile::{Profile, Profiles, Variant};
+
+/// The special register with the CPU's operating status.
+pub const STATUS_REGISTER: &str = "SD203";
+
+/// Whether an SD203 value says RUN: its low four bits hold the operating status, 0 for RUN (the
+/// Q-series special register list says so for SD203; the iQ-R list codes the per-CPU status
+/// SD230 the same way; for iQ-R and FX5 SD203 itself this is inferred).
+pub fn is_run(sd203: u16) -> bool {
+    sd203 & 0x000F == 0
+}
+
+/// What an SD203 value says, for messages.
+pub fn status_text(sd203: u16) -> String {
+    let name = match sd203 & 0x000F {
+        0 => "RUN",
+        1 => "STEP-RUN",
+        2 => "STOP",
+        3 => "PAUSE",
+        _ => "not RUN",
+    };
+    format!("{name} (SD203={sd203:04X}H)")
+}
+
+/// A live CPU backend.
+pub struct SlmpBackend {
+    settings: SlmpSettings,
+    profile: Arc<Profile>,
+    rungs: HashMap<String, u16>,
+    unrealisable: HashMap<String, String>,
+    instructions: Vec<String>,
+    mailbox: Device,
+    fence: WriteFence,
+    signature: Signature,
+    state: Mutex<Live>,
+    reconnects: AtomicUsize,
+}
+
+struct Live {
+    client: Client,
+    /// The interlocks passed on the current connection.
+    verified: bool,
+    /// The connection (by count) the interlocks passed on: a read retried on a new connection
+    /// leaves `verified` set, and the next write must not go out before they run again.
+    verified_on: u64,
+    /// The last trigger written (or found acknowledged).
+    trigger: u16,
+    /// The CPU's type name, once read.
+    cpu: Option<String>,
+    /// Set when the circuit breaker trips or the CPU left RUN: every later case gets this.
+    down: Option<String>,
+    faults_in_a_row: usize,
+}
+
+/// One case's capture from the mailbox.
+#[derive(Debug, Clone, Copy)]
+struct Status {
+    ack: u16,
+    state: u16,
+    flag_before: u16,
+    flag_after: u16,
+    code: u16,
+    extra: u16,
+    next: u16,
+    sd203: u16,
+}
+
+/// Why a case went wrong before it had an outcome.
+enum CaseError {
+    Client(ClientError),
+    Fault(Fault),
+    /// The CPU left RUN: no further case can run.
+    Stopped(String),
+}
+
+impl From<ClientError> for CaseError {
+    fn from(e: ClientError) -> Self {
+        CaseError::Client(e)
+    }
+}
+
+/// The fault kind of a client error.
+pub fn fault_of(e: &ClientError) -> Fault {
+    let text = e.to_string();
+    match e {
+        ClientError::Connect { .. } => Fault::Unreachable(text),
+        ClientError::Timeout { .. } => Fault::Timeout(text),
+        ClientError::Closed { .. } => Fault::Crashed(text),
+        ClientError::Frame { .. } | ClientError::EndCode { .. } | ClientError::Request { .. } => {
+            Fault::Protocol(text)
+        }
+    }
+}
+
+/// What a case writes: its window with the values before execution.
+pub struct Plan {
+    pub rung: u16,
+    pub flags: u16,
+    /// Each window range with its words.
+    pub window: Vec<(Device, Vec<u16>)>,
+}
+
+impl SlmpBackend {
+    /// The backend, checked against the profiles, without any connection.
+    pub fn new(settings: SlmpSettings, profiles: &Profiles) -> Result<SlmpBackend, String> {
+        let manifest = &settings.manifest;
+        let profile = profiles.get(&manifest.profile).cloned().ok_or_else(|| {
+            format!(
+                "the manifest is for profile `{}`, which is not loaded; known profiles: {}",
+                manifest.profile,
+                profiles.ids().join(", ")
+            )
+        })?;
+        if profile.variant(&settings.variant).is_none() {
+            return Err(format!(
+                "variant `{}` is not a variant of {}; it has: {}",
+                settings.variant,
+                profile.id,
+                profile
+                    .variants
+                    .iter()
+                    .map(|v| v.id.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
+        if !manifest.variants.contains(&settings.variant) {
+            return Err(format!(
+                "the manifest's program was generated for variants {}, not `{}`",
+                manifest.variants.join(", "),
+                settings.variant
+            ));
+        }
+        let mailbox = manifest.mailbox_head()?;
+        let whole = mailbox::range(&mailbox);
+        if let Some(r) = settings.sandbox.iter().find(|r| r.overlaps(&whole)) {
+            return Err(format!(
+                "the sandbox range {r} overlaps the mailbox {whole}: the program's own words \
+                 must not be writable"
+            ));
+        }
+        let mut allowed = settings.sandbox.clone();
+        allowed.extend(mailbox::pc_words(&mailbox));
+        let rungs = manifest.rung_index()?;
+        let unrealisable = manifest
+            .unrealisable
+            .iter()
+            .map(|u| {
+                let operands = u
+                    .operands
+                    .iter()
+                    .map(|(k, v)| manifest::parse_operand(v).map(|o| (k.clone(), o)))
+                    .collect::<Result<BTreeMap<_, _>, _>>()?;
+                Ok((
+                    manifest::rung_key(&u.instruction, &operands),
+                    u.reason.clone(),
+                ))
+            })
+            .collect::<Result<HashMap<_, _>, String>>()?;
+        let mut instructions: Vec<String> = manifest
+            .rungs
+            .iter()
+            .map(|r| r.instruction.clone())
+            .chain(manifest.unrealisable.iter().map(|u| u.instruction.clone()))
+            .collect();
+        instructions.sort();
+        instructions.dedup();
+        let signature = manifest.signature();
+        Ok(SlmpBackend {
+            state: Mutex::new(Live {
+                client: Client::new(settings.client.clone()),
+                verified: false,
+                verified_on: 0,
+                trigger: 0,
+                cpu: None,
+                down: None,
+                faults_in_a_row: 0,
+            }),
+            fence: WriteFence::new(allowed),
+            settings,
+            profile,
+            rungs,
+            unrealisable,
+            instructions,
+            mailbox,
+            signature,
+            reconnects: AtomicUsize::new(0),
+        })
+    }
+
+    pub fn settings(&self) -> &SlmpSettings {
+        &self.settings
+    }
+
+    pub fn fence(&self) -> &WriteFence {
+        &self.fence
+    }
+
+    fn variant(&self) -> Option<&Variant> {
+        self.profile.variant(&self.settings.variant)
+    }
+
+    /// Connects and runs the interlocks now, so that a bench that is not ready is an error
+    /// before the first case. Writes nothing.
+    pub fn connect(&self) -> Result<(), String> {
+        let mut live = self.lock();
+        self.verify(&mut live).map_err(|e| match e {
+            CaseError::Client(c) => c.to_string(),
+            CaseError::Fault(f) => f.to_string(),
+            CaseError::Stopped(s) => s,
+        })
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, Live> {
+        match self.state.lock() {
+            Ok(s) => s,
+            Err(poisoned) => poisoned.into_inner(),
+        }
+    }
+
+    /// The CPU's type name as read by the interlocks (after [`SlmpBackend::connect`]).
+    pub fn cpu(&self) -> Option<String> {
+        self.lock().cpu.clone()
+    }
+
+    /// Requests sent so far.
+    pub fn requests(&self) -> u64 {
+        self.lock().client.requests
+    }
+
+    /// The rung, flags and window a request would run with, each window range checked against
+    /// the fence; no socket is involved. `Err` is why the case cannot run on this program.
+    pub fn plan(&self, req: &Request<'_>) -> Result<Plan, String> {
+        let key = manifest::rung_key(req.instruction, req.operands);
+        let Some(&rung) = self.rungs.get(&key) else {
+            return Err(self.no_rung(&key));
+        };
+        let all = req.all_flags();
+        let flags = self
+            .settings
+            .manifest
+            .flags
+            .iter()
+            .enumerate()
+            .filter(|(_, f)| all.get(*f).copied().unwrap_or(false))
+            .fold(0u16, |acc, (i, _)| acc | 1 << i);
+        let mut window = Vec::new();
+        for (code, first, last) in window::ranges(req) {
+            let range = WordRange::new(&code, first, last);
+            self.fence.check(&range).map_err(|e| {
+                format!("not run: {e}; declare a sandbox that covers the manifest's `writes`")
+            })?;
+            let head = Device::new(&code, first);
+            let words = (first..=last)
+                .map(|i| req.memory.read(&Device::new(&code, i)))
+                .collect();
+            window.push((head, words));
+        }
+        Ok(Plan {
+            rung,
+            flags,
+            window,
+        })
+    }
+
+    fn no_rung(&self, key: &str) -> String {
+        match self.unrealisable.get(key) {
+            Some(reason) => format!("the program cannot hold `{key}`: {reason}"),
+            None => format!(
+                "the program has no rung for `{key}`: generate it again from this corpus \
+                 (`plc-conformance hil generate`) and write it to the CPU"
+            ),
+        }
+    }
+
+    /// The interlocks, before any write on a connection: type name, RUN, signature, a moving
+    /// scan counter, and the program idle. Read-only.
+    fn verify(&self, live: &mut Live) -> Result<(), CaseError> {
+        let name = live.client.type_name()?;
+        live.cpu = Some(name.to_string());
+        if name.name != self.settings.confirm {
+            return Err(CaseError::Stopped(format!(
+                "the CPU says it is `{}`, but `confirm` says `{}`: not the CPU this backend is \
+                 configured for, so nothing is written",
+                name.name, self.settings.confirm
+            )));
+        }
+        let sd203 = live
+            .client
+            .random_read(&[Device::new("SD", 203)])?
+            .first()
+            .copied()
+            .unwrap_or(u16::MAX);
+        if !is_run(sd203) {
+            return Err(CaseError::Stopped(format!(
+                "the CPU is in {}: the test program runs only in RUN; nothing is written and no \
+                 remote RUN is sent",
+                status_text(sd203)
+            )));
+        }
+        let words = live.client.read_words(&self.mailbox, mailbox::WORDS)?;
+        let read = Signature::of(&words).unwrap_or(Signature {
+            magic: [0, 0],
+            layout: 0,
+            hash: 0,
+            rungs: 0,
+        });
+        if let Some(why) = read.mismatch(&self.signature) {
+            return Err(CaseError::Stopped(why));
+        }
+        let scans = |w: &[u16]| w.get(off::SCANS as usize).copied().unwrap_or(0);
+        let first = scans(&words);
+        let since = Instant::now();
+        let counter = mailbox::at(&self.mailbox, off::SCANS);
+        loop {
+            let now = live.client.read_words(&counter, 1)?;
+            if now.first().copied() != Some(first) {
+                break;
+            }
+            if since.elapsed() > Duration::from_secs(1) {
+                return Err(CaseError::Stopped(format!(
+                    "the scan counter {counter} did not move in 1 s: the program is not \
+                     running"
+                )));
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        // A case left over from a lost connection finishes before a new one starts.
+        let pair = |w: &[u16]| (w[0], w[1]);
+        let trigger_at = mailbox::at(&self.mailbox, off::TRIGGER);
+        let mut tw = live.client.read_words(&trigger_at, 2)?;
+        let since = Instant::now();
+        while pair(&tw).0 != pair(&tw).1 {
+            if since.elapsed() > self.settings.case_timeout {
+                return Err(CaseError::Fault(Fault::Timeout(format!(
+                    "the program is still busy with an earlier case (trigger {}, ack {}) after \
+                     {} s",
+                    tw[0],
+                    tw[1],
+                    self.settings.case_timeout.as_secs_f64()
+                ))));
+            }
+            std::thread::sleep(Duration::from_millis(2));
+            tw = live.client.read_words(&trigger_at, 2)?;
+        }
+        live.trigger = tw[1];
+        live.verified = true;
+        live.verified_on = live.client.connections;
+        Ok(())
+    }
+
+    fn poll(&self, live: &mut Live) -> Result<Status, ClientError> {
+        let at = |o| mailbox::at(&self.mailbox, o);
+        let w = live.client.random_read(&[
+            at(off::ACK),
+            at(off::STATE),
+            at(off::FLAG_BEFORE),
+            at(off::FLAG_AFTER),
+            at(off::CODE),
+            at(off::CODE_EXTRA),
+            at(off::CODE_NEXT),
+            Device::new("SD", 203),
+        ])?;
+        let get = |i: usize| w.get(i).copied().unwrap_or(0);
+        Ok(Status {
+            ack: get(0),
+            state: get(1),
+            flag_before: get(2),
+            flag_after: get(3),
+            code: get(4),
+            extra: get(5),
+            next: get(6),
+            sd203: get(7),
+        })
+    }
+
+    /// One case on the CPU.
+    fn run_case(
+        &self,
+        live: &mut Live,
+        req: &Request<'_>,
+        plan: &Plan,
+    ) -> Result<Outcome, CaseError> {
+        if !live.verified
+            || live.verified_on != live.client.connections
+            || !live.client.is_connected()
+        {
+            if live.client.connections > 0 {
+                self.reconnects.fetch_add(1, Ordering::Relaxed);
+            }
+            self.verify(live)?;
+        }
+        let form = self.settings.client.form;
+        let refused = |e: fence::Refused| CaseError::Fault(Fault::Protocol(e.to_string()));
+        for (head, words) in &plan.window {
+            for w in self.fence.writes(form, head, words).map_err(refused)? {
+                live.client.write(&w)?;
+            }
+        }
+        let rung_at = mailbox::at(&self.mailbox, off::RUNG);
+        for w in self
+            .fence
+            .writes(form, &rung_at, &[plan.rung, plan.flags])
+            .map_err(refused)?
+        {
+            live.client.write(&w)?;
+        }
+        let trigger = mailbox::next_trigger(live.trigger);
+        let trigger_at = mailbox::at(&self.mailbox, off::TRIGGER);
+        for w in self
+            .fence
+            .writes(form, &trigger_at, &[trigger])
+            .map_err(refused)?
+        {
+            live.client.write(&w)?;
+        }
+        live.trigger = trigger;
+        let deadline = Instant::now() + self.settings.case_timeout;
+        let mut wait = self.settings.first_poll;
+        let status = loop {
+            let s = self.poll(live)?;
+            if !is_run(s.sd203) {
+                return Err(CaseError::Stopped(format!(
+                    "the CPU left RUN during case {} (now {}); if an operation error stops it, \
+                     set the CPU parameter for operation errors to continue (docs/live-cpu.md)",
+                    req.case_id,
+                    status_text(s.sd203)
+                )));
+            }
+            if s.ack == trigger {
+                break s;
+            }
+            if Instant::now() >= deadline {
+                return Err(CaseError::Fault(Fault::Timeout(format!(
+                    "the program did not acknowledge case {} (trigger {trigger}, ack {}, state \
+                     {}) within {} s: is the CPU in RUN with the generated program, and the \
+                     mailbox where the manifest says?",
+                    req.case_id,
+                    s.ack,
+                    s.state,
+                    self.settings.case_timeout.as_secs_f64()
+                ))));
+            }
+            std::thread::sleep(wait);
+            wait = (wait * 2).min(self.settings.max_poll);
+        };
+        if status.state == state::RESET_FAILED || status.flag_before != 0 {
+            return Err(CaseError::Fault(Fault::Unreachable(format!(
+                "the error flag {} stayed on after the error reset ({}), so case {} was not \
+                 executed (SD0={:04X}H)",
+                self.settings.manifest.error.flag,
+                self.settings.manifest.error.reset,
+                req.case_id,
+                status.code
+            ))));
+        }
+        let mut outcome = Outcome::default();
+        for (head, before) in &plan.window {
+            let after = live.client.read_words(head, before.len() as u32)?;
+            for (i, (b, a)) in before.iter().zip(&after).enumerate() {
+                if a != b {
+                    outcome
+                        .writes
+                        .insert(Device::new(head.code(), head.index + i as u32), *a);
+                }
+            }
+        }
+        if status.flag_after != 0 {
+            let errors = &self.settings.manifest.error;
+            if status.next != status.code {
+                return Err(CaseError::Fault(Fault::Protocol(format!(
+                    "{} changed after the scan of case {}: {:04X}H right after the instruction, \
+                     {:04X}H one scan later",
+                    errors.register, req.case_id, status.code, status.next
+                ))));
+            }
+            if let Some(extra) = &errors.extra {
+                if status.extra != status.code {
+                    return Err(CaseError::Fault(Fault::Protocol(format!(
+                        "case {}: {} = {:04X}H but {extra} = {:04X}H, where the profile says \
+                         both receive the error code",
+                        req.case_id, errors.register, status.code, status.extra
+                    ))));
+                }
+            }
+            outcome.error = Some(req.error(status.code));
+        }
+        Ok(outcome)
+    }
+
+    fn breaker(&self, last: &Fault) -> String {
+        format!(
+            "not run: {} failed {} requests in a row (the last: {}), so its remaining trials \
+             are not run (max_consecutive_faults: {})",
+            self.settings.name,
+            self.settings.max_consecutive_faults,
+            last.kind(),
+            self.settings.max_consecutive_faults
+        )
+    }
+}
+
+impl Backend for SlmpBackend {
+    fn name(&self) -> &str {
+        &self.settings.name
+    }
+
+    fn profile(&self) -> &str {
+        &self.profile.id
+    }
+
+    /// What a recording names as the backend's version: the CPU as it reported itself (0101
+    /// type name and model code, once connected), the profile variant, the program (manifest
+    /// hash and mailbox layout) and the transport; both fills of every case are executed.
+    fn describe(&self) -> String {
+        let cpu = self
+            .cpu()
+            .unwrap_or_else(|| format!("`{}` (not yet read)", self.settings.confirm));
+        format!(
+            "live CPU {cpu}, {} variant {}, program {} (mailbox layout {}), {}, both fills",
+            self.profile.id,
+            self.settings.variant,
+            self.settings.manifest.hash,
+            mailbox::LAYOUT,
+            self.settings.client.describe()
+        )
+    }
+
+    fn version(&self) -> Option<String> {
+        let cpu = self.cpu().unwrap_or_else(|| self.settings.confirm.clone());
+        Some(format!(
+            "{cpu}, program {} (mailbox layout {}), {}",
+            self.settings.manifest.hash,
+            mailbox::LAYOUT,
+            self.settings.client.describe()
+        ))
+    }
+
+    fn claims(&self, instruction: &str, variant: &str) -> bool {
+        variant == self.settings.variant
+            && self.instructions.iter().any(|i| i == instruction)
+            && self
+                .variant()
+                .is_some_and(|v| self.profile.has_instruction(v, instruction))
+    }
+
+    fn declines(&self, setting: &Setting<'_>) -> Option<String> {
+        let key = manifest::rung_key(setting.instruction, setting.operands);
+        (!self.rungs.contains_key(&key)).then(|| self.no_rung(&key))
+    }
+
+    fn chunk_trials(&self) -> usize {
+        16
+    }
+
+    fn restarts(&self) -> usize {
+        self.reconnects.load(Ordering::Relaxed)
+    }
+
+    fn execute(&self, req: &Request<'_>) -> Result<Response, Fault> {
+        let plan = match self.plan(req) {
+            Ok(p) => p,
+            Err(why) => return Ok(Response::Unsupported(why)),
+        };
+        let mut live = self.lock();
+        if let Some(why) = &live.down {
+            return Err(Fault::Unreachable(why.clone()));
+        }
+        if closing() {
+            return Err(Fault::Unreachable(
+                "not run: the run was interrupted".into(),
+            ));
+        }
+        match self.run_case(&mut live, req, &plan) {
+            Ok(outcome) => {
+                live.faults_in_a_row = 0;
+                Ok(Response::Done(outcome))
+            }
+            Err(e) => {
+                live.client.disconnect();
+                live.verified = false;
+                let fault = match e {
+                    CaseError::Client(c) => fault_of(&c),
+                    CaseError::Fault(f) => f,
+                    CaseError::Stopped(why) => {
+                        live.down = Some(format!("not run: {why}"));
+                        return Err(Fault::Unreachable(why));
+                    }
+                };
+                live.faults_in_a_row += 1;
+                if live.faults_in_a_row >= self.settings.max_consecutive_faults.max(1) {
+                    live.down = Some(self.breaker(&fault));
+                }
+                Err(fault)
+            }
+        }
+    }
+}

@@ -1,0 +1,202 @@
+//! How to run one live CPU backend, and its command-line form
+//! `slmp:NAME=HOST:PORT?manifest=PATH&confirm=TYPE&sandbox=RANGES[&...]`.
+
+use std::path::Path;
+use std::time::Duration;
+
+use super::client::{ClientSettings, Code};
+use super::fence::{parse_ranges, WordRange};
+use super::frame::{DeviceForm, FrameKind};
+use super::manifest::Manifest;
+
+/// The case time limit unless configured: the program needs three or four scans.
+pub const DEFAULT_CASE_TIMEOUT: Duration = Duration::from_secs(2);
+/// Faults in a row after which the remaining trials are not run, unless configured.
+pub const DEFAULT_MAX_FAULTS: usize = 3;
+
+/// One live CPU backend's settings.
+#[derive(Debug, Clone)]
+pub struct SlmpSettings {
+    /// The name in trial names and on the command line.
+    pub name: String,
+    pub client: ClientSettings,
+    /// The generated program's manifest.
+    pub manifest: Manifest,
+    /// The one profile variant the CPU is: its trials alone run.
+    pub variant: String,
+    /// What the CPU's type name (0101) must be before anything is written.
+    pub confirm: String,
+    /// The words case windows may be written to (the mailbox's PC words are added).
+    pub sandbox: Vec<WordRange>,
+    /// How long the program may take to acknowledge a case.
+    pub case_timeout: Duration,
+    /// The circuit breaker: faults in a row after which the remaining trials are not run.
+    pub max_consecutive_faults: usize,
+    /// The first wait between status polls; it doubles up to `max_poll`.
+    pub first_poll: Duration,
+    pub max_poll: Duration,
+}
+
+impl SlmpSettings {
+    /// Settings with the defaults of the manifest's family: FX5 CPUs get 3E frames and the
+    /// Q-compatible device form (an FX5U refuses the long form); others 4E and the long form.
+    pub fn new(
+        name: impl Into<String>,
+        address: impl Into<String>,
+        manifest: Manifest,
+        variant: impl Into<String>,
+        confirm: impl Into<String>,
+        sandbox: Vec<WordRange>,
+    ) -> Self {
+        let mut client = ClientSettings::new(address);
+        if manifest.profile == "mitsubishi-fx5" {
+            client.frame = FrameKind::E3;
+            client.form = DeviceForm::Short;
+        }
+        SlmpSettings {
+            name: name.into(),
+            client,
+            manifest,
+            variant: variant.into(),
+            confirm: confirm.into(),
+            sandbox,
+            case_timeout: DEFAULT_CASE_TIMEOUT,
+            max_consecutive_faults: DEFAULT_MAX_FAULTS,
+            first_poll: Duration::from_millis(2),
+            max_poll: Duration::from_millis(20),
+        }
+    }
+
+    /// Reads `slmp:NAME=HOST:PORT?key=value&...`; `None` when `text` is not of this form.
+    /// Keys: `manifest` (path), `confirm` (the CPU type name), `sandbox` (ranges such as
+    /// `D0-D4359,D7900-D7999`, or `manifest` for the manifest's `writes`), and optionally
+    /// `variant`, `frame` (3e, 4e), `code` (binary, ascii), `form` (short, long), `timeout` (case seconds), `monitor`
+    /// (monitoring timer, units of 250 ms), `max_faults`, `poll_ms`.
+    pub fn parse(text: &str, base: &Path) -> Result<Option<SlmpSettings>, String> {
+        let Some(rest) = text.strip_prefix("slmp:") else {
+            return Ok(None);
+        };
+        let usage = "expected `slmp:NAME=HOST:PORT?manifest=PATH&confirm=TYPE&sandbox=RANGES`";
+        let (name, rest) = rest
+            .split_once('=')
+            .ok_or_else(|| format!("`{text}`: {usage}"))?;
+        if name.is_empty()
+            || !name
+                .chars()
+                .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-' || c == '_')
+        {
+            return Err(format!(
+                "`{name}` is not a backend name: use lowercase letters, digits, `-` and `_`"
+            ));
+        }
+        let (address, query) = rest.split_once('?').unwrap_or((rest, ""));
+        if !address.contains(':') {
+            return Err(format!("`{text}`: `{address}` has no port; {usage}"));
+        }
+        let mut keys: Vec<(&str, &str)> = Vec::new();
+        for pair in query.split('&').filter(|p| !p.is_empty()) {
+            let (k, v) = pair
+                .split_once('=')
+                .ok_or_else(|| format!("`{pair}` in `{text}`: expected key=value"))?;
+            if keys.iter().any(|(seen, _)| *seen == k) {
+                return Err(format!("`{k}` is given twice in `{text}`"));
+            }
+            keys.push((k, v));
+        }
+        let get = |k: &str| keys.iter().find(|(key, _)| *key == k).map(|(_, v)| *v);
+        let known = [
+            "manifest",
+            "confirm",
+            "sandbox",
+            "variant",
+            "frame",
+            "code",
+            "form",
+            "timeout",
+            "monitor",
+            "max_faults",
+            "poll_ms",
+        ];
+        if let Some((k, _)) = keys.iter().find(|(k, _)| !known.contains(k)) {
+            return Err(format!(
+                "unknown key `{k}` in `{text}`; known keys: {}",
+                known.join(", ")
+            ));
+        }
+        let need = |k: &str| get(k).ok_or_else(|| format!("`{text}` has no `{k}=`; {usage}"));
+        let manifest_path = base.join(need("manifest")?);
+        let manifest = Manifest::load(&manifest_path)?;
+        let variant = match get("variant") {
+            Some(v) => v.to_string(),
+            None if manifest.variants.len() == 1 => manifest.variants[0].clone(),
+            None => {
+                return Err(format!(
+                    "`{text}` has no `variant=`, and the manifest has several: {}",
+                    manifest.variants.join(", ")
+                ))
+            }
+        };
+        let sandbox = match need("sandbox")? {
+            "manifest" => parse_ranges(&manifest.writes.join(","))
+                .map_err(|e| format!("{}: `writes`: {e}", manifest_path.display()))?,
+            ranges => parse_ranges(ranges).map_err(|e| format!("`sandbox`: {e}"))?,
+        };
+        let confirm = need("confirm")?.to_string();
+        let mut s = SlmpSettings::new(name, address, manifest, variant, confirm, sandbox);
+        if let Some(f) = get("frame") {
+            s.client.frame = match f {
+                "3e" | "3E" => FrameKind::E3,
+                "4e" | "4E" => FrameKind::E4,
+                _ => return Err(format!("`frame={f}`: give 3e or 4e")),
+            };
+        }
+        if let Some(c) = get("code") {
+            s.client.code = match c {
+                "binary" => Code::Binary,
+                "ascii" => Code::Ascii,
+                _ => return Err(format!("`code={c}`: give binary or ascii")),
+            };
+        }
+        if let Some(f) = get("form") {
+            s.client.form = match f {
+                "short" => DeviceForm::Short,
+                "long" => DeviceForm::Long,
+                _ => {
+                    return Err(format!(
+                        "`form={f}`: give short (subcommand 0000) or long (0002)"
+                    ))
+                }
+            };
+        }
+        let number = |k: &str, v: &str| {
+            v.parse::<f64>()
+                .ok()
+                .filter(|n| n.is_finite() && *n > 0.0 && *n <= 3600.0)
+                .ok_or_else(|| format!("`{k}={v}`: give a number above 0 and at most 3600"))
+        };
+        if let Some(v) = get("timeout") {
+            s.case_timeout = Duration::from_secs_f64(number("timeout", v)?);
+        }
+        if let Some(v) = get("monitor") {
+            let units = v
+                .parse::<u16>()
+                .ok()
+                .filter(|n| *n > 0 && *n <= 240)
+                .ok_or_else(|| format!("`monitor={v}`: give 1 to 240 (units of 250 ms)"))?;
+            s.client.timer = units;
+            s.client.reply_timeout =
+                Duration::from_millis(250 * u64::from(units)) + Duration::from_millis(500);
+        }
+        if let Some(v) = get("max_faults") {
+            s.max_consecutive_faults = v
+                .parse::<usize>()
+                .ok()
+                .filter(|n| *n > 0)
+                .ok_or_else(|| format!("`max_faults={v}`: give at least 1"))?;
+        }
+        if let Some(v) = get("poll_ms") {
+            s.first_poll = Duration::from_secs_f64(number("poll_ms", v)? / 1000.0);
+        }
+        Ok(Some(s))
+    }
+}

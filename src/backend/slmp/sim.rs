@@ -1,0 +1,743 @@
+//! A simulated CPU: an SLMP server on 127.0.0.1 that runs the generated test program's
+//! behaviour with a reference model, so that the live backend can be tested end to end without
+//! hardware, and can be made to fail in each way a real port fails.
+//!
+//! The server answers 0101, 0401, 0403 and 1401 in 3E or 4E frames, binary code, in the frame
+//! of each request. A scan thread takes the memory lock once per scan, so requests interleave
+//! between scans as they do with END processing, and runs the program as generated: the
+//! signature and scan counter every scan; on a new trigger, an error reset (the reset flag's
+//! rising edge clears the error flag and registers at the end of the scan), then one scan with
+//! the selected rung enabled, the error flag and registers captured in that scan and the error
+//! register again one scan later, then the acknowledgement. Every rung is evaluated every scan
+//! with its own enable, and a pulse form (`...P`) executes only on its enable's rising edge,
+//! which is what makes the same pulse rung fire again on the next case.
+//!
+//! Everything it received is audited: the commands, and every written word that lies outside
+//! the manifest's `writes` and the mailbox's PC words (a stray write the tests fail on).
+
+use std::collections::BTreeMap;
+use std::io::{Read, Write};
+use std::net::{SocketAddr, TcpListener, TcpStream};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+use super::fence::{parse_ranges, WordRange};
+use super::frame::{
+    self, decode_body, message_len, Decoded, DeviceRef, FrameKind, Request, Response,
+    MAX_BATCH_WORDS, MAX_RANDOM_WORDS,
+};
+use super::mailbox::{self, off, state};
+use super::manifest::{parse_operand, Manifest};
+use crate::backend::{Backend, Request as ModelRequest, Response as ModelResponse};
+use crate::device::Device;
+use crate::memory::{Fill, Image};
+use crate::model::profile::Profile;
+use crate::model::{ErrorSignal, Operand};
+
+/// What a fault rule does to the request it matches.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum FaultAction {
+    /// Close the connection without processing the request or answering.
+    Drop,
+    /// Process the request, answer after this long.
+    Delay(Duration),
+    /// Answer with this end code without processing the request.
+    EndCode(u16),
+    /// Answer with bytes that are not an SLMP response, without processing the request.
+    Garbage,
+    /// Process the request, answer with another serial number (4E).
+    WrongSerial,
+    /// Process the request, then go to STOP (SD203) and stop scanning.
+    Stop,
+}
+
+/// A fault on the `nth` request (from 1) of a command, optionally only requests whose first
+/// device is `head`; it fires once.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FaultRule {
+    pub command: u16,
+    pub head: Option<Device>,
+    pub nth: usize,
+    pub action: FaultAction,
+}
+
+/// How the simulated CPU is set up.
+#[derive(Debug, Clone)]
+pub struct SimSettings {
+    pub manifest: Manifest,
+    /// The profile variant the CPU is.
+    pub variant: String,
+    /// What 0101 answers.
+    pub type_name: String,
+    pub model_code: u16,
+    /// Time between scans.
+    pub scan: Duration,
+    /// Whether the program is written to the CPU (without it the mailbox stays cleared).
+    pub program: bool,
+    /// Whether the CPU starts in RUN.
+    pub run: bool,
+    /// Whether the CPU takes the long device form (subcommand 0002); an FX5 does not.
+    pub long_form: bool,
+    /// The port on 127.0.0.1 (0: any free one).
+    pub port: u16,
+    /// Evaluate a rung only in the scan it is selected, as a program with its rungs inside a
+    /// CASE would: a pulse form's enable then never falls, and the rung fires on its first
+    /// case only. The generator never writes such a program; tests use this to show that the
+    /// corpus catches one.
+    pub rungs_in_case: bool,
+    pub faults: Vec<FaultRule>,
+}
+
+impl SimSettings {
+    pub fn new(
+        manifest: Manifest,
+        variant: impl Into<String>,
+        type_name: impl Into<String>,
+    ) -> Self {
+        let long_form = manifest.profile != "mitsubishi-fx5";
+        SimSettings {
+            manifest,
+            variant: variant.into(),
+            type_name: type_name.into(),
+            model_code: 0x4800,
+            scan: Duration::from_micros(200),
+            program: true,
+            run: true,
+            long_form,
+            port: 0,
+            rungs_in_case: false,
+            faults: Vec::new(),
+        }
+    }
+}
+
+/// What the simulator received and did.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Audit {
+    /// Requests by command code.
+    pub commands: BTreeMap<u16, usize>,
+    /// Words written outside the manifest's `writes` and the mailbox's PC words.
+    pub stray_writes: Vec<String>,
+    /// Rung executions.
+    pub executions: usize,
+    /// Things the program could not do (a rung the model does not implement, ...).
+    pub anomalies: Vec<String>,
+    pub connections: usize,
+}
+
+struct Cpu {
+    words: BTreeMap<String, Vec<u16>>,
+    bits: BTreeMap<Device, bool>,
+    running: bool,
+    prev: Vec<bool>,
+    prev_reset: bool,
+    audit: Audit,
+    faults: Vec<(FaultRule, usize)>,
+}
+
+struct Shared {
+    cpu: Mutex<Cpu>,
+    stop: AtomicBool,
+    settings: SimSettings,
+    profile: Arc<Profile>,
+    model: Arc<dyn Backend>,
+    mailbox: Device,
+    rungs: Vec<(u16, String, BTreeMap<String, Operand>, bool)>,
+    allowed: Vec<WordRange>,
+}
+
+/// A running simulator; dropping it stops it.
+pub struct Simulator {
+    address: SocketAddr,
+    shared: Arc<Shared>,
+    threads: Vec<JoinHandle<()>>,
+}
+
+/// Word devices the simulator serves over SLMP, with their sizes.
+fn word_devices(profile: &Profile, variant: &str) -> BTreeMap<String, Vec<u16>> {
+    let mut words = BTreeMap::new();
+    if let Some(v) = profile.variant(variant) {
+        for code in profile.devices.keys() {
+            if let Some(r) = profile.ranges(v, code) {
+                let last = r.iter().map(|r| r.last).max().unwrap_or(0);
+                words.insert(code.clone(), vec![0u16; last as usize + 1]);
+            }
+        }
+    }
+    // Special registers: SD0, SD203, SD8067 and their neighbours.
+    words.entry("SD".into()).or_insert_with(|| vec![0; 12288]);
+    words
+}
+
+impl Simulator {
+    /// Starts the server and the scan thread.
+    pub fn start(
+        settings: SimSettings,
+        profile: Arc<Profile>,
+        model: Arc<dyn Backend>,
+    ) -> Result<Simulator, String> {
+        settings.manifest.validate()?;
+        if profile.variant(&settings.variant).is_none() {
+            return Err(format!(
+                "`{}` is not a variant of {}",
+                settings.variant, profile.id
+            ));
+        }
+        let mailbox = settings.manifest.mailbox_head()?;
+        let rungs = settings
+            .manifest
+            .rungs
+            .iter()
+            .map(|r| {
+                let operands = r
+                    .operands
+                    .iter()
+                    .map(|(k, v)| parse_operand(v).map(|o| (k.clone(), o)))
+                    .collect::<Result<BTreeMap<_, _>, _>>()?;
+                let pulse = is_pulse(&profile, &r.instruction);
+                Ok((r.id, r.instruction.clone(), operands, pulse))
+            })
+            .collect::<Result<Vec<_>, String>>()?;
+        let mut allowed = parse_ranges(&settings.manifest.writes.join(","))?;
+        allowed.extend(mailbox::pc_words(&mailbox));
+        let listener = TcpListener::bind(("127.0.0.1", settings.port))
+            .map_err(|e| format!("cannot listen on 127.0.0.1:{}: {e}", settings.port))?;
+        let address = listener
+            .local_addr()
+            .map_err(|e| format!("no local address: {e}"))?;
+        listener
+            .set_nonblocking(true)
+            .map_err(|e| format!("cannot poll the listener: {e}"))?;
+        let cpu = Cpu {
+            words: word_devices(&profile, &settings.variant),
+            bits: BTreeMap::new(),
+            running: settings.run,
+            prev: vec![false; rungs.len() + 1],
+            prev_reset: false,
+            audit: Audit::default(),
+            faults: settings.faults.iter().map(|f| (f.clone(), 0)).collect(),
+        };
+        let shared = Arc::new(Shared {
+            cpu: Mutex::new(cpu),
+            stop: AtomicBool::new(false),
+            settings,
+            profile,
+            model,
+            mailbox,
+            rungs,
+            allowed,
+        });
+        {
+            // A CPU in RUN has scanned before anyone can connect to it.
+            let mut cpu = shared.lock();
+            cpu.set_status();
+            scan(&shared, &mut cpu);
+        }
+        let mut threads = Vec::new();
+        let s = shared.clone();
+        threads.push(std::thread::spawn(move || scan_loop(&s)));
+        let s = shared.clone();
+        threads.push(std::thread::spawn(move || accept_loop(&s, &listener)));
+        Ok(Simulator {
+            address,
+            shared,
+            threads,
+        })
+    }
+
+    /// `127.0.0.1:PORT`.
+    pub fn address(&self) -> SocketAddr {
+        self.address
+    }
+
+    pub fn audit(&self) -> Audit {
+        self.shared.lock().audit.clone()
+    }
+
+    /// Puts the CPU in RUN or STOP.
+    pub fn set_running(&self, run: bool) {
+        let mut cpu = self.shared.lock();
+        cpu.running = run;
+        cpu.set_status();
+    }
+
+    /// Adds a fault rule while running.
+    pub fn add_fault(&self, rule: FaultRule) {
+        self.shared.lock().faults.push((rule, 0));
+    }
+
+    /// A word of device memory (0 for one the CPU does not have).
+    pub fn read(&self, device: &Device) -> u16 {
+        self.shared.lock().word(device).unwrap_or(0)
+    }
+
+    /// Sets a word of device memory, as a program or an operator would (not audited).
+    pub fn poke(&self, device: &Device, value: u16) {
+        self.shared.lock().set_word(device, value);
+    }
+}
+
+impl Drop for Simulator {
+    fn drop(&mut self) {
+        self.shared.stop.store(true, Ordering::SeqCst);
+        for t in self.threads.drain(..) {
+            let _ = t.join();
+        }
+    }
+}
+
+/// Whether an instruction is the pulse form of another one the profile has.
+fn is_pulse(profile: &Profile, instruction: &str) -> bool {
+    instruction
+        .strip_suffix('P')
+        .is_some_and(|base| profile.instructions.contains_key(base))
+}
+
+impl Shared {
+    fn lock(&self) -> MutexGuard<'_, Cpu> {
+        match self.cpu.lock() {
+            Ok(c) => c,
+            Err(poisoned) => poisoned.into_inner(),
+        }
+    }
+}
+
+impl Cpu {
+    fn word(&self, d: &Device) -> Option<u16> {
+        self.words
+            .get(d.code())
+            .and_then(|w| w.get(d.index as usize))
+            .copied()
+    }
+
+    fn set_word(&mut self, d: &Device, value: u16) {
+        if let Some(w) = self
+            .words
+            .get_mut(d.code())
+            .and_then(|w| w.get_mut(d.index as usize))
+        {
+            *w = value;
+        }
+    }
+
+    fn bit(&self, name: &str) -> bool {
+        name.parse::<Device>()
+            .ok()
+            .and_then(|d| self.bits.get(&d).copied())
+            .unwrap_or(false)
+    }
+
+    fn set_bit(&mut self, name: &str, on: bool) {
+        if let Ok(d) = name.parse::<Device>() {
+            self.bits.insert(d, on);
+        }
+    }
+
+    fn set_reg(&mut self, name: &str, value: u16) {
+        if let Ok(d) = name.parse::<Device>() {
+            self.set_word(&d, value);
+        }
+    }
+
+    fn reg(&self, name: &str) -> u16 {
+        name.parse::<Device>()
+            .ok()
+            .and_then(|d| self.word(&d))
+            .unwrap_or(0)
+    }
+
+    /// SD203: 0 in the low four bits for RUN, 2 for STOP.
+    fn set_status(&mut self) {
+        let v = if self.running { 0x0000 } else { 0x0002 };
+        self.set_word(&Device::new("SD", 203), v);
+    }
+
+    fn device_words(&self, d: DeviceRef, count: usize) -> Result<&[u16], u16> {
+        let letters = frame::device_letters(d.code).ok_or(0xC05C_u16)?;
+        let words = self.words.get(letters).ok_or(0xC05C_u16)?;
+        let first = d.number as usize;
+        words.get(first..first + count).ok_or(0xC056)
+    }
+}
+
+fn scan_loop(shared: &Shared) {
+    while !shared.stop.load(Ordering::SeqCst) {
+        {
+            let mut cpu = shared.lock();
+            scan(shared, &mut cpu);
+        }
+        std::thread::sleep(shared.settings.scan);
+    }
+}
+
+/// One scan of the generated program.
+fn scan(shared: &Shared, cpu: &mut Cpu) {
+    if !cpu.running || !shared.settings.program {
+        return;
+    }
+    let m = &shared.settings.manifest;
+    let at = |o: u32| mailbox::at(&shared.mailbox, o);
+    let hash = m.hash32();
+    cpu.set_word(&at(off::MAGIC), mailbox::MAGIC[0]);
+    cpu.set_word(&at(off::MAGIC + 1), mailbox::MAGIC[1]);
+    cpu.set_word(&at(off::LAYOUT), mailbox::LAYOUT);
+    cpu.set_word(&at(off::HASH), hash as u16);
+    cpu.set_word(&at(off::HASH + 1), (hash >> 16) as u16);
+    cpu.set_word(&at(off::RUNGS), m.rungs.len() as u16);
+    let scans = cpu.word(&at(off::SCANS)).unwrap_or(0).wrapping_add(1);
+    cpu.set_word(&at(off::SCANS), scans);
+    let flag_now = u16::from(cpu.bit(&m.error.flag));
+    cpu.set_word(&at(off::FLAG_NOW), flag_now);
+    let trigger = cpu.word(&at(off::TRIGGER)).unwrap_or(0);
+    let ack = cpu.word(&at(off::ACK)).unwrap_or(0);
+    let st = cpu.word(&at(off::STATE)).unwrap_or(0);
+    let mut exec = false;
+    if trigger != ack {
+        match st {
+            state::IDLE | state::RESET_FAILED => {
+                cpu.set_bit(&m.error.reset, true);
+                cpu.set_word(&at(off::STATE), state::RESETTING);
+            }
+            state::RESETTING => {
+                cpu.set_bit(&m.error.reset, false);
+                if cpu.bit(&m.error.flag) {
+                    cpu.set_word(&at(off::FLAG_BEFORE), 1);
+                    cpu.set_word(&at(off::STATE), state::RESET_FAILED);
+                    cpu.set_word(&at(off::ACK), trigger);
+                } else {
+                    cpu.set_word(&at(off::FLAG_BEFORE), 0);
+                    cpu.set_word(&at(off::STATE), state::EXECUTING);
+                }
+            }
+            state::EXECUTING => {
+                let bits = cpu.word(&at(off::FLAGS)).unwrap_or(0);
+                for (i, f) in m.flags.iter().enumerate() {
+                    cpu.set_bit(f, bits & (1 << i) != 0);
+                }
+                exec = true;
+            }
+            _ => {}
+        }
+    }
+    let selected = cpu.word(&at(off::RUNG)).unwrap_or(0);
+    for (id, instruction, operands, pulse) in &shared.rungs {
+        let enable = exec && selected == *id;
+        let i = usize::from(*id);
+        if shared.settings.rungs_in_case && !enable {
+            continue;
+        }
+        let fire = if *pulse {
+            enable && !cpu.prev[i]
+        } else {
+            enable
+        };
+        cpu.prev[i] = enable;
+        if fire {
+            execute(shared, cpu, instruction, operands);
+        }
+    }
+    if exec {
+        let flag = u16::from(cpu.bit(&m.error.flag));
+        cpu.set_word(&at(off::FLAG_AFTER), flag);
+        let code = cpu.reg(&m.error.register);
+        cpu.set_word(&at(off::CODE), code);
+        let extra = m.error.extra.as_ref().map_or(0, |e| cpu.reg(e));
+        cpu.set_word(&at(off::CODE_EXTRA), extra);
+        for f in &m.flags {
+            cpu.set_bit(f, false);
+        }
+        cpu.set_word(&at(off::STATE), state::DONE);
+    } else if st == state::DONE {
+        let code = cpu.reg(&m.error.register);
+        cpu.set_word(&at(off::CODE_NEXT), code);
+        cpu.set_word(&at(off::STATE), state::IDLE);
+        cpu.set_word(&at(off::ACK), trigger);
+    }
+    // END processing: the reset flag's rising edge clears the error state.
+    let reset = cpu.bit(&m.error.reset);
+    if reset && !cpu.prev_reset {
+        cpu.set_bit(&m.error.flag, false);
+        cpu.set_reg(&m.error.register, 0);
+        if let Some(e) = &m.error.extra {
+            cpu.set_reg(e, 0);
+        }
+    }
+    cpu.prev_reset = reset;
+}
+
+/// Executes one rung with the reference model on the device memory.
+fn execute(
+    shared: &Shared,
+    cpu: &mut Cpu,
+    instruction: &str,
+    operands: &BTreeMap<String, Operand>,
+) {
+    cpu.audit.executions += 1;
+    let Some(variant) = shared.profile.variant(&shared.settings.variant) else {
+        return;
+    };
+    let flags: BTreeMap<String, bool> = shared
+        .settings
+        .manifest
+        .flags
+        .iter()
+        .map(|f| (f.clone(), cpu.bit(f)))
+        .collect();
+    // The whole of every word device, so that the model reads what the CPU holds.
+    let image: BTreeMap<Device, u16> = cpu
+        .words
+        .iter()
+        .filter(|(code, _)| code.as_str() != "SD")
+        .flat_map(|(code, words)| {
+            words
+                .iter()
+                .enumerate()
+                .map(move |(i, w)| (Device::new(code, i as u32), *w))
+        })
+        .collect();
+    let image = Image::new(image, Fill::A);
+    let request = ModelRequest {
+        profile: &shared.profile,
+        variant,
+        instruction,
+        case_id: "simulated",
+        flags: &flags,
+        operands,
+        memory: &image,
+    };
+    match shared.model.execute(&request) {
+        Ok(ModelResponse::Done(outcome)) => {
+            for (d, v) in &outcome.writes {
+                cpu.set_word(d, *v);
+            }
+            let errors = &shared.settings.manifest.error;
+            match outcome.error {
+                Some(ErrorSignal::Code(code)) => {
+                    cpu.set_bit(&errors.flag, true);
+                    cpu.set_reg(&errors.register, code);
+                    if let Some(e) = &errors.extra {
+                        cpu.set_reg(e, code);
+                    }
+                }
+                Some(ErrorSignal::Flag(f)) => cpu.set_bit(&f.to_string(), true),
+                None => {}
+            }
+        }
+        Ok(other) => cpu
+            .audit
+            .anomalies
+            .push(format!("{instruction}: the model answered {other:?}")),
+        Err(fault) => cpu
+            .audit
+            .anomalies
+            .push(format!("{instruction}: the model failed: {fault}")),
+    }
+}
+
+fn accept_loop(shared: &Arc<Shared>, listener: &TcpListener) {
+    let mut connections: Vec<JoinHandle<()>> = Vec::new();
+    while !shared.stop.load(Ordering::SeqCst) {
+        match listener.accept() {
+            Ok((stream, _)) => {
+                shared.lock().audit.connections += 1;
+                let s = shared.clone();
+                connections.push(std::thread::spawn(move || serve(&s, stream)));
+            }
+            Err(_) => std::thread::sleep(Duration::from_millis(2)),
+        }
+        connections.retain(|c| !c.is_finished());
+    }
+    for c in connections {
+        let _ = c.join();
+    }
+}
+
+/// Reads one whole request, polling the stop flag; `None` when the connection ends.
+fn read_request(shared: &Shared, stream: &mut TcpStream) -> Option<Vec<u8>> {
+    let mut buf = vec![0u8; 2];
+    fill(shared, stream, &mut buf, 0)?;
+    let frame = FrameKind::of_request(buf[0]).unwrap_or(FrameKind::E3);
+    let header = frame.header_len();
+    buf.resize(header, 0);
+    fill(shared, stream, &mut buf, 2)?;
+    let total = message_len(frame, &buf).ok()?;
+    buf.resize(total, 0);
+    fill(shared, stream, &mut buf, header)?;
+    Some(buf)
+}
+
+fn fill(shared: &Shared, stream: &mut TcpStream, buf: &mut [u8], mut at: usize) -> Option<()> {
+    while at < buf.len() {
+        if shared.stop.load(Ordering::SeqCst) {
+            return None;
+        }
+        match stream.read(&mut buf[at..]) {
+            Ok(0) => return None,
+            Ok(n) => at += n,
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock
+                        | std::io::ErrorKind::TimedOut
+                        | std::io::ErrorKind::Interrupted
+                ) => {}
+            Err(_) => return None,
+        }
+    }
+    Some(())
+}
+
+fn serve(shared: &Shared, mut stream: TcpStream) {
+    let _ = stream.set_read_timeout(Some(Duration::from_millis(20)));
+    let _ = stream.set_nodelay(true);
+    while let Some(bytes) = read_request(shared, &mut stream) {
+        // A request that does not decode gets no answer, as a CPU stays silent on a frame it
+        // does not take.
+        let Ok(request) = Request::decode(&bytes) else {
+            continue;
+        };
+        let body = decode_body(&request);
+        let action = {
+            let mut cpu = shared.lock();
+            *cpu.audit.commands.entry(request.command).or_default() += 1;
+            let head = match &body {
+                Ok(Decoded::Read { head, .. } | Decoded::Write { head, .. }) => Some(*head),
+                Ok(Decoded::RandomRead { devices }) => devices.first().copied(),
+                _ => None,
+            };
+            take_fault(&mut cpu, request.command, head)
+        };
+        let mut response = Response {
+            frame: request.frame,
+            serial: request.serial,
+            route: request.route,
+            end_code: 0,
+            data: Vec::new(),
+        };
+        match &action {
+            Some(FaultAction::Drop) => return,
+            Some(FaultAction::EndCode(code)) => {
+                response.end_code = *code;
+                response.data = error_information(&request);
+            }
+            Some(FaultAction::Garbage) => {
+                let _ = stream.write_all(b"\xFF\x00garbage, not SLMP\r\n");
+                continue;
+            }
+            _ => {
+                let (end_code, data) = match body {
+                    Ok(decoded) => handle(shared, &request, decoded),
+                    Err(_) => (0xC061, Vec::new()),
+                };
+                response.end_code = end_code;
+                response.data = if end_code == 0 {
+                    data
+                } else {
+                    error_information(&request)
+                };
+            }
+        }
+        match action {
+            Some(FaultAction::Delay(d)) => std::thread::sleep(d),
+            Some(FaultAction::WrongSerial) => response.serial = response.serial.wrapping_add(1),
+            Some(FaultAction::Stop) => {
+                let mut cpu = shared.lock();
+                cpu.running = false;
+                cpu.set_status();
+            }
+            _ => {}
+        }
+        if stream.write_all(&response.encode()).is_err() {
+            return;
+        }
+    }
+}
+
+/// The error information of an error response: the route and the command that failed.
+fn error_information(request: &Request) -> Vec<u8> {
+    let mut out = vec![request.route.network, request.route.station];
+    out.extend_from_slice(&request.route.module_io.to_le_bytes());
+    out.push(request.route.multidrop);
+    out.extend_from_slice(&request.command.to_le_bytes());
+    out.extend_from_slice(&request.subcommand.to_le_bytes());
+    out
+}
+
+fn take_fault(cpu: &mut Cpu, command: u16, head: Option<DeviceRef>) -> Option<FaultAction> {
+    for (rule, seen) in cpu.faults.iter_mut() {
+        if rule.command != command {
+            continue;
+        }
+        if let Some(want) = &rule.head {
+            let matches = head.is_some_and(|h| {
+                frame::device_letters(h.code) == Some(want.code()) && h.number == want.index
+            });
+            if !matches {
+                continue;
+            }
+        }
+        *seen += 1;
+        if *seen == rule.nth {
+            return Some(rule.action.clone());
+        }
+    }
+    None
+}
+
+/// Answers one decoded request: (end code, data).
+fn handle(shared: &Shared, request: &Request, decoded: Decoded) -> (u16, Vec<u8>) {
+    if request.subcommand == 0x0002 && !shared.settings.long_form {
+        return (0xC059, Vec::new());
+    }
+    let mut cpu = shared.lock();
+    match decoded {
+        Decoded::TypeName => (
+            0,
+            frame::type_name_data(&shared.settings.type_name, shared.settings.model_code),
+        ),
+        Decoded::Read { head, count } => {
+            if count == 0 || count > MAX_BATCH_WORDS {
+                return (0xC051, Vec::new());
+            }
+            match cpu.device_words(head, count) {
+                Ok(words) => (0, words.iter().flat_map(|w| w.to_le_bytes()).collect()),
+                Err(code) => (code, Vec::new()),
+            }
+        }
+        Decoded::RandomRead { devices } => {
+            if devices.is_empty() || devices.len() > MAX_RANDOM_WORDS {
+                return (0xC054, Vec::new());
+            }
+            let mut data = Vec::with_capacity(2 * devices.len());
+            for d in devices {
+                match cpu.device_words(d, 1) {
+                    Ok(w) => data.extend_from_slice(&w[0].to_le_bytes()),
+                    Err(code) => return (code, Vec::new()),
+                }
+            }
+            (0, data)
+        }
+        Decoded::Write { head, words } => {
+            if words.is_empty() || words.len() > MAX_BATCH_WORDS {
+                return (0xC051, Vec::new());
+            }
+            if let Err(code) = cpu.device_words(head, words.len()) {
+                return (code, Vec::new());
+            }
+            let Some(letters) = frame::device_letters(head.code) else {
+                return (0xC05C, Vec::new());
+            };
+            let asked = WordRange::new(letters, head.number, head.number + words.len() as u32 - 1);
+            if !shared.allowed.iter().any(|r| r.contains(&asked)) {
+                cpu.audit.stray_writes.push(asked.to_string());
+            }
+            for (i, w) in words.iter().enumerate() {
+                cpu.set_word(&Device::new(letters, head.number + i as u32), *w);
+            }
+            (0, Vec::new())
+        }
+        Decoded::Other { .. } => (0xC059, Vec::new()),
+    }
+}

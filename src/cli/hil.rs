@@ -1,0 +1,232 @@
+//! `hil`: what a bench with a real MELSEC CPU needs around the live backend (`slmp:`): the test
+//! program to write to the CPU, a read-only look at the bench, a dry run that opens no socket,
+//! and the simulated CPU that stands in for a bench in tests and demonstrations.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Duration;
+
+use super::backends::{load, paths};
+use super::{output, Cli, CliError, Outcome, EXIT_DIFFERENCES, EXIT_OK};
+use crate::backend::slmp::doctor::doctor;
+use crate::backend::slmp::fence;
+use crate::backend::slmp::manifest::Manifest;
+use crate::backend::slmp::sim::{SimSettings, Simulator};
+use crate::backend::slmp::{SlmpBackend, SlmpSettings};
+use crate::device::Device;
+use crate::hil::{dry_run, generate, GenerateOptions};
+
+#[derive(Debug, clap::Subcommand)]
+pub enum HilCommand {
+    /// Write the test program (structured text for GX Works3), its manifest and a setup
+    /// checklist for a profile, from the corpus's own operands.
+    Generate {
+        /// The profile (mitsubishi-iqr, mitsubishi-fx5).
+        #[arg(long, value_name = "ID")]
+        profile: String,
+        /// Only this variant's trials; repeat for several [default: every variant].
+        #[arg(long = "variant", value_name = "ID")]
+        variants: Vec<String>,
+        /// The mailbox's first data register, e.g. D12000 [default: clear of every case window].
+        #[arg(long, value_name = "DEVICE")]
+        mailbox: Option<String>,
+        /// Only trials whose name contains this text.
+        #[arg(long)]
+        filter: Option<String>,
+        /// The folder to write executive.st, manifest.json and SETUP.md into.
+        #[arg(long, value_name = "DIR")]
+        out: PathBuf,
+    },
+    /// Look at a bench without writing anything: type name, operating status, the program's
+    /// signature in the mailbox, its state, and whether its scan counter moves.
+    Doctor {
+        /// The live backend: slmp:NAME=HOST:PORT?manifest=FILE&confirm=TYPE&sandbox=RANGES.
+        #[arg(long, value_name = "SPEC")]
+        backend: String,
+    },
+    /// Every trial a live backend would run and every word it would write, checked against its
+    /// write fence; no socket is opened.
+    DryRun {
+        /// The live backend: slmp:NAME=HOST:PORT?manifest=FILE&confirm=TYPE&sandbox=RANGES.
+        #[arg(long, value_name = "SPEC")]
+        backend: String,
+    },
+    /// Serve a simulated CPU on 127.0.0.1 running the manifest's program with the built-in
+    /// reference model, until interrupted; prints `listening on 127.0.0.1:PORT`.
+    Sim {
+        /// The manifest of the generated program.
+        #[arg(long, value_name = "FILE")]
+        manifest: PathBuf,
+        /// The profile variant the simulated CPU is [default: the manifest's only one].
+        #[arg(long, value_name = "ID")]
+        variant: Option<String>,
+        /// The type name 0101 answers.
+        #[arg(long, value_name = "NAME", default_value = "R04CPU")]
+        type_name: String,
+        /// The port on 127.0.0.1 [default: any free one].
+        #[arg(long, default_value_t = 0)]
+        port: u16,
+        /// Microseconds between scans.
+        #[arg(long, value_name = "US", default_value_t = 200)]
+        scan_us: u64,
+    },
+}
+
+pub fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
+    match command {
+        HilCommand::Generate {
+            profile,
+            variants,
+            mailbox,
+            filter,
+            out,
+        } => {
+            let mailbox = mailbox
+                .as_deref()
+                .map(|m| {
+                    m.parse::<Device>()
+                        .map_err(|e| CliError::input(format!("--mailbox {m}: {e}")))
+                })
+                .transpose()?;
+            let project = load(&paths(cli, &[], "--vectors")?)?;
+            let generated = generate(
+                &project,
+                &GenerateOptions {
+                    profile: profile.clone(),
+                    variants: variants.clone(),
+                    mailbox,
+                    filter: filter.clone(),
+                },
+            )
+            .map_err(CliError::input)?;
+            let manifest = serde_json::to_string_pretty(&generated.manifest)
+                .map_err(|e| CliError::input(format!("the manifest does not serialize: {e}")))?;
+            std::fs::create_dir_all(out).map_err(|e| {
+                CliError::input(format!("{}: cannot be created: {e}", out.display()))
+            })?;
+            let files = [
+                (out.join("executive.st"), generated.program.clone()),
+                (out.join("manifest.json"), manifest + "\n"),
+                (out.join("SETUP.md"), generated.setup.clone()),
+            ];
+            output::write_every(files.iter().map(|(p, t)| (p.as_path(), t.as_str())))?;
+            let m = &generated.manifest;
+            output::write(
+                None,
+                &format!(
+                    "{} rungs for {} trials ({} operand tuples no program can hold), mailbox {}, \
+                     program {}; wrote {}",
+                    m.rungs.len(),
+                    generated.trials,
+                    m.unrealisable.len(),
+                    m.mailbox,
+                    m.hash,
+                    files
+                        .iter()
+                        .map(|(p, _)| p.display().to_string())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            )?;
+            Ok(EXIT_OK)
+        }
+        HilCommand::Doctor { backend } => {
+            let settings = live_settings(backend)?;
+            let (findings, requests) = doctor(&settings);
+            let mut text = String::new();
+            for f in &findings {
+                let _ = match &f.result {
+                    Ok(s) => writeln!(text, "ok    {}: {s}", f.what),
+                    Err(s) => writeln!(text, "FAIL  {}: {s}", f.what),
+                };
+            }
+            let _ = write!(text, "{requests} read requests sent, nothing written");
+            output::write(None, &text)?;
+            Ok(if findings.iter().all(|f| f.result.is_ok()) {
+                EXIT_OK
+            } else {
+                EXIT_DIFFERENCES
+            })
+        }
+        HilCommand::DryRun { backend } => {
+            let settings = live_settings(backend)?;
+            let project = load(&paths(cli, &[], "--vectors")?)?;
+            let live =
+                Arc::new(SlmpBackend::new(settings, &project.profiles).map_err(CliError::input)?);
+            let found = dry_run(&project, &live);
+            let mut text = String::new();
+            for (trial, why) in &found.refused {
+                let _ = writeln!(text, "refused {trial}: {why}");
+            }
+            let _ = write!(
+                text,
+                "dry run, no socket opened: {} trials ({} executions) on {} rungs would run, {} \
+                 skipped, {} refused by the write fence; words written: {}",
+                found.trials,
+                found.executions,
+                found.rungs,
+                found.skipped.len(),
+                found.refused.len(),
+                fence::list(&found.writes)
+            );
+            output::write(None, &text)?;
+            Ok(if found.refused.is_empty() {
+                EXIT_OK
+            } else {
+                EXIT_DIFFERENCES
+            })
+        }
+        HilCommand::Sim {
+            manifest,
+            variant,
+            type_name,
+            port,
+            scan_us,
+        } => {
+            let project = load(&paths(cli, &[], "--vectors")?)?;
+            let m = Manifest::load(manifest).map_err(CliError::input)?;
+            let variant = match variant {
+                Some(v) => v.clone(),
+                None if m.variants.len() == 1 => m.variants[0].clone(),
+                None => {
+                    return Err(CliError::input(format!(
+                        "the manifest has several variants ({}): give --variant",
+                        m.variants.join(", ")
+                    )))
+                }
+            };
+            let profile =
+                project.profiles.get(&m.profile).cloned().ok_or_else(|| {
+                    CliError::input(format!("profile `{}` is not loaded", m.profile))
+                })?;
+            let model = project
+                .backends
+                .iter()
+                .find(|b| b.profile() == m.profile && b.codec().is_none())
+                .cloned()
+                .ok_or_else(|| {
+                    CliError::input(format!("no built-in reference model for {}", m.profile))
+                })?;
+            let mut settings = SimSettings::new(m, variant, type_name.clone());
+            settings.port = *port;
+            settings.scan = Duration::from_micros(*scan_us);
+            let sim = Simulator::start(settings, profile, model).map_err(CliError::input)?;
+            output::write(None, &format!("listening on {}", sim.address()))?;
+            loop {
+                std::thread::sleep(Duration::from_secs(3600));
+            }
+        }
+    }
+}
+
+fn live_settings(spec: &str) -> Result<SlmpSettings, CliError> {
+    SlmpSettings::parse(spec, Path::new("."))
+        .map_err(CliError::input)?
+        .ok_or_else(|| {
+            CliError::input(format!(
+                "`{spec}` is not a live backend: give \
+                 slmp:NAME=HOST:PORT?manifest=FILE&confirm=TYPE&sandbox=RANGES"
+            ))
+        })
+}

@@ -1,0 +1,357 @@
+//! Hardware in the loop: what a bench with a real MELSEC CPU needs around the live backend
+//! ([`crate::backend::slmp`]).
+//!
+//! - [`generate`]: the test program the CPU runs, from the corpus's own operands: one rung per
+//!   instruction and operand tuple the trials use, the manifest (rung table, mailbox, hash, the
+//!   words case windows write) and a setup checklist;
+//! - [`dry_run`]: every trial a live backend would run, with what it would write, checked
+//!   against its write fence, without a socket.
+
+mod program;
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use crate::backend::external::window;
+use crate::backend::slmp::fence::{self, WordRange};
+use crate::backend::slmp::mailbox;
+use crate::backend::slmp::manifest::{self, ErrorDevices, Manifest, Rung, Unrealisable};
+use crate::backend::slmp::SlmpBackend;
+use crate::backend::Backend;
+use crate::device::Device;
+use crate::execute::{images, requests};
+use crate::model::profile::Profile;
+use crate::model::Operand;
+use crate::runner::Project;
+
+pub use program::{setup_text, structured_text};
+
+/// What to generate a program for.
+#[derive(Debug, Clone, Default)]
+pub struct GenerateOptions {
+    /// The profile id.
+    pub profile: String,
+    /// Only these variants' trials (default: every variant).
+    pub variants: Vec<String>,
+    /// The mailbox's first word (default: chosen clear of every case window).
+    pub mailbox: Option<Device>,
+    /// Only trials whose name contains this.
+    pub filter: Option<String>,
+}
+
+/// A generated program: the manifest, the structured text and the setup checklist.
+#[derive(Debug, Clone)]
+pub struct Generated {
+    pub manifest: Manifest,
+    pub program: String,
+    pub setup: String,
+    /// Trials the rung table covers.
+    pub trials: usize,
+}
+
+/// The flag whose rising edge resets a MELSEC CPU's error state (SM50, "error reset").
+pub const ERROR_RESET: &str = "SM50";
+
+/// Why a constant cannot be written into the program: it must fit the operand as a signed
+/// decimal constant of its width (16 bits, or 32 for the data operand of a D-prefixed form).
+pub fn unrealisable(instruction: &str, operand: &str, value: i64) -> Option<String> {
+    let bits = if instruction.starts_with('D') && operand != "n" {
+        32
+    } else {
+        16
+    };
+    let (lo, hi) = (-(1i64 << (bits - 1)), (1i64 << (bits - 1)) - 1);
+    (!(lo..=hi).contains(&value)).then(|| {
+        format!(
+            "operand {operand} = K{value} does not fit a {bits}-bit constant (K{lo} to K{hi}), so \
+             no program can hold it as written"
+        )
+    })
+}
+
+/// Generates the program for a profile from the project's corpus.
+pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generated, String> {
+    let profile = project
+        .profiles
+        .get(&options.profile)
+        .cloned()
+        .ok_or_else(|| {
+            format!(
+                "profile `{}` is not loaded; known profiles: {}",
+                options.profile,
+                project.profiles.ids().join(", ")
+            )
+        })?;
+    let errors = error_devices(&profile)?;
+    for v in &options.variants {
+        if profile.variant(v).is_none() {
+            return Err(format!("`{v}` is not a variant of {}", profile.id));
+        }
+    }
+    let variants: Vec<String> = if options.variants.is_empty() {
+        profile.variants.iter().map(|v| v.id.clone()).collect()
+    } else {
+        options.variants.clone()
+    };
+    let model: Arc<dyn Backend> = project
+        .backends
+        .iter()
+        .find(|b| b.profile() == profile.id && b.codec().is_none())
+        .cloned()
+        .ok_or_else(|| format!("no built-in reference model for {}", profile.id))?;
+    let trials: Vec<_> = project
+        .plan(std::slice::from_ref(&model))
+        .into_iter()
+        .filter(|t| t.skip.is_none() && variants.contains(&t.variant))
+        .filter(|t| {
+            options
+                .filter
+                .as_ref()
+                .is_none_or(|f| t.name().contains(f.as_str()))
+        })
+        .collect();
+    if trials.is_empty() {
+        return Err("no trial of the corpus matches: nothing to generate".into());
+    }
+    // Whether each instruction and operand tuple can be a rung.
+    let mut seen: BTreeMap<String, bool> = BTreeMap::new();
+    let mut rungs: Vec<Rung> = Vec::new();
+    let mut unrealisables: Vec<Unrealisable> = Vec::new();
+    let mut windows: Vec<WordRange> = Vec::new();
+    for t in &trials {
+        let input = &t.input;
+        let key = manifest::rung_key(&input.instruction, &input.operands);
+        if !seen.contains_key(&key) {
+            let operands: BTreeMap<String, String> = input
+                .operands
+                .iter()
+                .map(|(k, v)| (k.clone(), v.to_string()))
+                .collect();
+            let why = input.operands.iter().find_map(|(name, o)| match o {
+                Operand::Constant(k) => unrealisable(&input.instruction, name, *k),
+                Operand::Device(_) => None,
+            });
+            seen.insert(key.clone(), why.is_none());
+            match why {
+                Some(reason) => unrealisables.push(Unrealisable {
+                    instruction: input.instruction.clone(),
+                    operands,
+                    reason,
+                }),
+                None => rungs.push(Rung {
+                    id: rungs.len() as u16 + 1,
+                    instruction: input.instruction.clone(),
+                    operands,
+                }),
+            }
+        }
+        // An unrealisable case never runs, so its window is never written.
+        if seen.get(&key) != Some(&true) {
+            continue;
+        }
+        let imgs = images(t);
+        for req in requests(t, &imgs) {
+            windows.extend(
+                window::ranges(&req)
+                    .into_iter()
+                    .map(|(code, first, last)| WordRange::new(&code, first, last)),
+            );
+        }
+    }
+    if rungs.len() > usize::from(u16::MAX) {
+        return Err(format!(
+            "{} rungs do not fit the mailbox's rung word",
+            rungs.len()
+        ));
+    }
+    let writes = fence::merged(windows);
+    let mailbox = match &options.mailbox {
+        Some(m) => m.clone(),
+        None => choose_mailbox(&profile, &variants, &writes)?,
+    };
+    let whole = mailbox::range(&mailbox);
+    if let Some(w) = writes.iter().find(|w| w.overlaps(&whole)) {
+        return Err(format!(
+            "the mailbox {whole} overlaps the case windows {w}; choose a mailbox clear of every \
+             window ({})",
+            fence::list(&writes)
+        ));
+    }
+    for v in &variants {
+        let variant = profile
+            .variant(v)
+            .ok_or_else(|| format!("no variant {v}"))?;
+        if !profile.words_exist(variant, &mailbox, mailbox::WORDS) {
+            return Err(format!(
+                "the mailbox {whole} does not exist on variant {v} of {}",
+                profile.id
+            ));
+        }
+    }
+    let mut flags: Vec<String> = rungs
+        .iter()
+        .filter_map(|r| profile.instructions.get(&r.instruction))
+        .flat_map(|def| def.flags.iter().cloned())
+        .collect();
+    flags.sort();
+    flags.dedup();
+    let mut manifest = Manifest {
+        format: manifest::FORMAT,
+        generator: format!("plc-conformance {}", env!("CARGO_PKG_VERSION")),
+        profile: profile.id.clone(),
+        variants,
+        mailbox: mailbox.to_string(),
+        layout: mailbox::LAYOUT,
+        flags,
+        error: errors,
+        rungs,
+        unrealisable: unrealisables,
+        writes: writes.iter().map(ToString::to_string).collect(),
+        hash: String::new(),
+    };
+    manifest.hash = manifest.compute_hash();
+    manifest.validate()?;
+    let program = structured_text(&manifest, &profile);
+    let setup = setup_text(&manifest, &profile, trials.len());
+    Ok(Generated {
+        manifest,
+        program,
+        setup,
+        trials: trials.len(),
+    })
+}
+
+/// Where a MELSEC profile's program finds an error: the error flag and register of the profile,
+/// its first further register, and the error reset flag.
+fn error_devices(profile: &Profile) -> Result<ErrorDevices, String> {
+    let errors = &profile.errors;
+    let register = errors.register.as_ref().ok_or_else(|| {
+        format!(
+            "{} signals errors with a flag only; the test program is generated for CPUs that \
+             store an error code (MELSEC)",
+            profile.id
+        )
+    })?;
+    let flag =
+        match &errors.flag {
+            Some(f) if f.code() == "SM" => f,
+            other => {
+                return Err(format!(
+                "{}'s error flag is {}; the test program is generated for MELSEC CPUs (SM0, SD0)",
+                profile.id,
+                other.as_ref().map_or("none".to_string(), ToString::to_string)
+            ))
+            }
+        };
+    Ok(ErrorDevices {
+        flag: flag.to_string(),
+        register: register.to_string(),
+        extra: errors.also.first().map(ToString::to_string),
+        reset: ERROR_RESET.into(),
+    })
+}
+
+/// A mailbox clear of every window: in the widest gap between the windows in D, at a round
+/// number (a multiple of 1000, else of 100) near its middle.
+fn choose_mailbox(
+    profile: &Profile,
+    variants: &[String],
+    writes: &[WordRange],
+) -> Result<Device, String> {
+    let last = variants
+        .iter()
+        .filter_map(|v| profile.variant(v))
+        .filter_map(|v| profile.ranges(v, "D"))
+        .map(|r| r.last)
+        .min()
+        .ok_or_else(|| format!("{} has no data registers (D) for a mailbox", profile.id))?;
+    let mut taken: Vec<(u32, u32)> = writes
+        .iter()
+        .filter(|w| w.code == "D")
+        .map(|w| (w.first, w.last))
+        .collect();
+    taken.sort_unstable();
+    let mut gaps = Vec::new();
+    let mut from = 0u32;
+    for (first, end) in taken {
+        if first > from {
+            gaps.push((from, first - 1));
+        }
+        from = from.max(end.saturating_add(1));
+    }
+    if from <= last {
+        gaps.push((from, last));
+    }
+    let (lo, hi) = gaps
+        .into_iter()
+        .filter(|(lo, hi)| hi - lo + 1 >= mailbox::WORDS)
+        .max_by_key(|(lo, hi)| hi - lo)
+        .ok_or("no 32 free data registers outside the case windows for the mailbox")?;
+    let middle = lo + (hi - lo) / 2;
+    let fits = |at: u32| at >= lo && at + mailbox::WORDS - 1 <= hi;
+    let at = [1000, 100, 1]
+        .into_iter()
+        .map(|step| middle / step * step)
+        .find(|at| fits(*at))
+        .unwrap_or(lo);
+    Ok(Device::new("D", at))
+}
+
+/// What a dry run found.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct DryRun {
+    /// Trials the backend would run.
+    pub trials: usize,
+    /// Executions (trials times fills).
+    pub executions: usize,
+    /// Trials it would not run, with why (no rung, unrealisable, not claimed, ...).
+    pub skipped: Vec<(String, String)>,
+    /// Executions the fence refuses, by trial name.
+    pub refused: Vec<(String, String)>,
+    /// Every word it would write, merged.
+    pub writes: Vec<WordRange>,
+    /// Rungs it would select.
+    pub rungs: usize,
+}
+
+/// Every trial of the corpus the backend would run, with what it would write: the plan the
+/// live backend makes for each execution, fence checked, and nothing sent (the backend opens no
+/// socket before its first case).
+pub fn dry_run(project: &Project, backend: &Arc<SlmpBackend>) -> DryRun {
+    let as_backend: Arc<dyn Backend> = backend.clone();
+    let mut out = DryRun::default();
+    let mut writes = Vec::new();
+    let mut rungs = std::collections::BTreeSet::new();
+    let mailbox_words = backend
+        .settings()
+        .manifest
+        .mailbox_head()
+        .map(|m| mailbox::pc_words(&m))
+        .unwrap_or_default();
+    for t in project.plan(&[as_backend]) {
+        if let Some(why) = &t.skip {
+            out.skipped.push((t.name(), why.clone()));
+            continue;
+        }
+        out.trials += 1;
+        let imgs = images(&t);
+        for req in requests(&t, &imgs) {
+            out.executions += 1;
+            match backend.plan(&req) {
+                Ok(plan) => {
+                    rungs.insert(plan.rung);
+                    writes.extend(
+                        plan.window
+                            .iter()
+                            .map(|(head, words)| WordRange::of(head, words.len() as u32)),
+                    );
+                    writes.extend(mailbox_words.iter().cloned());
+                }
+                Err(why) => out.refused.push((t.name(), why)),
+            }
+        }
+    }
+    out.writes = fence::merged(writes);
+    out.rungs = rungs.len();
+    out
+}

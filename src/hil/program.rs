@@ -1,0 +1,269 @@
+//! The generated program's text (structured text for GX Works3) and its setup checklist.
+//!
+//! The program is written in the plainest structured text: direct device names, signed decimal
+//! constants, bit-specified word devices (`D12011.0`) for the flag bits, and no functions beyond
+//! the instructions under test, so that as little as possible depends on the engineering tool's
+//! dialect. What a bench user must still check in the tool is in the setup checklist.
+
+use std::fmt::Write;
+
+use crate::backend::slmp::mailbox::{self, off, state};
+use crate::backend::slmp::manifest::{parse_operand, Manifest};
+use crate::device::Device;
+use crate::model::profile::Profile;
+use crate::model::Operand;
+
+/// Operands in the order the instruction pages list them: (s), then (d), then (n).
+fn operand_rank(name: &str) -> (u8, &str) {
+    let rank = match name.chars().next() {
+        Some('s') => 0,
+        Some('d') => 1,
+        Some('n') => 2,
+        _ => 3,
+    };
+    (rank, name)
+}
+
+fn word(head: &Device, offset: u32) -> String {
+    mailbox::at(head, offset).to_string()
+}
+
+/// A constant as a signed decimal of its word, with the hex it stands for.
+fn int(value: u16) -> String {
+    format!("{}", value as i16)
+}
+
+/// The structured text of the test program.
+pub fn structured_text(manifest: &Manifest, profile: &Profile) -> String {
+    let Ok(mb) = manifest.mailbox_head() else {
+        return String::new();
+    };
+    let w = |o| word(&mb, o);
+    let e = &manifest.error;
+    let hash = manifest.hash32();
+    let mut t = String::new();
+    let _ = writeln!(
+        t,
+        "(* plc-conformance test program for {} ({}), variants {}. *)",
+        profile.name,
+        profile.id,
+        manifest.variants.join(", ")
+    );
+    let _ = writeln!(
+        t,
+        "(* Manifest {}, mailbox layout {} at {}-{}, {} rungs; {}. *)",
+        manifest.hash,
+        manifest.layout,
+        mb,
+        mailbox::at(&mb, mailbox::WORDS - 1),
+        manifest.rungs.len(),
+        manifest.generator
+    );
+    t.push_str(
+        "(* Generated: do not edit. Every rung is evaluated in every scan, each with its own \
+         enable, so that a pulse form sees its enable fall between two cases and executes again \
+         on the next one: keep the rungs out of IF and CASE. Declare the label bExec (BOOL). *)\n\n",
+    );
+    t.push_str("(* Signature, scan counter and the error flag, every scan. *)\n");
+    let _ = writeln!(
+        t,
+        "{} := {}; (* 'PC' *)",
+        w(off::MAGIC),
+        int(mailbox::MAGIC[0])
+    );
+    let _ = writeln!(
+        t,
+        "{} := {}; (* 'HI' *)",
+        w(off::MAGIC + 1),
+        int(mailbox::MAGIC[1])
+    );
+    let _ = writeln!(t, "{} := {};", w(off::LAYOUT), manifest.layout);
+    let _ = writeln!(
+        t,
+        "{} := {}; (* hash low word {:04X}H *)",
+        w(off::HASH),
+        int(hash as u16),
+        hash as u16
+    );
+    let _ = writeln!(
+        t,
+        "{} := {}; (* hash high word {:04X}H *)",
+        w(off::HASH + 1),
+        int((hash >> 16) as u16),
+        (hash >> 16) as u16
+    );
+    let _ = writeln!(t, "{} := {};", w(off::RUNGS), manifest.rungs.len());
+    let _ = writeln!(t, "{} := {} + 1;", w(off::SCANS), w(off::SCANS));
+    let _ = writeln!(
+        t,
+        "IF {} THEN {} := 1; ELSE {} := 0; END_IF;",
+        e.flag,
+        w(off::FLAG_NOW),
+        w(off::FLAG_NOW)
+    );
+    t.push_str("bExec := FALSE;\n\n");
+    t.push_str(
+        "(* A new trigger: reset the error state (one scan), check it, then enable the selected \
+         rung for exactly one scan. *)\n",
+    );
+    let _ = writeln!(t, "IF {} <> {} THEN", w(off::TRIGGER), w(off::ACK));
+    let _ = writeln!(t, "  CASE {} OF", w(off::STATE));
+    let _ = writeln!(t, "    {}, {}:", state::IDLE, state::RESET_FAILED);
+    let _ = writeln!(t, "      {} := TRUE;", e.reset);
+    let _ = writeln!(t, "      {} := {};", w(off::STATE), state::RESETTING);
+    let _ = writeln!(t, "    {}:", state::RESETTING);
+    let _ = writeln!(t, "      {} := FALSE;", e.reset);
+    let _ = writeln!(t, "      IF {} THEN", e.flag);
+    let _ = writeln!(t, "        {} := 1;", w(off::FLAG_BEFORE));
+    let _ = writeln!(t, "        {} := {};", w(off::STATE), state::RESET_FAILED);
+    let _ = writeln!(t, "        {} := {};", w(off::ACK), w(off::TRIGGER));
+    t.push_str("      ELSE\n");
+    let _ = writeln!(t, "        {} := 0;", w(off::FLAG_BEFORE));
+    let _ = writeln!(t, "        {} := {};", w(off::STATE), state::EXECUTING);
+    t.push_str("      END_IF;\n");
+    let _ = writeln!(t, "    {}:", state::EXECUTING);
+    for (i, f) in manifest.flags.iter().enumerate() {
+        let _ = writeln!(t, "      {f} := {}.{:X};", w(off::FLAGS), i);
+    }
+    t.push_str("      bExec := TRUE;\n");
+    t.push_str("  END_CASE;\n");
+    t.push_str("END_IF;\n\n");
+    t.push_str("(* The rungs: instruction(enable, operands...), one per instruction and operand tuple of the corpus. *)\n");
+    for rung in &manifest.rungs {
+        let mut names: Vec<&String> = rung.operands.keys().collect();
+        names.sort_by_key(|n| operand_rank(n));
+        let args: Vec<String> = names
+            .iter()
+            .map(|n| match parse_operand(&rung.operands[*n]) {
+                Ok(Operand::Constant(k)) => k.to_string(),
+                Ok(Operand::Device(d)) => d.to_string(),
+                Err(_) => rung.operands[*n].clone(),
+            })
+            .collect();
+        let _ = writeln!(
+            t,
+            "{}(bExec AND {} = {}, {});",
+            rung.instruction,
+            w(off::RUNG),
+            rung.id,
+            args.join(", ")
+        );
+    }
+    t.push_str("\n(* Capture the error in the scan of the instruction, and the register one scan later; acknowledge last. *)\n");
+    t.push_str("IF bExec THEN\n");
+    let _ = writeln!(
+        t,
+        "  IF {} THEN {} := 1; ELSE {} := 0; END_IF;",
+        e.flag,
+        w(off::FLAG_AFTER),
+        w(off::FLAG_AFTER)
+    );
+    let _ = writeln!(t, "  {} := {};", w(off::CODE), e.register);
+    match &e.extra {
+        Some(extra) => {
+            let _ = writeln!(t, "  {} := {};", w(off::CODE_EXTRA), extra);
+        }
+        None => {
+            let _ = writeln!(t, "  {} := 0;", w(off::CODE_EXTRA));
+        }
+    }
+    for f in &manifest.flags {
+        let _ = writeln!(t, "  {f} := FALSE;");
+    }
+    let _ = writeln!(t, "  {} := {};", w(off::STATE), state::DONE);
+    let _ = writeln!(t, "ELSIF {} = {} THEN", w(off::STATE), state::DONE);
+    let _ = writeln!(t, "  {} := {};", w(off::CODE_NEXT), e.register);
+    let _ = writeln!(t, "  {} := {};", w(off::STATE), state::IDLE);
+    let _ = writeln!(t, "  {} := {};", w(off::ACK), w(off::TRIGGER));
+    t.push_str("END_IF;\n");
+    t
+}
+
+/// The setup checklist (`SETUP.md`).
+pub fn setup_text(manifest: &Manifest, profile: &Profile, trials: usize) -> String {
+    let mb = manifest.mailbox.clone();
+    let mut t = String::new();
+    let _ = writeln!(t, "# Test program for {} ({})\n", profile.name, profile.id);
+    let _ = writeln!(
+        t,
+        "Manifest `{}`, {} rungs for {trials} trials of variants {}; mailbox {} ({} words), \
+         layout {}. Generated by {}.\n",
+        manifest.hash,
+        manifest.rungs.len(),
+        manifest.variants.join(", "),
+        mb,
+        mailbox::WORDS,
+        manifest.layout,
+        manifest.generator
+    );
+    t.push_str(
+        "**A bench CPU only.** The harness writes data registers of the CPU while it runs. \
+         Use a CPU that controls nothing: no outputs wired, no other program.\n\n",
+    );
+    t.push_str("## In the engineering tool (GX Works3)\n\n");
+    t.push_str("Items marked *check* are not confirmed from a manual; note what you found.\n\n");
+    let _ = writeln!(
+        t,
+        "1. A new project for the CPU model under test ({}). Device ranges as the profile \
+         variant says (data registers {}).",
+        manifest.variants.join(" / "),
+        manifest
+            .variants
+            .iter()
+            .filter_map(|v| profile.variant(v))
+            .filter_map(|v| profile.ranges(v, "D"))
+            .map(|r| format!("D{}-D{}", r.first, r.last))
+            .next()
+            .unwrap_or_else(|| "as the profile says".into())
+    );
+    t.push_str(
+        "2. CPU parameter, RAS setting, operation at an error: operation errors must **continue** \
+         (not stop), or the first error case stops the CPU and ends the run. *check* the \
+         item's name and default on your model.\n",
+    );
+    t.push_str(
+        "3. Ethernet port: an SLMP connection, TCP, **binary** code, a port number of your \
+         choice; the frame the backend uses (4E by default, 3E on FX5); writes from the \
+         connection allowed during RUN (*check* whether your model has such a setting).\n",
+    );
+    t.push_str(
+        "4. A program in structured text: paste `executive.st`, declare the label `bExec` \
+         (BOOL), convert. *check* that every instruction call converts with its enable first; \
+         a rung that does not convert cannot be run (remove it and regenerate with a filter, \
+         or report it).\n",
+    );
+    t.push_str("5. Write parameters and program to the CPU; switch to RUN.\n\n");
+    t.push_str("## From the PC\n\n");
+    let _ = writeln!(
+        t,
+        "```sh\nB='slmp:bench=HOST:PORT?manifest=manifest.json&confirm=TYPE-NAME&sandbox=manifest'\n\
+         plc-conformance hil doctor --backend \"$B\"      # read-only: type, RUN, signature, scan counter\n\
+         plc-conformance hil dry-run --backend \"$B\"     # every write checked, no socket\n\
+         plc-conformance run --backend \"$B\"\n```\n"
+    );
+    t.push_str(
+        "`confirm` is the type name the CPU reports (0101), e.g. `R04CPU`; nothing is written \
+         unless it matches. `sandbox` is the set of data registers the harness may write \
+         besides the mailbox's three PC words: `manifest` takes the manifest's `writes`:\n\n",
+    );
+    for w in &manifest.writes {
+        let _ = writeln!(t, "- {w}");
+    }
+    t.push('\n');
+    if !manifest.unrealisable.is_empty() {
+        t.push_str(
+            "## Cases no program can hold\n\nTheir trials are skipped with this reason:\n\n",
+        );
+        for u in &manifest.unrealisable {
+            let ops: Vec<String> = u.operands.iter().map(|(k, v)| format!("{k}={v}")).collect();
+            let _ = writeln!(t, "- {} {}: {}", u.instruction, ops.join(" "), u.reason);
+        }
+        t.push('\n');
+    }
+    t.push_str("## Rungs\n\n| rung | instruction | operands |\n|---|---|---|\n");
+    for r in &manifest.rungs {
+        let ops: Vec<String> = r.operands.iter().map(|(k, v)| format!("{k}={v}")).collect();
+        let _ = writeln!(t, "| {} | {} | {} |", r.id, r.instruction, ops.join(" "));
+    }
+    t
+}

@@ -1,0 +1,806 @@
+//! The live CPU backend against the simulated CPU, on 127.0.0.1 only: the whole corpus judged
+//! exactly as the built-in models judge it, each fault of a port mapped to its kind, the write
+//! fence and the interlocks refusing before anything is written, and a dry run that opens no
+//! socket.
+
+mod common;
+
+use std::collections::BTreeMap;
+use std::net::TcpListener;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use plc_conformance::backend::slmp::fence::{parse_ranges, WordRange};
+use plc_conformance::backend::slmp::frame::{command, DeviceForm, FrameKind};
+use plc_conformance::backend::slmp::manifest::Manifest;
+use plc_conformance::backend::slmp::sim::{FaultAction, FaultRule, SimSettings, Simulator};
+use plc_conformance::backend::slmp::{SlmpBackend, SlmpSettings};
+use plc_conformance::backend::{Backend, Fault};
+use plc_conformance::device::Device;
+use plc_conformance::hil::{dry_run, generate, GenerateOptions};
+use plc_conformance::judge::Verdict;
+use plc_conformance::plan::Trial;
+use plc_conformance::runner::{verdicts, Project};
+
+use common::{reference, session};
+use plc_conformance::execute::{images, requests};
+
+fn manifest(project: &Project, profile: &str) -> Manifest {
+    generate(
+        project,
+        &GenerateOptions {
+            profile: profile.into(),
+            ..GenerateOptions::default()
+        },
+    )
+    .unwrap_or_else(|e| panic!("generate {profile}: {e}"))
+    .manifest
+}
+
+fn type_name(profile: &str) -> &'static str {
+    if profile == "mitsubishi-fx5" {
+        "FX5U-32MT/DS"
+    } else {
+        "R04CPU"
+    }
+}
+
+fn simulator(
+    project: &Project,
+    manifest: &Manifest,
+    variant: &str,
+    faults: Vec<FaultRule>,
+) -> Simulator {
+    let profile = project
+        .profiles
+        .get(&manifest.profile)
+        .cloned()
+        .expect("profile");
+    let mut settings = SimSettings::new(manifest.clone(), variant, type_name(&manifest.profile));
+    settings.faults = faults;
+    Simulator::start(settings, profile, reference(project, &manifest.profile))
+        .unwrap_or_else(|e| panic!("simulator: {e}"))
+}
+
+fn settings(manifest: &Manifest, variant: &str, sim: &Simulator) -> SlmpSettings {
+    let sandbox = parse_ranges(&manifest.writes.join(",")).expect("writes");
+    let mut s = SlmpSettings::new(
+        "live",
+        sim.address().to_string(),
+        manifest.clone(),
+        variant,
+        type_name(&manifest.profile),
+        sandbox,
+    );
+    s.first_poll = Duration::from_micros(300);
+    s.max_poll = Duration::from_millis(2);
+    s.client.reply_timeout = Duration::from_millis(500);
+    s.case_timeout = Duration::from_millis(800);
+    s
+}
+
+fn live(project: &mut Project, settings: SlmpSettings) -> Arc<dyn Backend> {
+    let backend = Arc::new(SlmpBackend::new(settings, &project.profiles).expect("backend"));
+    backend
+        .connect()
+        .unwrap_or_else(|e| panic!("interlocks: {e}"));
+    let backend: Arc<dyn Backend> = backend;
+    project.backends.push(backend.clone());
+    backend
+}
+
+/// A trial's identity across backends.
+fn key(t: &Trial) -> (String, String, String) {
+    (
+        t.check_name().to_string(),
+        t.case_id().to_string(),
+        t.variant.clone(),
+    )
+}
+
+/// Runs every trial of one variant through the live backend and compares each verdict with the
+/// built-in model's; returns how many ran.
+fn same_verdicts(profile: &str, variant: &str) -> usize {
+    let mut project = session();
+    let manifest = manifest(&project, profile);
+    let sim = simulator(&project, &manifest, variant, vec![]);
+    let model = reference(&project, profile);
+    let backend = live(&mut project, settings(&manifest, variant, &sim));
+    let expected: BTreeMap<_, _> = {
+        let trials: Vec<Trial> = project
+            .plan(std::slice::from_ref(&model))
+            .into_iter()
+            .filter(|t| t.variant == variant)
+            .collect();
+        let v = verdicts(&trials);
+        trials.iter().map(key).zip(v).collect()
+    };
+    let trials = project.plan(std::slice::from_ref(&backend));
+    let started = Instant::now();
+    let got = verdicts(&trials);
+    let elapsed = started.elapsed();
+    let mut ran = 0;
+    for (t, v) in trials.iter().zip(&got) {
+        if t.variant != variant {
+            assert!(t.skip.is_some(), "{}: run on another variant", t.name());
+            continue;
+        }
+        let want = expected.get(&key(t));
+        match (&t.skip, want) {
+            (_, None) => panic!("{}: no such trial on the built-in model", t.name()),
+            (Some(why), Some(w)) => {
+                assert!(
+                    matches!(w, Verdict::Skipped { .. }) || why.contains("no program can hold"),
+                    "{}: skipped ({why}) where the model ran it",
+                    t.name()
+                );
+            }
+            (None, Some(w)) => {
+                ran += 1;
+                assert_eq!(v, w, "{}", t.name());
+            }
+        }
+    }
+    let audit = sim.audit();
+    assert!(
+        audit.stray_writes.is_empty(),
+        "stray writes: {:?}",
+        audit.stray_writes
+    );
+    assert!(audit.anomalies.is_empty(), "{:?}", audit.anomalies);
+    let sent: Vec<u16> = audit.commands.keys().copied().collect();
+    assert!(
+        sent.iter().all(|c| [
+            command::READ_TYPE_NAME,
+            command::READ,
+            command::RANDOM_READ,
+            command::WRITE
+        ]
+        .contains(c)),
+        "only 0101, 0401, 0403 and 1401 are ever sent: {sent:04X?}"
+    );
+    eprintln!(
+        "{profile} {variant}: {ran} trials, {} executions, {} requests in {:.2} s",
+        audit.executions,
+        audit.commands.values().sum::<usize>(),
+        elapsed.as_secs_f64()
+    );
+    assert!(ran > 0);
+    ran
+}
+
+#[test]
+fn iqr_through_the_simulated_cpu_judges_like_the_model() {
+    let ran =
+        same_verdicts("mitsubishi-iqr", "rcpu") + same_verdicts("mitsubishi-iqr", "rcpu-no-sm705");
+    assert!(ran > 300, "{ran}");
+}
+
+#[test]
+fn fx5_through_the_simulated_cpu_judges_like_the_model() {
+    let project = session();
+    let profile = project
+        .profiles
+        .get("mitsubishi-fx5")
+        .cloned()
+        .expect("fx5");
+    for v in &profile.variants {
+        assert!(same_verdicts("mitsubishi-fx5", &v.id) > 200, "{}", v.id);
+    }
+}
+
+// --- One case at a time: faults, interlocks, the fence, the dry run ------------------------------
+
+/// The iQ-R manifest, generated once for every test of this file.
+fn iqr_manifest() -> &'static Manifest {
+    static M: std::sync::OnceLock<Manifest> = std::sync::OnceLock::new();
+    M.get_or_init(|| manifest(&session(), "mitsubishi-iqr"))
+}
+
+/// A simulated iQ-R CPU (4E frames, long device form) set up by `change`.
+fn iqr_sim(project: &Project, change: impl FnOnce(&mut SimSettings)) -> Simulator {
+    let m = iqr_manifest();
+    let profile = project.profiles.get(&m.profile).cloned().expect("profile");
+    let mut s = SimSettings::new(m.clone(), "rcpu", "R04CPU");
+    change(&mut s);
+    Simulator::start(s, profile, reference(project, &m.profile)).expect("simulator")
+}
+
+/// The first trial the live backend would run whose instruction is `instruction`, and the
+/// backend itself (not connected).
+fn first_trial(project: &Project, backend: &Arc<SlmpBackend>, instruction: &str) -> Trial {
+    let b: Arc<dyn Backend> = backend.clone();
+    project
+        .plan(&[b])
+        .into_iter()
+        .find(|t| t.skip.is_none() && t.input.instruction == instruction)
+        .unwrap_or_else(|| panic!("no {instruction} trial"))
+}
+
+/// Executes the trial's first request (fill A) once.
+fn execute_once(
+    backend: &SlmpBackend,
+    trial: &Trial,
+) -> Result<plc_conformance::backend::Response, Fault> {
+    let imgs = images(trial);
+    let reqs = requests(trial, &imgs);
+    backend.execute(&reqs[0])
+}
+
+fn iqr_backend(
+    project: &Project,
+    sim: &Simulator,
+    change: impl FnOnce(&mut SlmpSettings),
+) -> Arc<SlmpBackend> {
+    let mut s = settings(iqr_manifest(), "rcpu", sim);
+    change(&mut s);
+    Arc::new(SlmpBackend::new(s, &project.profiles).expect("backend"))
+}
+
+fn rule(command: u16, nth: usize, action: FaultAction) -> FaultRule {
+    FaultRule {
+        command,
+        head: None,
+        nth,
+        action,
+    }
+}
+
+fn writes_sent(sim: &Simulator) -> usize {
+    sim.audit()
+        .commands
+        .get(&command::WRITE)
+        .copied()
+        .unwrap_or(0)
+}
+
+/// Each fault of a port, injected on the first request of its command in a case, is reported
+/// as its kind; `expected` is a part of the message.
+#[rstest::rstest]
+#[case::connection_dropped_during_a_write(
+    rule(command::WRITE, 1, FaultAction::Drop),
+    "crashed",
+    "closed by the other side"
+)]
+#[case::reply_past_the_timeout(
+    rule(command::WRITE, 1, FaultAction::Delay(Duration::from_millis(900))),
+    "timeout",
+    "no reply to 1401"
+)]
+#[case::error_end_code(
+    rule(command::WRITE, 1, FaultAction::EndCode(0xC056)),
+    "protocol-error",
+    "end code C056H"
+)]
+#[case::garbage_bytes(
+    rule(command::RANDOM_READ, 1, FaultAction::Garbage),
+    "protocol-error",
+    "not a valid SLMP response"
+)]
+#[case::wrong_serial_on_4e(
+    rule(command::RANDOM_READ, 1, FaultAction::WrongSerial),
+    "protocol-error",
+    "carries serial"
+)]
+#[case::cpu_leaves_run(
+    rule(command::RANDOM_READ, 1, FaultAction::Stop),
+    "unreachable",
+    "left RUN"
+)]
+fn a_port_fault_is_reported_as_its_kind(
+    #[case] fault: FaultRule,
+    #[case] kind: &str,
+    #[case] expected: &str,
+) {
+    let project = session();
+    let sim = iqr_sim(&project, |_| {});
+    let backend = iqr_backend(&project, &sim, |_| {});
+    backend.connect().expect("interlocks");
+    let trial = first_trial(&project, &backend, "BINHA");
+    execute_once(&backend, &trial).expect("a case before the fault runs");
+    // A rule counts the requests from when it is added: 1 is the next one.
+    sim.add_fault(fault);
+    let e = execute_once(&backend, &trial).expect_err("the fault shows");
+    assert_eq!(e.kind(), kind, "{e}");
+    assert!(e.to_string().contains(expected), "{e}");
+}
+
+#[test]
+fn a_read_past_the_timeout_is_sent_again_and_the_case_completes() {
+    let project = session();
+    let sim = iqr_sim(&project, |_| {});
+    let backend = iqr_backend(&project, &sim, |_| {});
+    backend.connect().expect("interlocks");
+    sim.add_fault(rule(
+        command::RANDOM_READ,
+        1,
+        FaultAction::Delay(Duration::from_millis(900)),
+    ));
+    let trial = first_trial(&project, &backend, "BINHA");
+    let r = execute_once(&backend, &trial).expect("the read is retried on a new connection");
+    assert!(
+        matches!(r, plc_conformance::backend::Response::Done(_)),
+        "{r:?}"
+    );
+    assert_eq!(sim.audit().connections, 2);
+}
+
+#[test]
+fn the_circuit_breaker_stops_asking_after_max_faults_in_a_row() {
+    let project = session();
+    let sim = iqr_sim(&project, |s| {
+        s.faults = vec![
+            rule(command::WRITE, 1, FaultAction::EndCode(0xC051)),
+            rule(command::WRITE, 2, FaultAction::EndCode(0xC051)),
+        ]
+    });
+    let backend = iqr_backend(&project, &sim, |s| s.max_consecutive_faults = 2);
+    backend.connect().expect("interlocks");
+    let trial = first_trial(&project, &backend, "BINHA");
+    assert_eq!(
+        execute_once(&backend, &trial).expect_err("1").kind(),
+        "protocol-error"
+    );
+    assert_eq!(
+        execute_once(&backend, &trial).expect_err("2").kind(),
+        "protocol-error"
+    );
+    let before = sim.audit().commands.values().sum::<usize>();
+    let e = execute_once(&backend, &trial).expect_err("tripped");
+    assert_eq!(e.kind(), "unreachable");
+    assert!(e.to_string().contains("failed 2 requests in a row"), "{e}");
+    assert_eq!(
+        sim.audit().commands.values().sum::<usize>(),
+        before,
+        "nothing sent once tripped"
+    );
+}
+
+#[test]
+fn no_connection_is_unreachable() {
+    let project = session();
+    // A port that was free a moment ago: nothing listens there.
+    let address = {
+        let l = TcpListener::bind("127.0.0.1:0").expect("bind");
+        l.local_addr().expect("addr").to_string()
+    };
+    let mut s = SlmpSettings::new(
+        "live",
+        address,
+        iqr_manifest().clone(),
+        "rcpu",
+        "R04CPU",
+        parse_ranges(&iqr_manifest().writes.join(",")).expect("writes"),
+    );
+    s.client.read_retries = 0;
+    let backend = Arc::new(SlmpBackend::new(s, &project.profiles).expect("backend"));
+    assert!(backend
+        .connect()
+        .expect_err("refused")
+        .contains("no connection to"));
+    let trial = first_trial(&project, &backend, "BINHA");
+    assert_eq!(
+        execute_once(&backend, &trial).expect_err("down").kind(),
+        "unreachable"
+    );
+}
+
+/// Nothing is written before the type name, the operating status and the program's signature
+/// match: each interlock refuses on its own.
+#[rstest::rstest]
+#[case::another_cpu(|s: &mut SimSettings| s.type_name = "R08CPU".into(), "`confirm` says `R04CPU`")]
+#[case::cpu_in_stop(|s: &mut SimSettings| s.run = false, "STOP")]
+#[case::no_program(|s: &mut SimSettings| s.program = false, "no test program signature")]
+#[case::another_program(|s: &mut SimSettings| { s.manifest = manifest_for("habin"); }, "another one than the manifest's")]
+fn an_interlock_refuses_before_any_write(
+    #[case] change: fn(&mut SimSettings),
+    #[case] expected: &str,
+) {
+    let project = session();
+    let sim = iqr_sim(&project, change);
+    let backend = iqr_backend(&project, &sim, |_| {});
+    let e = backend.connect().expect_err("refused");
+    assert!(e.contains(expected), "{e}");
+    let trial = first_trial(&project, &backend, "BINHA");
+    assert!(execute_once(&backend, &trial).is_err());
+    assert_eq!(writes_sent(&sim), 0, "a write went out");
+}
+
+/// A manifest generated for a part of the corpus only: another program.
+fn manifest_for(filter: &str) -> Manifest {
+    generate(
+        &session(),
+        &GenerateOptions {
+            profile: "mitsubishi-iqr".into(),
+            variants: vec!["rcpu".into()],
+            mailbox: Some(Device::new("D", 11000)),
+            filter: Some(filter.into()),
+        },
+    )
+    .expect("generate")
+    .manifest
+}
+
+/// A case whose window lies outside the sandbox is refused while it is still a plan: no
+/// connection is even made, let alone a byte written.
+#[test]
+fn a_write_outside_the_sandbox_is_refused_before_any_byte_is_sent() {
+    let project = session();
+    let listener = TcpListener::bind("127.0.0.1:0").expect("bind");
+    listener.set_nonblocking(true).expect("nonblocking");
+    let s = SlmpSettings::new(
+        "live",
+        listener.local_addr().expect("addr").to_string(),
+        iqr_manifest().clone(),
+        "rcpu",
+        "R04CPU",
+        vec![WordRange::new("D", 0, 150)],
+    );
+    let backend = Arc::new(SlmpBackend::new(s, &project.profiles).expect("backend"));
+    let trial = first_trial(&project, &backend, "BINHA");
+    match execute_once(&backend, &trial) {
+        Ok(plc_conformance::backend::Response::Unsupported(why)) => {
+            assert!(
+                why.contains("is refused: it lies outside the words the harness may write"),
+                "{why}"
+            );
+        }
+        other => panic!("not refused: {other:?}"),
+    }
+    assert!(listener.accept().is_err(), "the backend connected");
+    // The same with a simulated CPU that audits every byte it receives.
+    let sim = iqr_sim(&project, |_| {});
+    let backend = iqr_backend(&project, &sim, |s| {
+        s.sandbox = vec![WordRange::new("D", 0, 150)]
+    });
+    backend.connect().expect("interlocks");
+    assert!(matches!(
+        execute_once(&backend, &trial),
+        Ok(plc_conformance::backend::Response::Unsupported(_))
+    ));
+    assert_eq!(writes_sent(&sim), 0);
+}
+
+#[test]
+fn a_sandbox_over_the_mailbox_is_refused() {
+    let project = session();
+    let s = SlmpSettings::new(
+        "live",
+        "127.0.0.1:1",
+        iqr_manifest().clone(),
+        "rcpu",
+        "R04CPU",
+        vec![WordRange::new("D", 0, 18431)],
+    );
+    let e = SlmpBackend::new(s, &project.profiles)
+        .err()
+        .expect("refused");
+    assert!(e.contains("overlaps the mailbox"), "{e}");
+}
+
+#[test]
+fn a_dry_run_opens_no_socket() {
+    let project = session();
+    let listener = TcpListener::bind("127.0.0.1:0").expect("bind");
+    listener.set_nonblocking(true).expect("nonblocking");
+    let m = iqr_manifest();
+    let s = SlmpSettings::new(
+        "live",
+        listener.local_addr().expect("addr").to_string(),
+        m.clone(),
+        "rcpu",
+        "R04CPU",
+        parse_ranges(&m.writes.join(",")).expect("writes"),
+    );
+    let backend = Arc::new(SlmpBackend::new(s, &project.profiles).expect("backend"));
+    let found = dry_run(&project, &backend);
+    assert!(found.trials > 300, "{found:?}");
+    assert_eq!(found.executions, 2 * found.trials);
+    assert!(found.refused.is_empty(), "{:?}", found.refused);
+    assert!(listener.accept().is_err(), "the dry run connected");
+    assert_eq!(backend.requests(), 0);
+}
+
+/// A pulse form executes on each case, not only the first: its enable falls between two cases
+/// because every rung is evaluated every scan.
+#[test]
+fn a_pulse_rung_fires_on_every_case() {
+    let project = session();
+    let sim = iqr_sim(&project, |_| {});
+    let backend = iqr_backend(&project, &sim, |_| {});
+    backend.connect().expect("interlocks");
+    let trial = first_trial(&project, &backend, "BINHAP");
+    let first = execute_once(&backend, &trial).expect("first");
+    let before = sim.audit().executions;
+    let second = execute_once(&backend, &trial).expect("second");
+    assert_eq!(sim.audit().executions, before + 1);
+    assert_eq!(first, second);
+    assert!(
+        matches!(first, plc_conformance::backend::Response::Done(ref o) if !o.writes.is_empty()),
+        "{first:?}"
+    );
+}
+
+#[test]
+fn every_generated_rung_sits_outside_if_and_case() {
+    let g = generate(
+        &session(),
+        &GenerateOptions {
+            profile: "mitsubishi-fx5".into(),
+            ..GenerateOptions::default()
+        },
+    )
+    .expect("generate");
+    let mut depth = 0i32;
+    let mut rungs = 0;
+    for line in g.program.lines() {
+        let t = line.trim_start();
+        let closes_itself = t.contains("END_IF") || t.contains("END_CASE");
+        if (t.starts_with("IF ") || t.starts_with("CASE ")) && !closes_itself {
+            depth += 1;
+        }
+        if !(t.starts_with("IF ") || t.starts_with("CASE ")) && closes_itself {
+            depth -= 1;
+        }
+        if t.contains("(bExec AND ") {
+            rungs += 1;
+            assert_eq!(depth, 0, "a rung inside IF or CASE: {line}");
+            assert!(!line.starts_with(' '), "{line}");
+        }
+    }
+    assert_eq!(rungs, g.manifest.rungs.len());
+    assert!(g
+        .manifest
+        .rungs
+        .iter()
+        .any(|r| r.instruction.ends_with('P')));
+    // FX5 captures SD8067 beside SD0.
+    assert_eq!(g.manifest.error.extra.as_deref(), Some("SD8067"));
+    assert!(g.program.contains(":= SD8067;"));
+}
+
+/// `record` through the simulated CPU, as a bench user would run it: the unspecified cases of a
+/// copy of the corpus become observed with the CPU, program and transport in the provenance,
+/// manual ones are untouched, and the copy still validates.
+#[test]
+fn record_through_the_simulated_cpu_writes_observed_vectors_with_provenance() {
+    let project = session();
+    let scratch_dir = common::scratch();
+    let dir = scratch_dir.path().join("vectors");
+    std::fs::create_dir_all(&dir).expect("mkdir");
+    for entry in std::fs::read_dir(common::root().join("vectors/mitsubishi-iqr")).expect("dir") {
+        let entry = entry.expect("entry");
+        std::fs::copy(entry.path(), dir.join(entry.file_name())).expect("copy");
+    }
+    let m = iqr_manifest();
+    let manifest_file = scratch_dir.path().join("manifest.json");
+    std::fs::write(
+        &manifest_file,
+        serde_json::to_string_pretty(m).expect("json"),
+    )
+    .expect("write");
+    let sim = iqr_sim(&project, |_| {});
+    let spec = format!(
+        "slmp:bench={}?manifest={}&confirm=R04CPU&sandbox=manifest&variant=rcpu",
+        sim.address(),
+        manifest_file.display()
+    );
+    let manual_before = count(&dir, "basis: manual");
+    let out = common::cli(&[
+        "record",
+        "--backend",
+        &spec,
+        "--vectors",
+        dir.to_str().expect("utf-8"),
+        "--date",
+        "2026-11-25",
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("unspecified -> observed"), "{stdout}");
+    assert_eq!(
+        count(&dir, "basis: manual"),
+        manual_before,
+        "a manual expectation was replaced"
+    );
+    let habin = std::fs::read_to_string(dir.join("habin.yaml")).expect("habin.yaml");
+    let wanted = format!("live CPU R04CPU (4800H), mitsubishi-iqr variant rcpu, program {} (mailbox layout 1), SLMP 4E binary TCP", m.hash);
+    assert!(habin.contains("backend: bench"), "{habin}");
+    assert!(habin.contains(&wanted), "{habin}");
+    let valid = common::cli(&["validate", dir.to_str().expect("utf-8")]);
+    assert!(
+        valid.status.success(),
+        "{}",
+        String::from_utf8_lossy(&valid.stderr)
+    );
+    assert_eq!(sim.audit().stray_writes, Vec::<String>::new());
+}
+
+fn count(dir: &std::path::Path, text: &str) -> usize {
+    std::fs::read_dir(dir)
+        .expect("dir")
+        .map(|e| {
+            std::fs::read_to_string(e.expect("entry").path())
+                .expect("read")
+                .matches(text)
+                .count()
+        })
+        .sum()
+}
+
+/// The pitfall the generator avoids, simulated: with its rungs inside a CASE a pulse rung fires
+/// on its first case only, and the corpus run through the live backend shows it.
+#[test]
+fn a_program_with_its_rungs_in_a_case_is_caught() {
+    let project = session();
+    let sim = iqr_sim(&project, |s| s.rungs_in_case = true);
+    let backend = iqr_backend(&project, &sim, |_| {});
+    backend.connect().expect("interlocks");
+    let trial = first_trial(&project, &backend, "BINHAP");
+    let first = execute_once(&backend, &trial).expect("first");
+    let second = execute_once(&backend, &trial).expect("second");
+    assert_ne!(first, second, "the second run of a pulse rung did the same");
+    let b: Arc<dyn Backend> = backend.clone();
+    let trials: Vec<Trial> = project
+        .plan(&[b])
+        .into_iter()
+        .filter(|t| t.skip.is_none())
+        .collect();
+    let failed: Vec<(String, String)> = trials
+        .iter()
+        .zip(verdicts(&trials))
+        .filter(|(_, v)| v.is_failure())
+        .map(|(t, _)| (t.input.instruction.clone(), t.name()))
+        .collect();
+    assert!(!failed.is_empty(), "no trial failed");
+    assert!(
+        failed.iter().all(|(i, _)| i.ends_with('P')),
+        "a trial of a non-pulse form failed: {failed:?}"
+    );
+}
+
+/// The `hil` commands through the binary: `generate` writes the three files, `doctor` reads a
+/// running simulated CPU without writing, `dry-run` plans every case without a socket, and a
+/// live backend that is not ready stops `run` before any case (exit 2).
+#[test]
+fn the_hil_commands_through_the_binary() {
+    let project = session();
+    let dir = common::scratch();
+    let out_dir = dir.path().join("bench");
+    let out = common::cli(&[
+        "hil",
+        "generate",
+        "--profile",
+        "mitsubishi-iqr",
+        "--variant",
+        "rcpu",
+        "--mailbox",
+        "D11000",
+        "--out",
+        out_dir.to_str().expect("utf-8"),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("mailbox D11000"), "{stdout}");
+    for f in ["executive.st", "manifest.json", "SETUP.md"] {
+        assert!(out_dir.join(f).is_file(), "{f}");
+    }
+    let manifest_file = out_dir.join("manifest.json");
+    let m = Manifest::load(&manifest_file).expect("the written manifest loads");
+    // The same program as the one generated for both variants (the variants are not hashed).
+    assert_eq!(m.hash, iqr_manifest().hash, "generate is deterministic");
+    assert_eq!(m.rungs, iqr_manifest().rungs);
+    let sim = iqr_sim(&project, |_| {});
+    let spec = format!(
+        "slmp:bench={}?manifest={}&confirm=R04CPU&sandbox=manifest",
+        sim.address(),
+        manifest_file.display()
+    );
+    let doctor = common::cli(&["hil", "doctor", "--backend", &spec]);
+    let shown = String::from_utf8_lossy(&doctor.stdout);
+    assert!(doctor.status.success(), "{shown}");
+    assert!(shown.contains("ok    program signature"), "{shown}");
+    assert!(shown.contains("nothing written"), "{shown}");
+    assert_eq!(writes_sent(&sim), 0);
+    let connections = sim.audit().connections;
+    let dry = common::cli(&["hil", "dry-run", "--backend", &spec]);
+    let shown = String::from_utf8_lossy(&dry.stdout);
+    assert!(dry.status.success(), "{shown}");
+    assert!(
+        shown.contains("no socket opened") && shown.contains("0 refused"),
+        "{shown}"
+    );
+    assert_eq!(
+        sim.audit().connections,
+        connections,
+        "the dry run connected"
+    );
+    sim.set_running(false);
+    let run = common::cli(&["run", "--backend", &spec]);
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("live CPU backend `bench` not started") && err.contains("STOP"),
+        "{err}"
+    );
+    assert_eq!(writes_sent(&sim), 0);
+}
+
+/// An FX5 refuses the long device form (C059H), which the FX5 default avoids: asked for anyway,
+/// the interlocks stop on the end code, before any write.
+#[test]
+fn the_long_device_form_on_an_fx5_is_refused_before_any_write() {
+    let project = session();
+    let m = manifest(&project, "mitsubishi-fx5");
+    let variant = m.variants[0].clone();
+    let sim = simulator(&project, &m, &variant, vec![]);
+    let mut s = settings(&m, &variant, &sim);
+    assert_eq!(
+        (s.client.frame, s.client.form),
+        (FrameKind::E3, DeviceForm::Short),
+        "the FX5 default"
+    );
+    s.client.form = DeviceForm::Long;
+    let backend = SlmpBackend::new(s, &project.profiles).expect("backend");
+    let e = backend.connect().expect_err("C059H");
+    assert!(e.contains("end code C059H"), "{e}");
+    assert_eq!(writes_sent(&sim), 0);
+}
+
+/// `hil sim` serves until it is ended, on 127.0.0.1, and a live backend runs against it.
+#[test]
+fn hil_sim_serves_a_simulated_cpu_on_loopback() {
+    use std::io::{BufRead, BufReader};
+    let dir = common::scratch();
+    let manifest_file = dir.path().join("manifest.json");
+    std::fs::write(
+        &manifest_file,
+        serde_json::to_string_pretty(iqr_manifest()).expect("json"),
+    )
+    .expect("write");
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin!("plc-conformance"))
+        .args([
+            "--root",
+            common::root().to_str().expect("utf-8"),
+            "hil",
+            "sim",
+        ])
+        .args(["--manifest", manifest_file.to_str().expect("utf-8")])
+        .args(["--variant", "rcpu"])
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .expect("hil sim starts");
+    let stdout = child.stdout.take().expect("stdout");
+    let line = BufReader::new(stdout)
+        .lines()
+        .next()
+        .expect("a line")
+        .expect("text");
+    let address = line
+        .strip_prefix("listening on ")
+        .unwrap_or_else(|| panic!("{line}"))
+        .to_string();
+    assert!(address.starts_with("127.0.0.1:"), "{address}");
+    let spec = format!(
+        "slmp:bench={address}?manifest={}&confirm=R04CPU&sandbox=manifest&variant=rcpu",
+        manifest_file.display()
+    );
+    let run = common::cli(&["run", "--backend", &spec, "--filter", "binha"]);
+    let _ = child.kill();
+    let _ = child.wait();
+    let shown = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success(),
+        "{shown}{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(shown.contains(" 0 failed"), "{shown}");
+}
