@@ -804,3 +804,19 @@ fn hil_sim_serves_a_simulated_cpu_on_loopback() {
     );
     assert!(shown.contains(" 0 failed"), "{shown}");
 }
+
+/// `hil doctor --self-test` runs one pulse case twice: it passes on a program that evaluates
+/// every rung every scan and fails on one with its rungs inside a CASE.
+#[rstest::rstest]
+#[case::every_rung_every_scan(false, true)]
+#[case::rungs_in_a_case(true, false)]
+fn the_pulse_self_test(#[case] rungs_in_case: bool, #[case] passes: bool) {
+    let project = session();
+    let sim = iqr_sim(&project, |s| s.rungs_in_case = rungs_in_case);
+    let backend = iqr_backend(&project, &sim, |_| {});
+    backend.connect().expect("interlocks");
+    let check = plc_conformance::hil::pulse_self_test(&project, &backend).expect("ran");
+    assert_eq!(check.fired_twice, passes, "{check:?}");
+    assert!(check.trial.contains("p::"), "{check:?}");
+    assert!(sim.audit().stray_writes.is_empty());
+}

@@ -15,7 +15,7 @@ use crate::backend::slmp::manifest::Manifest;
 use crate::backend::slmp::sim::{SimSettings, Simulator};
 use crate::backend::slmp::{SlmpBackend, SlmpSettings};
 use crate::device::Device;
-use crate::hil::{dry_run, generate, GenerateOptions};
+use crate::hil::{dry_run, generate, pulse_self_test, GenerateOptions};
 
 #[derive(Debug, clap::Subcommand)]
 pub enum HilCommand {
@@ -44,6 +44,11 @@ pub enum HilCommand {
         /// The live backend: slmp:NAME=HOST:PORT?manifest=FILE&confirm=TYPE&sandbox=RANGES.
         #[arg(long, value_name = "SPEC")]
         backend: String,
+        /// Then, once every check passed, run one pulse-form case twice and check that both
+        /// executions did the same: writes that case's window (inside the sandbox) and the
+        /// mailbox.
+        #[arg(long)]
+        self_test: bool,
     },
     /// Every trial a live backend would run and every word it would write, checked against its
     /// write fence; no socket is opened.
@@ -131,7 +136,7 @@ pub fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
             )?;
             Ok(EXIT_OK)
         }
-        HilCommand::Doctor { backend } => {
+        HilCommand::Doctor { backend, self_test } => {
             let settings = live_settings(backend)?;
             let (findings, requests) = doctor(&settings);
             let mut text = String::new();
@@ -142,12 +147,40 @@ pub fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
                 };
             }
             let _ = write!(text, "{requests} read requests sent, nothing written");
+            let mut ok = findings.iter().all(|f| f.result.is_ok());
+            if *self_test && ok {
+                let project = load(&paths(cli, &[], "--vectors")?)?;
+                let live = Arc::new(
+                    SlmpBackend::new(settings, &project.profiles).map_err(CliError::input)?,
+                );
+                live.connect().map_err(CliError::input)?;
+                let _ = writeln!(text);
+                match pulse_self_test(&project, &live) {
+                    Ok(check) => {
+                        ok = check.fired_twice;
+                        let _ = write!(
+                            text,
+                            "{}  pulse self-test: {} run twice: {} / {}{}",
+                            if ok { "ok  " } else { "FAIL" },
+                            check.trial,
+                            check.first,
+                            check.second,
+                            if ok {
+                                ""
+                            } else {
+                                "; the second execution differs: a pulse rung fires once \
+                                 only, so its later cases would be judged on a stale result"
+                            }
+                        );
+                    }
+                    Err(why) => {
+                        ok = false;
+                        let _ = write!(text, "FAIL  pulse self-test: {why}");
+                    }
+                }
+            }
             output::write(None, &text)?;
-            Ok(if findings.iter().all(|f| f.result.is_ok()) {
-                EXIT_OK
-            } else {
-                EXIT_DIFFERENCES
-            })
+            Ok(if ok { EXIT_OK } else { EXIT_DIFFERENCES })
         }
         HilCommand::DryRun { backend } => {
             let settings = live_settings(backend)?;

@@ -355,3 +355,93 @@ pub fn dry_run(project: &Project, backend: &Arc<SlmpBackend>) -> DryRun {
     out.rungs = rungs.len();
     out
 }
+
+/// Whether a trial is a corpus case that expects words to change without an error: two
+/// executions of it can be told apart from one that did nothing.
+fn expects_writes(t: &crate::plan::Trial) -> bool {
+    match &t.check {
+        crate::plan::Check::Native { case, .. } => case
+            .expect
+            .as_ref()
+            .is_some_and(|e| !e.after.is_empty() && e.error.is_none()),
+        _ => false,
+    }
+}
+
+/// What the pulse self-test found.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PulseCheck {
+    /// The trial it ran twice.
+    pub trial: String,
+    /// Whether the second execution did what the first did.
+    pub fired_twice: bool,
+    /// What each execution did, for the message.
+    pub first: String,
+    pub second: String,
+}
+
+/// Runs one pulse-form case twice in a row on a connected live backend and compares what the
+/// two executions did. A pulse form executes on its enable's rising edge; if the program on the
+/// CPU did not let the enable fall between two cases (rungs inside IF or CASE, or an engineering
+/// tool that treats pulse calls in structured text otherwise), the second execution does
+/// nothing and every later case of that rung would be judged on a stale result. Writes only
+/// what a case writes: its window (inside the fence) and the mailbox's PC words.
+pub fn pulse_self_test(
+    project: &Project,
+    backend: &Arc<SlmpBackend>,
+) -> Result<PulseCheck, String> {
+    let as_backend: Arc<dyn Backend> = backend.clone();
+    let profile = project
+        .profiles
+        .get(backend.profile())
+        .ok_or_else(|| format!("profile `{}` is not loaded", backend.profile()))?;
+    let trials = project.plan(&[as_backend]);
+    let trial = trials
+        .iter()
+        .filter(|t| t.skip.is_none())
+        .find(|t| {
+            t.input
+                .instruction
+                .strip_suffix('P')
+                .is_some_and(|base| profile.instructions.contains_key(base))
+                && expects_writes(t)
+        })
+        .ok_or("the program has no pulse-form rung whose case writes something to compare")?;
+    let imgs = images(trial);
+    let reqs = requests(trial, &imgs);
+    let req = reqs
+        .first()
+        .ok_or_else(|| format!("{}: no request", trial.name()))?;
+    let show = |r: &Result<crate::backend::Response, crate::backend::Fault>| match r {
+        Ok(crate::backend::Response::Done(o)) if o.writes.is_empty() && o.error.is_none() => {
+            "nothing".to_string()
+        }
+        Ok(crate::backend::Response::Done(o)) => {
+            let mut words: Vec<String> = o
+                .writes
+                .iter()
+                .map(|(d, v)| format!("{d}={v:04X}H"))
+                .collect();
+            if let Some(e) = &o.error {
+                words.push(format!("error {e}"));
+            }
+            words.join(" ")
+        }
+        Ok(other) => format!("{other:?}"),
+        Err(fault) => fault.to_string(),
+    };
+    let first = backend.execute(req);
+    if let Err(fault) = &first {
+        return Err(format!("{}: {fault}", trial.name()));
+    }
+    let second = backend.execute(req);
+    if let Err(fault) = &second {
+        return Err(format!("{}: {fault}", trial.name()));
+    }
+    Ok(PulseCheck {
+        trial: trial.name(),
+        fired_twice: first == second,
+        first: show(&first),
+        second: show(&second),
+    })
+}
