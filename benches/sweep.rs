@@ -8,7 +8,8 @@
 //! - values: all 65,536 values through each value-to-hex instruction on every built-in variant;
 //! - protocol: generated inputs through `plc-conformance serve` (the native adapter), batched;
 //! - full: all 2^32 four-byte texts through every built-in hex-to-value lowering by byte class;
-//!   and a shard asked text by text, with the whole space extrapolated from it.
+//!   and a shard asked text by text through the models, and a larger one through the lowerings'
+//!   rules (`--each-text`), with the whole space extrapolated from each.
 //!
 //! Results: `docs/performance.md`, section "Sweeps".
 
@@ -252,19 +253,27 @@ fn full(project: &Project, cores: usize, texts: u64) {
         if c.mismatch.is_none() { "all alike" } else { "A MISMATCH" },
         r.groups.by_key.len()
     );
-    let shards = (1u64 << 32) / texts;
-    settings.generator = Generator::Full { by_class: false };
-    settings.shard = (1, shards);
-    let sweep = Sweep::new(settings, &project.profiles, &project.backends).expect("sweep");
-    let (t, r) = best(1, || sweep.run(&AtomicBool::new(false), &mut |_, _| {}));
-    println!(
-        "full: each text, shard 1/{shards} ({} texts) x {} lowerings: {t:.2} s, {:.0} texts/s; \
-         the whole space at this rate: {:.0} s ({:.1} h), {} groups",
-        r.swept,
-        sweep.columns.len(),
-        r.swept as f64 / t,
-        t * shards as f64,
-        t * shards as f64 / 3600.0,
-        r.groups.by_key.len()
-    );
+    // Each text through the models (the general path, as with an external backend's columns),
+    // then through the lowerings' rules (what `--each-text` does over the built-ins), each on a
+    // shard and extrapolated.
+    for (exhaustive, texts) in [(false, texts), (true, texts * 64)] {
+        let shards = ((1u64 << 32) / texts).max(1);
+        settings.generator = Generator::Full { by_class: false };
+        settings.shard = (1, shards);
+        settings.exhaustive = exhaustive;
+        let sweep =
+            Sweep::new(settings.clone(), &project.profiles, &project.backends).expect("sweep");
+        let (t, r) = best(1, || sweep.run(&AtomicBool::new(false), &mut |_, _| {}));
+        println!(
+            "full: each text through the {}, shard 1/{shards} ({} texts) x {} lowerings: {t:.2} s, \
+             {:.0} texts/s; the whole space at this rate: {:.0} s ({:.1} h), {} groups",
+            if exhaustive { "rules" } else { "models" },
+            r.swept,
+            sweep.columns.len(),
+            r.swept as f64 / t,
+            t * shards as f64,
+            t * shards as f64 / 3600.0,
+            r.groups.by_key.len()
+        );
+    }
 }

@@ -26,6 +26,7 @@
 pub mod classes;
 pub mod direct;
 pub mod emit;
+pub mod exhaustive;
 pub mod generate;
 pub mod group;
 pub mod input;
@@ -78,6 +79,10 @@ pub struct Settings {
     pub class_check: u64,
     /// What codec columns are judged against (operation sweeps).
     pub oracle: Oracle,
+    /// The full generator asking each text of hex-to-value over the built-in lowerings asks
+    /// them through the lowerings' rules ([`exhaustive`]); the results are the same.
+    #[serde(skip)]
+    pub exhaustive: bool,
 }
 
 impl Settings {
@@ -94,6 +99,7 @@ impl Settings {
             direct: true,
             class_check: DEFAULT_CLASS_CHECK,
             oracle: Oracle::Declared,
+            exhaustive: true,
         }
     }
 }
@@ -147,6 +153,9 @@ pub struct Results {
     /// The full generator by class: the classes and their check.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub classes: Option<classes::Report>,
+    /// Every text asked through the built-in lowerings' rules ([`exhaustive`]): how.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub exhaustive: Option<exhaustive::Report>,
 }
 
 impl Results {
@@ -358,10 +367,16 @@ impl Sweep {
     }
 
     /// Runs the sweep (this shard of it), calling `progress(done, of)` after each round, then
-    /// shrinks the groups. A set `stop` ends it after the round under way, with what was found.
+    /// shrinks the groups. Every text of hex-to-value through the built-in lowerings is asked
+    /// through their rules ([`exhaustive`]), with the same results. A set `stop` ends it after the round under way, with what was found.
     /// The full generator by class first finds its byte classes and afterwards checks them
     /// ([`classes`]).
     pub fn run(&self, stop: &AtomicBool, progress: &mut dyn FnMut(u64, u64)) -> Results {
+        if let Some(plan) = exhaustive::plan(self) {
+            if let Some(results) = exhaustive::run(self, &plan, stop, progress) {
+                return results;
+            }
+        }
         let started = Instant::now();
         let by_class = matches!(self.settings.generator, Generator::Full { by_class: true });
         let mut split_texts = 0;
@@ -461,6 +476,7 @@ impl Sweep {
             groups,
             shrunk: Vec::new(),
             classes: class_report,
+            exhaustive: None,
         };
         if !stop.load(Ordering::Relaxed) {
             results.shrunk = shrink::shrink_groups(self, &results, stop);

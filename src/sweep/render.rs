@@ -208,6 +208,9 @@ pub fn text(results: &Results) -> String {
     if let Some(c) = &results.classes {
         class_text(&mut out, c);
     }
+    if let Some(e) = &results.exhaustive {
+        exhaustive_text(&mut out, e);
+    }
     let swept = thousands(results.swept);
     let judged = judged(results);
     for j in &judged {
@@ -297,6 +300,36 @@ fn class_text(out: &mut String, c: &super::classes::Report) {
                 thousands(c.checked),
                 m.text.point,
                 m.representative.point
+            );
+        }
+    }
+}
+
+/// How every text was asked through the lowerings' rules, and whether the models agreed.
+fn exhaustive_text(out: &mut String, e: &super::exhaustive::Report) {
+    let _ = writeln!(
+        out,
+        "  each text: {} texts asked through every lowering's rule in {:.1} s, tallied by {} \
+         tuples of {} byte classes; {} answered unlike their tuple and were asked on their own",
+        thousands(e.texts),
+        e.seconds,
+        thousands(e.tuples),
+        e.classes.len(),
+        thousands(e.apart)
+    );
+    match &e.disagreement {
+        None => {
+            let _ = writeln!(
+                out,
+                "  checked: the first text of each tuple asked through the models too, each \
+                 answered as the rules said"
+            );
+        }
+        Some(f) => {
+            let _ = writeln!(
+                out,
+                "  CHECK FAILED: the models answer {} unlike the rules; the counts are not exact",
+                f.point
             );
         }
     }
@@ -408,6 +441,9 @@ pub struct Document<'a> {
     /// The full generator by class: the byte classes and their check.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub byte_classes: Option<&'a super::classes::Report>,
+    /// Every text asked through the built-in lowerings' rules, and the models' check of them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub each_text: Option<&'a super::exhaustive::Report>,
 }
 
 #[derive(Serialize)]
@@ -460,6 +496,7 @@ pub fn document(results: &Results) -> Document<'_> {
             })
             .collect(),
         byte_classes: results.classes.as_ref(),
+        each_text: results.exhaustive.as_ref(),
     }
 }
 
