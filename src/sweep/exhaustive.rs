@@ -310,7 +310,8 @@ pub fn run(
     let shard_inputs = (1u64 << 32).saturating_sub(k - 1).div_ceil(n);
     progress(0, shard_inputs);
     let Some((classes, _)) = classes::derive(sweep, stop) else {
-        return Some(empty(sweep, started, shard_inputs));
+        let groups = Groups::new(sweep.settings.max_classes);
+        return Some(sweep.results(shard_inputs, 0, true, groups, started));
     };
     let tuples = classes.tuples() as usize;
     let r = plan.rules.len();
@@ -362,8 +363,7 @@ pub fn run(
                 let row = &table[t * r..t * r + r];
                 let alike = replies.iter().enumerate().all(|(c, reply)| {
                     let code = row[plan.of[c]];
-                    agrees(code, reply)
-                        && (code < ERROR || same_error(&mut errors[c], reply))
+                    agrees(code, reply) && (code < ERROR || same_error(&mut errors[c], reply))
                 });
                 if !alike {
                     disagreement = Some(Found {
@@ -385,49 +385,21 @@ pub fn run(
             swept += weight;
         }
     }
-    let mut results = Results {
-        settings: sweep.settings.clone(),
-        columns: sweep.column_info(),
-        space: sweep.space.total(),
-        shard_inputs,
-        swept,
-        interrupted,
-        elapsed: started.elapsed(),
-        groups,
-        shrunk: Vec::new(),
-        classes: None,
-        exhaustive: Some(Report {
-            texts: swept,
-            classes: classes.describe(),
-            tuples: adds.iter().filter(|(_, t)| t.is_some()).count() as u64,
-            apart: apart.len() as u64,
-            seconds,
-            disagreement,
-        }),
-    };
+    let mut results = sweep.results(shard_inputs, swept, interrupted, groups, started);
+    results.exhaustive = Some(Report {
+        texts: swept,
+        classes: classes.describe(),
+        tuples: adds.iter().filter(|(_, t)| t.is_some()).count() as u64,
+        apart: apart.len() as u64,
+        seconds,
+        disagreement,
+    });
     progress(swept, shard_inputs);
     if !interrupted {
         results.shrunk = super::shrink::shrink_groups(sweep, &results, stop);
     }
     results.elapsed = started.elapsed();
     Some(results)
-}
-
-/// The results of a sweep stopped before any text was asked.
-fn empty(sweep: &Sweep, started: Instant, shard_inputs: u64) -> Results {
-    Results {
-        settings: sweep.settings.clone(),
-        columns: sweep.column_info(),
-        space: sweep.space.total(),
-        shard_inputs,
-        swept: 0,
-        interrupted: true,
-        elapsed: started.elapsed(),
-        groups: Groups::new(sweep.settings.max_classes),
-        shrunk: Vec::new(),
-        classes: None,
-        exhaustive: None,
-    }
 }
 
 /// Every text of the shard through the rules, the first bytes shared out among the threads;

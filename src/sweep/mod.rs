@@ -465,24 +465,38 @@ impl Sweep {
                 mismatch,
             }
         });
-        let mut results = Results {
+        let mut results = self.results(shard_inputs, swept, interrupted, groups, started);
+        results.classes = class_report;
+        if !stop.load(Ordering::Relaxed) {
+            results.shrunk = shrink::shrink_groups(self, &results, stop);
+        }
+        results.elapsed = started.elapsed();
+        results
+    }
+
+    /// The results of this sweep with what was swept, before shrinking, with neither classes nor
+    /// an exhaustive report.
+    pub(crate) fn results(
+        &self,
+        shard_inputs: u64,
+        swept: u64,
+        interrupted: bool,
+        groups: Groups,
+        started: Instant,
+    ) -> Results {
+        Results {
             settings: self.settings.clone(),
             columns: self.column_info(),
-            space: total,
+            space: self.space.total(),
             shard_inputs,
             swept,
             interrupted,
             elapsed: started.elapsed(),
             groups,
             shrunk: Vec::new(),
-            classes: class_report,
+            classes: None,
             exhaustive: None,
-        };
-        if !stop.load(Ordering::Relaxed) {
-            results.shrunk = shrink::shrink_groups(self, &results, stop);
         }
-        results.elapsed = started.elapsed();
-        results
     }
 
     pub fn column_info(&self) -> Vec<ColumnInfo> {
