@@ -5,7 +5,7 @@ use std::collections::BTreeSet;
 use std::path::Path;
 
 use super::{read_file, FileContext, LoadErrorKind, LoadErrors};
-use crate::model::open_questions::OpenQuestion;
+use crate::model::open_questions::{Decides, OpenQuestion};
 use crate::model::profile::Profiles;
 use crate::model::Corpus;
 use crate::spec::open_questions::OpenQuestionsSpec;
@@ -102,14 +102,57 @@ pub fn load_open_questions(
                 );
             }
         }
+        let decides = q.decides.map(|d| {
+            if !q.probes.contains(&d.probe) {
+                cx.error(
+                    key("decides.probe"),
+                    invalid(format!("`{}` is not one of the question's probes", d.probe)),
+                );
+            }
+            for id in d.outcomes.keys().filter(|id| !readings.contains(id)) {
+                cx.error(
+                    format!("questions[{i}].decides.outcomes.{id}"),
+                    super::checks::unknown("reading", id, &readings),
+                );
+            }
+            let mut outcomes = Vec::new();
+            for r in &readings {
+                match d.outcomes.get(r) {
+                    None => cx.error(
+                        key("decides.outcomes"),
+                        invalid(format!(
+                            "reading `{r}` has no outcome: the probe must tell every reading apart"
+                        )),
+                    ),
+                    Some(o) => {
+                        if let Some((same, _)) = outcomes.iter().find(|(_, x)| x == o) {
+                            cx.error(
+                                format!("questions[{i}].decides.outcomes.{r}"),
+                                invalid(format!(
+                                    "readings `{same}` and `{r}` predict the same outcome `{o}`: \
+                                     the probe cannot tell them apart"
+                                )),
+                            );
+                        }
+                        outcomes.push((r.clone(), o.clone()));
+                    }
+                }
+            }
+            Decides {
+                probe: d.probe,
+                outcomes,
+            }
+        });
         out.push(OpenQuestion {
             location: cx.location(&format!("questions[{i}]")),
             id: q.id,
             title: q.title,
             profile: q.profile,
+            variants: q.variants,
             readings,
             model_takes: q.model_takes,
             probes: q.probes,
+            decides,
         });
     }
     if errors.is_empty() {

@@ -7,10 +7,22 @@ pub struct OpenQuestion {
     pub id: String,
     pub title: String,
     pub profile: String,
+    /// The profile variants it is about; all when `None`.
+    pub variants: Option<Vec<String>>,
     /// The readings' ids, in file order.
     pub readings: Vec<String>,
     pub model_takes: String,
     /// Case ids whose outcome tells the readings apart; every one is in the corpus.
     pub probes: Vec<String>,
+    /// The probe whose outcome differs under every reading, and each reading's outcome (as a
+    /// report writes it); the reference model's must be `model_takes`'s.
+    pub decides: Option<Decides>,
     pub location: Location,
+}
+
+#[derive(Debug, Clone)]
+pub struct Decides {
+    pub probe: String,
+    /// By reading id, in the readings' order.
+    pub outcomes: Vec<(String, String)>,
 }

@@ -2,6 +2,8 @@
 //! manual page settles, each with its competing readings and the probe vectors whose outcome on
 //! a real CPU tells them apart.
 
+use std::collections::BTreeMap;
+
 use schemars::JsonSchema;
 use serde::Deserialize;
 
@@ -35,6 +37,9 @@ pub struct QuestionSpec {
     pub evidence: Vec<String>,
     /// Case ids whose outcome on a real CPU tells the readings apart.
     pub probes: Vec<String>,
+    /// The probe that tells every reading apart, and its outcome under each reading.
+    #[serde(default)]
+    pub decides: Option<DecidesSpec>,
     #[serde(default)]
     pub note: Option<String>,
     /// What CPUs on the bench answered.
@@ -48,6 +53,19 @@ pub struct ReadingSpec {
     #[schemars(regex(pattern = r"^[a-z0-9]+(-[a-z0-9]+)*$"))]
     pub id: String,
     pub text: String,
+}
+
+/// A probe whose outcome differs under every reading: the outcome each reading predicts, written
+/// as a report writes what a backend did (`error 3401H, no change`, `D200=0030H`, `no change`;
+/// for a cross-vendor probe its answer, `0030H`), or in words for a reading that predicts no
+/// single outcome (`an error other than 3401H`).
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DecidesSpec {
+    /// One of the question's probes.
+    pub probe: String,
+    /// By reading id: every reading, each outcome different.
+    pub outcomes: BTreeMap<String, String>,
 }
 
 /// One CPU's answer to a question.
