@@ -61,6 +61,9 @@ fn accepts(#[case] d1: &str) {
 #[case("D1500", "D1500 does not exist on any idec-fc4a variant")]
 #[case("D8000", "D8000 does not exist on any idec-fc4a variant")]
 #[case("I0", "unknown device for this operand `I`")]
+// "Special internal relays cannot be designated as D1" (fc4a-user p.14-5).
+#[case("M8000", "M8000 does not exist on any idec-fc4a variant")]
+#[case("M8004", "M8004 does not exist on any idec-fc4a variant")]
 fn rejects(#[case] d1: &str, #[case] message: &str) {
     let errors = load_with_d1(d1).expect_err("the vector is rejected");
     assert!(errors.contains(message), "{errors}");
