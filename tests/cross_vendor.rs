@@ -153,9 +153,10 @@ fn a_listed_cross_vendor_difference_is_a_known_difference_not_a_failure() {
         KnownDifferences {
             file: "known.yaml".into(),
             entries: vec![Entry {
-                case: trial.case_id().to_string(),
+                covers: plc_conformance::model::known::Covers::Case(trial.case_id().to_string()),
                 instruction: Some(trial.check_name().to_string()),
                 variant: None,
+                kind: None,
                 reason: "reads D150".into(),
                 location: "known.yaml:2".into(),
             }],

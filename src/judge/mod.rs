@@ -532,9 +532,10 @@ mod known_tests {
 
     fn entry() -> Entry {
         Entry {
-            case: "c".into(),
+            covers: crate::model::known::Covers::Case("c".into()),
             instruction: None,
             variant: None,
+            kind: None,
             reason: "r".into(),
             location: "k.yaml:2".into(),
         }

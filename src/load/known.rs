@@ -18,7 +18,7 @@ use std::path::Path;
 
 use super::{read_file, FileContext, LoadErrorKind, LoadErrors};
 use crate::model::cross_vendor::CrossVendorCase;
-use crate::model::known::{Entry, KnownDifferences};
+use crate::model::known::{id_matches, Covers, Entry, KnownDifferences};
 use crate::model::profile::Profile;
 use crate::model::{Basis, Corpus};
 use crate::spec::known::KnownFileSpec;
@@ -46,11 +46,83 @@ pub fn load_known(
     for (i, e) in spec.differences.into_iter().enumerate() {
         let key = |k: &str| format!("differences[{i}].{k}");
         let location = cx.location(&format!("differences[{i}]")).to_string();
+        let by_cause = !e.cases.is_empty() || !e.input.is_empty();
+        let reason = e.reason.as_deref().map(str::trim).unwrap_or_default();
+        let covers = match (&e.case, by_cause) {
+            (Some(_), true) => {
+                cx.error(
+                    key("case"),
+                    LoadErrorKind::Invalid(
+                        "an entry lists one `case`, or one cause's `cases`/`input`, not both"
+                            .into(),
+                    ),
+                );
+                continue;
+            }
+            (None, false) => {
+                cx.error(
+                    key("case"),
+                    LoadErrorKind::Invalid(
+                        "an entry needs the `case` it lists, or the `cases` (id patterns) or \
+                         `input` (classes of text) of its cause"
+                            .into(),
+                    ),
+                );
+                continue;
+            }
+            (Some(c), false) => Covers::Case(c.clone()),
+            (None, true) => Covers::Cause {
+                patterns: e.cases.clone(),
+                inputs: e.input.clone(),
+            },
+        };
+        let shown = match (&covers, e.cause.as_deref().map(str::trim)) {
+            (Covers::Cause { .. }, None | Some("")) => {
+                cx.error(
+                    key("cause"),
+                    LoadErrorKind::Invalid(
+                        "an entry by cause needs its `cause`: what the implementation does".into(),
+                    ),
+                );
+                continue;
+            }
+            (Covers::Cause { .. }, Some(cause)) => {
+                if e.kind.is_none() {
+                    cx.error(
+                        key("kind"),
+                        LoadErrorKind::Invalid(
+                            "an entry by cause needs its `kind`: `bug` or `by-design`".into(),
+                        ),
+                    );
+                }
+                let kind = e.kind.map(|k| format!(" ({k})")).unwrap_or_default();
+                if reason.is_empty() {
+                    format!("{cause}{kind}")
+                } else {
+                    format!("{cause}{kind}: {reason}")
+                }
+            }
+            (Covers::Case(_), cause) => {
+                let cause = cause.unwrap_or_default();
+                match (e.kind, cause.is_empty(), reason.is_empty()) {
+                    (_, true, true) => String::new(),
+                    (kind, _, _) => {
+                        let kind = kind.map(|k| format!(" ({k})")).unwrap_or_default();
+                        match (cause.is_empty(), reason.is_empty()) {
+                            (false, false) => format!("{cause}{kind}: {reason}"),
+                            (false, true) => format!("{cause}{kind}"),
+                            _ => format!("{reason}{kind}"),
+                        }
+                    }
+                }
+            }
+        };
         let entry = Entry {
-            case: e.case,
+            covers,
             instruction: e.instruction,
             variant: e.variant,
-            reason: e.reason.trim().to_string(),
+            kind: e.kind,
+            reason: shown,
             location,
         };
         if entry.reason.is_empty() {
@@ -59,7 +131,13 @@ pub fn load_known(
                 LoadErrorKind::Invalid("a known difference needs its reason".into()),
             );
         }
-        let cross_vendor = corpus.cross_vendor.iter().find(|c| c.id == entry.case);
+        if let Covers::Cause { patterns, .. } = &entry.covers {
+            check_cause(&entry, patterns, profile, corpus, strict, &mut cx, &key);
+            known.entries.push(entry);
+            continue;
+        }
+        let case_id = entry.case().unwrap_or_default().to_string();
+        let cross_vendor = corpus.cross_vendor.iter().find(|c| c.id == case_id);
         let Some(profile) = profile else {
             // A codec has neither instructions nor variants, and answers cross-vendor cases only.
             for (k, given) in [
@@ -85,7 +163,7 @@ pub fn load_known(
                     LoadErrorKind::Invalid(format!(
                         "unknown cross-vendor case id `{}`: a codec-level backend runs only the \
                          cross-vendor cases",
-                        entry.case
+                        case_id
                     )),
                 ),
                 None => known.ignored.push(entry),
@@ -100,14 +178,14 @@ pub fn load_known(
         let Some(case) = corpus
             .cases
             .iter()
-            .find(|c| c.id == entry.case && c.profiles.contains(&profile.id))
+            .find(|c| c.id == case_id && c.profiles.contains(&profile.id))
         else {
             if strict {
                 cx.error(
                     key("case"),
                     LoadErrorKind::Invalid(format!(
                         "unknown case id `{}`: no case of profile {} has it",
-                        entry.case, profile.id
+                        case_id, profile.id
                     )),
                 );
             } else {
@@ -147,7 +225,9 @@ pub fn load_known(
             }
         }
         if let Some(first) = known.entries.iter().find(|k| {
-            k.case == entry.case && k.instruction == entry.instruction && k.variant == entry.variant
+            k.case() == Some(&case_id)
+                && k.instruction == entry.instruction
+                && k.variant == entry.variant
         }) {
             cx.error(
                 key("case"),
@@ -166,6 +246,70 @@ pub fn load_known(
     }
 }
 
+/// An entry by cause: each id pattern must cover a case the backend can run (against the
+/// project's own corpus, `strict`), and the instruction and variant it narrows to must exist (a
+/// typo would excuse nothing and go unnoticed).
+fn check_cause(
+    entry: &Entry,
+    patterns: &[String],
+    profile: Option<&Profile>,
+    corpus: &Corpus,
+    strict: bool,
+    cx: &mut FileContext<'_>,
+    key: &dyn Fn(&str) -> String,
+) {
+    let ids: Vec<&str> = match profile {
+        None => corpus.cross_vendor.iter().map(|c| c.id.as_str()).collect(),
+        Some(p) => corpus
+            .cases
+            .iter()
+            .filter(|c| c.profiles.contains(&p.id))
+            .map(|c| c.id.as_str())
+            .chain(corpus.cross_vendor.iter().map(|c| c.id.as_str()))
+            .collect(),
+    };
+    for (j, p) in patterns.iter().enumerate() {
+        if strict && !ids.iter().any(|id| id_matches(p, id)) {
+            cx.error(
+                format!("{}[{j}]", key("cases")),
+                LoadErrorKind::Invalid(format!("`{p}` matches no case this backend runs")),
+            );
+        }
+    }
+    match profile {
+        None => {
+            for (k, given) in [
+                ("instruction", entry.instruction.is_some()),
+                ("variant", entry.variant.is_some()),
+            ] {
+                if given {
+                    cx.error(
+                        key(k),
+                        LoadErrorKind::Invalid(format!(
+                            "a codec-level backend has no {k}: leave `{k}` out"
+                        )),
+                    );
+                }
+            }
+        }
+        Some(p) => {
+            if let Some(v) = &entry.variant {
+                if p.variant(v).is_none() {
+                    let known: Vec<String> = p.variants.iter().map(|v| v.id.clone()).collect();
+                    cx.error(
+                        key("variant"),
+                        LoadErrorKind::Unknown {
+                            what: "variant",
+                            name: v.clone(),
+                            expected: known,
+                        },
+                    );
+                }
+            }
+        }
+    }
+}
+
 /// An `unspecified` case is recorded and never fails: there is no difference to list.
 fn check_not_unspecified(
     entry: &Entry,
@@ -179,7 +323,7 @@ fn check_not_unspecified(
             LoadErrorKind::Invalid(format!(
                 "case `{}` is unspecified: it is recorded and never fails, so there is no \
                  difference to list",
-                entry.case
+                entry.case().unwrap_or_default()
             )),
         );
     }
@@ -206,7 +350,7 @@ fn check_cross_vendor_entry(
             key("case"),
             LoadErrorKind::Invalid(format!(
                 "cross-vendor case `{}` does not run on profile {}: it lowers no {}",
-                entry.case, profile.id, case.operation
+                case.id, profile.id, case.operation
             )),
         );
     }
@@ -325,6 +469,49 @@ mod tests {
     }
 
     #[test]
+    fn an_entry_by_cause_covers_many_cases_and_is_checked() {
+        let known = load(
+            "differences:\n  - cause: takes lowercase\n    kind: bug\n    cases: [c*, only-*]\n",
+            true,
+        )
+        .expect("loads");
+        let e = &known.entries[0];
+        assert_eq!(e.reason, "takes lowercase (bug)");
+        assert_eq!(e.case(), None);
+        let subject = |case| crate::model::known::Subject {
+            case,
+            text: None,
+            instruction: "HABIN",
+            variant: "a",
+        };
+        assert!(e.matches(&subject("c1")));
+        assert!(e.matches(&subject("only-a")));
+        assert!(!e.matches(&subject("open")));
+        let errors = load(
+            "differences:\n\
+             - {cause: c, kind: bug, cases: [nothing-*]}\n\
+             - {cases: [c1], kind: bug}\n\
+             - {cause: c, cases: [c1]}\n\
+             - {case: c1, cases: [c1], reason: r}\n\
+             - {reason: r}\n\
+             - {cause: c, kind: by-design, cases: [c1], variant: z}\n",
+            true,
+        )
+        .expect_err("invalid")
+        .to_string();
+        for expected in [
+            ":2: differences[0].cases[0]: `nothing-*` matches no case this backend runs",
+            ":3: differences[1].cause: an entry by cause needs its `cause`",
+            ":4: differences[2].kind: an entry by cause needs its `kind`: `bug` or `by-design`",
+            ":5: differences[3].case: an entry lists one `case`, or one cause's `cases`/`input`, not both",
+            ":6: differences[4].case: an entry needs the `case` it lists",
+            ":7: differences[5].variant: unknown variant `z`",
+        ] {
+            assert!(errors.contains(expected), "{expected}\nin:\n{errors}");
+        }
+    }
+
+    #[test]
     fn another_corpus_sets_unknown_cases_aside() {
         let known = load(
             "differences:\n  - {case: c1, reason: r}\n  - {case: elsewhere, reason: r}\n",
@@ -333,6 +520,6 @@ mod tests {
         .expect("loads");
         assert_eq!(known.entries.len(), 1);
         assert_eq!(known.ignored.len(), 1);
-        assert_eq!(known.ignored[0].case, "elsewhere");
+        assert_eq!(known.ignored[0].case(), Some("elsewhere"));
     }
 }

@@ -4,27 +4,92 @@
 //! green run that still catches regressions. The list is loaded by [`crate::load`] and applied
 //! by [`crate::judge`]: a listed trial that differs is a known difference, a listed trial that
 //! conforms is a stale entry (a failure, so the list cannot rot), a fault is never excused.
+//!
+//! One cause ("accepts lowercase") usually shows in many cases, so an entry names either one
+//! case or one cause with the cases it covers: by id pattern, or by a class of their input text.
+//! Every trial an entry covers must differ, so a cause is narrowed to the inputs it explains.
 
 use std::path::PathBuf;
+
+pub use crate::spec::known::{InputClass, Kind};
+
+/// Whether `id` matches `pattern`, where `*` stands for any run of characters.
+pub fn id_matches(pattern: &str, id: &str) -> bool {
+    let mut parts = pattern.split('*');
+    let first = parts.next().unwrap_or_default();
+    let Some(mut rest) = id.strip_prefix(first) else {
+        return false;
+    };
+    let parts: Vec<&str> = parts.collect();
+    let Some((last, middle)) = parts.split_last() else {
+        return rest.is_empty();
+    };
+    for p in middle {
+        match rest.find(p) {
+            Some(at) => rest = &rest[at + p.len()..],
+            None => return false,
+        }
+    }
+    rest.len() >= last.len() && rest.ends_with(last)
+}
+
+/// What an entry covers.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Covers {
+    /// One case, by id.
+    Case(String),
+    /// The cases of one cause: those whose id matches a pattern or whose text has a class.
+    Cause {
+        patterns: Vec<String>,
+        inputs: Vec<InputClass>,
+    },
+}
 
 /// One validated entry.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Entry {
-    pub case: String,
+    pub covers: Covers,
     /// Only this instruction of the case (for a cross-vendor case: only this lowering).
     pub instruction: Option<String>,
     pub variant: Option<String>,
+    pub kind: Option<Kind>,
+    /// What a report shows: the reason, or the kind and the cause.
     pub reason: String,
     /// `file:line` of the entry, to point at when it goes stale.
     pub location: String,
 }
 
+/// The case a trial checks, as an entry looks at it.
+#[derive(Debug, Clone, Copy)]
+pub struct Subject<'a> {
+    pub case: &'a str,
+    /// A cross-vendor case's text; `None` for a case of an instruction's own corpus.
+    pub text: Option<&'a [u8]>,
+    pub instruction: &'a str,
+    pub variant: &'a str,
+}
+
 impl Entry {
     /// Whether the entry covers a trial of this case, instruction (or lowering) and variant.
-    pub fn matches(&self, case: &str, instruction: &str, variant: &str) -> bool {
-        self.case == case
-            && self.instruction.as_ref().is_none_or(|i| i == instruction)
-            && self.variant.as_ref().is_none_or(|v| v == variant)
+    pub fn matches(&self, s: &Subject<'_>) -> bool {
+        let covered = match &self.covers {
+            Covers::Case(c) => c == s.case,
+            Covers::Cause { patterns, inputs } => {
+                patterns.iter().any(|p| id_matches(p, s.case))
+                    || s.text.is_some_and(|t| inputs.iter().any(|i| i.holds(t)))
+            }
+        };
+        covered
+            && self.instruction.as_ref().is_none_or(|i| i == s.instruction)
+            && self.variant.as_ref().is_none_or(|v| v == s.variant)
+    }
+
+    /// The one case the entry lists, if it lists one.
+    pub fn case(&self) -> Option<&str> {
+        match &self.covers {
+            Covers::Case(c) => Some(c),
+            Covers::Cause { .. } => None,
+        }
     }
 }
 
@@ -39,10 +104,51 @@ pub struct KnownDifferences {
 }
 
 impl KnownDifferences {
-    /// The entry covering a trial, if any (the first that matches).
-    pub fn entry(&self, case: &str, instruction: &str, variant: &str) -> Option<&Entry> {
+    /// The entry covering a trial, if any: the entry of its own case first, else the first cause
+    /// that covers it.
+    pub fn entry(&self, s: &Subject<'_>) -> Option<&Entry> {
         self.entries
             .iter()
-            .find(|e| e.matches(case, instruction, variant))
+            .find(|e| e.case().is_some() && e.matches(s))
+            .or_else(|| self.entries.iter().find(|e| e.matches(s)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn patterns_take_any_run_of_characters_for_a_star() {
+        for (p, id, m) in [
+            ("xv-h2v-6*h", "xv-h2v-61h", true),
+            ("xv-h2v-6*h", "xv-h2v-66h", true),
+            ("xv-h2v-6*h", "xv-h2v-60h-x", false),
+            ("habin-*-is-invalid", "habin-fixed-61h-is-invalid", true),
+            ("habin-*", "dhabin-x", false),
+            ("*", "anything", true),
+            ("exact", "exact", true),
+            ("exact", "exactly", false),
+            ("a*b*c", "abc", true),
+            ("a*b*c", "acb", false),
+        ] {
+            assert_eq!(id_matches(p, id), m, "{p} {id}");
+        }
+    }
+
+    #[test]
+    fn each_class_holds_for_its_characters_only() {
+        assert!(InputClass::Lowercase.holds(b"5a8D"));
+        assert!(!InputClass::Lowercase.holds(b"5A8D"));
+        assert!(InputClass::Blank.holds(b"5A\t8"));
+        assert!(InputClass::Sign.holds(b"-5A8"));
+        assert!(InputClass::HexPrefix.holds(b"0X5A"));
+        assert!(!InputClass::HexPrefix.holds(b"05A8"));
+        assert!(InputClass::Underscore.holds(b"5_A8"));
+        assert!(InputClass::Above7fh.holds(b"5A\x80D"));
+        assert!(InputClass::Nul.holds(b"1\x0034"));
+        assert!(InputClass::Control.holds(b"1\x1F34"));
+        assert!(!InputClass::Control.holds(b"1\t34"));
+        assert!(InputClass::Empty.holds(b""));
     }
 }

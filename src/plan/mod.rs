@@ -19,7 +19,7 @@ use crate::backend::{Backend, Setting};
 use crate::device::Device;
 use crate::memory::{Fill, Image, Unit};
 use crate::model::cross_vendor::{Answer, CrossVendorCase, ErrorClass, Lowering};
-use crate::model::known::{Entry, KnownDifferences};
+use crate::model::known::{Entry, KnownDifferences, Subject};
 use crate::model::profile::{Profile, Profiles};
 use crate::model::{Basis, Case, Citation, Corpus, Location, Operand};
 
@@ -225,7 +225,16 @@ pub fn plan(
                     known: None,
                 };
                 t.skip = skip_reason(&t, backend.as_ref());
-                t.known = list.and_then(|k| k.entry(&case.id, "codec", "")).cloned();
+                t.known = list
+                    .and_then(|k| {
+                        k.entry(&Subject {
+                            case: &case.id,
+                            text: Some(&case.text),
+                            instruction: "codec",
+                            variant: "",
+                        })
+                    })
+                    .cloned();
                 trials.push(t);
             }
             continue;
@@ -276,8 +285,19 @@ fn trial(
         known: None,
     };
     t.skip = skip_reason(&t, backend.as_ref());
+    let text = match &t.check {
+        Check::CrossVendor { case, .. } | Check::Codec { case } => Some(case.text.as_slice()),
+        Check::Native { .. } => None,
+    };
     t.known = known
-        .and_then(|k| k.entry(t.case_id(), t.check_name(), &t.variant))
+        .and_then(|k| {
+            k.entry(&Subject {
+                case: t.case_id(),
+                text,
+                instruction: t.check_name(),
+                variant: &t.variant,
+            })
+        })
         .cloned();
     t
 }

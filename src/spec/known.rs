@@ -1,7 +1,7 @@
 //! Known-differences files as written on disk.
 
 use schemars::JsonSchema;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 /// A known-differences file as written.
 #[derive(Debug, Deserialize, JsonSchema)]
@@ -10,11 +10,21 @@ pub struct KnownFileSpec {
     pub differences: Vec<EntrySpec>,
 }
 
+/// One entry: a single case (`case` and `reason`), or one cause that explains many cases
+/// (`cause`, `kind`, and the cases it covers by id pattern and/or by the class of their input).
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct EntrySpec {
     /// A case id of the corpus (a cross-vendor case id too).
-    pub case: String,
+    #[serde(default)]
+    pub case: Option<String>,
+    /// An entry by cause: case id patterns it covers, `*` standing for any characters
+    /// (`xv-h2v-6*h`, `habin-fixed-*-is-invalid`).
+    #[serde(default)]
+    pub cases: Vec<String>,
+    /// An entry by cause: the cross-vendor cases whose text has any of these classes.
+    #[serde(default)]
+    pub input: Vec<InputClass>,
     /// Only this instruction of the case's file (for a cross-vendor case: only this lowering of
     /// the profile, e.g. `habin-fixed`).
     #[serde(default)]
@@ -22,6 +32,79 @@ pub struct EntrySpec {
     /// Only this variant of the profile.
     #[serde(default)]
     pub variant: Option<String>,
-    /// Why the backend differs: shown with the trial.
-    pub reason: String,
+    /// An entry by cause: the cause, in one line (what the implementation does).
+    #[serde(default)]
+    pub cause: Option<String>,
+    /// Whether the difference is a bug or a deliberate choice of the implementation.
+    #[serde(default)]
+    pub kind: Option<Kind>,
+    /// Why the backend differs: shown with the trial. Required for a single case; for an entry
+    /// by cause, more detail after the cause.
+    #[serde(default)]
+    pub reason: Option<String>,
+}
+
+/// Whether a listed difference is a bug or a deliberate choice.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum Kind {
+    Bug,
+    ByDesign,
+}
+
+impl std::fmt::Display for Kind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Kind::Bug => "bug",
+            Kind::ByDesign => "by design",
+        })
+    }
+}
+
+/// A class of input text, as codecs tend to mistreat it: the characters no vendor takes as a
+/// digit (30H-39H and 41H-46H are the digits).
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize, JsonSchema,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum InputClass {
+    /// A letter a-z (61H-7AH).
+    Lowercase,
+    /// A space or a tab, line feed, vertical tab, form feed or carriage return (20H, 09H-0DH).
+    Blank,
+    /// `+` or `-`.
+    Sign,
+    /// A `0x` or `0X`.
+    HexPrefix,
+    /// `_`.
+    Underscore,
+    /// A byte above 7FH.
+    #[serde(rename = "above-7fh")]
+    Above7fh,
+    /// A 00H.
+    Nul,
+    /// Another control character (01H-08H, 0EH-1FH, 7FH).
+    Control,
+    /// No character at all.
+    Empty,
+}
+
+impl InputClass {
+    /// Whether a text has a character of the class.
+    pub fn holds(self, text: &[u8]) -> bool {
+        let any = |f: fn(u8) -> bool| text.iter().any(|&b| f(b));
+        match self {
+            InputClass::Lowercase => any(|b| b.is_ascii_lowercase()),
+            InputClass::Blank => any(|b| b == b' ' || (0x09..=0x0D).contains(&b)),
+            InputClass::Sign => any(|b| b == b'+' || b == b'-'),
+            InputClass::HexPrefix => text.windows(2).any(|w| w == b"0x" || w == b"0X"),
+            InputClass::Underscore => any(|b| b == b'_'),
+            InputClass::Above7fh => any(|b| b > 0x7F),
+            InputClass::Nul => any(|b| b == 0),
+            InputClass::Control => {
+                any(|b| (0x01..=0x08).contains(&b) || (0x0E..=0x1F).contains(&b) || b == 0x7F)
+            }
+            InputClass::Empty => text.is_empty(),
+        }
+    }
 }
