@@ -25,6 +25,7 @@ pub mod execute;
 pub mod hil;
 pub mod interrupt;
 pub mod judge;
+pub mod known_draft;
 pub mod libtest;
 pub mod load;
 pub mod memory;

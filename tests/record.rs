@@ -181,3 +181,69 @@ fn record_outside_a_project_says_where_to_run_it() {
     assert!(stderr.contains("built into the binary"), "{stderr}");
     assert!(out.stdout.is_empty());
 }
+
+/// `record --known`'s draft for an implementation that reads a byte above 7FH as "0": one entry
+/// by input class for the cross-vendor cases, the iQ-R cases one by one, and the draft,
+/// loaded as the backend's known differences, covers exactly what differs (no failure, no
+/// stale entry).
+#[test]
+fn the_known_draft_loads_and_covers_exactly_the_differences() {
+    use plc_conformance::judge::Status;
+    let mut project = common::session();
+    let iqr = common::reference(&project, "mitsubishi-iqr");
+    let mutant = common::Mutant::new("high-bytes-as-zero", &iqr, |req, base| {
+        common::with_memory(req, base, |w| {
+            let [lo, hi] = w.to_le_bytes();
+            let zero = |b: u8| if b > 0x7F { b'0' } else { b };
+            u16::from_le_bytes([zero(lo), zero(hi)])
+        })
+    });
+    let draft = plc_conformance::known_draft::draft(&project, &mutant, None);
+    assert!(draft.text.contains("input: [above-7fh]"), "{}", draft.text);
+    assert!(draft.causes >= 1 && draft.cases >= 1, "{}", draft.text);
+    assert!(draft.faults.is_empty());
+    let dir = scratch();
+    let file = dir.path().join("high-bytes-as-zero.known.yaml");
+    std::fs::write(&file, &draft.text).expect("write");
+    let profile = project
+        .profiles
+        .get("mitsubishi-iqr")
+        .expect("profile")
+        .clone();
+    let known = plc_conformance::load::load_known(&file, Some(&profile), &project.corpus, true)
+        .unwrap_or_else(|e| panic!("the draft does not load: {e}\n{}", draft.text));
+    project.known.insert("high-bytes-as-zero".into(), known);
+    let trials = project.plan(std::slice::from_ref(&mutant));
+    let verdicts = plc_conformance::runner::verdicts(&trials);
+    let failing: Vec<String> = trials
+        .iter()
+        .zip(&verdicts)
+        .filter(|(_, v)| v.status() == Status::Fail)
+        .map(|(t, v)| format!("{}: {v:?}", t.name()))
+        .collect();
+    assert!(failing.is_empty(), "{failing:#?}\n{}", draft.text);
+    assert!(verdicts
+        .iter()
+        .any(|v| matches!(v, plc_conformance::judge::Verdict::KnownDifference { .. })));
+}
+
+/// `record --known` never replaces a file: a known-differences file is edited by hand.
+#[test]
+fn record_known_refuses_an_existing_file() {
+    let dir = scratch();
+    let file = dir.path().join("k.yaml");
+    std::fs::write(&file, "differences: []\n").expect("write");
+    let out = cli(&[
+        "record",
+        "--backend",
+        "iqr",
+        "--known",
+        file.to_str().expect("utf-8"),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("the file exists"));
+    assert_eq!(
+        std::fs::read_to_string(&file).expect("read"),
+        "differences: []\n"
+    );
+}

@@ -29,6 +29,11 @@ pub struct RecordArgs {
     /// Show what would change without writing.
     #[arg(long)]
     pub dry_run: bool,
+    /// Instead of recording into the vectors, write a starting known-differences file of what
+    /// the backend gets wrong (run without its own file): an entry by input class where every
+    /// case of the class differs, else a case at a time. An existing file is never replaced.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["dry_run", "date"])]
+    pub known: Option<PathBuf>,
 }
 
 pub fn record_command(cli: &Cli, args: &RecordArgs) -> Outcome {
@@ -49,6 +54,9 @@ pub fn record_command(cli: &Cli, args: &RecordArgs) -> Outcome {
     let Some(backend) = backends.first() else {
         return Err(CliError::input("record needs a --backend"));
     };
+    if let Some(path) = &args.known {
+        return known_file(backend, &project, args.filter.as_deref(), path);
+    }
     // Recording edits vector files in place: the copies built into the binary are not files.
     if !args.dry_run {
         if let Some(case) = project
@@ -143,5 +151,41 @@ pub fn record_command(cli: &Cli, args: &RecordArgs) -> Outcome {
         EXIT_DIFFERENCES
     } else {
         EXIT_OK
+    })
+}
+
+/// `record --known FILE`: the starting known-differences file (`crate::known_draft`).
+fn known_file(
+    backend: &std::sync::Arc<dyn crate::backend::Backend>,
+    project: &crate::runner::Project,
+    filter: Option<&str>,
+    path: &std::path::Path,
+) -> Outcome {
+    output::check(path)?;
+    if path.exists() {
+        return Err(CliError::input(format!(
+            "--known {}: the file exists; a starting file is written only where none is (a \
+             known-differences file is edited by hand): remove it or give another path",
+            path.display()
+        )));
+    }
+    let draft = crate::known_draft::draft(project, backend, filter);
+    for fault in &draft.faults {
+        crate::report::console::status(&format!(
+            "not listed: {fault} faulted, and a fault is never a known difference"
+        ));
+    }
+    output::write(Some(path), &draft.text)?;
+    crate::report::console::status(&format!(
+        "wrote {}: {} entr{} by input class, {} by case; put each cause in words before keeping it",
+        path.display(),
+        draft.causes,
+        if draft.causes == 1 { "y" } else { "ies" },
+        draft.cases
+    ));
+    Ok(if draft.faults.is_empty() {
+        EXIT_OK
+    } else {
+        EXIT_DIFFERENCES
     })
 }

@@ -1,0 +1,191 @@
+//! A starting known-differences file for a backend: what `record --known` writes.
+//!
+//! A library's author meets its differences all at once, dozens of them, most from a few causes.
+//! The draft runs the backend's trials without its known-differences file and lists what differs,
+//! grouped the way a cause is written: an input class of the cross-vendor cases (lowercase,
+//! signs, ...) becomes one entry when every trial with text of that class differs, and what no
+//! class explains is listed case by case. Each entry still needs its cause put in words and its
+//! kind checked: the draft says so in the text it writes, and it loads and covers exactly the
+//! trials that differ, so the run is green with it until the author edits it.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::fmt::Write as _;
+use std::sync::Arc;
+
+use crate::backend::Backend;
+use crate::judge::{Difference, Verdict};
+use crate::model::known::InputClass;
+use crate::plan::{Check, Trial};
+use crate::runner::{verdicts, Project};
+
+/// Every input class, in the order the draft tries them.
+const CLASSES: [InputClass; 9] = [
+    InputClass::Lowercase,
+    InputClass::Blank,
+    InputClass::Sign,
+    InputClass::HexPrefix,
+    InputClass::Underscore,
+    InputClass::Above7fh,
+    InputClass::Nul,
+    InputClass::Control,
+    InputClass::Empty,
+];
+
+/// The draft and what it holds.
+#[derive(Debug)]
+pub struct Draft {
+    /// The file's text (YAML).
+    pub text: String,
+    /// Entries by input class.
+    pub causes: usize,
+    /// Entries of one case.
+    pub cases: usize,
+    /// Trials that faulted: a fault is never a known difference, so they are not listed.
+    pub faults: Vec<String>,
+}
+
+/// What one trial did, as the draft sorts it.
+struct Seen<'a> {
+    trial: &'a Trial,
+    differs: bool,
+    what: String,
+}
+
+/// The draft for `backend` (its trials whose name contains `filter`), run without its
+/// known-differences file.
+pub fn draft(project: &Project, backend: &Arc<dyn Backend>, filter: Option<&str>) -> Draft {
+    let mut known = project.known.clone();
+    known.remove(backend.name());
+    let trials: Vec<Trial> = crate::plan::plan(
+        &project.corpus,
+        &project.profiles,
+        std::slice::from_ref(backend),
+        &known,
+    )
+    .into_iter()
+    .filter(|t| t.skip.is_none())
+    .filter(|t| filter.is_none_or(|f| t.name().contains(f)))
+    .collect();
+    let mut faults = Vec::new();
+    let mut seen = Vec::new();
+    for (t, v) in trials.iter().zip(verdicts(&trials)) {
+        match &v {
+            Verdict::Differs { difference } => seen.push(Seen {
+                trial: t,
+                differs: true,
+                what: describe(difference),
+            }),
+            Verdict::Unsupported { reason } => seen.push(Seen {
+                trial: t,
+                differs: true,
+                what: format!("answers that it does not implement it ({reason})"),
+            }),
+            Verdict::Fault { .. } => faults.push(t.name()),
+            _ => seen.push(Seen {
+                trial: t,
+                differs: false,
+                what: String::new(),
+            }),
+        }
+    }
+    let text_of = |t: &Trial| match &t.check {
+        Check::CrossVendor { case, .. } | Check::Codec { case } => Some(case.text.clone()),
+        Check::Native { .. } => None,
+    };
+    let mut explained: BTreeSet<usize> = BTreeSet::new();
+    let mut out = String::from(HEADER);
+    let mut causes = 0;
+    for class in CLASSES {
+        let with: Vec<usize> = (0..seen.len())
+            .filter(|&i| text_of(seen[i].trial).is_some_and(|t| class.holds(&t)))
+            .collect();
+        let new = with.iter().filter(|i| !explained.contains(i)).count();
+        if with.len() < 2 || new == 0 || !with.iter().all(|&i| seen[i].differs) {
+            continue;
+        }
+        let ids: BTreeSet<&str> = with.iter().map(|&i| seen[i].trial.case_id()).collect();
+        let name = serde_yaml::to_string(&class).unwrap_or_default();
+        let _ = write!(
+            out,
+            "  - cause: \"differs on every case whose text has {}: say what the implementation \
+             does\"\n    kind: bug\n    input: [{}]\n    reason: >-\n      {}\n",
+            name.trim(),
+            name.trim(),
+            ids.into_iter().collect::<Vec<_>>().join(", ")
+        );
+        explained.extend(with);
+        causes += 1;
+    }
+    // What no class explains, case by case: the case alone when every trial of it differs,
+    // else each differing instruction and variant.
+    let mut by_case: BTreeMap<&str, Vec<&Seen<'_>>> = BTreeMap::new();
+    for s in &seen {
+        by_case.entry(s.trial.case_id()).or_default().push(s);
+    }
+    let mut cases = 0;
+    let mut listed: BTreeSet<&str> = BTreeSet::new();
+    for (i, s) in seen.iter().enumerate() {
+        if !s.differs || explained.contains(&i) {
+            continue;
+        }
+        let whole = by_case[s.trial.case_id()].iter().all(|o| o.differs);
+        if whole && !listed.insert(s.trial.case_id()) {
+            continue;
+        }
+        let _ = writeln!(out, "  - case: {}", s.trial.case_id());
+        if !whole {
+            let _ = write!(
+                out,
+                "    instruction: {}\n    variant: {}\n",
+                s.trial.check_name(),
+                s.trial.variant
+            );
+        }
+        let _ = write!(
+            out,
+            "    reason: >-\n      {} (say what the implementation does and the manual rule it \
+             breaks)\n",
+            s.what
+        );
+        cases += 1;
+    }
+    Draft {
+        text: out,
+        causes,
+        cases,
+        faults,
+    }
+}
+
+/// One line on what a trial did.
+fn describe(difference: &Difference) -> String {
+    match difference {
+        Difference::Answer { expected, actual } => {
+            format!("answers {actual} where the case expects {expected}")
+        }
+        Difference::FillDependent { fill_a, fill_b } => {
+            format!("answers {fill_a} or {fill_b}, depending on memory the case does not set")
+        }
+        Difference::Words { mismatches } => match mismatches.first() {
+            Some(m) if m.error_differs() => format!(
+                "ends in {} where the case expects {}",
+                m.actual_error
+                    .as_ref()
+                    .map_or("no error".to_string(), |e| format!("error {e}")),
+                m.expected_error
+                    .as_ref()
+                    .map_or("no error".to_string(), |e| format!("error {e}"))
+            ),
+            _ => "writes other words than the case expects".to_string(),
+        },
+    }
+}
+
+const HEADER: &str = "\
+# A starting known-differences file, written by `plc-conformance record --known`: what the
+# backend does differently from the corpus, an entry by input class where every case of the
+# class differs, else a case at a time. Before keeping it, put each cause in words (what the
+# implementation does), say whether it is a `bug` or `by-design`, and add the manual rule it
+# breaks: docs/check-your-library.md, section 4. Schema: `plc-conformance schema --kind known`.
+differences:
+";
