@@ -205,6 +205,7 @@ impl Placeholder {
                     digits: Some((0..=16).collect()),
                     width: 64,
                     reading: None,
+                    shape: Default::default(),
                 };
                 CodecAbilities {
                     hex_to_value: Some(any.clone()),

@@ -960,3 +960,35 @@ impl plc_conformance::report::Reporter for Keep {
         Ok(())
     }
 }
+
+/// A codec of 2-digit byte fields checked with their frame, and one of variable-length tokens
+/// without leading zeros, each declaring its field's shape: run on the corpus with no
+/// known-differences file, neither differs anywhere, and what a shape cannot be asked is skipped
+/// with the shape's reason.
+#[rstest::rstest]
+#[case::byte_fields("byte_field_codec", "checks its field as part of a whole frame")]
+#[case::tokens("token_codec", "reads a token of whatever length")]
+fn a_codec_that_declares_its_field_shape_differs_nowhere(
+    #[case] script: &str,
+    #[case] reason: &str,
+) {
+    if interpreter().is_none() {
+        eprintln!("skipped: no python3");
+        return;
+    }
+    let path = root().join(format!("tests/fixtures/external/{script}.py"));
+    let backend = format!("external:{script}=python3 {}", path.display());
+    let out = common::cli(&["run", "--backend", &backend]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stdout}{stderr}");
+    let last = stdout.lines().last().unwrap_or_default();
+    assert!(
+        last.contains(" passed, 0 failed") && !last.starts_with("0 passed"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains(reason) || stderr.contains(reason),
+        "{stdout}{stderr}"
+    );
+}

@@ -108,6 +108,19 @@ export interface CodecOptions extends LoopOptions {
   decodeReading?: string;
   /** The built-in reading encode follows ('fx5/asci-16bit'). */
   encodeReading?: string;
+  /** What the protocol's field is, where it is not a fixed run of digits, most significant first. */
+  field?: {
+    /** The value width in bits for each digit count taken: { 2: 8, 4: 16 }. */
+    widths?: Record<number, 8 | 16 | 32>;
+    /** A token of whatever length: decode reads the characters it is given. */
+    variable?: boolean;
+    /** Whether encode writes the field's leading zeros (true when absent). */
+    leadingZeros?: boolean;
+    /** 'low-first': the first character pair is the low byte (the MEWTOCOL order). */
+    byteOrder?: 'high-first' | 'low-first';
+    /** The field is checked with the frame around it: a text with characters after it is not asked. */
+    wholeFrame?: boolean;
+  };
   /** How the library's exceptions answer: by constructor, or by error name. */
   errors?: ErrorMap;
   /** The same for decode alone, before `errors`. */

@@ -291,7 +291,9 @@ function serve(run, options) {
   return loop(hello, answer, options);
 }
 
-function codecCapability(digits, width, reading) {
+const FIELD_KEYS = { widths: 'widths', variable: 'variable', leadingZeros: 'leading-zeros', byteOrder: 'byte-order', wholeFrame: 'whole-frame' };
+
+function codecCapability(digits, width, reading, field) {
   if (width !== 16 && width !== 32) throw new TypeError(`width must be 16 or 32, not ${width}`);
   const capability = { width };
   if (reading !== undefined && reading !== null) capability.reading = String(reading);
@@ -302,7 +304,39 @@ function codecCapability(digits, width, reading) {
     }
     capability.digits = counts;
   }
+  for (const [key, value] of Object.entries(field || {})) {
+    const wire = FIELD_KEYS[key];
+    if (!wire) throw new TypeError(`field: ${key} is not one of ${Object.keys(FIELD_KEYS).join(', ')}`);
+    if (key === 'widths') {
+      const widths = {};
+      for (const [d, w] of Object.entries(value)) {
+        if (!(Number(d) >= 1) || ![8, 16, 32].includes(w)) {
+          throw new TypeError(`field widths: digit counts to 8, 16 or 32 bits, not ${JSON.stringify(value)}`);
+        }
+        widths[String(Number(d))] = w;
+      }
+      capability.widths = widths;
+    } else if (key === 'byteOrder') {
+      if (value !== 'high-first' && value !== 'low-first') {
+        throw new TypeError(`field byteOrder: 'high-first' or 'low-first', not ${JSON.stringify(value)}`);
+      }
+      capability[wire] = value;
+    } else {
+      capability[wire] = Boolean(value);
+    }
+  }
   return capability;
+}
+
+/** Whether a declared operation takes a digit count: its digits, or its field's widths. */
+function takes(declared, digits) {
+  if (declared.digits) return declared.digits.includes(digits);
+  if (declared.widths) return String(digits) in declared.widths;
+  return digits >= 1 && digits <= 8;
+}
+
+function widthOf(declared, digits) {
+  return (declared.widths && declared.widths[String(digits)]) || declared.width;
 }
 
 /** The error class `errors` gives an exception (its nearest listed class), or undefined. */
@@ -354,11 +388,15 @@ function textBytes(text) {
  *   'device-range' or 'error'; decodeErrors, encodeErrors: the same for one direction, before
  *   `errors`. Either function may return a promise. decodeReading,
  *   encodeReading: the built-in reading each follows, as `plc-conformance sweep` names it
- *   ('fx5/hexa-16bit'): a sweep of the operation judges the codec against it.
+ *   ('fx5/hexa-16bit'): a sweep of the operation judges the codec against it. field: what
+ *   the protocol's field is, where not a fixed run of digits (docs/protocol.md, "Field
+ *   shapes"): { widths: { 2: 8, 4: 16 }, variable: true, leadingZeros: false,
+ *   byteOrder: 'low-first', wholeFrame: true }.
  */
 function serveCodec(options) {
   const {
     decode, encode, name, version, decodeDigits, encodeDigits, width = 16, decodeReading, encodeReading,
+    field,
   } = options || {};
   if (!name || !version) throw new TypeError('serveCodec needs name and version');
   if (!decode && !encode) throw new TypeError('serveCodec needs decode, encode or both');
@@ -366,8 +404,8 @@ function serveCodec(options) {
   const shared = errorTable(options.errors);
   const own = { [HEX_TO_VALUE]: errorTable(options.decodeErrors), [VALUE_TO_HEX]: errorTable(options.encodeErrors) };
   const codec = {};
-  if (decode) codec[HEX_TO_VALUE] = codecCapability(decodeDigits, width, decodeReading);
-  if (encode) codec[VALUE_TO_HEX] = codecCapability(encodeDigits, width, encodeReading);
+  if (decode) codec[HEX_TO_VALUE] = codecCapability(decodeDigits, width, decodeReading, field);
+  if (encode) codec[VALUE_TO_HEX] = codecCapability(encodeDigits, width, encodeReading, field);
 
   const hello = (message, log) => {
     if (!(message.protocol >= 2)) {
@@ -379,7 +417,7 @@ function serveCodec(options) {
     const { id, operation, digits } = request;
     try {
       const declared = codec[operation];
-      if (declared && !(declared.digits || [1, 2, 3, 4, 5, 6, 7, 8]).includes(digits)) {
+      if (declared && !takes(declared, digits)) {
         // Outside the declared capabilities: the harness skips such cases.
         throw new Unsupported(`${operation} with ${digits} digits is not implemented`);
       }
@@ -391,8 +429,8 @@ function serveCodec(options) {
         return { type: 'result', id, value };
       }
       if (operation === VALUE_TO_HEX && encode) {
-        if (!(request.value >= 0 && request.value < 2 ** declared.width)) {
-          throw new Unsupported(`${request.value} is wider than ${declared.width} bits`);
+        if (!(request.value >= 0 && request.value < 2 ** widthOf(declared, digits))) {
+          throw new Unsupported(`${request.value} is wider than ${widthOf(declared, digits)} bits`);
         }
         return { type: 'result', id, text: textBytes(await encode(request.value, digits)) };
       }

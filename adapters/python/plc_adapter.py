@@ -309,7 +309,10 @@ def serve(run, name, version, profile, instructions, variants=None, flags=None,
     _serving(lambda i, o: _loop(i, o, hello, answer), stdin, stdout)
 
 
-def _codec_capability(digits, width, reading):
+FIELD_KEYS = ("widths", "variable", "leading_zeros", "byte_order", "whole_frame")
+
+
+def _codec_capability(digits, width, reading, field=None):
     if width not in (16, 32):
         raise ValueError("width must be 16 or 32, not %r" % (width,))
     capability = {"width": width}
@@ -320,7 +323,33 @@ def _codec_capability(digits, width, reading):
         if not digits or not all(1 <= d <= 8 for d in digits):
             raise ValueError("digits must be counts from 1 to 8, not %r" % (digits,))
         capability["digits"] = digits
+    for key, value in (field or {}).items():
+        if key not in FIELD_KEYS:
+            raise ValueError("field: %r is not one of %s" % (key, ", ".join(FIELD_KEYS)))
+        if key == "widths":
+            if not all(int(d) >= 1 and w in (8, 16, 32) for d, w in value.items()):
+                raise ValueError("field widths: digit counts to 8, 16 or 32 bits, not %r" % (value,))
+            capability["widths"] = {str(int(d)): w for d, w in value.items()}
+        elif key == "byte_order":
+            if value not in ("high-first", "low-first"):
+                raise ValueError("field byte_order: 'high-first' or 'low-first', not %r" % (value,))
+            capability["byte-order"] = value
+        else:
+            capability[key.replace("_", "-")] = bool(value)
     return capability
+
+
+def _takes(declared, digits):
+    """Whether a declared operation takes a digit count: its digits, or its field's widths."""
+    if "digits" in declared:
+        return digits in declared["digits"]
+    if "widths" in declared:
+        return str(digits) in declared["widths"]
+    return 1 <= digits <= 8
+
+
+def _width(declared, digits):
+    return declared.get("widths", {}).get(str(digits), declared["width"])
 
 
 def _error_class(error, errors):
@@ -346,7 +375,7 @@ def _text_bytes(text):
 def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits=None,
                 encode_digits=None, width=16, errors=None, stdin=None, stdout=None,
                 decode_reading=None, encode_reading=None, decode_errors=None,
-                encode_errors=None):
+                encode_errors=None, field=None):
     """Answers the harness as a codec-level backend (protocol version 2) until it says shutdown
     or closes stdin.
 
@@ -365,6 +394,11 @@ def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits
     decode_reading, encode_reading: the built-in reading each follows, as `plc-conformance
       sweep` names it (e.g. "fx5/hexa-16bit", "fx5/asci-16bit"): a sweep of the operation
       judges the codec against it.
+    field: what the protocol's field is, where it is not a fixed run of digits, most
+      significant first (docs/protocol.md, "Field shapes"): {"widths": {2: 8, 4: 16}} (the bits
+      for each digit count taken), "variable": True (a token of whatever length), "leading_zeros":
+      False (value -> text writes none), "byte_order": "low-first" (the first character pair is
+      the low byte), "whole_frame": True (the field is checked with the frame around it).
     """
     if name is None or version is None:
         raise TypeError("serve_codec needs name= and version=")
@@ -385,9 +419,9 @@ def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits
     }
     codec = {}
     if decode is not None:
-        codec[HEX_TO_VALUE] = _codec_capability(decode_digits, width, decode_reading)
+        codec[HEX_TO_VALUE] = _codec_capability(decode_digits, width, decode_reading, field)
     if encode is not None:
-        codec[VALUE_TO_HEX] = _codec_capability(encode_digits, width, encode_reading)
+        codec[VALUE_TO_HEX] = _codec_capability(encode_digits, width, encode_reading, field)
 
     def hello(message):
         if message.get("protocol", 1) < 2:
@@ -403,13 +437,14 @@ def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits
         digits = request.get("digits")
         try:
             declared = codec.get(operation)
-            if declared is not None and digits not in declared.get("digits", range(1, 9)):
+            if declared is not None and not _takes(declared, digits):
                 # Outside the declared capabilities: the harness skips such cases, and the
                 # library is never called with a count it does not take.
                 raise Unsupported("%s with %s digits is not implemented" % (operation, digits))
             if operation == VALUE_TO_HEX and declared is not None \
-                    and not 0 <= request["value"] < 1 << declared["width"]:
-                raise Unsupported("%s is wider than %d bits" % (request["value"], declared["width"]))
+                    and not 0 <= request["value"] < 1 << _width(declared, digits):
+                raise Unsupported("%s is wider than %d bits"
+                                  % (request["value"], _width(declared, digits)))
             if operation == HEX_TO_VALUE and decode is not None:
                 value = decode(bytes(request["text"]), digits)
                 if isinstance(value, bool) or not isinstance(value, int):

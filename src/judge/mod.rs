@@ -276,8 +276,17 @@ fn judge_unlisted(trial: &Trial, observations: &[Observation]) -> Verdict {
         }
         Check::Codec { case } => match &observations[0].result {
             // A codec answers the case's plain reading: it has no vendor's exceptions.
+            // Read as the codec's field writes it (its byte order, its leading zeros).
             Ok(Response::Answer(a)) => {
-                compare_answers(case.basis, case.expect.as_ref(), vec![a.clone()])
+                let ability = trial.backend.codec().and_then(|c| match case.operation {
+                    crate::model::cross_vendor::Operation::HexToValue => c.hex_to_value.as_ref(),
+                    crate::model::cross_vendor::Operation::ValueToHex => c.value_to_hex.as_ref(),
+                });
+                let expected = match (ability, &case.expect) {
+                    (Some(ab), Some(e)) => Some(ab.shaped(case.operation, case.digits, e)),
+                    (_, e) => e.clone(),
+                };
+                compare_answers(case.basis, expected.as_ref(), vec![a.clone()])
             }
             _ => wrong_kind(&observations[0]),
         },

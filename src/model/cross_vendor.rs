@@ -169,6 +169,39 @@ pub struct OperationAbilities {
     pub width: u32,
     /// The built-in reading it claims to follow (`fx5/hexa-16bit`), the oracle of its sweeps.
     pub reading: Option<String>,
+    /// The shape of its field, where it is not a fixed run of digits, most significant first.
+    pub shape: FieldShape,
+}
+
+/// What a protocol's field is, beyond its digit count: what the harness must know to ask a codec
+/// only what its field can hold, and to read its answer as the field means it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FieldShape {
+    /// The value width in bits for each digit count the field takes (2 digits an 8-bit byte, 4 a
+    /// word, 8 a double word); the counts given are the counts taken.
+    pub widths: BTreeMap<u32, u32>,
+    /// A token of whatever length (KEYENCE Host Link `.H`): it reads the characters it is given,
+    /// so a case whose text is not exactly its digit count is not asked.
+    pub variable: bool,
+    /// Whether value -> text writes the leading zeros of the field; without them 007FH is "7F".
+    pub leading_zeros: bool,
+    /// The first character pair is the low byte (the MEWTOCOL order): "ABCD" is CDABH.
+    pub low_byte_first: bool,
+    /// The codec checks its field as part of a whole frame (trailing text, a checksum): a text
+    /// with characters after its field is not asked.
+    pub whole_frame: bool,
+}
+
+impl Default for FieldShape {
+    fn default() -> Self {
+        FieldShape {
+            widths: BTreeMap::new(),
+            variable: false,
+            leading_zeros: true,
+            low_byte_first: false,
+            whole_frame: false,
+        }
+    }
 }
 
 impl Default for OperationAbilities {
@@ -177,6 +210,42 @@ impl Default for OperationAbilities {
             digits: None,
             width: 16,
             reading: None,
+            shape: FieldShape::default(),
+        }
+    }
+}
+
+impl OperationAbilities {
+    /// The value width for a digit count: the field's own for that count, else the operation's.
+    pub fn width_for(&self, digits: u32) -> u32 {
+        self.shape
+            .widths
+            .get(&digits)
+            .copied()
+            .unwrap_or(self.width)
+    }
+
+    /// The answer the field gives where the case expects `expected` of `digits` digits: the
+    /// same, written as the field writes it (bytes low first, no leading zeros).
+    pub fn shaped(&self, operation: Operation, digits: u32, expected: &Answer) -> Answer {
+        match (operation, expected) {
+            (Operation::HexToValue, Answer::Value(v)) if self.shape.low_byte_first => {
+                let n = (digits / 2).min(8) as usize;
+                let swapped = (0..n).fold(0u64, |acc, i| acc << 8 | (v >> (8 * i)) & 0xFF);
+                Answer::Value(swapped)
+            }
+            (Operation::ValueToHex, Answer::Text(t)) => {
+                let mut t = t.clone();
+                if self.shape.low_byte_first {
+                    t = t.chunks(2).rev().flatten().copied().collect();
+                }
+                if !self.shape.leading_zeros {
+                    let zeros = t.iter().take_while(|b| **b == b'0').count();
+                    t.drain(..zeros.min(t.len().saturating_sub(1)));
+                }
+                Answer::Text(t)
+            }
+            (_, other) => other.clone(),
         }
     }
 }
@@ -192,12 +261,17 @@ impl CodecAbilities {
         let Some(ability) = ability else {
             return Some(format!("implements no {}", case.operation));
         };
-        let digits_ok = match &ability.digits {
-            Some(list) => list.contains(&case.digits),
-            None => (1..=8).contains(&case.digits),
+        let digits_ok = match (&ability.digits, ability.shape.widths.is_empty()) {
+            (Some(list), _) => list.contains(&case.digits),
+            (None, false) => ability.shape.widths.contains_key(&case.digits),
+            (None, true) => (1..=8).contains(&case.digits),
         };
         if !digits_ok {
-            let taken = ability.digits.as_ref().map_or_else(
+            let listed = ability.digits.clone().or_else(|| {
+                (!ability.shape.widths.is_empty())
+                    .then(|| ability.shape.widths.keys().copied().collect())
+            });
+            let taken = listed.as_ref().map_or_else(
                 || "1 to 8".to_string(),
                 |l| {
                     l.iter()
@@ -211,19 +285,168 @@ impl CodecAbilities {
                 case.digits, case.operation
             ));
         }
-        let fits = |v: u64| ability.width >= 64 || v >> ability.width == 0;
+        let shape = &ability.shape;
+        let text = case.text.len();
+        let digits = case.digits as usize;
+        if case.operation == Operation::HexToValue {
+            if shape.variable && text != digits {
+                return Some(format!(
+                    "reads a token of whatever length, and the case gives {text} character(s) \
+                     for a {digits}-digit field"
+                ));
+            }
+            if shape.whole_frame && text > digits {
+                return Some(format!(
+                    "checks its field as part of a whole frame, and the text has {} character(s) \
+                     after its {digits}-digit field",
+                    text - digits
+                ));
+            }
+        }
+        if shape.variable
+            && case.operation == Operation::ValueToHex
+            && u64::BITS - case.value.leading_zeros() > 4 * case.digits
+        {
+            return Some(format!(
+                "writes every significant digit of the value, and {} has more than {digits}",
+                Answer::Value(case.value)
+            ));
+        }
+        if shape.low_byte_first && digits % 2 == 1 {
+            return Some(format!(
+                "puts the first character pair in the low byte, and {digits} digit(s) are no \
+                 whole bytes"
+            ));
+        }
+        let width = ability.width_for(case.digits);
+        let fits = |v: u64| width >= 64 || v >> width == 0;
         match (case.operation, &case.expect) {
             (Operation::HexToValue, Some(Answer::Value(v))) if !fits(*v) => Some(format!(
-                "the expected value {} is wider than its {} bits",
+                "the expected value {} is wider than its {width} bits",
                 Answer::Value(*v),
-                ability.width
             )),
             (Operation::ValueToHex, _) if !fits(case.value) => Some(format!(
-                "the value {} is wider than its {} bits",
+                "the value {} is wider than its {width} bits",
                 Answer::Value(case.value),
-                ability.width
             )),
             _ => None,
         }
+    }
+}
+
+#[cfg(test)]
+mod shape_tests {
+    use std::path::PathBuf;
+
+    use super::*;
+
+    fn case(operation: Operation, text: &[u8], value: u64, digits: u32) -> CrossVendorCase {
+        CrossVendorCase {
+            id: "c".into(),
+            operation,
+            basis: Basis::Inferred,
+            citation: Citation {
+                manual: "m".into(),
+                page: "1".into(),
+                text: None,
+            },
+            location: Location {
+                file: PathBuf::from("x.yaml"),
+                line: 1,
+            },
+            text: text.to_vec(),
+            value,
+            digits,
+            expect: Some(Answer::Value(value)),
+            except: BTreeMap::new(),
+            note: None,
+        }
+    }
+
+    fn codec(shape: FieldShape) -> CodecAbilities {
+        let ability = OperationAbilities {
+            shape,
+            ..OperationAbilities::default()
+        };
+        CodecAbilities {
+            hex_to_value: Some(ability.clone()),
+            value_to_hex: Some(ability),
+        }
+    }
+
+    #[test]
+    fn a_field_shape_reads_the_expected_answer_as_the_field_writes_it() {
+        let low = OperationAbilities {
+            shape: FieldShape {
+                low_byte_first: true,
+                ..FieldShape::default()
+            },
+            ..OperationAbilities::default()
+        };
+        let h2v = Operation::HexToValue;
+        let v2h = Operation::ValueToHex;
+        assert_eq!(
+            low.shaped(h2v, 4, &Answer::Value(0xABCD)),
+            Answer::Value(0xCDAB)
+        );
+        assert_eq!(
+            low.shaped(h2v, 2, &Answer::Value(0x7F)),
+            Answer::Value(0x7F)
+        );
+        assert_eq!(
+            low.shaped(v2h, 4, &Answer::Text(b"ABCD".to_vec())),
+            Answer::Text(b"CDAB".to_vec())
+        );
+        let bare = OperationAbilities {
+            shape: FieldShape {
+                leading_zeros: false,
+                ..FieldShape::default()
+            },
+            ..OperationAbilities::default()
+        };
+        assert_eq!(
+            bare.shaped(v2h, 4, &Answer::Text(b"007F".to_vec())),
+            Answer::Text(b"7F".to_vec())
+        );
+        assert_eq!(
+            bare.shaped(v2h, 4, &Answer::Text(b"0000".to_vec())),
+            Answer::Text(b"0".to_vec())
+        );
+        let errors = Answer::Error(ErrorClass::InvalidDigit);
+        assert_eq!(low.shaped(h2v, 4, &errors), errors);
+    }
+
+    #[test]
+    fn a_field_shape_declines_what_it_cannot_be_asked() {
+        let h2v = Operation::HexToValue;
+        let frame = codec(FieldShape {
+            whole_frame: true,
+            widths: BTreeMap::from([(2, 8)]),
+            ..FieldShape::default()
+        });
+        assert!(frame.declines(&case(h2v, b"7F", 0x7F, 2)).is_none());
+        let trailing = frame
+            .declines(&case(h2v, b"7F00", 0x7F, 2))
+            .expect("declined");
+        assert!(trailing.contains("whole frame"), "{trailing}");
+        let count = frame
+            .declines(&case(h2v, b"5A8D", 0x5A8D, 4))
+            .expect("declined");
+        assert!(count.contains("takes 2 digit(s), not 4"), "{count}");
+        let wide = frame
+            .declines(&case(Operation::ValueToHex, b"", 0x0ABC, 2))
+            .expect("declined");
+        assert!(wide.contains("wider than its 8 bits"), "{wide}");
+        let token = codec(FieldShape {
+            variable: true,
+            ..FieldShape::default()
+        });
+        assert!(token.declines(&case(h2v, b"12", 0x12, 4)).is_some());
+        assert!(token.declines(&case(h2v, b"1234", 0x1234, 4)).is_none());
+        let low = codec(FieldShape {
+            low_byte_first: true,
+            ..FieldShape::default()
+        });
+        assert!(low.declines(&case(h2v, b"ABC", 0xABC, 3)).is_some());
     }
 }

@@ -306,3 +306,22 @@ test('each direction maps its own errors before the shared ones', async () => {
   ]);
   assert.throws(() => helper.serveCodec({ name: 'x', version: '1', decode: () => 0, encodeErrors: { Error: 'wrong' } }), TypeError);
 });
+
+test('a codec declares its field shape; a count or value outside its widths is unsupported', async () => {
+  const answers = await inProcess({
+    name: 'byte-field',
+    version: '1',
+    decode: (text) => parseInt(text.toString('latin1'), 16),
+    encode: (value) => value.toString(16).toUpperCase().padStart(2, '0'),
+    field: { widths: { 2: 8 }, wholeFrame: true, byteOrder: 'low-first', leadingZeros: true, variable: false },
+  }, [HELLO_2, { type: 'run', cases: [h2v(1, '7F', 2), h2v(2, '5A8D', 4), v2h(3, 0x7f, 2), v2h(4, 0x1ff, 2)] }, SHUTDOWN]);
+  assert.deepEqual(answers[0].capabilities.codec['hex-to-value'], {
+    width: 16, widths: { 2: 8 }, 'whole-frame': true, 'byte-order': 'low-first', 'leading-zeros': true, variable: false,
+  });
+  assert.deepEqual(answers[1], { type: 'result', id: 1, value: 0x7f });
+  assert.equal(answers[2].type, 'unsupported');
+  assert.deepEqual(answers[3], { type: 'result', id: 3, text: [...Buffer.from('7F')] });
+  assert.equal(answers[4].type, 'unsupported');
+  assert.throws(() => helper.serveCodec({ name: 'x', version: '1', decode: () => 0, field: { widths: { 2: 12 } } }), TypeError);
+  assert.throws(() => helper.serveCodec({ name: 'x', version: '1', decode: () => 0, field: { order: 'low' } }), TypeError);
+});

@@ -232,6 +232,25 @@ class InProcess(unittest.TestCase):
             "hex-to-value": {"width": 16, "reading": "fx5/hexa-16bit"},
             "value-to-hex": {"width": 16}}})
 
+    def test_a_field_shape_is_declared_and_bounds_what_is_answered(self):
+        answers = self.serve_codec(
+            [HELLO_2, {"type": "run", "cases": [h2v(1, "7F", 2), h2v(2, "5A8D", 4),
+                                                v2h(3, 0x7F, 2), v2h(4, 0x1FF, 2)]}, SHUTDOWN],
+            decode=lambda t, d: int(t.decode(), 16), encode=lambda v, d: "%02X" % v,
+            name="byte-field", version="1",
+            field={"widths": {2: 8}, "whole_frame": True, "byte_order": "low-first",
+                   "leading_zeros": True, "variable": False})
+        self.assertEqual(answers[0]["capabilities"]["codec"]["hex-to-value"], {
+            "width": 16, "widths": {"2": 8}, "whole-frame": True, "byte-order": "low-first",
+            "leading-zeros": True, "variable": False})
+        self.assertEqual(answers[1], {"type": "result", "id": 1, "value": 0x7F})
+        self.assertEqual(answers[2]["type"], "unsupported")
+        self.assertEqual(answers[3], {"type": "result", "id": 3, "text": list(b"7F")})
+        self.assertEqual(answers[4]["type"], "unsupported")
+        for field in ({"widths": {2: 12}}, {"order": "low"}, {"byte_order": "middle"}):
+            with self.assertRaises(ValueError):
+                plc_adapter.serve_codec(decode=lambda t, d: 0, name="x", version="1", field=field)
+
     def test_what_the_protocol_cannot_say_is_refused(self):
         with self.assertRaises(ValueError):
             plc_adapter.CodecError("bad-class")

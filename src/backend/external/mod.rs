@@ -31,7 +31,7 @@ use protocol::{
 use super::{Backend, Fault, Outcome, Question, Request, Response, Setting};
 use crate::device::Device;
 use crate::memory::{Fill, Unit};
-use crate::model::cross_vendor::{Answer, CodecAbilities, OperationAbilities};
+use crate::model::cross_vendor::{Answer, CodecAbilities, FieldShape, OperationAbilities};
 use crate::model::profile::{Profile, Profiles};
 use crate::model::project::ExternalSettings;
 use crate::model::{ErrorSignal, Operand};
@@ -727,10 +727,32 @@ fn check_codec(
                     "claims {name} of {d} digits"
                 )));
             }
+            let mut widths = std::collections::BTreeMap::new();
+            for (d, w) in c.widths.iter().flatten() {
+                let count = d.parse::<u32>().ok().filter(|n| (1..=16).contains(n));
+                let Some(count) = count else {
+                    return Err(ExternalErrorKind::Capabilities(format!(
+                        "claims {name} widths for `{d}` digits; give a count from 1 to 16"
+                    )));
+                };
+                if ![8, 16, 32].contains(w) {
+                    return Err(ExternalErrorKind::Capabilities(format!(
+                        "claims {name} of width {w} for {count} digits; give 8, 16 or 32"
+                    )));
+                }
+                widths.insert(count, *w);
+            }
             Ok(Some(OperationAbilities {
                 digits: c.digits.clone(),
                 width,
                 reading: c.reading.clone(),
+                shape: FieldShape {
+                    widths,
+                    variable: c.variable.unwrap_or(false),
+                    leading_zeros: c.leading_zeros.unwrap_or(true),
+                    low_byte_first: c.byte_order == Some(protocol::ByteOrder::LowFirst),
+                    whole_frame: c.whole_frame.unwrap_or(false),
+                },
             }))
         }
     };

@@ -199,6 +199,9 @@ impl std::fmt::Display for ProtocolViolation {
 }
 
 /// A message from a backend to the harness.
+// The hello carries the capabilities and is read once per backend; the results, read by the
+// thousand, are not held long enough for their size to matter either.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum BackendMessage {
@@ -327,6 +330,44 @@ pub struct OperationCapabilities {
     /// `sweep --operation` judges the codec against unless `--oracle` says otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reading: Option<String>,
+    /// The value width in bits (8, 16 or 32) for each digit count the field takes, by count:
+    /// `{"2": 8, "4": 16}`. The counts given are the counts taken when `digits` is absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub widths: Option<std::collections::BTreeMap<String, u32>>,
+    /// A token of whatever length: text -> value reads the characters it is given (a case whose
+    /// text is not exactly its digit count is skipped).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub variable: Option<bool>,
+    /// Whether value -> text writes the field's leading zeros (true when absent).
+    #[serde(
+        rename = "leading-zeros",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub leading_zeros: Option<bool>,
+    /// `high-first` (when absent) or `low-first`: the first character pair is the low byte.
+    #[serde(
+        rename = "byte-order",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub byte_order: Option<ByteOrder>,
+    /// The codec checks its field as part of a whole frame: a text with characters after the
+    /// field is skipped.
+    #[serde(
+        rename = "whole-frame",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub whole_frame: Option<bool>,
+}
+
+/// Which byte a field's first character pair is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum ByteOrder {
+    HighFirst,
+    LowFirst,
 }
 
 /// An operation error: the vendor's code or flag (instruction level), or an error class (codec
