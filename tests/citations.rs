@@ -237,18 +237,22 @@ fn unquoted_manual_claims(text: &str) -> Vec<String> {
         .collect()
 }
 
+/// The manual id (or any id) a text ends with.
+fn id_before(text: &str) -> String {
+    let start = text
+        .char_indices()
+        .rev()
+        .take_while(|(_, c)| is_id_char(*c))
+        .last()
+        .map_or(text.len(), |(i, _)| i);
+    text[start..].to_string()
+}
+
 /// `<manual-id> p.<page>` cites in a text.
 fn pages(text: &str) -> Vec<(String, String)> {
     let mut out = Vec::new();
     for (at, _) in text.match_indices(" p.") {
-        let id: String = text[..at]
-            .chars()
-            .rev()
-            .take_while(|c| is_id_char(*c))
-            .collect::<Vec<_>>()
-            .into_iter()
-            .rev()
-            .collect();
+        let id = id_before(&text[..at]);
         let page: String = text[at + 3..]
             .chars()
             .take_while(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '(' | ')' | '_'))
@@ -265,14 +269,7 @@ fn pages(text: &str) -> Vec<(String, String)> {
     }
     // A manual known by its topic rather than by pages (`fpwin-f72: "..."`) is cited whole.
     for (at, _) in text.match_indices(": \"") {
-        let id: String = text[..at]
-            .chars()
-            .rev()
-            .take_while(|c| is_id_char(*c))
-            .collect::<Vec<_>>()
-            .into_iter()
-            .rev()
-            .collect();
+        let id = id_before(&text[..at]);
         if id.contains('-') {
             out.push((id, "*".to_string()));
         }

@@ -97,9 +97,10 @@ fn every_question_has_a_probe_that_decides_and_the_model_answers_its_reading() {
         .cases
         .iter()
         .map(|c| {
-            let mut c = (**c).clone();
-            c.basis = Basis::Unspecified;
-            Arc::new(c)
+            Arc::new(plc_conformance::model::Case {
+                basis: Basis::Unspecified,
+                ..(**c).clone()
+            })
         })
         .collect();
     s.corpus.cross_vendor = s
@@ -107,9 +108,10 @@ fn every_question_has_a_probe_that_decides_and_the_model_answers_its_reading() {
         .cross_vendor
         .iter()
         .map(|c| {
-            let mut c = (**c).clone();
-            c.basis = Basis::Unspecified;
-            Arc::new(c)
+            Arc::new(plc_conformance::model::cross_vendor::CrossVendorCase {
+                basis: Basis::Unspecified,
+                ..(**c).clone()
+            })
         })
         .collect();
     let mut problems = Vec::new();

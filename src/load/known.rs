@@ -140,19 +140,7 @@ pub fn load_known(
         let cross_vendor = corpus.cross_vendor.iter().find(|c| c.id == case_id);
         let Some(profile) = profile else {
             // A codec has neither instructions nor variants, and answers cross-vendor cases only.
-            for (k, given) in [
-                ("instruction", entry.instruction.is_some()),
-                ("variant", entry.variant.is_some()),
-            ] {
-                if given {
-                    cx.error(
-                        key(k),
-                        LoadErrorKind::Invalid(format!(
-                            "a codec-level backend has no {k}: leave `{k}` out"
-                        )),
-                    );
-                }
-            }
+            codec_has_no_instruction(&entry, &mut cx, &key);
             match cross_vendor {
                 Some(cv) => {
                     check_not_unspecified(&entry, cv.basis, &mut cx, &key);
@@ -278,19 +266,7 @@ fn check_cause(
     }
     match profile {
         None => {
-            for (k, given) in [
-                ("instruction", entry.instruction.is_some()),
-                ("variant", entry.variant.is_some()),
-            ] {
-                if given {
-                    cx.error(
-                        key(k),
-                        LoadErrorKind::Invalid(format!(
-                            "a codec-level backend has no {k}: leave `{k}` out"
-                        )),
-                    );
-                }
-            }
+            codec_has_no_instruction(entry, cx, key);
         }
         Some(p) => {
             if let Some(v) = &entry.variant {
@@ -306,6 +282,23 @@ fn check_cause(
                     );
                 }
             }
+        }
+    }
+}
+
+/// A codec-level backend has neither instructions nor variants: an entry naming one is an error.
+fn codec_has_no_instruction(entry: &Entry, cx: &mut FileContext<'_>, key: &dyn Fn(&str) -> String) {
+    for (k, given) in [
+        ("instruction", entry.instruction.is_some()),
+        ("variant", entry.variant.is_some()),
+    ] {
+        if given {
+            cx.error(
+                key(k),
+                LoadErrorKind::Invalid(format!(
+                    "a codec-level backend has no {k}: leave `{k}` out"
+                )),
+            );
         }
     }
 }
