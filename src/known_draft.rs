@@ -17,6 +17,7 @@ use crate::judge::{Difference, Verdict};
 use crate::model::known::InputClass;
 use crate::plan::{Check, Trial};
 use crate::runner::{verdicts, Project};
+use crate::value::hex_word;
 
 /// Every input class, in the order the draft tries them.
 const CLASSES: [InputClass; 9] = [
@@ -176,6 +177,20 @@ fn describe(difference: &Difference) -> String {
                     .as_ref()
                     .map_or("no error".to_string(), |e| format!("error {e}"))
             ),
+            Some(m) if m.registers_differ() => m
+                .registers
+                .iter()
+                .filter(|r| r.differs())
+                .map(|r| {
+                    format!(
+                        "leaves {} {} after error {}",
+                        r.device,
+                        r.actual.map_or("unreported".to_string(), hex_word),
+                        hex_word(r.expected)
+                    )
+                })
+                .collect::<Vec<_>>()
+                .join(", "),
             _ => "writes other words than the case expects".to_string(),
         },
     }

@@ -16,10 +16,11 @@ use std::time::Duration;
 
 use plc_conformance::backend::external::ExternalErrorKind;
 use plc_conformance::backend::Backend;
-use plc_conformance::judge::Verdict;
+use plc_conformance::judge::{Difference, Verdict};
 use plc_conformance::load::{load_project, ENV_CONFIG, ENV_SELF, FILE_NAME};
 use plc_conformance::model::project::{ExternalSettings, Launch};
-use plc_conformance::plan::Trial;
+use plc_conformance::model::{Basis, ErrorSignal};
+use plc_conformance::plan::{Check, Trial};
 use plc_conformance::runner::{run_one, verdicts as run_all, Paths, Project, SetupError};
 
 fn root() -> &'static Path {
@@ -396,6 +397,60 @@ fn an_adapter_written_with_the_python_helper_conforms() {
             .any(|t| t.input.instruction == "HABIN" && t.skip.is_some()),
         "the corpus has SM705-on HABIN cases, which must be skipped"
     );
+}
+
+/// An emulator that models SD0 reports it among its writes: held to the error code, apart from
+/// the case's memory (never a stray write), and a wrong SD0 is a difference on SD0 alone.
+#[rstest::rstest]
+#[case::right("sd0", false)]
+#[case::stale("sd0-stale", true)]
+fn an_emulator_that_writes_sd0_is_held_to_the_error_code(
+    #[case] mode: &str,
+    #[case] errors_differ: bool,
+) {
+    if !python() {
+        return;
+    }
+    let mut session = corpus_session();
+    let spec = python_backend("habin-py", &fixtures().join("habin_adapter.py"), &[mode]);
+    session.add_external(spec, true).expect("starts");
+    let trials: Vec<Trial> = trials_of(&session, "habin-py")
+        .into_iter()
+        .filter(|t| t.skip.is_none())
+        .collect();
+    let mut errors = 0;
+    for (t, v) in trials.iter().zip(run_all(&trials)) {
+        let Check::Native { case, .. } = &t.check else {
+            continue;
+        };
+        let code = case.basis != Basis::Unspecified
+            && case
+                .expect
+                .as_ref()
+                .is_some_and(|e| matches!(e.error, Some(ErrorSignal::Code(_))));
+        if !code || !errors_differ {
+            assert!(!v.is_failure(), "{}: {v:?}", t.name());
+            errors += usize::from(code);
+            continue;
+        }
+        errors += 1;
+        let Verdict::Differs {
+            difference: Difference::Words { mismatches },
+        } = &v
+        else {
+            panic!("{}: {v:?}", t.name());
+        };
+        let m = &mismatches[0];
+        assert!(!m.words_differ() && !m.error_differs(), "{}", t.name());
+        assert_eq!(
+            m.registers
+                .iter()
+                .map(|r| (r.device.to_string(), r.actual))
+                .collect::<Vec<_>>(),
+            [("SD0".to_string(), Some(0))]
+        );
+    }
+    assert!(errors > 5, "{errors} error trials ran");
 }
 
 fn known_file(dir: &Path, name: &str, yaml: &str) -> PathBuf {

@@ -18,7 +18,8 @@ use plc_conformance::backend::slmp::{SlmpBackend, SlmpSettings};
 use plc_conformance::backend::{Backend, Fault};
 use plc_conformance::device::Device;
 use plc_conformance::hil::{dry_run, generate, GenerateOptions};
-use plc_conformance::judge::Verdict;
+use plc_conformance::judge::{Difference, Verdict};
+use plc_conformance::model::ErrorSignal;
 use plc_conformance::plan::Trial;
 use plc_conformance::runner::{verdicts, Project};
 
@@ -187,6 +188,61 @@ fn fx5_through_the_simulated_cpu_judges_like_the_model() {
     for v in &profile.variants {
         assert!(same_verdicts("mitsubishi-fx5", &v.id) > 200, "{}", v.id);
     }
+}
+
+/// A CPU that signals the code in SD0 but leaves SD8067 alone: every FX5 error trial differs,
+/// on that register only, and nothing else changes (no fault: the CPU answered).
+#[test]
+fn an_fx5_that_leaves_sd8067_alone_differs_on_every_error() {
+    let mut project = session();
+    let manifest = manifest(&project, "mitsubishi-fx5");
+    let profile = project
+        .profiles
+        .get("mitsubishi-fx5")
+        .cloned()
+        .expect("fx5");
+    let mut sim_settings = SimSettings::new(manifest.clone(), "fx5u", type_name("mitsubishi-fx5"));
+    sim_settings.untouched_registers = vec!["SD8067".parse().expect("SD8067")];
+    let sim = Simulator::start(sim_settings, profile, reference(&project, "mitsubishi-fx5"))
+        .expect("simulator");
+    let backend = live(&mut project, settings(&manifest, "fx5u", &sim));
+    let trials: Vec<Trial> = project
+        .plan(std::slice::from_ref(&backend))
+        .into_iter()
+        .filter(|t| t.variant == "fx5u" && t.skip.is_none())
+        .collect();
+    let mut errors = 0;
+    for (t, v) in trials.iter().zip(verdicts(&trials)) {
+        let expects_code = match &t.check {
+            plc_conformance::plan::Check::Native { case, .. } => {
+                case.expect
+                    .as_ref()
+                    .is_some_and(|e| matches!(e.error, Some(ErrorSignal::Code(_))))
+                    && case.basis != plc_conformance::model::Basis::Unspecified
+            }
+            _ => false,
+        };
+        if !expects_code {
+            assert!(!v.is_failure(), "{}: {v:?}", t.name());
+            continue;
+        }
+        errors += 1;
+        let Verdict::Differs {
+            difference: Difference::Words { mismatches },
+        } = &v
+        else {
+            panic!("{}: {v:?}", t.name());
+        };
+        let wrong: Vec<String> = mismatches[0]
+            .registers
+            .iter()
+            .filter(|r| r.differs())
+            .map(|r| r.device.to_string())
+            .collect();
+        assert!(!mismatches[0].error_differs() && !mismatches[0].words_differ());
+        assert_eq!(wrong, ["SD8067"], "{}", t.name());
+    }
+    assert!(errors > 20, "{errors} error trials");
 }
 
 // --- One case at a time: faults, interlocks, the fence, the dry run ------------------------------

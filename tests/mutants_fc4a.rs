@@ -181,10 +181,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                     writes.insert(d1, 0);
                 }
             }
-            Ok(Response::Done(Outcome {
-                writes,
-                error: None,
-            }))
+            Ok(Response::Done(Outcome::written(writes)))
         }),
         // Range checks one word too generous and one word too strict at each range's end.
         Mutant::new("range-one-word-long", base, |req, base| {

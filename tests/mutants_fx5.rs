@@ -429,6 +429,21 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                 _ => o,
             })
         }),
+        // SD0 right, but the FX-compatible SD8067 not written (or written only on ASCI).
+        Mutant::new("sd8067-not-written", base, |req, b| {
+            reshape(req, b, |_, mut o| {
+                o.registers.remove(&"SD8067".parse().expect("SD8067"));
+                o
+            })
+        }),
+        Mutant::new("sd8067-only-for-asci", base, |req, b| {
+            reshape(req, b, |req, mut o| {
+                if !is_asci(req) {
+                    o.registers.remove(&"SD8067".parse().expect("SD8067"));
+                }
+                o
+            })
+        }),
         Mutant::new("hexa-invalid-character-as-3405h", base, |req, b| {
             reshape(req, b, |req, o| match code(&o) {
                 Some(fx5::ERR_INVALID_DATA) => Outcome::error(req.error(fx5::ERR_COUNT)),

@@ -324,6 +324,15 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                 o
             })
         }),
+        // The code signalled, but SD0 left holding the error before it.
+        Mutant::new("sd0-not-written", base, |req, base| {
+            map_done(base.execute(req), |mut o| {
+                if let Some(sd0) = o.registers.get_mut(&"SD0".parse().expect("SD0")) {
+                    *sd0 = 0;
+                }
+                o
+            })
+        }),
         Mutant::new("swaps-error-codes", base, |req, base| {
             map_done(base.execute(req), |mut o| {
                 o.error = o.error.map(|e| match e {

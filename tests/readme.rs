@@ -215,11 +215,8 @@ fn an_excerpt_matches_lines_in_order() {
     );
 }
 
-/// Every row of the README's families table names a vector folder and its case count, and
-/// every vector folder has a row: a count that goes stale, or a family left out, fails here.
-#[test]
-fn the_families_table_counts_every_family_s_cases() {
-    let readme = std::fs::read_to_string(root().join("README.md")).expect("README.md");
+/// The corpus's case count by vector folder (`cross-vendor` included).
+fn cases_by_folder() -> std::collections::BTreeMap<String, usize> {
     let project = common::session();
     let mut counted = std::collections::BTreeMap::<String, usize>::new();
     for case in &project.corpus.cases {
@@ -231,6 +228,49 @@ fn the_families_table_counts_every_family_s_cases() {
         }
     }
     counted.insert("cross-vendor".into(), project.corpus.cross_vendor.len());
+    counted
+}
+
+/// A count the docs give in prose ("`vectors/cross-vendor/` (57 cases)") is the corpus's.
+#[test]
+fn every_case_count_in_the_docs_is_the_corpus_s() {
+    let counted = cases_by_folder();
+    let mut seen = 0;
+    for entry in std::fs::read_dir(root().join("docs")).expect("docs") {
+        let path = entry.expect("entry").path();
+        if path.extension().is_none_or(|e| e != "md") {
+            continue;
+        }
+        let text = std::fs::read_to_string(&path).expect("doc");
+        for (at, _) in text.match_indices("`vectors/") {
+            let rest = &text[at + "`vectors/".len()..];
+            let Some((folder, after)) = rest.split_once("/` (") else {
+                continue;
+            };
+            let Some(count) = after
+                .split_once(" cases)")
+                .and_then(|(n, _)| n.parse::<usize>().ok())
+            else {
+                continue;
+            };
+            seen += 1;
+            assert_eq!(
+                Some(&count),
+                counted.get(folder),
+                "{}: `vectors/{folder}/` ({count} cases)",
+                path.display()
+            );
+        }
+    }
+    assert!(seen > 0, "no case count found in docs/");
+}
+
+/// Every row of the README's families table names a vector folder and its case count, and
+/// every vector folder has a row: a count that goes stale, or a family left out, fails here.
+#[test]
+fn the_families_table_counts_every_family_s_cases() {
+    let readme = std::fs::read_to_string(root().join("README.md")).expect("README.md");
+    let counted = cases_by_folder();
     let mut rows = std::collections::BTreeMap::<String, usize>::new();
     for line in readme.lines().filter(|l| l.starts_with("| ")) {
         let Some(at) = line.find("`vectors/") else {

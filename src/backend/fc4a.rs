@@ -95,10 +95,7 @@ fn atoh(req: &Request<'_>) -> Result<Outcome, Stop> {
     }
     let mut out = Scratch::new(req.memory);
     out.write(d1.clone(), value);
-    Ok(Outcome {
-        writes: out.into_writes(),
-        error: None,
-    })
+    Ok(Outcome::written(out.into_writes()))
 }
 
 /// HTOA: the lowest S2 digits of S1, most significant first, one character (00xxH) per word
@@ -116,8 +113,5 @@ fn htoa(req: &Request<'_>) -> Result<Outcome, Stop> {
         let shift = 4 * (n - 1 - k);
         out.write(dev, u16::from(digit_char(u64::from(value >> shift))));
     }
-    Ok(Outcome {
-        writes: out.into_writes(),
-        error: None,
-    })
+    Ok(Outcome::written(out.into_writes()))
 }

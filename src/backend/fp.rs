@@ -103,10 +103,7 @@ fn ahex(req: &Request<'_>) -> Result<Outcome, Stop> {
             out.write(dev, new);
         }
     }
-    Ok(Outcome {
-        writes: out.into_writes(),
-        error: None,
-    })
+    Ok(Outcome::written(out.into_writes()))
 }
 
 /// F71 HEXA: s2 bytes from s1 -> s2 words of two characters from d.
@@ -136,8 +133,5 @@ fn hexa(req: &Request<'_>) -> Result<Outcome, Stop> {
             out.write(dev, high | low << 8);
         }
     }
-    Ok(Outcome {
-        writes: out.into_writes(),
-        error: None,
-    })
+    Ok(Outcome::written(out.into_writes()))
 }

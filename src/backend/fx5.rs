@@ -283,10 +283,7 @@ pub(super) fn asci_with(
             out.write(dev, store.apply(old));
         }
     }
-    Ok(Outcome {
-        writes: out.into_writes(),
-        error: None,
-    })
+    Ok(Outcome::written(out.into_writes()))
 }
 
 /// HEXA: n ASCII characters at (s) -> hex code at (d), right-justified.
@@ -317,10 +314,7 @@ pub(super) fn hex_with(
             out.write(dev, word);
         }
     }
-    Ok(Outcome {
-        writes: out.into_writes(),
-        error: None,
-    })
+    Ok(Outcome::written(out.into_writes()))
 }
 
 #[cfg(test)]

@@ -94,10 +94,7 @@ fn habin(req: &Request<'_>, words: u32) -> Result<Outcome, Unsupported> {
             out.write(dev, (value >> (16 * w)) as u16);
         }
     }
-    Ok(Outcome {
-        writes: out.into_writes(),
-        error: None,
-    })
+    Ok(Outcome::written(out.into_writes()))
 }
 
 /// BINHA / DBINHA: binary at (s) -> hex ASCII at (d).
@@ -147,8 +144,5 @@ fn binha(req: &Request<'_>, words: u32) -> Result<Outcome, Unsupported> {
             out.write(dev, word);
         }
     }
-    Ok(Outcome {
-        writes: out.into_writes(),
-        error: None,
-    })
+    Ok(Outcome::written(out.into_writes()))
 }

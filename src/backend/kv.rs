@@ -44,8 +44,8 @@ impl Model for Kv {
         let mut out = Scratch::new(req.memory);
         out.write(d.clone(), stored);
         Ok(Outcome {
-            writes: out.into_writes(),
             error,
+            ..Outcome::written(out.into_writes())
         })
     }
 }

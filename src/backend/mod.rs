@@ -102,14 +102,39 @@ pub struct Outcome {
     /// still listed; the comparer decides what changed).
     pub writes: BTreeMap<Device, u16>,
     pub error: Option<ErrorSignal>,
+    /// The registers where the profile says an error code lands (MELSEC SD0, FX5 SD8067 too),
+    /// as the backend holds them after an error: kept apart from `writes` because they are
+    /// judged against the code, not against the case's memory. Empty for a backend that models
+    /// no such register, which is then judged on the code alone.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub registers: BTreeMap<Device, u16>,
 }
 
 impl Outcome {
     pub fn error(error: ErrorSignal) -> Self {
         Outcome {
-            writes: BTreeMap::new(),
             error: Some(error),
+            ..Outcome::default()
         }
+    }
+
+    /// The words an instruction wrote, without an error.
+    pub fn written(writes: BTreeMap<Device, u16>) -> Self {
+        Outcome {
+            writes,
+            ..Outcome::default()
+        }
+    }
+
+    /// Moves what was reported as writes to the error registers into `registers`: a backend
+    /// that models its CPU's memory writes SD0 like any word.
+    pub fn registers_from_writes(mut self, registers: &[Device]) -> Self {
+        for register in registers {
+            if let Some(value) = self.writes.remove(register) {
+                self.registers.insert(register.clone(), value);
+            }
+        }
+        self
     }
 }
 

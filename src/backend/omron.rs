@@ -207,10 +207,7 @@ fn hex(req: &Request<'_>) -> Result<Outcome, Stop> {
     }
     let mut out = Scratch::new(req.memory);
     out.write(d.clone(), value);
-    Ok(Outcome {
-        writes: out.into_writes(),
-        error: None,
-    })
+    Ok(Outcome::written(out.into_writes()))
 }
 
 /// ASC: `count` digits of S from the first digit on, each as one ASCII byte (uppercase, the
@@ -238,10 +235,7 @@ fn asc(req: &Request<'_>) -> Result<Outcome, Stop> {
         };
         out.write(word, new);
     }
-    Ok(Outcome {
-        writes: out.into_writes(),
-        error: None,
-    })
+    Ok(Outcome::written(out.into_writes()))
 }
 
 #[cfg(test)]

@@ -6,6 +6,7 @@ use std::sync::Arc;
 
 use super::{Backend, Fault, Outcome, Request, Response, Unsupported};
 use crate::model::profile::{Profile, Profiles};
+use crate::model::ErrorSignal;
 use crate::value::to_bits;
 
 /// One vendor family's reference model.
@@ -90,10 +91,18 @@ impl<M: Model> Backend for Reference<M> {
         if !M::models(req.instruction) {
             return Ok(Unsupported(format!("{} is not modelled", req.instruction)).into());
         }
-        Ok(match M::run(req) {
-            Ok(outcome) => Response::Done(outcome),
-            Err(Stop::Error(code)) => Response::Done(Outcome::error(req.error(code))),
-            Err(Stop::Unsupported(u)) => u.into(),
-        })
+        let mut outcome = match M::run(req) {
+            Ok(outcome) => outcome,
+            Err(Stop::Error(code)) => Outcome::error(req.error(code)),
+            Err(Stop::Unsupported(u)) => return Ok(u.into()),
+        };
+        // The code lands where the profile says (SD0, and SD8067 on FX5): the model holds
+        // those registers as the CPU does, so a backend that reports them is judged on them.
+        if let Some(ErrorSignal::Code(code)) = outcome.error {
+            outcome.registers = (self.profile.errors.code_registers().into_iter())
+                .map(|r| (r, code))
+                .collect();
+        }
+        Ok(Response::Done(outcome))
     }
 }

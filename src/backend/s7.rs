@@ -106,8 +106,8 @@ fn ath(req: &Request<'_>) -> Result<Outcome, Stop> {
         }
     }
     Ok(Outcome {
-        writes: scratch.into_writes(),
         error: invalid.then_some(ErrorSignal::Code(INVALID_CHARACTER)),
+        ..Outcome::written(scratch.into_writes())
     })
 }
 
@@ -123,10 +123,7 @@ fn hta(req: &Request<'_>) -> Result<Outcome, Stop> {
             }
         }
     }
-    Ok(Outcome {
-        writes: scratch.into_writes(),
-        error: None,
-    })
+    Ok(Outcome::written(scratch.into_writes()))
 }
 
 #[cfg(test)]

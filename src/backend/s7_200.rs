@@ -92,10 +92,7 @@ fn ath(req: &Request<'_>) -> Result<Outcome, Stop> {
             scratch.write(d, u16::from(pair[0] << 4 | low));
         }
     }
-    Ok(Outcome {
-        writes: scratch.into_writes(),
-        error: None,
-    })
+    Ok(Outcome::written(scratch.into_writes()))
 }
 
 /// HTA: LEN hex digits from IN, the high nibble of each byte first -> LEN uppercase characters
@@ -110,8 +107,5 @@ fn hta(req: &Request<'_>) -> Result<Outcome, Stop> {
             scratch.write(d, u16::from(digit_char(u64::from(nibble))));
         }
     }
-    Ok(Outcome {
-        writes: scratch.into_writes(),
-        error: None,
-    })
+    Ok(Outcome::written(scratch.into_writes()))
 }

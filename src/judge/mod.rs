@@ -18,7 +18,7 @@ use crate::model::cross_vendor::Answer;
 use crate::model::known::Entry;
 use crate::model::Basis;
 use crate::plan::{Check, Trial};
-pub use words::{Effect, Mismatch, WordRow};
+pub use words::{Effect, Mismatch, RegisterRow, WordRow};
 
 /// The verdict of one trial.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
@@ -242,10 +242,14 @@ fn judge_unlisted(trial: &Trial, observations: &[Observation]) -> Verdict {
                     }
                 }
             };
+            let registers = trial
+                .profile
+                .as_ref()
+                .map_or_else(Vec::new, |p| p.errors.code_registers());
             let mismatches: Vec<Mismatch> = outcomes
                 .iter()
                 .filter_map(|(image, outcome)| {
-                    words::mismatch(image, expect, outcome, image.fill())
+                    words::mismatch(image, expect, outcome, image.fill(), &registers)
                 })
                 .collect();
             if mismatches.is_empty() {
@@ -387,7 +391,7 @@ mod tests {
         let mut errors = Vec::new();
         let profile = crate::load::parse_profile(
             Path::new("p.yaml"),
-            "id: p\nname: P\nshort: p\nmanuals: {}\nerrors: {signal: code, flag: SM0, register: SD0}\n\
+            "id: p\nname: P\nshort: p\nmanuals: {}\nerrors: {signal: code, flag: SM0, register: SD0, also: [SD8067]}\n\
              devices: {D: {first: 0, last: 1000}}\ninstructions: {}\n\
              variants: [{id: v, description: v}]\n",
             &mut errors,
@@ -448,6 +452,7 @@ mod tests {
                 result: Ok(Response::Done(Outcome {
                     writes: writes.iter().map(|(i, v)| (d(*i), *v)).collect(),
                     error: error.clone(),
+                    registers: BTreeMap::new(),
                 })),
             })
             .collect()
@@ -501,6 +506,57 @@ mod tests {
         )
         .is_failure());
         assert!(judge(&trial(c.clone()), &done(&[], None)).is_failure());
+    }
+
+    /// The same observations with the error registers reported as given.
+    fn with_registers(mut obs: Vec<Observation>, registers: &[(&str, u16)]) -> Vec<Observation> {
+        for o in &mut obs {
+            if let Ok(Response::Done(outcome)) = &mut o.result {
+                outcome.registers = registers
+                    .iter()
+                    .map(|(r, v)| (r.parse().expect("device"), *v))
+                    .collect();
+            }
+        }
+        obs
+    }
+
+    #[test]
+    fn every_error_register_must_hold_the_code_when_the_backend_reports_them() {
+        let code = Some(ErrorSignal::Code(0x3401));
+        let c = case(Basis::Manual, expect(&[], code.clone()));
+        let both = with_registers(
+            done(&[], code.clone()),
+            &[("SD0", 0x3401), ("SD8067", 0x3401)],
+        );
+        assert_eq!(judge(&trial(c.clone()), &both), Verdict::Conforms);
+        // A backend that models no register is judged on the code alone.
+        assert_eq!(
+            judge(&trial(c.clone()), &done(&[], code.clone())),
+            Verdict::Conforms
+        );
+        let stale = with_registers(done(&[], code.clone()), &[("SD0", 0x3401), ("SD8067", 0)]);
+        let Verdict::Differs {
+            difference: Difference::Words { mismatches },
+        } = judge(&trial(c.clone()), &stale)
+        else {
+            panic!("a stale SD8067 must differ");
+        };
+        assert!(!mismatches[0].error_differs() && mismatches[0].registers_differ());
+        let wrong = &mismatches[0].registers;
+        assert_eq!(
+            (wrong[1].device.to_string(), wrong[1].actual),
+            ("SD8067".to_string(), Some(0))
+        );
+        let missing = with_registers(done(&[], code.clone()), &[("SD0", 0x3401)]);
+        assert!(judge(&trial(c.clone()), &missing).is_failure());
+    }
+
+    #[test]
+    fn error_registers_are_not_judged_after_a_success() {
+        let c = case(Basis::Manual, expect(&[(200, 1)], None));
+        let obs = with_registers(done(&[(200, 1)], None), &[("SD0", 0x1234)]);
+        assert_eq!(judge(&trial(c.clone()), &obs), Verdict::Conforms);
     }
 
     #[test]

@@ -46,6 +46,9 @@ pub struct Mismatch {
     pub rows: Vec<WordRow>,
     pub expected_error: Option<ErrorSignal>,
     pub actual_error: Option<ErrorSignal>,
+    /// The error registers, when one of them does not hold the code (empty otherwise).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub registers: Vec<RegisterRow>,
 }
 
 impl Mismatch {
@@ -54,6 +57,62 @@ impl Mismatch {
     }
     pub fn error_differs(&self) -> bool {
         self.expected_error != self.actual_error
+    }
+    pub fn registers_differ(&self) -> bool {
+        self.registers.iter().any(RegisterRow::differs)
+    }
+}
+
+/// One register where the profile says the error code lands, against the code expected.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RegisterRow {
+    pub device: Device,
+    pub expected: u16,
+    /// `None`: the backend reported other error registers but not this one.
+    pub actual: Option<u16>,
+}
+
+impl RegisterRow {
+    pub fn differs(&self) -> bool {
+        self.actual != Some(self.expected)
+    }
+}
+
+impl Serialize for RegisterRow {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let mut row = s.serialize_struct("RegisterRow", 3)?;
+        row.serialize_field("device", &self.device)?;
+        row.serialize_field("expected", &Unit::Word.hex(self.expected))?;
+        row.serialize_field("actual", &self.actual.map(|a| Unit::Word.hex(a)))?;
+        row.end()
+    }
+}
+
+/// The error registers against the code the case expects. Only a backend that reports error
+/// registers is held to them (one that models none is judged on the code alone), and only
+/// after an expected error with a code: after a success the manuals say nothing of them.
+pub fn register_rows(
+    expect: &Expectation,
+    outcome: &Outcome,
+    registers: &[Device],
+) -> Vec<RegisterRow> {
+    let (Some(ErrorSignal::Code(code)), false) = (&expect.error, outcome.registers.is_empty())
+    else {
+        return Vec::new();
+    };
+    let rows: Vec<RegisterRow> = registers
+        .iter()
+        .map(|d| RegisterRow {
+            device: d.clone(),
+            expected: *code,
+            actual: outcome.registers.get(d).copied(),
+        })
+        .collect();
+    if rows.iter().any(RegisterRow::differs) {
+        rows
+    } else {
+        Vec::new()
     }
 }
 
@@ -132,18 +191,21 @@ pub fn rows(before: &Image, expect: &Expectation, outcome: &Outcome) -> Vec<Word
         .collect()
 }
 
-/// How an outcome under one fill differs from the expectation, if it does.
+/// How an outcome under one fill differs from the expectation, if it does; `registers` are
+/// where the profile says an error code lands.
 pub fn mismatch(
     before: &Image,
     expect: &Expectation,
     outcome: &Outcome,
     fill: Fill,
+    registers: &[Device],
 ) -> Option<Mismatch> {
     let m = Mismatch {
         fill,
         rows: rows(before, expect, outcome),
         expected_error: expect.error.clone(),
         actual_error: outcome.error.clone(),
+        registers: register_rows(expect, outcome, registers),
     };
-    (m.words_differ() || m.error_differs()).then_some(m)
+    (m.words_differ() || m.error_differs() || m.registers_differ()).then_some(m)
 }

@@ -92,6 +92,13 @@ pub struct ErrorSignalling {
     pub also: Vec<Device>,
 }
 
+impl ErrorSignalling {
+    /// Every register an operation error's code lands in: `register`, then `also`.
+    pub fn code_registers(&self) -> Vec<Device> {
+        self.register.iter().chain(&self.also).cloned().collect()
+    }
+}
+
 impl Profile {
     pub fn variant(&self, id: &str) -> Option<&Variant> {
         self.variants.iter().find(|v| v.id == id)

@@ -12,6 +12,7 @@ use crate::memory::Unit;
 use crate::model::cross_vendor::Operation;
 use crate::model::{error_text, Case};
 use crate::plan::{Check, Trial};
+use crate::value::hex_word;
 
 /// Styles for the text report; all plain unless colour is on, so the same renderer serves a
 /// terminal, a log file and libtest's captured output.
@@ -305,6 +306,19 @@ fn render_mismatch(m: &Mismatch, palette: Palette) -> String {
             palette.added
         );
     }
+    for r in m.registers.iter().filter(|r| r.differs()) {
+        let _ = writeln!(
+            out,
+            "  {} (where the error code lands): expected {}{}{:#}, actual {}{}{:#}",
+            r.device,
+            palette.removed,
+            hex_word(r.expected),
+            palette.removed,
+            palette.added,
+            r.actual.map_or("not reported".to_string(), hex_word),
+            palette.added
+        );
+    }
     out
 }
 
@@ -344,4 +358,32 @@ pub fn case_line(case: &Case) -> String {
         case.location,
         case.instructions.join(",")
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::judge::RegisterRow;
+    use crate::memory::Fill;
+    use crate::model::ErrorSignal;
+
+    #[test]
+    fn a_register_that_does_not_hold_the_code_is_shown_alone() {
+        let row = |device: &str, actual| RegisterRow {
+            device: device.parse().expect("device"),
+            expected: 0x3401,
+            actual,
+        };
+        let m = Mismatch {
+            fill: Fill::A,
+            rows: Vec::new(),
+            expected_error: Some(ErrorSignal::Code(0x3401)),
+            actual_error: Some(ErrorSignal::Code(0x3401)),
+            registers: vec![row("SD0", Some(0x3401)), row("SD8067", None)],
+        };
+        assert_eq!(
+            render_mismatch(&m, Palette::plain()),
+            "  SD8067 (where the error code lands): expected 3401H, actual not reported\n"
+        );
+    }
 }

@@ -353,8 +353,12 @@ impl ExternalBackend {
             } if id == case.id() => match case {
                 RunCase::Instruction(case) if value.is_none() && text.is_none() => {
                     let unit = self.profile.as_ref().map_or(Unit::Word, |p| p.unit);
+                    let registers = self
+                        .profile
+                        .as_ref()
+                        .map_or_else(Vec::new, |p| p.errors.code_registers());
                     outcome(case, unit, memory, writes, error)
-                        .map(Response::Done)
+                        .map(|o| Response::Done(o.registers_from_writes(&registers)))
                         .map_err(|e| unexpected(e.0))
                 }
                 RunCase::Instruction(_) => Err(unexpected(

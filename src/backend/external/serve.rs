@@ -190,9 +190,8 @@ fn answer(backend: &dyn Backend, profile: &Profile, case: &CaseRequest) -> Backe
         Ok(Response::Done(outcome)) => BackendMessage::Result {
             id: case.id,
             memory: Vec::new(),
-            writes: outcome
-                .writes
-                .iter()
+            // The error registers are words the model writes, as an emulator reports them.
+            writes: (outcome.writes.iter().chain(&outcome.registers))
                 .map(|(d, v)| (d.to_string(), *v))
                 .collect(),
             error: outcome.error.map(|e| {

@@ -521,16 +521,18 @@ impl SlmpBackend {
                     errors.register, req.case_id, status.code, status.next
                 ))));
             }
-            if let Some(extra) = &errors.extra {
-                if status.extra != status.code {
-                    return Err(CaseError::Fault(Fault::Protocol(format!(
-                        "case {}: {} = {:04X}H but {extra} = {:04X}H, where the profile says \
-                         both receive the error code",
-                        req.case_id, errors.register, status.code, status.extra
-                    ))));
+            // The code is SD0 as read; the registers go to the judge, which holds each one
+            // (SD8067 beside SD0 on FX5) to the code.
+            outcome.error = Some(req.error(status.code));
+            let read = [
+                (Some(&errors.register), status.code),
+                (errors.extra.as_ref(), status.extra),
+            ];
+            for (name, value) in read {
+                if let Some(device) = name.and_then(|n| n.parse::<Device>().ok()) {
+                    outcome.registers.insert(device, value);
                 }
             }
-            outcome.error = Some(req.error(status.code));
         }
         Ok(outcome)
     }

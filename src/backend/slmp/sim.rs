@@ -87,6 +87,9 @@ pub struct SimSettings {
     /// case only. The generator never writes such a program; tests use this to show that the
     /// corpus catches one.
     pub rungs_in_case: bool,
+    /// Error registers the CPU leaves alone on an error (a firmware that does not copy the
+    /// code to SD8067): tests use this to show that the judge holds every register to the code.
+    pub untouched_registers: Vec<Device>,
     pub faults: Vec<FaultRule>,
 }
 
@@ -108,6 +111,7 @@ impl SimSettings {
             long_form,
             port: 0,
             rungs_in_case: false,
+            untouched_registers: Vec::new(),
             faults: Vec::new(),
         }
     }
@@ -514,11 +518,12 @@ fn execute(
             }
             let errors = &shared.settings.manifest.error;
             match outcome.error {
-                Some(ErrorSignal::Code(code)) => {
+                Some(ErrorSignal::Code(_)) => {
                     cpu.set_bit(&errors.flag, true);
-                    cpu.set_reg(&errors.register, code);
-                    if let Some(e) = &errors.extra {
-                        cpu.set_reg(e, code);
+                    for (register, code) in &outcome.registers {
+                        if !shared.settings.untouched_registers.contains(register) {
+                            cpu.set_word(register, *code);
+                        }
                     }
                 }
                 Some(ErrorSignal::Flag(f)) => cpu.set_bit(&f.to_string(), true),
