@@ -14,6 +14,7 @@ use std::sync::Arc;
 
 use crate::backend::external::window;
 use crate::backend::slmp::fence::{self, WordRange};
+use crate::backend::slmp::frame;
 use crate::backend::slmp::mailbox;
 use crate::backend::slmp::manifest::{self, ErrorDevices, Manifest, Rung, Unrealisable};
 use crate::backend::slmp::SlmpBackend;
@@ -65,6 +66,20 @@ pub fn unrealisable(instruction: &str, operand: &str, value: i64) -> Option<Stri
         format!(
             "operand {operand} = K{value} does not fit a {bits}-bit constant (K{lo} to K{hi}), so \
              no program can hold it as written"
+        )
+    })
+}
+
+/// Why a device operand cannot be part of a live case: the client has no SLMP device code for
+/// it (timers, counters and index registers are not addressed here), so the case's memory could
+/// be neither set nor read back.
+pub fn unaddressable(operand: &str, device: &Device) -> Option<String> {
+    frame::device_code(device.code()).is_none().then(|| {
+        format!(
+            "operand {operand} = {device}: {} has no SLMP device code in this client (it \
+                 addresses {}), so no program can hold it as written",
+            device.code(),
+            frame::DEVICE_LETTERS.join(", ")
         )
     })
 }
@@ -129,7 +144,7 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
                 .collect();
             let why = input.operands.iter().find_map(|(name, o)| match o {
                 Operand::Constant(k) => unrealisable(&input.instruction, name, *k),
-                Operand::Device(_) => None,
+                Operand::Device(d) => unaddressable(name, d),
             });
             seen.insert(key.clone(), why.is_none());
             match why {

@@ -157,13 +157,16 @@ pub fn device_code(letters: &str) -> Option<u16> {
     })
 }
 
+/// Every device [`device_code`] knows, by its letters.
+pub const DEVICE_LETTERS: [&str; 13] = [
+    "SM", "SD", "X", "Y", "M", "L", "F", "V", "B", "D", "W", "R", "ZR",
+];
+
 /// The letters of a device code (the inverse of [`device_code`]).
 pub fn device_letters(code: u16) -> Option<&'static str> {
-    [
-        "SM", "SD", "X", "Y", "M", "L", "F", "V", "B", "D", "W", "R", "ZR",
-    ]
-    .into_iter()
-    .find(|l| device_code(l) == Some(code))
+    DEVICE_LETTERS
+        .into_iter()
+        .find(|l| device_code(l) == Some(code))
 }
 
 /// One device as a command names it: code and number.

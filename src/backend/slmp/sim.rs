@@ -493,7 +493,6 @@ fn execute(
     let image: BTreeMap<Device, u16> = cpu
         .words
         .iter()
-        .filter(|(code, _)| code.as_str() != "SD")
         .flat_map(|(code, words)| {
             words
                 .iter()
