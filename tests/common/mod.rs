@@ -270,3 +270,39 @@ cases:
 "
     )
 }
+
+/// Whether a trial's case expects an operation error with a code, and is judged on it (not
+/// `unspecified`).
+pub fn expects_a_code(t: &plc_conformance::plan::Trial) -> bool {
+    use plc_conformance::model::{Basis, ErrorSignal};
+    match &t.check {
+        plc_conformance::plan::Check::Native { case, .. } => {
+            case.basis != Basis::Unspecified
+                && case
+                    .expect
+                    .as_ref()
+                    .is_some_and(|e| matches!(e.error, Some(ErrorSignal::Code(_))))
+        }
+        _ => false,
+    }
+}
+
+/// The error registers that do not hold the code, with what they held, when a verdict differs
+/// on them alone (the words and the error signal as expected); `None` for any other verdict.
+pub fn registers_alone(v: &plc_conformance::judge::Verdict) -> Option<Vec<(String, Option<u16>)>> {
+    use plc_conformance::judge::{Difference, Verdict};
+    let Verdict::Differs {
+        difference: Difference::Words { mismatches },
+    } = v
+    else {
+        return None;
+    };
+    let m = mismatches.first()?;
+    (!m.words_differ() && !m.error_differs()).then(|| {
+        m.registers
+            .iter()
+            .filter(|r| r.differs())
+            .map(|r| (r.device.to_string(), r.actual))
+            .collect()
+    })
+}
