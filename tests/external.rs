@@ -1003,11 +1003,12 @@ impl plc_conformance::report::Reporter for Keep {
 /// known-differences file, neither differs anywhere, and what a shape cannot be asked is skipped
 /// with the shape's reason.
 #[rstest::rstest]
-#[case::byte_fields("byte_field_codec", "checks its field as part of a whole frame")]
-#[case::tokens("token_codec", "reads a token of whatever length")]
+#[case::byte_fields("byte_field_codec", "checks its field as part of a whole frame", 5)]
+#[case::tokens("token_codec", "reads a token of whatever length", 40)]
 fn a_codec_that_declares_its_field_shape_differs_nowhere(
     #[case] script: &str,
     #[case] reason: &str,
+    #[case] at_least: usize,
 ) {
     if interpreter().is_none() {
         eprintln!("skipped: no python3");
@@ -1020,10 +1021,12 @@ fn a_codec_that_declares_its_field_shape_differs_nowhere(
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(0), "{stdout}{stderr}");
     let last = stdout.lines().last().unwrap_or_default();
-    assert!(
-        last.contains(" passed, 0 failed") && !last.starts_with("0 passed"),
-        "{stdout}"
-    );
+    let passed: usize = last
+        .split_once(" passed, 0 failed")
+        .and_then(|(n, _)| n.parse().ok())
+        .unwrap_or_else(|| panic!("{stdout}"));
+    // The corpus asks each shape enough to mean something: a byte field's 2-digit cases too.
+    assert!(passed >= at_least, "{passed} passed: {stdout}");
     assert!(
         stdout.contains(reason) || stderr.contains(reason),
         "{stdout}{stderr}"

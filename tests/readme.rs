@@ -1,5 +1,5 @@
-//! The README's example outputs are real: each fenced `text` block whose first line is
-//! `$ cargo run -q -- ARGS` is run (the built binary with ARGS, from the repository root, without
+//! The example outputs of the README and of `docs/` are real: each fenced `text` block whose
+//! first line is `$ cargo run -q -- ARGS` (continued over lines ending in `\`) is run (the built binary with ARGS, from the repository root, without
 //! colour and at the default width) and its output compared with the block. A line `...` in a
 //! block stands for any number of lines, so a block may show an excerpt, and `[..]` within a
 //! line for any text (a time, say).
@@ -24,14 +24,22 @@ fn examples(readme: &str) -> Vec<Example> {
     let mut i = 0;
     while i < lines.len() {
         if lines[i].trim_end() == "```text" {
-            if let Some(command) = lines.get(i + 1).and_then(|l| l.strip_prefix("$ ")) {
-                let start = i + 2;
+            if let Some(first) = lines.get(i + 1).and_then(|l| l.strip_prefix("$ ")) {
+                // A command may go on over lines ending in `\`, as in a shell.
+                let mut command = first.to_string();
+                let mut last = i + 1;
+                while command.ends_with('\\') {
+                    command.pop();
+                    last += 1;
+                    command.push_str(lines.get(last).map_or("", |l| l.trim_start()));
+                }
+                let start = last + 1;
                 let end = (start..lines.len())
                     .find(|&j| lines[j].starts_with("```"))
                     .unwrap_or(lines.len());
                 out.push(Example {
                     line: i + 2,
-                    command: command.to_string(),
+                    command,
                     expected: lines[start..end].iter().map(|l| l.to_string()).collect(),
                 });
                 i = end;
@@ -143,25 +151,48 @@ fn needs_adapters(args: &[String]) -> bool {
             .any(|n| !matches!(n.as_str(), "iqr" | "fx5" | "fc4a"))
 }
 
+/// The README and every page of `docs/`: the files whose examples must be real.
+fn documents() -> Vec<(String, String)> {
+    let mut files = vec!["README.md".to_string()];
+    let mut docs: Vec<String> = std::fs::read_dir(root().join("docs"))
+        .expect("docs")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "md"))
+        .filter_map(|p| Some(format!("docs/{}", p.file_name()?.to_str()?)))
+        .collect();
+    docs.sort();
+    files.extend(docs);
+    files
+        .into_iter()
+        .map(|f| {
+            let text = std::fs::read_to_string(root().join(&f)).expect("document");
+            (f, text)
+        })
+        .collect()
+}
+
 #[test]
 fn readme_examples_show_the_real_output() {
-    let readme = std::fs::read_to_string(root().join("README.md")).expect("README.md");
-    let examples = examples(&readme);
+    let documents = documents();
+    let examples: Vec<(&str, Example)> = documents
+        .iter()
+        .flat_map(|(file, text)| examples(text).into_iter().map(move |e| (file.as_str(), e)))
+        .collect();
     assert!(examples.len() >= 3, "the README has its examples");
     let adapters = root().join(".venv-adapters/bin/python").exists();
     let required = std::env::var_os("PLC_CONFORMANCE_REQUIRE_BACKENDS").is_some();
     let mut stale = Vec::new();
-    for example in &examples {
+    for (file, example) in &examples {
         let Some(rest) = example.command.strip_prefix("cargo run -q -- ") else {
             panic!(
-                "README.md:{}: an example command starts with `cargo run -q -- `",
+                "{file}:{}: an example command starts with `cargo run -q -- `",
                 example.line
             );
         };
         let args = words(rest);
         if needs_adapters(&args) && !adapters && !required {
             eprintln!(
-                "skipped README.md:{} (`{}`): .venv-adapters is missing (.ci/run creates it)",
+                "skipped {file}:{} (`{}`): .venv-adapters is missing (.ci/run creates it)",
                 example.line, example.command
             );
             continue;
@@ -176,7 +207,7 @@ fn readme_examples_show_the_real_output() {
         let actual: Vec<&str> = stdout.trim_end_matches('\n').lines().collect();
         if !matches(&example.expected, &actual) {
             stale.push(format!(
-                "README.md:{}: `{}` now prints:\n{stdout}",
+                "{file}:{}: `{}` now prints:\n{stdout}",
                 example.line, example.command
             ));
         }
