@@ -1198,6 +1198,116 @@ fn a_codec_is_judged_against_the_reading_it_declares() {
     );
 }
 
+/// A known-differences entry that names its cause by input classes covers the sweep's groups of
+/// those classes: they are counted as known, not shown and not failing; what it does not cover
+/// still fails, and an entry that covers every input (`cases: ["*"]`) leaves the sweep green.
+#[test]
+fn a_sweep_counts_the_groups_a_cause_covers_as_known() {
+    if !common::python() {
+        return;
+    }
+    let dir = common::scratch();
+    let by_class = dir.path().join("by-class.known.yaml");
+    std::fs::write(
+        &by_class,
+        "differences:\n  - cause: int(text, 16) takes more than hex digits\n    kind: bug\n    \
+         input: [lowercase, blank, sign, hex-prefix, underscore]\n    reason: Python's int\n",
+    )
+    .expect("known file");
+    let known = format!("judged={}", by_class.display());
+    let out = judged_sweep("lenient", &["--known-differences", &known]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let line = stdout
+        .lines()
+        .find(|l| l.contains("as its known differences say"))
+        .unwrap_or_else(|| panic!("no known line: {stdout}"));
+    assert!(line.contains("by-class.known.yaml:2): "), "{line}");
+    for g in stdout.split("\n#").skip(1) {
+        let head = g.lines().next().unwrap_or_default();
+        for class in ["lowercase", "blank", "sign", "0x"] {
+            assert!(!head.contains(class), "a covered group is shown: {g}");
+        }
+        // Its shrunk inputs are its own (they are renumbered when known groups move).
+        if let Some((_, first)) = head.split_once("first non-digit: ") {
+            let class = first
+                .split(';')
+                .next()
+                .unwrap_or_default()
+                .trim_end_matches(']');
+            for line in g.lines().filter(|l| l.trim_start().starts_with("shrunk (")) {
+                assert!(line.contains(class), "{class}: {g}");
+            }
+        }
+    }
+    // The same sweep without the file shows those groups and differs on more inputs.
+    let without = String::from_utf8_lossy(&judged_sweep("lenient", &[]).stdout).into_owned();
+    let differs = |text: &str| -> u64 {
+        let at = text.find("differs on ").expect("judged line") + "differs on ".len();
+        text[at..]
+            .split_whitespace()
+            .next()
+            .and_then(|n| n.replace(',', "").parse().ok())
+            .expect("a count")
+    };
+    assert!(differs(&stdout) < differs(&without), "{stdout}\n{without}");
+    let doc: serde_json::Value = serde_json::from_slice(
+        &judged_sweep(
+            "lenient",
+            &["--known-differences", &known, "--format", "json"],
+        )
+        .stdout,
+    )
+    .expect("JSON");
+    let known_groups = doc["groups"]
+        .as_array()
+        .expect("groups")
+        .iter()
+        .filter(|g| g["known"][0]["column"] == "judged")
+        .count();
+    assert!(
+        known_groups > 0,
+        "no group lists the judged column as known"
+    );
+    // Every shrunk input is listed under its own group (they are renumbered when known groups
+    // move behind the differing ones).
+    let mut shrunk = 0;
+    for g in doc["groups"].as_array().expect("groups") {
+        let firsts: Vec<&serde_json::Value> = g["classes"]
+            .as_array()
+            .expect("classes")
+            .iter()
+            .map(|c| &c["first"]["index"])
+            .collect();
+        for s in g["shrunk"].as_array().expect("shrunk") {
+            shrunk += 1;
+            assert!(
+                firsts.contains(&&s["from"]["index"]),
+                "group {}: a shrunk input of another group",
+                g["number"]
+            );
+        }
+    }
+    assert!(shrunk > 0, "nothing shrunk");
+
+    let everything = dir.path().join("all.known.yaml");
+    std::fs::write(
+        &everything,
+        "differences:\n  - cause: lenient\n    kind: by-design\n    cases: ['*']\n    \
+         reason: takes what int takes\n",
+    )
+    .expect("known file");
+    let out = judged_sweep(
+        "lenient",
+        &[
+            "--known-differences",
+            &format!("judged={}", everything.display()),
+        ],
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    assert!(stdout.contains("differs on 0 of 400 inputs"), "{stdout}");
+}
+
 /// `--oracle` judges a codec against another reading, `none` against none; a reading that is
 /// not a built-in column is refused with the list of those that are.
 #[test]

@@ -73,6 +73,11 @@ pub struct SweepArgs {
     /// oracle, and fails when there is one.
     #[arg(long, value_name = "READING")]
     pub oracle: Option<String>,
+    /// A known-differences file for an `external:` backend given here (those of the project
+    /// file's backends are read as for `run`). A judged column's group is a known difference,
+    /// not a failure, when an entry names its cause by the classes of its input (`input:`).
+    #[arg(long, value_name = "NAME=FILE")]
+    pub known_differences: Vec<String>,
     /// Seconds an `external:` backend may take to answer one case.
     #[arg(long, value_name = "SECONDS", default_value_t = 5.0)]
     pub timeout: f64,
@@ -166,7 +171,7 @@ pub fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
     let backend_args = BackendArgs {
         backends: args.backends.clone(),
         timeout: args.timeout,
-        known_differences: Vec::new(),
+        known_differences: args.known_differences.clone(),
         filter: None,
         vectors: Vec::new(),
         jobs: args.jobs,
@@ -368,7 +373,7 @@ pub fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
     }
     // SIGINT and SIGTERM (handled in `cli::main`) stop the sweep after the round under way and
     // kill every backend process group, so a hung backend ends the round too.
-    let results = sweep.run(crate::interrupt::stop_flag(), &mut |done, of| {
+    let mut results = sweep.run(crate::interrupt::stop_flag(), &mut |done, of| {
         if let Some(bar) = &bar {
             bar.set_length(of);
             bar.set_position(done);
@@ -377,6 +382,7 @@ pub fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
+    crate::sweep::known::apply(&mut results, &project.known);
     if results.interrupted {
         console::status(&format!(
             "interrupted: {} of {} inputs swept; what was found so far follows",

@@ -212,6 +212,15 @@ pub struct Class {
     pub first: Found,
 }
 
+/// A judged column whose difference in a group an entry covers.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct KnownColumn {
+    pub column: String,
+    pub reason: String,
+    /// `file:line` of the entry.
+    pub location: String,
+}
+
 /// Inputs with the same behaviour and features.
 #[derive(Debug, Clone, Serialize)]
 pub struct Group {
@@ -219,6 +228,10 @@ pub struct Group {
     pub inputs: u64,
     /// The columns that differ from their oracle (by name), on the first input.
     pub differing: Vec<String>,
+    /// Judged columns whose difference here a known-differences entry covers (moved out of
+    /// `differing` by `sweep::known::apply`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub known: Vec<KnownColumn>,
     /// Whether the columns do not all answer alike.
     pub disagree: bool,
     /// The first input found.
@@ -291,6 +304,7 @@ impl Groups {
                 key,
                 inputs: 0,
                 differing: names(&replies),
+                known: Vec::new(),
                 disagree: disagree(&replies),
                 representative: found(&replies),
                 classes: BTreeMap::new(),

@@ -30,6 +30,7 @@ pub mod exhaustive;
 pub mod generate;
 pub mod group;
 pub mod input;
+pub mod known;
 pub mod render;
 pub mod rng;
 pub mod shrink;
@@ -48,7 +49,7 @@ use generate::{shard_indices, Digits, Generator, Space};
 use group::{Found, Groups, Reply};
 use input::Point;
 pub use target::Oracle;
-use target::{columns, Cases, Column, Shape, Target};
+use target::{columns, Ask, Cases, Column, Shape, Target};
 
 /// Random texts that check the byte classes of a full sweep by class.
 pub const DEFAULT_CLASS_CHECK: u64 = 1 << 20;
@@ -120,6 +121,12 @@ pub struct ColumnInfo {
     pub description: String,
     /// The column it is judged against.
     pub oracle: Option<String>,
+    /// What a known-differences entry names as the instruction: the instruction, the
+    /// lowering, or `codec`, as for a trial of the corpus.
+    #[serde(skip)]
+    pub check: String,
+    #[serde(skip)]
+    pub variant: String,
 }
 
 /// A group's input reduced to the simplest one that behaves the same.
@@ -507,6 +514,15 @@ impl Sweep {
                 backend: c.backend.name().to_string(),
                 description: c.backend.describe(),
                 oracle: c.oracle.map(|o| self.columns[o].name.clone()),
+                check: match (&c.ask, &self.settings.target) {
+                    (Ask::Lowering(l), _) => l.name.clone(),
+                    (Ask::Codec, _) => "codec".into(),
+                    (Ask::Instruction, Target::Instruction { instruction, .. }) => {
+                        instruction.clone()
+                    }
+                    (Ask::Instruction, Target::Operation { .. }) => String::new(),
+                },
+                variant: c.variant.clone(),
             })
             .collect()
     }

@@ -58,6 +58,18 @@ pub struct Judged {
     /// Inputs on which the column differs from its oracle.
     pub inputs: u64,
     pub groups: usize,
+    /// Where it differs as its known-differences file says, by entry.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub known: Vec<KnownTally>,
+}
+
+/// The groups of a judged column one known-differences entry covers.
+#[derive(Debug, Clone, Serialize)]
+pub struct KnownTally {
+    pub reason: String,
+    pub location: String,
+    pub inputs: u64,
+    pub groups: usize,
 }
 
 /// Every column that has an oracle, in column order; its groups are counted as the text
@@ -80,11 +92,30 @@ pub fn judged(results: &Results) -> Vec<Judged> {
                 inputs += g.inputs;
                 keys.insert(shown_key(g, &shown));
             }
+            let mut known: Vec<KnownTally> = Vec::new();
+            for g in results.groups.by_key.values() {
+                for k in g.known.iter().filter(|k| k.column == c.name) {
+                    match known.iter_mut().find(|t| t.location == k.location) {
+                        Some(t) => {
+                            t.inputs += g.inputs;
+                            t.groups += 1;
+                        }
+                        None => known.push(KnownTally {
+                            reason: k.reason.clone(),
+                            location: k.location.clone(),
+                            inputs: g.inputs,
+                            groups: 1,
+                        }),
+                    }
+                }
+            }
+            known.sort_by(|a, b| a.location.cmp(&b.location));
             Some(Judged {
                 column: c.name.clone(),
                 oracle,
                 inputs,
                 groups: keys.len(),
+                known,
             })
         })
         .collect()
@@ -223,6 +254,17 @@ pub fn text(results: &Results) -> String {
             what(results),
             j.groups
         );
+        for k in &j.known {
+            let _ = writeln!(
+                out,
+                "    and on {} {} in {} group(s) as its known differences say ({}): {}",
+                thousands(k.inputs),
+                what(results),
+                k.groups,
+                k.location,
+                crate::report::sanitize::terminal(&k.reason)
+            );
+        }
     }
     if judged.is_empty() {
         for p in pairs(results) {
@@ -248,7 +290,9 @@ pub fn text(results: &Results) -> String {
             continue;
         }
         if g.differing.is_empty() {
-            agreeing = (agreeing.0 + 1, agreeing.1 + g.inputs);
+            if g.known.is_empty() {
+                agreeing = (agreeing.0 + 1, agreeing.1 + g.inputs);
+            }
             continue;
         }
         let key = shown_key(g, &shown);
@@ -454,6 +498,9 @@ pub struct GroupDoc<'a> {
     /// Per column, the class of its answer.
     pub signature: BTreeMap<&'a str, &'a str>,
     pub differing: &'a [String],
+    /// Judged columns that differ here as their known-differences file says.
+    #[serde(skip_serializing_if = "<[_]>::is_empty")]
+    pub known: &'a [super::group::KnownColumn],
     pub disagree: bool,
     pub representative: &'a Found,
     pub classes: Vec<&'a Class>,
@@ -489,6 +536,7 @@ pub fn document(results: &Results) -> Document<'_> {
                     .zip(g.key.signature.iter().map(String::as_str))
                     .collect(),
                 differing: &g.differing,
+                known: &g.known,
                 disagree: g.disagree,
                 representative: &g.representative,
                 classes: g.classes_by_size(),
