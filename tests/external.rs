@@ -435,6 +435,40 @@ fn an_emulator_that_writes_sd0_is_held_to_the_error_code(
     assert!(errors > 5, "{errors} error trials ran");
 }
 
+/// A wrong SD0 is its own behaviour in the reports, not "wrong words": the JSON record names
+/// the register, and the text shows it alone.
+#[test]
+fn a_wrong_error_register_is_reported_as_such() {
+    if !python() {
+        return;
+    }
+    let script = fixtures().join("habin_adapter.py");
+    let backend = format!("external:habin-py=python3 {} sd0-stale", script.display());
+    let filter = "habin-py::habin::habin-fixed-lowercase-is-invalid::rcpu-no-sm705";
+    let out = common::cli(&["run", "--backend", &backend, "--filter", filter]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains("  SD0 (where the error code lands): expected 3401H, actual 0000H\n"),
+        "{text}"
+    );
+    assert!(!text.contains("memory (- expected"), "{text}");
+    let out = common::cli(&[
+        "run",
+        "--backend",
+        &backend,
+        "--filter",
+        filter,
+        "--format",
+        "json",
+    ]);
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let behaviour = &doc["records"][0]["behaviour"];
+    assert_eq!(behaviour["behaviour"], "wrong-register", "{behaviour}");
+    assert_eq!(behaviour["registers"][0], "SD0", "{behaviour}");
+    assert_eq!(doc["records"][0]["shown"], "SD0 not the code");
+}
+
 fn known_file(dir: &Path, name: &str, yaml: &str) -> PathBuf {
     let file = dir.join(name);
     std::fs::write(&file, yaml).expect("write known file");

@@ -61,6 +61,11 @@ pub enum Behaviour {
         expected: Option<ErrorSignal>,
         actual: Option<ErrorSignal>,
     },
+    /// Native: the words and the code as expected, but an error register (SD0, SD8067) that
+    /// does not hold the code.
+    WrongRegister {
+        registers: Vec<String>,
+    },
     /// Cross-vendor: what kind of answer the lowering gave.
     Answer {
         class: AnswerClass,
@@ -103,6 +108,11 @@ impl fmt::Display for Behaviour {
                 "differs: error {} instead of {}",
                 error_text(actual.as_ref()),
                 error_text(expected.as_ref())
+            ),
+            Behaviour::WrongRegister { registers } => write!(
+                f,
+                "differs: {} not holding the error code",
+                registers.join(", ")
             ),
             Behaviour::Answer { class } => write!(f, "{class}"),
             Behaviour::FillDependent => f.write_str("fill-dependent"),
@@ -206,6 +216,9 @@ impl Behaviour {
     fn short(&self, verdict: &Verdict) -> String {
         match self {
             Behaviour::WrongWords => "wrong words".to_string(),
+            Behaviour::WrongRegister { registers } => {
+                format!("{} not the code", registers.join(", "))
+            }
             Behaviour::WrongError { expected, actual } => format!(
                 "error {} instead of {}",
                 error_text(actual.as_ref()),
@@ -271,6 +284,12 @@ fn behaviour(trial: &Trial, verdict: &Verdict) -> Behaviour {
                 Some(m) if m.error_differs() => Behaviour::WrongError {
                     expected: m.expected_error.clone(),
                     actual: m.actual_error.clone(),
+                },
+                Some(m) if !m.words_differ() && m.registers_differ() => Behaviour::WrongRegister {
+                    registers: (m.registers.iter())
+                        .filter(|r| r.differs())
+                        .map(|r| r.device.to_string())
+                        .collect(),
                 },
                 _ => Behaviour::WrongWords,
             },
