@@ -178,9 +178,7 @@ fn describe(difference: &Difference) -> String {
                     .map_or("no error".to_string(), |e| format!("error {e}"))
             ),
             Some(m) if m.registers_differ() => m
-                .registers
-                .iter()
-                .filter(|r| r.differs())
+                .wrong_registers()
                 .map(|r| {
                     format!(
                         "leaves {} {} after error {}",

@@ -17,7 +17,7 @@ use std::time::Duration;
 use plc_conformance::backend::external::ExternalErrorKind;
 use plc_conformance::backend::Backend;
 use plc_conformance::judge::Verdict;
-use plc_conformance::load::{load_project, ENV_CONFIG, ENV_SELF, FILE_NAME};
+use plc_conformance::load::{load_project, ENV_SELF, FILE_NAME};
 use plc_conformance::model::project::{ExternalSettings, Launch};
 use plc_conformance::plan::Trial;
 use plc_conformance::runner::{run_one, verdicts as run_all, Paths, Project, SetupError};
@@ -612,16 +612,6 @@ fn protocol_schema_is_current() {
     );
 }
 
-fn cli(args: &[&str]) -> std::process::Output {
-    assert_cmd::Command::new(BIN)
-        .args(["--root", root().to_str().unwrap_or(".")])
-        .args(args)
-        .env("NO_COLOR", "1")
-        .env_remove(ENV_CONFIG)
-        .output()
-        .expect("the binary runs")
-}
-
 #[test]
 fn the_command_line_reports_a_failed_handshake_before_any_case() {
     if !python() {
@@ -629,7 +619,7 @@ fn the_command_line_reports_a_failed_handshake_before_any_case() {
     }
     let script = fixtures().join("faulty_adapter.py");
     let backend = format!("external:broken=python3 {} version", script.display());
-    let out = cli(&["run", "--backend", &backend]);
+    let out = common::cli(&["run", "--backend", &backend]);
     assert_eq!(out.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
@@ -651,7 +641,7 @@ fn the_command_line_runs_an_external_backend_and_labels_its_crash() {
         script.display()
     );
     let vectors = fixtures().join("vectors");
-    let out = cli(&[
+    let out = common::cli(&[
         "run",
         "--vectors",
         vectors.to_str().unwrap_or_default(),
@@ -679,7 +669,7 @@ fn the_command_line_takes_a_known_differences_file_and_fails_a_stale_entry() {
         "cli-stale.yaml",
         "differences:\n  - case: habin-fixed-text-form\n    reason: \"was wrong once\"\n",
     );
-    let out = cli(&[
+    let out = common::cli(&[
         "run",
         "--backend",
         r#"external:served="$PLC_CONFORMANCE" serve --profile mitsubishi-iqr"#,

@@ -59,7 +59,11 @@ impl Mismatch {
         self.expected_error != self.actual_error
     }
     pub fn registers_differ(&self) -> bool {
-        self.registers.iter().any(RegisterRow::differs)
+        self.wrong_registers().next().is_some()
+    }
+    /// The error registers that do not hold the code.
+    pub fn wrong_registers(&self) -> impl Iterator<Item = &RegisterRow> {
+        self.registers.iter().filter(|r| r.differs())
     }
 }
 
@@ -97,10 +101,12 @@ pub fn register_rows(
     outcome: &Outcome,
     registers: &[Device],
 ) -> Vec<RegisterRow> {
-    let (Some(ErrorSignal::Code(code)), false) = (&expect.error, outcome.registers.is_empty())
-    else {
+    let Some(ErrorSignal::Code(code)) = &expect.error else {
         return Vec::new();
     };
+    if outcome.registers.is_empty() {
+        return Vec::new();
+    }
     let rows: Vec<RegisterRow> = registers
         .iter()
         .map(|d| RegisterRow {

@@ -268,20 +268,28 @@ fn check_cause(
         None => {
             codec_has_no_instruction(entry, cx, key);
         }
-        Some(p) => {
-            if let Some(v) = &entry.variant {
-                if p.variant(v).is_none() {
-                    let known: Vec<String> = p.variants.iter().map(|v| v.id.clone()).collect();
-                    cx.error(
-                        key("variant"),
-                        LoadErrorKind::Unknown {
-                            what: "variant",
-                            name: v.clone(),
-                            expected: known,
-                        },
-                    );
-                }
-            }
+        Some(p) => variant_exists(entry, p, cx, key),
+    }
+}
+
+/// An entry's `variant` names a variant of the profile.
+fn variant_exists(
+    entry: &Entry,
+    profile: &Profile,
+    cx: &mut FileContext<'_>,
+    key: &dyn Fn(&str) -> String,
+) {
+    if let Some(v) = &entry.variant {
+        if profile.variant(v).is_none() {
+            let known: Vec<String> = profile.variants.iter().map(|v| v.id.clone()).collect();
+            cx.error(
+                key("variant"),
+                LoadErrorKind::Unknown {
+                    what: "variant",
+                    name: v.clone(),
+                    expected: known,
+                },
+            );
         }
     }
 }
@@ -360,19 +368,7 @@ fn check_cross_vendor_entry(
             );
         }
     }
-    if let Some(v) = &entry.variant {
-        if profile.variant(v).is_none() {
-            let known: Vec<String> = profile.variants.iter().map(|v| v.id.clone()).collect();
-            cx.error(
-                key("variant"),
-                LoadErrorKind::Unknown {
-                    what: "variant",
-                    name: v.clone(),
-                    expected: known,
-                },
-            );
-        }
-    }
+    variant_exists(entry, profile, cx, key);
 }
 
 #[cfg(test)]

@@ -286,10 +286,7 @@ fn behaviour(trial: &Trial, verdict: &Verdict) -> Behaviour {
                     actual: m.actual_error.clone(),
                 },
                 Some(m) if !m.words_differ() && m.registers_differ() => Behaviour::WrongRegister {
-                    registers: (m.registers.iter())
-                        .filter(|r| r.differs())
-                        .map(|r| r.device.to_string())
-                        .collect(),
+                    registers: m.wrong_registers().map(|r| r.device.to_string()).collect(),
                 },
                 _ => Behaviour::WrongWords,
             },

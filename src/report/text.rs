@@ -306,7 +306,7 @@ fn render_mismatch(m: &Mismatch, palette: Palette) -> String {
             palette.added
         );
     }
-    for r in m.registers.iter().filter(|r| r.differs()) {
+    for r in m.wrong_registers() {
         let _ = writeln!(
             out,
             "  {} (where the error code lands): expected {}{}{:#}, actual {}{}{:#}",

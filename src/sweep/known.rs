@@ -28,7 +28,7 @@ pub fn apply(results: &mut Results, known: &BTreeMap<String, KnownDifferences>) 
         .iter()
         .map(|g| g.key.clone())
         .collect();
-    let columns = results.columns.clone();
+    let columns = &results.columns;
     for group in results.groups.by_key.values_mut() {
         let texts: Option<Vec<&[u8]>> = std::iter::once(&group.representative)
             .chain(group.classes.values().map(|c| &c.first))

@@ -299,9 +299,7 @@ pub fn registers_alone(v: &plc_conformance::judge::Verdict) -> Option<Vec<(Strin
     };
     let m = mismatches.first()?;
     (!m.words_differ() && !m.error_differs()).then(|| {
-        m.registers
-            .iter()
-            .filter(|r| r.differs())
+        m.wrong_registers()
             .map(|r| (r.device.to_string(), r.actual))
             .collect()
     })
