@@ -1,10 +1,14 @@
 //! Device addresses as the manuals write them: a code and a decimal number (`D100`, `SD0`,
-//! `M1260`, `DT100`, `MB20`, `DB1.DBB10`), or a bit of a byte (`SM1.7`, the S7-200's error bit).
+//! `M1260`, `DT100`, `MB20`, `DB1.DBB10`, MELSEC's module buffer memory `U1\G10`), or a bit of
+//! a byte (`SM1.7`, the S7-200's error bit).
 //!
 //! A device names one unit of its family's memory ([`crate::memory::Unit`]): a 16-bit word, or
 //! a byte in a byte-addressed family. The number is the unit's address, so `(s)+1` is the next
 //! word or the next byte. For a bit device used as a word operand (IDEC's "16 points", e.g. `M0`
 //! as a destination) the address names the word made of the 16 points starting at that head.
+//! MELSEC writes such a word with a digit designation, `K4M0`: 4 digits of 4 bits from M0. Its
+//! code is `K4M`, its number the head point, and `(s)+1` is the next 16 points, `K4M16`
+//! ([`Device::points`]).
 //!
 //! The syntax is the same for every family, a code and the number after it; which codes exist is
 //! data in the vendor profile (`devices:`), where a `#` in a code stands for a block number
@@ -29,7 +33,7 @@ pub const MAX_CODE_LEN: usize = 12;
 
 /// The device syntax as a JSON Schema pattern (vector files, the protocol): [`Device::from_str`]
 /// is the rule, this is the same rule for editors and other languages.
-pub const PATTERN: &str = r"^[A-Z]([A-Z0-9.]*[A-Z])?([0-9]+\.[0-7]|[0-9]+)$";
+pub const PATTERN: &str = r"^[A-Z]([A-Z0-9.\\]*[A-Z])?([0-9]+\.[0-7]|[0-9]+)$";
 
 /// A device code kept inline, zero-padded. Memory images and effects are maps keyed
 /// by devices, and a sweep builds millions of them: a code that is a `String` makes every
@@ -84,11 +88,40 @@ impl Device {
     /// The device `offset` units after this one, e.g. `(s)+1`. `None` when the number would
     /// overflow, which callers treat like any other address past the end of the device range.
     pub fn offset(&self, offset: u32) -> Option<Device> {
-        self.index.checked_add(offset).map(|index| Device {
-            code: self.code,
-            index,
-        })
+        offset
+            .checked_mul(self.points())
+            .and_then(|points| self.index.checked_add(points))
+            .map(|index| Device {
+                code: self.code,
+                index,
+            })
     }
+
+    /// How many device numbers one unit spans: 1, except for a MELSEC digit designation
+    /// (`K` and a digit count, then a bit device: `K4M`), whose unit is 4 points per digit, so
+    /// that `(s)+1` of `K4M0` is `K4M16` as on the CPU. Which designations exist is the
+    /// profile's (`devices:`); the syntax alone says how far apart their units are.
+    pub fn points(&self) -> u32 {
+        digit_designation(self.code())
+            .map(|digits| 4 * digits)
+            .unwrap_or(1)
+    }
+
+    /// The position of this unit in its code's sequence of units: the number for plain
+    /// devices, the number divided by [`Device::points`] for a digit designation. The fill
+    /// pattern varies with it, so that consecutive units differ.
+    pub fn unit_number(&self) -> u32 {
+        self.index / self.points()
+    }
+}
+
+/// The digit count of a digit-designated code (`K4M` -> 4): `K`, one digit 1-8, then letters.
+fn digit_designation(code: &str) -> Option<u32> {
+    let rest = code.strip_prefix('K')?;
+    let mut chars = rest.chars();
+    let digits = chars.next()?.to_digit(10).filter(|d| (1..=8).contains(d))?;
+    let letters = chars.as_str();
+    (!letters.is_empty() && letters.bytes().all(|b| b.is_ascii_uppercase())).then_some(digits)
 }
 
 impl fmt::Display for Device {
@@ -131,9 +164,9 @@ impl FromStr for Device {
     }
 }
 
-/// A code: uppercase letters, optionally with block numbers between dots (`DB1.DBB`), starting
-/// and ending with a letter; or such a code with a byte number and a dot, the head of a bit
-/// address (`SM1.` of `SM1.7`).
+/// A code: uppercase letters, optionally with block numbers between dots (`DB1.DBB`) or a
+/// module number before a backslash (`U1\G`), starting and ending with a letter; or such a
+/// code with a byte number and a dot, the head of a bit address (`SM1.` of `SM1.7`).
 fn valid_code(code: &str) -> bool {
     if let Some(byte) = code.strip_suffix('.') {
         let letters = byte.trim_end_matches(|c: char| c.is_ascii_digit());
@@ -146,8 +179,9 @@ fn valid_code(code: &str) -> bool {
         && bytes[bytes.len() - 1].is_ascii_uppercase()
         && bytes
             .iter()
-            .all(|b| b.is_ascii_uppercase() || b.is_ascii_digit() || *b == b'.')
+            .all(|b| b.is_ascii_uppercase() || b.is_ascii_digit() || matches!(b, b'.' | b'\\'))
         && !code.contains("..")
+        && !code.contains("\\\\")
 }
 
 /// Whether a profile's device code names `code`: equal, or a pattern in which each `#` stands
@@ -190,6 +224,8 @@ mod tests {
     #[case("DB1.DBB10", "DB1.DBB", 10)]
     #[case("SM1.7", "SM1.", 7)]
     #[case("V10.0", "V10.", 0)]
+    #[case("U1\\G10", "U1\\G", 10)]
+    #[case("K4M16", "K4M", 16)]
     fn parses(#[case] text: &str, #[case] code: &str, #[case] index: u32) {
         assert_eq!(text.parse::<Device>(), Ok(Device::new(code, index)));
     }
@@ -212,6 +248,9 @@ mod tests {
     #[case("SM1.8")]
     #[case("SM.7")]
     #[case("SM1..7")]
+    #[case("U1\\\\G10")]
+    #[case("U1\\10")]
+    #[case("\\G10")]
     fn rejects(#[case] text: &str) {
         assert!(text.parse::<Device>().is_err());
     }
@@ -225,6 +264,8 @@ mod tests {
     #[case("DB1.10")]
     #[case("d100")]
     #[case("D")]
+    #[case("U1\\G10")]
+    #[case("U1\\10")]
     fn the_pattern_is_the_parser(#[case] text: &str) {
         let schema = serde_json::json!({"type": "string", "pattern": PATTERN});
         let pattern = jsonschema::validator_for(&schema).expect("the pattern compiles");
@@ -243,7 +284,31 @@ mod tests {
     #[case("DB#.DBB", "DB.DBB", false)]
     #[case("DB#.DBB", "DB1.DBW", false)]
     #[case("DB#.DBB", "DB1X.DBB", false)]
+    #[case("U#\\G", "U1\\G", true)]
+    #[case("U#\\G", "U\\G", false)]
     fn patterns(#[case] pattern: &str, #[case] code: &str, #[case] matches: bool) {
         assert_eq!(code_matches(pattern, code), matches);
+    }
+
+    #[rstest]
+    #[case("D100", 1, "D101", 100)]
+    #[case("K4M0", 16, "K4M16", 0)]
+    #[case("K4M100", 16, "K4M116", 6)]
+    #[case("K2M0", 8, "K2M8", 0)]
+    #[case("K8M0", 32, "K8M32", 0)]
+    #[case("KM0", 1, "KM1", 0)]
+    #[case("K9M0", 1, "K9M1", 0)]
+    #[case("K4DB1.DBB0", 1, "K4DB1.DBB1", 0)]
+    fn a_digit_designation_steps_by_its_points(
+        #[case] head: &str,
+        #[case] points: u32,
+        #[case] next: &str,
+        #[case] unit: u32,
+    ) {
+        let head: Device = head.parse().expect("a device");
+        assert_eq!(head.points(), points);
+        assert_eq!(head.offset(1).map(|d| d.to_string()).as_deref(), Some(next));
+        assert_eq!(head.unit_number(), unit);
+        assert_eq!(Device::new("K4M", u32::MAX - 3).offset(1), None);
     }
 }

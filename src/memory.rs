@@ -89,9 +89,11 @@ impl Fill {
     pub const ALL: [Fill; 2] = [Fill::A, Fill::B];
 
     /// The fill's value of a unit: each byte of a word fill is the byte fill of the same kind,
-    /// so a byte-addressed family sees the same kinds of bytes as a word-addressed one.
+    /// so a byte-addressed family sees the same kinds of bytes as a word-addressed one. It
+    /// varies with the unit's position ([`Device::unit_number`]), so neighbouring units differ
+    /// for a digit designation too (`K4M0`, `K4M16`).
     pub fn value(self, device: &Device, unit: Unit) -> u16 {
-        let i = (device.index % 16) as usize;
+        let i = (device.unit_number() % 16) as usize;
         let word = match self {
             Fill::A => 0xA5A5 ^ ((i % 6) as u16 * 0x0101),
             Fill::B => {
@@ -215,6 +217,21 @@ mod tests {
         }
         let image = Image::of_units(BTreeMap::new(), Fill::A, Unit::Byte);
         assert!(image.read(&Device::new("MB", 3)) <= 0xFF);
+    }
+
+    #[test]
+    fn neighbouring_digit_designated_words_have_different_fills() {
+        for fill in Fill::ALL {
+            for k in 0..16 {
+                let word = Device::new("K4M", 100 + 16 * k);
+                assert_eq!(fill.word(&word), fill.word(&Device::new("D", 6 + k)));
+                assert_ne!(
+                    fill.word(&word),
+                    fill.word(&Device::new("K4M", 116 + 16 * k)),
+                    "{word}"
+                );
+            }
+        }
     }
 
     #[test]

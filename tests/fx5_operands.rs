@@ -1,7 +1,8 @@
 //! The operands FX5 ASCI(P) refuses, as its page's applicable devices table gives them: LC, LZ,
 //! real constants (E) and character strings ($) as (s); T, ST and C as (d) ("*1 T, ST, and C
 //! cannot be used"), and Z as (d). A vector that names one is refused at load, with the
-//! operand's key; so is one naming a device the table allows but the profile does not model.
+//! operand's key; so is one naming a device the table allows but the profile does not model,
+//! and one whose digit-designated words share points (K4M0 with K4M8).
 
 use std::path::Path;
 
@@ -52,6 +53,23 @@ fn the_other_word_devices_are_accepted(#[case] s: &str, #[case] d: &str) {
     assert_eq!(load_asci(s, d), Ok(()));
 }
 
+/// The table's bit column, as 16 points by digit designation (K4), and module buffer memory
+/// (U□\G□), for (s) and (d).
+#[rstest]
+#[case("K4M0", "D200")]
+#[case("K4L100", "D200")]
+#[case("K4F0", "D200")]
+#[case("K4S16", "D200")]
+#[case("D100", "K4M0")]
+#[case("D100", "K4L20")]
+#[case("K4M0", "K4M32")]
+#[case("U1\\G10", "D200")]
+#[case("D100", "U1\\G100")]
+#[case("U1\\G10", "U2\\G10")]
+fn bit_devices_and_buffer_memory_are_accepted(#[case] s: &str, #[case] d: &str) {
+    assert_eq!(load_asci(s, d), Ok(()));
+}
+
 #[rstest]
 #[case::long_counter_as_s("LC0", "D200", "operands.s")]
 #[case::long_index_as_s("LZ0", "D200", "operands.s")]
@@ -63,10 +81,14 @@ fn the_other_word_devices_are_accepted(#[case] s: &str, #[case] d: &str) {
 #[case::index_register_as_d("D100", "Z0", "operands.d")]
 // Allowed by the table but not modelled (docs/semantics.md#fx5-asci-operands): refused, never
 // read as something else.
-#[case::bit_device_with_digit_count_as_s("K4M0", "D200", "operands.s")]
+#[case::digit_count_other_than_4_as_s("K2M0", "D200", "operands.s")]
+#[case::octal_bit_device_as_s("K4X0", "D200", "operands.s")]
+#[case::hexadecimal_bit_device_as_d("D100", "K4B0", "operands.d")]
 #[case::link_register_as_s("W10", "D200", "operands.s")]
-#[case::module_buffer_memory_as_s("U0\\G10", "D200", "operands.s")]
+#[case::module_number_in_hexadecimal_as_s("U1A\\G10", "D200", "operands.s")]
 #[case::indirect_as_d("D100", "@D0", "operands.d")]
+// Two digit-designated words of one case that share points.
+#[case::bit_words_off_one_grid("K4M0", "K4M8", "operands.s")]
 fn a_forbidden_operand_is_refused(#[case] s: &str, #[case] d: &str, #[case] key: &str) {
     let errors = load_asci(s, d).expect_err("the vector is refused");
     assert!(errors.contains(key), "{errors}");

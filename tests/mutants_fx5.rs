@@ -414,6 +414,48 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                 _ => b.execute(req),
             }
         }),
+        // A digit-designated operand's next word taken one point on (K4M1 after K4M0), as a
+        // backend that steps device numbers by one for every code would.
+        Mutant::new("digit-designation-one-point-apart", base, |req, b| {
+            let heads: Vec<Device> = ["s", "d"]
+                .into_iter()
+                .filter_map(|name| device(req, name))
+                .filter(|d| d.points() > 1)
+                .collect();
+            if heads.is_empty() {
+                return b.execute(req);
+            }
+            // What the wrong backend reads as unit k of a head is the word k points on; give
+            // the right model that word where it reads unit k, and move its writes back.
+            let one_point = |head: &Device, k: u32| Device::new(head.code(), head.index + k);
+            let mut words = req.memory.explicit().clone();
+            for head in &heads {
+                for k in 1..64 {
+                    if let Some(unit) = head.offset(k) {
+                        words.insert(unit, req.memory.read(&one_point(head, k)));
+                    }
+                }
+            }
+            let image = Image::of_units(words, req.memory.fill(), req.memory.unit());
+            let answer = b.execute(&Request {
+                memory: &image,
+                ..*req
+            })?;
+            let Response::Done(mut o) = answer else {
+                return Ok(answer);
+            };
+            let mut moved = BTreeMap::new();
+            for (dev, value) in std::mem::take(&mut o.writes) {
+                let unit = heads.iter().find_map(|h| {
+                    let apart = dev.index.checked_sub(h.index)?;
+                    (dev.code() == h.code() && apart % h.points() == 0)
+                        .then(|| one_point(h, apart / h.points()))
+                });
+                moved.insert(unit.unwrap_or(dev), value);
+            }
+            o.writes = moved;
+            Ok(Response::Done(o))
+        }),
         Mutant::new("destination-written-on-error", base, |req, b| {
             reshape(req, b, |req, mut o| {
                 if let (Some(_), Some(d)) = (&o.error, device(req, "d")) {

@@ -60,15 +60,24 @@ class Device {
   }
 
   static parse(text) {
-    // A code and the decimal number after it: D100, MB20, DB1.DBB10.
-    const m = /^([A-Z](?:[A-Z0-9.]*[A-Z])?)([0-9]+)$/.exec(String(text));
+    // A code and the decimal number after it: D100, MB20, DB1.DBB10, U1\G10.
+    const m = /^([A-Z](?:[A-Z0-9.\\]*[A-Z])?)([0-9]+)$/.exec(String(text));
     if (!m) throw new TypeError(`not a device name: ${JSON.stringify(text)}`);
     return new Device(m[1], Number(m[2]));
   }
 
+  /**
+   * Device numbers one word spans: 1, or 16 for a digit designation such as K4M (K4M0 is the
+   * 16 points M0-M15, and the next word is K4M16).
+   */
+  points() {
+    const m = /^K([1-8])[A-Z]+$/.exec(this.code);
+    return m ? 4 * Number(m[1]) : 1;
+  }
+
   /** The device n words after this one, like (s)+n in the manuals. */
   offset(n) {
-    return new Device(this.code, this.index + n);
+    return new Device(this.code, this.index + n * this.points());
   }
 
   toString() {
@@ -89,12 +98,14 @@ const DIGITS = '0123456789ABCDEF';
 /**
  * The word a device holds when the case does not set it (docs/protocol.md, "Memory"): fill A
  * is 0xA5A5 XOR ((i mod 6) x 0x0101), fill B has "0123456789ABCDEF"[i] in the low byte and
- * [15 - i] in the high byte, with i = device number mod 16.
+ * [15 - i] in the high byte, with i = word number mod 16 (the device number, or for a digit
+ * designation the number divided by 16: K4M32 is word 2).
  * @param {'A'|'B'} fill
  * @param {Device|string|number} device a device, a device name or a device number
  */
 function fillWord(fill, device) {
-  const index = typeof device === 'number' ? device : asDevice(device).index;
+  const d = typeof device === 'number' ? null : asDevice(device);
+  const index = d === null ? device : Math.floor(d.index / d.points());
   const i = index % 16;
   if (fill === 'A') return 0xa5a5 ^ ((i % 6) * 0x0101);
   return DIGITS.charCodeAt(i) | (DIGITS.charCodeAt(15 - i) << 8);

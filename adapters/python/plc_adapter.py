@@ -95,7 +95,7 @@ class Device(namedtuple("Device", "code index")):
 
     @classmethod
     def parse(cls, text):
-        """A code and the decimal number after it: D100, MB20, DB1.DBB10."""
+        """A code and the decimal number after it: D100, MB20, DB1.DBB10, U1\\G10."""
         split = len(text)
         while split > 0 and text[split - 1].isdigit():
             split -= 1
@@ -105,9 +105,18 @@ class Device(namedtuple("Device", "code index")):
             raise ValueError("not a device name: %r" % (text,))
         return cls(code, int(number))
 
+    def points(self):
+        """Device numbers one word spans: 1, or 16 for a digit designation such as K4M
+        (K4M0 is the 16 points M0-M15, and the next word is K4M16)."""
+        c = self.code
+        if len(c) > 2 and c[0] == "K" and c[1] in "12345678" and c[2:].isalpha() \
+                and c[2:].isupper():
+            return 4 * int(c[1])
+        return 1
+
     def offset(self, n):
         """The device n words after this one, like (s)+n in the manuals."""
-        return Device(self.code, self.index + n)
+        return Device(self.code, self.index + n * self.points())
 
     def __str__(self):
         return "%s%d" % (self.code, self.index)
@@ -119,9 +128,9 @@ _DIGITS = b"0123456789ABCDEF"
 def fill_word(fill, index):
     """The word a device holds when the case does not set it (docs/protocol.md, "Fill").
 
-    index: the device number, or a Device."""
+    index: the device number, or a Device (whose word number counts: K4M32 is word 2)."""
     if isinstance(index, Device):
-        index = index.index
+        index = index.index // index.points()
     i = index % 16
     if fill == "A":
         return 0xA5A5 ^ ((i % 6) * 0x0101)
@@ -149,7 +158,8 @@ class Case:
             if "bytes" in block:
                 self.unit = "byte"
             for i, value in enumerate(block.get("words", block.get("bytes", []))):
-                memory[(start.code, start.index + i)] = value
+                unit = start.offset(i)
+                memory[(unit.code, unit.index)] = value
         self.memory = memory
         self.writes = {}
         self.error = None
@@ -182,7 +192,7 @@ class Case:
             return self.writes[key]
         if key in self.memory:
             return self.memory[key]
-        word = fill_word(self.fill, device[1])
+        word = fill_word(self.fill, Device(*key))
         return word & 0xFF if self.unit == "byte" else word
 
     def exists(self, device):

@@ -136,6 +136,18 @@ fn check_profile(p: &ProfileSpec, cx: &mut FileContext<'_>) {
                 LoadErrorKind::Invalid("a word takes at least one point".into()),
             );
         }
+        // A digit designation's unit is its points (`K4M0`, then `K4M16`): only one that is
+        // exactly a word is a unit the models and the protocol know.
+        let points = crate::device::Device::new(code, 0).points();
+        if points > 1 && (points != 16 || def.points_per_word != 16) {
+            cx.error(
+                format!("devices.{code}"),
+                LoadErrorKind::Invalid(format!(
+                    "a digit designation is modelled as one 16-bit word: K4 and a bit device \
+                     (16 points), with `points_per_word: 16` ({code} is {points} points)"
+                )),
+            );
+        }
     }
     for (name, def) in &p.instructions {
         for (i, flag) in def.flags.iter().enumerate() {

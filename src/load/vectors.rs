@@ -268,6 +268,8 @@ fn read_case(key: &str, spec: &CaseSpec, h: &Header<'_>, cx: &mut FileContext<'_
         }
     };
 
+    check_digit_grids(key, spec, cx);
+
     (cx.errors.len() == before_count).then(|| Case {
         id: spec.id.clone(),
         basis: spec.basis,
@@ -444,6 +446,54 @@ fn read_operands(
     out
 }
 
+/// Refuses a case whose digit-designated words of one code are not 16 points apart
+/// (`K4M0` with `K4M8`): such words share points, and the models keep each word on its own.
+/// On one grid (`K4M100`, `K4M116`, ...) no two words of the case, or of what an instruction
+/// reaches from its operands a unit at a time, ever overlap.
+fn check_digit_grids(key: &str, spec: &CaseSpec, cx: &mut FileContext<'_>) {
+    let operands = spec
+        .operands
+        .iter()
+        .filter_map(|(name, value)| match value {
+            ScalarSpec::Text(t) => Some((format!("{key}.operands.{name}"), t.as_str())),
+            ScalarSpec::Number(_) => None,
+        });
+    let before = spec
+        .before
+        .keys()
+        .map(|name| (format!("{key}.before.{name}"), name.as_str()));
+    let after = spec.expect.iter().flat_map(|e| {
+        e.after
+            .keys()
+            .map(|name| (format!("{key}.expect.after.{name}"), name.as_str()))
+    });
+    let mut grids: BTreeMap<String, Device> = BTreeMap::new();
+    for (at, text) in operands.chain(before).chain(after) {
+        let Ok(device) = text.parse::<Device>() else {
+            continue;
+        };
+        let points = device.points();
+        if points == 1 {
+            continue;
+        }
+        match grids.get(device.code()) {
+            Some(first) if first.index % points != device.index % points => cx.error(
+                &at,
+                LoadErrorKind::Invalid(format!(
+                    "{device} and {first} share points: a case's {} words must be {points} \
+                     points apart ({first}, {}, ...), since each is modelled as a word of its own",
+                    device.code(),
+                    first.offset(1).map_or_else(String::new, |d| d.to_string()),
+                )),
+            ),
+            Some(_) => {}
+            None => {
+                grids.insert(device.code().to_string(), device);
+            }
+        }
+    }
+}
+
 /// Expands `device: value` entries into single words, rejecting a word set twice.
 fn read_memory(
     key: &str,
@@ -469,7 +519,11 @@ fn read_memory(
         // of their 16 points. Such words are given one by one, by their heads.
         if words.len() > 1 {
             for p in &h.profiles {
-                if let Some(def) = p.devices.get(head.code()).filter(|d| d.points_per_word > 1) {
+                if let Some(def) = p
+                    .devices
+                    .get(head.code())
+                    .filter(|d| d.points_per_word > head.points())
+                {
                     cx.error(
                         &mkey,
                         LoadErrorKind::Invalid(format!(

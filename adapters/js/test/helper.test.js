@@ -204,6 +204,10 @@ test('fillWord gives the two fill patterns of docs/protocol.md', () => {
   assert.equal(helper.fillWord('B', 0), 0x4630); // '0' low, 'F' high
   assert.equal(helper.fillWord('B', 15), 0x3046);
   assert.equal(helper.fillWord('B', 'D110'), 0x3145); // i = 14: 'E' low, '1' high
+  // A digit designation's next word is 16 points on, and its word number is the head / 16.
+  assert.equal(helper.Device.parse('K4M100').offset(1).toString(), 'K4M116');
+  assert.equal(helper.fillWord('B', 'K4M116'), helper.fillWord('B', 7));
+  assert.equal(helper.Device.parse('U1\\G10').offset(1).toString(), 'U1\\G11');
 });
 
 test('Case reads its writes, then the window, then the fill; flag() prefers ignored_flags', () => {

@@ -269,6 +269,10 @@ class InProcess(unittest.TestCase):
         self.assertEqual(plc_adapter.fill_word("A", plc_adapter.Device.parse("D17")), 0xA4A4)
         self.assertEqual(plc_adapter.fill_word("B", 0), 0x4630)
         self.assertEqual(plc_adapter.fill_word("B", 110), 0x3145)
+        k4m = plc_adapter.Device.parse("K4M100")
+        self.assertEqual(str(k4m.offset(1)), "K4M116")
+        self.assertEqual(str(plc_adapter.Device.parse("D100").offset(1)), "D101")
+        self.assertEqual(plc_adapter.fill_word("B", k4m.offset(1)), plc_adapter.fill_word("B", 7))
         case = plc_adapter.Case(habin_case(1, fill="B", flags={"SM705": True, "SM701": True},
                                            ignored_flags={"SM705": False}))
         self.assertEqual(case.read(plc_adapter.Device.parse("D100")), 0x4135)
@@ -290,6 +294,21 @@ class InProcess(unittest.TestCase):
         # A byte the case does not set holds the low byte of the word fill.
         self.assertEqual(case.read(plc_adapter.Device.parse("MB30")),
                          plc_adapter.fill_word("B", 30) & 0xFF)
+
+    def test_a_digit_designated_range_steps_sixteen_points(self):
+        message = habin_case(1, fill="B")
+        message["memory"] = [{"start": "K4M100", "words": [0x1234, 0x5678]}]
+        case = plc_adapter.Case(message)
+        self.assertEqual(case.read(plc_adapter.Device.parse("K4M116")), 0x5678)
+        self.assertEqual(case.read(plc_adapter.Device.parse("K4M101")),
+                         plc_adapter.fill_word("B", 6))
+        self.assertEqual(case.read(plc_adapter.Device.parse("K4M132")),
+                         plc_adapter.fill_word("B", 8))
+
+    def test_module_buffer_memory_is_a_device(self):
+        device = plc_adapter.Device.parse("U1\\G10")
+        self.assertEqual((device.code, device.index), ("U1\\G", 10))
+        self.assertEqual(str(device.offset(1)), "U1\\G11")
 
 
 if __name__ == "__main__":

@@ -144,7 +144,8 @@ pub struct MemoryRange {
     /// The first device, e.g. `D100` or `DB1.DBB10`.
     #[schemars(regex(pattern = DEVICE_PATTERN))]
     pub start: String,
-    /// The words from `start` on, as unsigned 16-bit integers (word-addressed families).
+    /// The words from `start` on, as unsigned 16-bit integers (word-addressed families). A
+    /// digit-designated start's next word is 16 points on: `K4M0`, `K4M16`, ...
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub words: Vec<u16>,
     /// The bytes from `start` on, as unsigned 8-bit integers (byte-addressed families,

@@ -24,7 +24,9 @@ const CONSTANT_LIMIT: u32 = 4096;
 /// Ranges closer than this are sent as one.
 const MERGE_GAP: u32 = 8;
 
-/// The ranges of a request's window, per device code in ascending order: `(code, first, last)`.
+/// The ranges of a request's window, per device code in ascending order: `(code, first, last)`,
+/// the units from `first` to `last` a unit apart ([`Device::points`]: every number for a plain
+/// device, every 16th for `K4M`).
 pub fn ranges(req: &Request<'_>) -> Vec<(String, u32, u32)> {
     let longest_constant = req
         .operands
@@ -44,7 +46,7 @@ pub fn ranges(req: &Request<'_>) -> Vec<(String, u32, u32)> {
     });
     let set = req.memory.explicit().keys().map(|d| (d, SET_SPAN));
     for (d, len) in operands.chain(set) {
-        let last = d.index.saturating_add(len - 1);
+        let last = d.index.saturating_add((len - 1).saturating_mul(d.points()));
         spans.entry(d.code()).or_default().push((d.index, last));
     }
     let mut out = Vec::new();
@@ -52,21 +54,28 @@ pub fn ranges(req: &Request<'_>) -> Vec<(String, u32, u32)> {
         let Some(ranges) = req.profile.ranges(req.variant, code) else {
             continue;
         };
-        // Clip every span to each range the device has (a gap between ranges holds no word).
+        let step = Device::new(code, 0).points();
+        // Clip every span to each range the device has (a gap between ranges holds no word),
+        // keeping its units on their grid and whole inside the range.
         let mut pieces: Vec<(u32, u32)> = list
             .iter()
             .flat_map(|&(first, last)| {
-                ranges
-                    .iter()
-                    .map(move |r| (first.max(r.first), last.min(r.last)))
+                ranges.iter().filter_map(move |r| {
+                    let first = first + r.first.saturating_sub(first).div_ceil(step) * step;
+                    let end = last.min(r.last.checked_sub(step - 1)?);
+                    let last = first + end.checked_sub(first)? / step * step;
+                    Some((first, last))
+                })
             })
-            .filter(|(first, last)| first <= last)
             .collect();
         pieces.sort_unstable();
         let mut merged: Vec<(u32, u32)> = Vec::new();
         for (first, last) in pieces {
             match merged.last_mut() {
-                Some((_, end)) if first <= end.saturating_add(MERGE_GAP) => {
+                Some((start, end))
+                    if first <= end.saturating_add(MERGE_GAP * step)
+                        && (first - *start) % step == 0 =>
+                {
                     *end = (*end).max(last);
                 }
                 _ => merged.push((first, last)),
@@ -83,18 +92,21 @@ pub fn memory(req: &Request<'_>) -> Vec<MemoryRange> {
     ranges(req)
         .into_iter()
         .map(|(code, first, last)| {
-            let mut device = Device::new(&code, first);
-            let mut words = Vec::with_capacity((last - first + 1) as usize);
-            for index in first..=last {
+            let head = Device::new(&code, first);
+            let step = head.points();
+            let mut device = head.clone();
+            let mut words = Vec::with_capacity(((last - first) / step + 1) as usize);
+            for index in (first..=last).step_by(step as usize) {
                 device.index = index;
                 words.push(fill.value(&device, unit));
             }
-            device.index = first;
-            let end = Device::new(device.code(), last);
-            for (d, value) in req.memory.explicit().range(&device..=&end) {
-                words[(d.index - first) as usize] = *value;
+            let end = Device::new(&code, last);
+            for (d, value) in req.memory.explicit().range(&head..=&end) {
+                if (d.index - first) % step == 0 {
+                    words[((d.index - first) / step) as usize] = *value;
+                }
             }
-            MemoryRange::new(device.to_string(), unit, words)
+            MemoryRange::new(head.to_string(), unit, words)
         })
         .collect()
 }
@@ -171,6 +183,41 @@ mod tests {
             &[],
         );
         assert_eq!(r, vec![("D".into(), 0, 163)]);
+    }
+
+    #[test]
+    fn a_digit_designation_sends_its_units_sixteen_points_apart() {
+        let mut errors = Vec::new();
+        let p = crate::load::parse_profile(
+            std::path::Path::new("p.yaml"),
+            "id: p\nname: P\nshort: p\nmanuals: {}\nerrors: {signal: code, flag: SM0, register: SD0}\n\
+             devices: {K4M: {first: 0, last: 1023, points_per_word: 16}}\ninstructions: {}\n\
+             variants: [{id: v, description: v}]\n",
+            &mut errors,
+        )
+        .expect("profile");
+        let head = Device::new("K4M", 100);
+        let operands = BTreeMap::from([("s".to_string(), Operand::Device(head.clone()))]);
+        let image = Image::new(BTreeMap::from([(Device::new("K4M", 116), 0x1234)]), Fill::B);
+        let flags = BTreeMap::new();
+        let req = Request {
+            profile: &p,
+            variant: p.variant("v").expect("variant"),
+            instruction: "X",
+            case_id: "c",
+            flags: &flags,
+            operands: &operands,
+            memory: &image,
+        };
+        // K4M100 .. K4M996: the last whole 16 points end at M1011, before M1023.
+        assert_eq!(ranges(&req), vec![("K4M".into(), 100, 996)]);
+        let window = memory(&req);
+        let range = serde_json::to_value(&window[0]).expect("json");
+        let words = range["words"].as_array().expect("words");
+        assert_eq!(range["start"], "K4M100");
+        assert_eq!(words.len(), 57);
+        assert_eq!(words[1], 0x1234, "K4M116 is the second unit");
+        assert_eq!(words[0], Fill::B.word(&head));
     }
 
     #[test]

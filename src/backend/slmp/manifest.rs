@@ -107,15 +107,15 @@ pub fn rung_key(instruction: &str, operands: &BTreeMap<String, Operand>) -> Stri
 
 /// Reads an operand as the manifest writes it.
 pub fn parse_operand(text: &str) -> Result<Operand, String> {
-    // Constants are written `K<decimal>`, as [`Operand`]'s display does; no device code is K.
+    // Constants are written `K<decimal>`, as [`Operand`]'s display does; a device that starts
+    // with K is a digit designation (`K4M0`), which is no number.
+    let device = || text.parse::<Device>().map(Operand::Device);
     if text.starts_with('K') {
         return crate::value::parse_number(text)
             .map(Operand::Constant)
-            .map_err(|e| e.to_string());
+            .or_else(|number| device().map_err(|_| number.to_string()));
     }
-    text.parse::<Device>()
-        .map(Operand::Device)
-        .map_err(|e| e.to_string())
+    device().map_err(|e| e.to_string())
 }
 
 impl Manifest {
@@ -311,5 +311,9 @@ mod tests {
             Ok(Operand::Device(Device::new("D", 100)))
         );
         assert!(parse_operand("x").is_err());
+        assert_eq!(
+            parse_operand("K4M0"),
+            Ok(Operand::Device(Device::new("K4M", 0)))
+        );
     }
 }

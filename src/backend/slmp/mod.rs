@@ -299,6 +299,7 @@ impl SlmpBackend {
             })?;
             let head = Device::new(&code, first);
             let words = (first..=last)
+                .step_by(head.points() as usize)
                 .map(|i| req.memory.read(&Device::new(&code, i)))
                 .collect();
             window.push((head, words));
