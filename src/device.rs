@@ -54,6 +54,20 @@ impl Code {
         Some(Code(padded))
     }
 
+    /// The digit count of a digit-designated code (`K4M` -> 4): `K`, one digit 1-8, then
+    /// letters. Read from the bytes, as every fill and `(s)+n` asks it.
+    fn digit_designation(&self) -> Option<u32> {
+        let [b'K', digit @ b'1'..=b'8', first, rest @ ..] = self.0 else {
+            return None;
+        };
+        let letters = first.is_ascii_uppercase()
+            && rest
+                .iter()
+                .take_while(|b| **b != 0)
+                .all(u8::is_ascii_uppercase);
+        letters.then_some(u32::from(digit - b'0'))
+    }
+
     fn as_str(&self) -> &str {
         let len = self.0.iter().position(|b| *b == 0).unwrap_or(MAX_CODE_LEN);
         // Built from a `&str` cut at its end, so always whole UTF-8.
@@ -102,9 +116,7 @@ impl Device {
     /// that `(s)+1` of `K4M0` is `K4M16` as on the CPU. Which designations exist is the
     /// profile's (`devices:`); the syntax alone says how far apart their units are.
     pub fn points(&self) -> u32 {
-        digit_designation(self.code())
-            .map(|digits| 4 * digits)
-            .unwrap_or(1)
+        self.code.digit_designation().map_or(1, |digits| 4 * digits)
     }
 
     /// The position of this unit in its code's sequence of units: the number for plain
@@ -113,15 +125,6 @@ impl Device {
     pub fn unit_number(&self) -> u32 {
         self.index / self.points()
     }
-}
-
-/// The digit count of a digit-designated code (`K4M` -> 4): `K`, one digit 1-8, then letters.
-fn digit_designation(code: &str) -> Option<u32> {
-    let rest = code.strip_prefix('K')?;
-    let mut chars = rest.chars();
-    let digits = chars.next()?.to_digit(10).filter(|d| (1..=8).contains(d))?;
-    let letters = chars.as_str();
-    (!letters.is_empty() && letters.bytes().all(|b| b.is_ascii_uppercase())).then_some(digits)
 }
 
 impl fmt::Display for Device {

@@ -155,22 +155,27 @@ fn answer(backend: &dyn Backend, profile: &Profile, case: &CaseRequest) -> Backe
     // the rest, inside the window and past it alike.
     let mut words = BTreeMap::new();
     for range in &case.memory {
-        let Ok(head) = range.start.parse::<Device>() else {
+        let Ok(mut device) = range.start.parse::<Device>() else {
             return unsupported(format!("bad device `{}` in memory", range.start));
         };
         let values = match range.values(profile.unit) {
             Ok(values) => values,
             Err(e) => return unsupported(e.0),
         };
+        let (first, step) = (device.index, device.points());
         for (i, word) in values.into_iter().enumerate() {
-            let Some(device) = head.offset(i as u32) else {
+            let Some(index) = (i as u32)
+                .checked_mul(step)
+                .and_then(|apart| first.checked_add(apart))
+            else {
                 return unsupported(format!(
                     "memory from {} runs past the last device number",
                     range.start
                 ));
             };
+            device.index = index;
             if fill.value(&device, profile.unit) != word {
-                words.insert(device, word);
+                words.insert(device.clone(), word);
             }
         }
     }
