@@ -502,6 +502,36 @@ fn a_write_outside_the_sandbox_is_refused_before_any_byte_is_sent() {
     assert_eq!(writes_sent(&sim), 0);
 }
 
+/// A case that sets a word the client cannot address (16 points of M, as `K4M0`) is not run,
+/// with the reason, and nothing of it is written.
+#[test]
+fn a_case_setting_words_the_client_cannot_address_is_not_run() {
+    let project = session();
+    let m = manifest(&project, "mitsubishi-fx5");
+    let sim = simulator(&project, &m, "fx5u", vec![]);
+    let backend =
+        Arc::new(SlmpBackend::new(settings(&m, "fx5u", &sim), &project.profiles).expect("backend"));
+    backend.connect().expect("interlocks");
+    let mut trial = first_trial(&project, &backend, "ASCI");
+    let written = writes_sent(&sim);
+    assert!(matches!(
+        execute_once(&backend, &trial),
+        Ok(plc_conformance::backend::Response::Done(_))
+    ));
+    assert!(writes_sent(&sim) > written, "the case as it is runs");
+    std::sync::Arc::make_mut(&mut trial.input)
+        .before
+        .insert(Device::new("K4M", 0), 0x1234);
+    let written = writes_sent(&sim);
+    match execute_once(&backend, &trial) {
+        Ok(plc_conformance::backend::Response::Unsupported(why)) => {
+            assert!(why.contains("K4M words"), "{why}");
+        }
+        other => panic!("run: {other:?}"),
+    }
+    assert_eq!(writes_sent(&sim), written);
+}
+
 #[test]
 fn a_sandbox_over_the_mailbox_is_refused() {
     let project = session();

@@ -166,9 +166,12 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
         }
         let imgs = images(t);
         for req in requests(t, &imgs) {
+            // Words the client cannot address are never written: such a case is not run
+            // (`SlmpBackend::plan` says why), so they take no part in the sandbox.
             windows.extend(
                 window::ranges(&req)
                     .into_iter()
+                    .filter(|(code, ..)| frame::device_code(code).is_some())
                     .map(|(code, first, last)| WordRange::new(&code, first, last)),
             );
         }

@@ -293,6 +293,14 @@ impl SlmpBackend {
             .fold(0u16, |acc, (i, _)| acc | 1 << i);
         let mut window = Vec::new();
         for (code, first, last) in window::ranges(req) {
+            if frame::device_code(&code).is_none() {
+                return Err(format!(
+                    "not run: the case sets {} words, which this client cannot address (it \
+                     addresses {})",
+                    code,
+                    frame::DEVICE_LETTERS.join(", ")
+                ));
+            }
             let range = WordRange::new(&code, first, last);
             self.fence.check(&range).map_err(|e| {
                 format!("not run: {e}; declare a sandbox that covers the manifest's `writes`")
