@@ -1201,6 +1201,54 @@ fn a_codec_is_judged_against_the_reading_it_declares() {
 /// A known-differences entry that names its cause by input classes covers the sweep's groups of
 /// those classes: they are counted as known, not shown and not failing; what it does not cover
 /// still fails, and an entry that covers every input (`cases: ["*"]`) leaves the sweep green.
+/// A value has no input class: entries by class cover none of a value-to-hex sweep's
+/// differences, and the sweep says so; an entry for every case covers them.
+#[test]
+fn a_value_sweep_says_which_known_entries_can_cover_it() {
+    if !common::python() {
+        return;
+    }
+    let dir = common::scratch();
+    let script = root().join("tests/fixtures/external/judged_codec.py");
+    let backend = format!("external:judged=python3 {} lenient", script.display());
+    let sweep = |entry: &str| {
+        let file = dir.path().join("judged.known.yaml");
+        std::fs::write(
+            &file,
+            format!("differences:\n  - cause: lowercase digits\n    kind: bug\n    {entry}\n    reason: printf %x\n"),
+        )
+        .expect("known file");
+        let known = format!("judged={}", file.display());
+        common::cli(&[
+            "sweep",
+            "--operation",
+            "value-to-hex",
+            "--generator",
+            "random",
+            "--count",
+            "200",
+            "--seed",
+            "5",
+            "--digits",
+            "4",
+            "--backend",
+            &backend,
+            "--known-differences",
+            &known,
+        ])
+    };
+    let by_class = sweep("input: [lowercase]");
+    let stderr = String::from_utf8_lossy(&by_class.stderr);
+    assert_eq!(by_class.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("a value has no input class"), "{stderr}");
+    let every = sweep("cases: ['*']");
+    let stdout = String::from_utf8_lossy(&every.stdout);
+    let stderr = String::from_utf8_lossy(&every.stderr);
+    assert_eq!(every.status.code(), Some(0), "{stdout}{stderr}");
+    assert!(!stderr.contains("a value has no input class"), "{stderr}");
+    assert!(stdout.contains("as its known differences say"), "{stdout}");
+}
+
 #[test]
 fn a_sweep_counts_the_groups_a_cause_covers_as_known() {
     if !common::python() {

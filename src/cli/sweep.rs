@@ -382,7 +382,13 @@ pub fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
-    crate::sweep::known::apply(&mut results, &project.known);
+    if crate::sweep::known::apply(&mut results, &project.known) {
+        console::warning(
+            "a value has no input class: of a known-differences file, only an entry for every \
+             case (`cases: ['*']`) covers a value-to-hex sweep's inputs, so its other entries \
+             cover none of the differences below",
+        );
+    }
     if results.interrupted {
         console::status(&format!(
             "interrupted: {} of {} inputs swept; what was found so far follows",

@@ -15,10 +15,14 @@ use super::{ColumnInfo, Results};
 use crate::model::known::{Entry, KnownDifferences, Subject};
 
 /// Moves every covered column of every group from `differing` to `known`; `known` holds the
-/// known-differences files by backend name.
-pub fn apply(results: &mut Results, known: &BTreeMap<String, KnownDifferences>) {
+/// known-differences files by backend name. A value (of a value-to-hex sweep) has no input
+/// class, so only an entry for every case (`cases: ['*']`) covers it; the answer is whether a
+/// value group still differs on a backend that has a known-differences file, which the caller
+/// says, so that no entry seems to be ignored silently.
+pub fn apply(results: &mut Results, known: &BTreeMap<String, KnownDifferences>) -> bool {
+    let mut values_uncovered = false;
     if known.is_empty() {
-        return;
+        return values_uncovered;
     }
     // Shrunk inputs name their group by its place in the sorted order, which puts differing
     // groups first: remember the order to renumber them after.
@@ -30,14 +34,13 @@ pub fn apply(results: &mut Results, known: &BTreeMap<String, KnownDifferences>) 
         .collect();
     let columns = &results.columns;
     for group in results.groups.by_key.values_mut() {
-        let texts: Option<Vec<&[u8]>> = std::iter::once(&group.representative)
+        let texts: Vec<Option<&[u8]>> = std::iter::once(&group.representative)
             .chain(group.classes.values().map(|c| &c.first))
             .map(|f| match &f.point.data {
                 Data::Text(t) => Some(t.as_slice()),
                 Data::Value(_) => None,
             })
             .collect();
-        let Some(texts) = texts else { continue };
         let mut covered = Vec::new();
         group.differing.retain(|name| {
             let entry = columns
@@ -57,6 +60,12 @@ pub fn apply(results: &mut Results, known: &BTreeMap<String, KnownDifferences>) 
                 None => true,
             }
         });
+        values_uncovered |= texts.iter().any(Option::is_none)
+            && group.differing.iter().any(|name| {
+                columns
+                    .iter()
+                    .any(|c| &c.name == name && known.contains_key(&c.backend))
+            });
         group.known.extend(covered);
     }
     let place: HashMap<&Key, usize> = results
@@ -83,17 +92,19 @@ pub fn apply(results: &mut Results, known: &BTreeMap<String, KnownDifferences>) 
             (!wholly_known(key)).then_some(s)
         })
         .collect();
+    values_uncovered
 }
 
-/// The entry that covers every text for the column, if one does.
-fn covering<'k>(
+/// The entry that covers every input for the column, if one does: a text by its classes, a
+/// value (`None`) only by a pattern that takes any case.
+fn covering<'k, 't>(
     known: &'k KnownDifferences,
     column: &ColumnInfo,
-    texts: &[&[u8]],
+    texts: &[Option<&'t [u8]>],
 ) -> Option<&'k Entry> {
-    let subject = |text| Subject {
+    let subject = |text: &Option<&'t [u8]>| Subject {
         case: "",
-        text: Some(text),
+        text: *text,
         instruction: &column.check,
         variant: &column.variant,
     };
