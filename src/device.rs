@@ -23,17 +23,25 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct Device {
     code: Code,
-    /// The device number as written, read in decimal.
+    /// The device number: as written in decimal, or the value of its hexadecimal digits for a
+    /// code numbered in hexadecimal (MELSEC `W1A` is 26).
     pub index: u32,
+    /// Whether the number is written in hexadecimal. Only the profile knows which codes are
+    /// (`numbering: hexadecimal`), so a device read without it is decimal: see
+    /// [`Device::parse_numbered`].
+    hexadecimal: bool,
 }
 
 /// The longest device code: MELSEC's are up to three letters (`ZR`, `SW`, `LCN`), a Siemens data
 /// block's bytes carry the block number (`DB65535.DBB`).
 pub const MAX_CODE_LEN: usize = 12;
 
-/// The device syntax as a JSON Schema pattern (vector files, the protocol): [`Device::from_str`]
-/// is the rule, this is the same rule for editors and other languages.
-pub const PATTERN: &str = r"^[A-Z]([A-Z0-9.\\]*[A-Z])?([0-9]+\.[0-7]|[0-9]+)$";
+/// The device syntax as a JSON Schema pattern (vector files, the protocol):
+/// [`Device::parse_numbered`] is the rule, this is the same rule for editors and other
+/// languages, with any code allowed a hexadecimal number (which codes have one is the
+/// profile's).
+pub const PATTERN: &str =
+    r"^([A-Z]([A-Z0-9.\\]*[A-Z])?([0-9]+\.[0-7]|[0-9]+)|[A-Z]([A-Z0-9.\\]*[A-Z])?[0-9A-F]+)$";
 
 /// A device code kept inline, zero-padded. Memory images and effects are maps keyed
 /// by devices, and a sweep builds millions of them: a code that is a `String` makes every
@@ -91,7 +99,57 @@ impl Device {
             Code::new(code.get(..MAX_CODE_LEN).unwrap_or_default())
                 .unwrap_or(Code([0; MAX_CODE_LEN]))
         });
-        Device { code, index }
+        Device {
+            code,
+            index,
+            hexadecimal: false,
+        }
+    }
+
+    /// A device whose code is numbered in hexadecimal (MELSEC W, SW): it prints its number in
+    /// hexadecimal, `W1A` for 26.
+    pub fn hexadecimal(code: &str, index: u32) -> Self {
+        Device {
+            hexadecimal: true,
+            ..Device::new(code, index)
+        }
+    }
+
+    /// Whether the number is written in hexadecimal.
+    pub fn is_hexadecimal(&self) -> bool {
+        self.hexadecimal
+    }
+
+    /// The device of the same code, numbered the same way, with another number.
+    pub fn with_index(&self, index: u32) -> Device {
+        Device {
+            index,
+            ..self.clone()
+        }
+    }
+
+    /// Reads a device name whose code may be numbered in hexadecimal, as `hexadecimal` says of
+    /// a code: `W1A` is W 26 when W is, and `W10` W 16. The longest such code wins (`SW10` is
+    /// SW 16, not S `W10`); a name with no such code reads as [`Device::from_str`] does.
+    pub fn parse_numbered(
+        text: &str,
+        hexadecimal: impl Fn(&str) -> bool,
+    ) -> Result<Device, DeviceSyntaxError> {
+        for split in (1..text.len()).rev() {
+            let Some((code, digits)) = text.split_at_checked(split) else {
+                continue;
+            };
+            let is_hex_number = digits
+                .bytes()
+                .all(|b| b.is_ascii_digit() || (b'A'..=b'F').contains(&b));
+            // A bit address's byte (`SM1.`) is never numbered in hexadecimal.
+            if is_hex_number && !code.ends_with('.') && valid_code(code) && hexadecimal(code) {
+                return u32::from_str_radix(digits, 16)
+                    .map(|index| Device::hexadecimal(code, index))
+                    .map_err(|_| DeviceSyntaxError(text.to_string()));
+            }
+        }
+        text.parse()
     }
 
     /// The device code, uppercase (`D`, `SD`, `M`, `DB1.DBB`).
@@ -105,10 +163,7 @@ impl Device {
         offset
             .checked_mul(self.points())
             .and_then(|points| self.index.checked_add(points))
-            .map(|index| Device {
-                code: self.code,
-                index,
-            })
+            .map(|index| self.with_index(index))
     }
 
     /// How many device numbers one unit spans: 1, except for a MELSEC digit designation
@@ -129,7 +184,10 @@ impl Device {
 
 impl fmt::Display for Device {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}{}", self.code(), self.index)
+        match self.hexadecimal {
+            true => write!(f, "{}{:X}", self.code(), self.index),
+            false => write!(f, "{}{}", self.code(), self.index),
+        }
     }
 }
 
@@ -269,13 +327,45 @@ mod tests {
     #[case("D")]
     #[case("U1\\G10")]
     #[case("U1\\10")]
+    #[case("W1A")]
+    #[case("SW0F")]
+    #[case("W1G")]
+    #[case("W")]
     fn the_pattern_is_the_parser(#[case] text: &str) {
         let schema = serde_json::json!({"type": "string", "pattern": PATTERN});
         let pattern = jsonschema::validator_for(&schema).expect("the pattern compiles");
         assert_eq!(
             pattern.is_valid(&serde_json::json!(text)),
-            text.parse::<Device>().is_ok(),
+            Device::parse_numbered(text, |_| true).is_ok(),
             "{text}"
+        );
+    }
+
+    #[rstest]
+    #[case("W1A", "W1A", 26)]
+    #[case("W10", "W10", 16)]
+    #[case("WA", "WA", 10)]
+    #[case("SW10", "SW10", 16)]
+    #[case("W0", "W0", 0)]
+    #[case("D10", "D10", 10)]
+    #[case("DB1.DBB10", "DB1.DBB10", 10)]
+    fn hexadecimal_numbers_read_and_print_as_written(
+        #[case] text: &str,
+        #[case] printed: &str,
+        #[case] index: u32,
+    ) {
+        let hex = |code: &str| code == "W" || code == "SW";
+        let device = Device::parse_numbered(text, hex).expect("a device");
+        assert_eq!(device.index, index);
+        assert_eq!(device.to_string(), printed);
+        assert_eq!(device.is_hexadecimal(), hex(device.code()));
+        assert!(Device::parse_numbered("W1G", hex).is_err());
+        assert!(Device::parse_numbered("D1A", hex).is_err());
+        let nine = Device::parse_numbered("W9", hex).expect("W9");
+        assert_eq!(nine.offset(1).map(|d| d.to_string()).as_deref(), Some("WA"));
+        assert_eq!(
+            nine.offset(7).map(|d| d.to_string()).as_deref(),
+            Some("W10")
         );
     }
 

@@ -53,8 +53,8 @@ fn the_other_word_devices_are_accepted(#[case] s: &str, #[case] d: &str) {
     assert_eq!(load_asci(s, d), Ok(()));
 }
 
-/// The table's bit column, as 16 points by digit designation (K4), and module buffer memory
-/// (U□\G□), for (s) and (d).
+/// The table's bit column, as 16 points by digit designation (K4), the link registers W and
+/// SW (numbered in hexadecimal), and module buffer memory (U□\G□), for (s) and (d).
 #[rstest]
 #[case("K4M0", "D200")]
 #[case("K4L100", "D200")]
@@ -66,7 +66,11 @@ fn the_other_word_devices_are_accepted(#[case] s: &str, #[case] d: &str) {
 #[case("U1\\G10", "D200")]
 #[case("D100", "U1\\G100")]
 #[case("U1\\G10", "U2\\G10")]
-fn bit_devices_and_buffer_memory_are_accepted(#[case] s: &str, #[case] d: &str) {
+#[case("W1FF", "D200")]
+#[case("W1A", "SW0F")]
+#[case("WA", "SW10")]
+#[case("K4B10", "K4SB1F0")]
+fn bit_devices_link_registers_and_buffer_memory_are_accepted(#[case] s: &str, #[case] d: &str) {
     assert_eq!(load_asci(s, d), Ok(()));
 }
 
@@ -83,8 +87,9 @@ fn bit_devices_and_buffer_memory_are_accepted(#[case] s: &str, #[case] d: &str) 
 // read as something else.
 #[case::digit_count_other_than_4_as_s("K2M0", "D200", "operands.s")]
 #[case::octal_bit_device_as_s("K4X0", "D200", "operands.s")]
-#[case::hexadecimal_bit_device_as_d("D100", "K4B0", "operands.d")]
-#[case::link_register_as_s("W10", "D200", "operands.s")]
+#[case::link_register_past_its_range_as_s("W200", "D200", "operands.s")]
+#[case::no_hexadecimal_digit_as_s("W1G", "D200", "operands.s")]
+#[case::decimal_device_with_hexadecimal_digits_as_s("D1A", "D200", "operands.s")]
 #[case::module_number_in_hexadecimal_as_s("U1A\\G10", "D200", "operands.s")]
 #[case::indirect_as_d("D100", "@D0", "operands.d")]
 // Two digit-designated words of one case that share points.

@@ -42,6 +42,49 @@ fn n_of(req: &Request<'_>) -> Option<u32> {
     }
 }
 
+/// The base model run as a backend that takes unit k of an (s) or (d) head to be the word
+/// `wrong(head, k)` (`None`: the head is one it reads right): the right model is given that
+/// word where it reads unit k, and its writes are moved back to where the wrong one puts them.
+fn units_elsewhere(
+    req: &Request<'_>,
+    base: &dyn Backend,
+    wrong: impl Fn(&Device, u32) -> Option<Device>,
+) -> Answer {
+    let heads: Vec<Device> = ["s", "d"]
+        .into_iter()
+        .filter_map(|name| device(req, name))
+        .filter(|d| wrong(d, 1).is_some())
+        .collect();
+    if heads.is_empty() {
+        return base.execute(req);
+    }
+    let mut words = req.memory.explicit().clone();
+    for head in &heads {
+        for k in 1..64 {
+            if let (Some(unit), Some(there)) = (head.offset(k), wrong(head, k)) {
+                words.insert(unit, req.memory.read(&there));
+            }
+        }
+    }
+    let image = Image::of_units(words, req.memory.fill(), req.memory.unit());
+    let answer = base.execute(&Request {
+        memory: &image,
+        ..*req
+    })?;
+    let Response::Done(mut o) = answer else {
+        return Ok(answer);
+    };
+    let mut moved = BTreeMap::new();
+    for (dev, value) in std::mem::take(&mut o.writes) {
+        let there = heads.iter().find_map(|h| {
+            (0..64).find_map(|k| (h.offset(k).as_ref() == Some(&dev)).then(|| wrong(h, k))?)
+        });
+        moved.insert(there.unwrap_or(dev), value);
+    }
+    o.writes = moved;
+    Ok(Response::Done(o))
+}
+
 /// The base model's answer with its outcome changed (when it did run).
 fn reshape(
     req: &Request<'_>,
@@ -417,44 +460,19 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
         // A digit-designated operand's next word taken one point on (K4M1 after K4M0), as a
         // backend that steps device numbers by one for every code would.
         Mutant::new("digit-designation-one-point-apart", base, |req, b| {
-            let heads: Vec<Device> = ["s", "d"]
-                .into_iter()
-                .filter_map(|name| device(req, name))
-                .filter(|d| d.points() > 1)
-                .collect();
-            if heads.is_empty() {
-                return b.execute(req);
-            }
-            // What the wrong backend reads as unit k of a head is the word k points on; give
-            // the right model that word where it reads unit k, and move its writes back.
-            let one_point = |head: &Device, k: u32| Device::new(head.code(), head.index + k);
-            let mut words = req.memory.explicit().clone();
-            for head in &heads {
-                for k in 1..64 {
-                    if let Some(unit) = head.offset(k) {
-                        words.insert(unit, req.memory.read(&one_point(head, k)));
-                    }
-                }
-            }
-            let image = Image::of_units(words, req.memory.fill(), req.memory.unit());
-            let answer = b.execute(&Request {
-                memory: &image,
-                ..*req
-            })?;
-            let Response::Done(mut o) = answer else {
-                return Ok(answer);
-            };
-            let mut moved = BTreeMap::new();
-            for (dev, value) in std::mem::take(&mut o.writes) {
-                let unit = heads.iter().find_map(|h| {
-                    let apart = dev.index.checked_sub(h.index)?;
-                    (dev.code() == h.code() && apart % h.points() == 0)
-                        .then(|| one_point(h, apart / h.points()))
-                });
-                moved.insert(unit.unwrap_or(dev), value);
-            }
-            o.writes = moved;
-            Ok(Response::Done(o))
+            units_elsewhere(req, b, |head, k| {
+                (head.points() > 1).then(|| head.with_index(head.index + k))
+            })
+        }),
+        // A hexadecimal-numbered operand stepped in decimal (W10 after W9, for WA), as a
+        // backend that reads every device number as decimal would.
+        Mutant::new("hexadecimal-numbers-stepped-in-decimal", base, |req, b| {
+            units_elsewhere(req, b, |head, k| {
+                let decimal: u32 = format!("{:X}", head.index).parse().ok()?;
+                let text = (decimal + k * head.points()).to_string();
+                let index = u32::from_str_radix(&text, 16).ok()?;
+                head.is_hexadecimal().then(|| head.with_index(index))
+            })
         }),
         Mutant::new("destination-written-on-error", base, |req, b| {
             reshape(req, b, |req, mut o| {

@@ -53,15 +53,28 @@ class CodecError extends Error {
 
 /** A word device such as D100: its letter code and number. */
 class Device {
-  constructor(code, index) {
+  /** `hexadecimal`: the number is written in hexadecimal, as MELSEC numbers W and SW. */
+  constructor(code, index, hexadecimal = false) {
     this.code = code;
     this.index = index;
+    this.hexadecimal = hexadecimal;
     Object.freeze(this);
   }
 
-  static parse(text) {
-    // A code and the decimal number after it: D100, MB20, DB1.DBB10, U1\G10.
-    const m = /^([A-Z](?:[A-Z0-9.\\]*[A-Z])?)([0-9]+)$/.exec(String(text));
+  /**
+   * A code and the number after it: D100, MB20, DB1.DBB10, U1\G10; for a code in
+   * `hexadecimal` (the case's `hexadecimal` list), a hexadecimal number: W1A is index 26.
+   */
+  static parse(text, hexadecimal = []) {
+    const s = String(text);
+    for (let split = s.length - 1; split > 0; split -= 1) {
+      const code = s.slice(0, split);
+      const digits = s.slice(split);
+      if (hexadecimal.includes(code) && /^[0-9A-F]+$/.test(digits)) {
+        return new Device(code, parseInt(digits, 16), true);
+      }
+    }
+    const m = /^([A-Z](?:[A-Z0-9.\\]*[A-Z])?)([0-9]+)$/.exec(s);
     if (!m) throw new TypeError(`not a device name: ${JSON.stringify(text)}`);
     return new Device(m[1], Number(m[2]));
   }
@@ -75,17 +88,18 @@ class Device {
     return m ? 4 * Number(m[1]) : 1;
   }
 
-  /** The device n words after this one, like (s)+n in the manuals. */
+  /** The device n words after this one, like (s)+n in the manuals (W9, WA, ... in hexadecimal). */
   offset(n) {
-    return new Device(this.code, this.index + n * this.points());
+    return new Device(this.code, this.index + n * this.points(), this.hexadecimal);
   }
 
   toString() {
-    return `${this.code}${this.index}`;
+    return `${this.code}${this.hexadecimal ? this.index.toString(16).toUpperCase() : this.index}`;
   }
 
+  /** The device's name, as the protocol writes it: the key of memory and writes. */
   get key() {
-    return `${this.code}${this.index}`;
+    return this.toString();
   }
 }
 
@@ -123,17 +137,24 @@ class Case {
     this.ignoredFlags = message.ignored_flags || {};
     this.operands = message.operands || {};
     this.fill = message.fill || 'A';
+    // The codes whose numbers are hexadecimal (W1A is the word after W19).
+    this.hexadecimal = message.hexadecimal || [];
     this.memory = new Map();
     // A byte-addressed family's ranges carry bytes (protocol version 3).
     this.unit = 'word';
     for (const block of message.memory || []) {
-      const start = Device.parse(block.start);
+      const start = Device.parse(block.start, this.hexadecimal);
       if (block.bytes) this.unit = 'byte';
       (block.words || block.bytes || []).forEach((value, i) =>
         this.memory.set(start.offset(i).key, value));
     }
     this.writes = new Map();
     this.error = null;
+  }
+
+  /** A device, or a device name read with the case's numbering. */
+  asDevice(device) {
+    return device instanceof Device ? device : Device.parse(device, this.hexadecimal);
   }
 
   /** The flag as this variant's CPU sees it: `ignored_flags` wins over `flags`. */
@@ -148,7 +169,7 @@ class Case {
       throw new Unsupported(`${this.instruction} needs operand ${JSON.stringify(name)}`);
     }
     const value = this.operands[name];
-    return typeof value === 'string' ? Device.parse(value) : value;
+    return typeof value === 'string' ? Device.parse(value, this.hexadecimal) : value;
   }
 
   /** An operand that must be a device. */
@@ -162,7 +183,7 @@ class Case {
 
   /** A word as the instruction reads it: its latest write, else the window, else the fill. */
   read(device) {
-    const d = asDevice(device);
+    const d = this.asDevice(device);
     if (this.writes.has(d.key)) return this.writes.get(d.key);
     if (this.memory.has(d.key)) return this.memory.get(d.key);
     const word = fillWord(this.fill, d);
@@ -174,12 +195,12 @@ class Case {
    * the window covers that span and is cut to the words that exist.
    */
   exists(device) {
-    return this.memory.has(asDevice(device).key);
+    return this.memory.has(this.asDevice(device).key);
   }
 
   /** A 16-bit write. */
   write(device, value) {
-    const d = asDevice(device);
+    const d = this.asDevice(device);
     if (!Number.isInteger(value) || value < 0 || value > 0xffff) {
       throw new RangeError(`${d}: ${value} is not a 16-bit word`);
     }

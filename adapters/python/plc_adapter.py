@@ -88,14 +88,20 @@ class CodecError(Exception):
         self.error_class = error_class
 
 
-class Device(namedtuple("Device", "code index")):
-    """A word device such as D100: its letter code and number."""
+class Device(namedtuple("Device", "code index hexadecimal", defaults=(False,))):
+    """A word device such as D100: its letter code and number (and whether the number is
+    written in hexadecimal, as MELSEC numbers W and SW: W1A is index 26)."""
 
     __slots__ = ()
 
     @classmethod
-    def parse(cls, text):
-        """A code and the decimal number after it: D100, MB20, DB1.DBB10, U1\\G10."""
+    def parse(cls, text, hexadecimal=()):
+        """A code and the number after it: D100, MB20, DB1.DBB10, U1\\G10; for a code in
+        `hexadecimal` (the case's `hexadecimal` list), a hexadecimal number: W1A."""
+        for split in range(len(text) - 1, 0, -1):
+            code, digits = text[:split], text[split:]
+            if code in hexadecimal and all(c in "0123456789ABCDEF" for c in digits):
+                return cls(code, int(digits, 16), True)
         split = len(text)
         while split > 0 and text[split - 1].isdigit():
             split -= 1
@@ -115,11 +121,12 @@ class Device(namedtuple("Device", "code index")):
         return 1
 
     def offset(self, n):
-        """The device n words after this one, like (s)+n in the manuals."""
-        return Device(self.code, self.index + n * self.points())
+        """The device n words after this one, like (s)+n in the manuals (W9, WA, ... for a
+        hexadecimal-numbered code)."""
+        return Device(self.code, self.index + n * self.points(), self.hexadecimal)
 
     def __str__(self):
-        return "%s%d" % (self.code, self.index)
+        return ("%s%X" if self.hexadecimal else "%s%d") % (self.code, self.index)
 
 
 _DIGITS = b"0123456789ABCDEF"
@@ -150,11 +157,13 @@ class Case:
         self.ignored_flags = message.get("ignored_flags", {})
         self.operands = message.get("operands", {})
         self.fill = message.get("fill", "A")
+        # The codes whose numbers are hexadecimal (W1A is the word after W19).
+        self.hexadecimal = tuple(message.get("hexadecimal", ()))
         memory = {}
         # A byte-addressed family's ranges carry bytes (protocol version 3).
         self.unit = "word"
         for block in message.get("memory", []):
-            start = Device.parse(block["start"])
+            start = Device.parse(block["start"], self.hexadecimal)
             if "bytes" in block:
                 self.unit = "byte"
             for i, value in enumerate(block.get("words", block.get("bytes", []))):
@@ -176,7 +185,7 @@ class Case:
         if name not in self.operands:
             raise Unsupported("%s needs operand %r" % (self.instruction, name))
         value = self.operands[name]
-        return Device.parse(value) if isinstance(value, str) else value
+        return Device.parse(value, self.hexadecimal) if isinstance(value, str) else value
 
     def device(self, name):
         """An operand that must be a device."""
@@ -214,7 +223,8 @@ class Case:
         return {
             "type": "result",
             "id": self.id,
-            "writes": {"%s%d" % key: value for key, value in self.writes.items()},
+            "writes": {str(Device(code, index, code in self.hexadecimal)): value
+                       for (code, index), value in self.writes.items()},
             "error": self.error,
         }
 

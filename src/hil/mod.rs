@@ -74,6 +74,13 @@ pub fn unrealisable(instruction: &str, operand: &str, value: i64) -> Option<Stri
 /// it (timers, counters and index registers are not addressed here), so the case's memory could
 /// be neither set nor read back.
 pub fn unaddressable(operand: &str, device: &Device) -> Option<String> {
+    if device.is_hexadecimal() {
+        return Some(format!(
+            "operand {operand} = {device}: {} is numbered in hexadecimal, which the program \
+             and its manifest do not carry yet, so no program can hold it as written",
+            device.code()
+        ));
+    }
     frame::device_code(device.code()).is_none().then(|| {
         format!(
             "operand {operand} = {device}: {} has no SLMP device code in this client (it \
@@ -171,8 +178,10 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
             windows.extend(
                 window::ranges(&req)
                     .into_iter()
-                    .filter(|(code, ..)| frame::device_code(code).is_some())
-                    .map(|(code, first, last)| WordRange::new(&code, first, last)),
+                    .filter(|(head, _)| {
+                        frame::device_code(head.code()).is_some() && !head.is_hexadecimal()
+                    })
+                    .map(|(head, last)| WordRange::new(head.code(), head.index, last)),
             );
         }
     }

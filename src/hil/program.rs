@@ -134,7 +134,7 @@ pub fn structured_text(manifest: &Manifest, profile: &Profile) -> String {
         names.sort_by_key(|n| operand_rank(n));
         let args: Vec<String> = names
             .iter()
-            .map(|n| match parse_operand(&rung.operands[*n]) {
+            .map(|n| match parse_operand(&rung.operands[*n], &|_| false) {
                 Ok(Operand::Constant(k)) => k.to_string(),
                 Ok(Operand::Device(d)) => d.to_string(),
                 Err(_) => rung.operands[*n].clone(),

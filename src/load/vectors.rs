@@ -138,6 +138,15 @@ struct Header<'p> {
     source: SourceSpec,
 }
 
+impl Header<'_> {
+    /// A device name read with the profiles' numbering (`W1A` where W is hexadecimal).
+    fn device(&self, text: &str) -> Result<Device, crate::device::DeviceSyntaxError> {
+        Device::parse_numbered(text, |code| {
+            self.profiles.iter().any(|p| p.devices.is_hexadecimal(code))
+        })
+    }
+}
+
 fn read_header<'p>(
     spec: &VectorFileSpec,
     profiles: &'p Profiles,
@@ -268,7 +277,7 @@ fn read_case(key: &str, spec: &CaseSpec, h: &Header<'_>, cx: &mut FileContext<'_
         }
     };
 
-    check_digit_grids(key, spec, cx);
+    check_digit_grids(key, spec, h, cx);
 
     (cx.errors.len() == before_count).then(|| Case {
         id: spec.id.clone(),
@@ -373,7 +382,7 @@ fn read_operands(
             ScalarSpec::Number(n) => Operand::Constant(*n),
             ScalarSpec::Text(t) => match parse_number(t) {
                 Ok(n) => Operand::Constant(n),
-                Err(_) => match t.parse::<Device>() {
+                Err(_) => match h.device(t) {
                     Ok(d) => Operand::Device(d),
                     Err(e) => {
                         cx.error(&okey, LoadErrorKind::Device(e));
@@ -450,7 +459,7 @@ fn read_operands(
 /// (`K4M0` with `K4M8`): such words share points, and the models keep each word on its own.
 /// On one grid (`K4M100`, `K4M116`, ...) no two words of the case, or of what an instruction
 /// reaches from its operands a unit at a time, ever overlap.
-fn check_digit_grids(key: &str, spec: &CaseSpec, cx: &mut FileContext<'_>) {
+fn check_digit_grids(key: &str, spec: &CaseSpec, h: &Header<'_>, cx: &mut FileContext<'_>) {
     let operands = spec
         .operands
         .iter()
@@ -469,7 +478,7 @@ fn check_digit_grids(key: &str, spec: &CaseSpec, cx: &mut FileContext<'_>) {
     });
     let mut grids: BTreeMap<String, Device> = BTreeMap::new();
     for (at, text) in operands.chain(before).chain(after) {
-        let Ok(device) = text.parse::<Device>() else {
+        let Ok(device) = h.device(text) else {
             continue;
         };
         let points = device.points();
@@ -505,7 +514,7 @@ fn read_memory(
     let mut set_by: BTreeMap<Device, String> = BTreeMap::new();
     for (name, value) in spec {
         let mkey = format!("{key}.{name}");
-        let head = match name.parse::<Device>() {
+        let head = match h.device(name) {
             Ok(d) => d,
             Err(e) => {
                 cx.error(&mkey, LoadErrorKind::Device(e));

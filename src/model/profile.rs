@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 use super::cross_vendor::CrossVendorSection;
 use super::ErrorSignal;
-use crate::device::{code_matches, Device};
+use crate::device::{code_matches, Device, DeviceSyntaxError};
 use crate::memory::Unit;
 pub use crate::spec::profile::{
     DeviceDef, DeviceRange, DeviceRanges, FlagDef, InstructionDef, Manual, Numbering, OperandDef,
@@ -62,6 +62,27 @@ impl DeviceTable {
 
     pub fn get(&self, code: &str) -> Option<&DeviceDef> {
         self.entry(code).map(|(_, def)| def)
+    }
+
+    /// Whether the code's numbers are hexadecimal (MELSEC W, SW).
+    pub fn is_hexadecimal(&self, code: &str) -> bool {
+        self.get(code)
+            .is_some_and(|d| d.numbering == Numbering::Hexadecimal)
+    }
+
+    /// The codes numbered in hexadecimal, as the protocol tells an external backend.
+    pub fn hexadecimal_codes(&self) -> Vec<String> {
+        self.defs
+            .iter()
+            .filter(|(_, d)| d.numbering == Numbering::Hexadecimal)
+            .map(|(code, _)| code.clone())
+            .collect()
+    }
+
+    /// Reads a device name with this table's numbering: `W1A` is W 26 where W is numbered in
+    /// hexadecimal.
+    pub fn device(&self, text: &str) -> Result<Device, DeviceSyntaxError> {
+        Device::parse_numbered(text, |code| self.is_hexadecimal(code))
     }
 
     pub fn contains_key(&self, code: &str) -> bool {

@@ -146,6 +146,10 @@ pub enum Numbering {
     /// outputs and internal relays: M0-M7, M10-M17, ..., M80-M87, ... M1270-M1277. M8 and M1278
     /// do not exist.
     OctalLastDigit,
+    /// Hexadecimal numbers, as MELSEC numbers link registers: W0-W9, WA-WF, W10. A vector
+    /// writes them so (`W1A`), and `(s)+1` of W9 is WA. Profile ranges give the values (a
+    /// YAML integer such as `0x1FF`).
+    Hexadecimal,
 }
 
 impl Numbering {
@@ -154,6 +158,7 @@ impl Numbering {
         match self {
             Numbering::Decimal => "decimal",
             Numbering::OctalLastDigit => "octal-last-digit",
+            Numbering::Hexadecimal => "hexadecimal",
         }
     }
 
@@ -164,6 +169,7 @@ impl Numbering {
             Numbering::OctalLastDigit => {
                 "the last digit is octal (0-7), the digits before it decimal (M0-M7, M10-M17, ...)"
             }
+            Numbering::Hexadecimal => "numbers are hexadecimal (W0-W9, WA-WF, W10, ...)",
         }
     }
 
@@ -172,7 +178,7 @@ impl Numbering {
     /// from M1260 end at M1277 and those from M1270 run past it.
     pub fn point(self, number: u32) -> Option<u64> {
         match self {
-            Numbering::Decimal => Some(u64::from(number)),
+            Numbering::Decimal | Numbering::Hexadecimal => Some(u64::from(number)),
             Numbering::OctalLastDigit => {
                 (number % 10 < 8).then(|| u64::from(number / 10) * 8 + u64::from(number % 10))
             }

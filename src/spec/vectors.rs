@@ -324,7 +324,7 @@ mod schema_shapes {
         Number(i64),
         Text(
             #[schemars(regex(
-                pattern = r"^\s*(K-?[0-9]+|0[xX][0-9A-Fa-f]+|[0-9A-Fa-f]+[Hh]|H[0-9A-Fa-f]+|-?[0-9]+|[A-Z]([A-Z0-9.\\]*[A-Z])?([0-9]+\.[0-7]|[0-9]+)|none)\s*$"
+                pattern = r"^\s*(K-?[0-9]+|0[xX][0-9A-Fa-f]+|[0-9A-Fa-f]+[Hh]|H[0-9A-Fa-f]+|-?[0-9]+|[A-Z]([A-Z0-9.\\]*[A-Z])?([0-9]+\.[0-7]|[0-9]+)|[A-Z]([A-Z0-9.\\]*[A-Z])?[0-9A-F]+|none)\s*$"
             ))]
             String,
         ),

@@ -228,6 +228,21 @@ test('Case reads its writes, then the window, then the fill; flag() prefers igno
   assert.deepEqual(c.answer(), { type: 'result', id: 1, writes: { D100: 7 }, error: { flag: 'M8004' } });
 });
 
+test('a hexadecimal-numbered code reads, steps and answers in hexadecimal', () => {
+  const c = new helper.Case(habinCase(1, {
+    hexadecimal: ['W'],
+    operands: { s: 'W19', d: 'W1A' },
+    memory: [{ start: 'W19', words: [1, 2] }],
+  }));
+  assert.equal(c.device('s').offset(1).toString(), 'W1A');
+  assert.equal(c.read('W1A'), 2);
+  assert.equal(c.read(c.device('d')), 2);
+  assert.equal(helper.Device.parse('W10', ['W']).index, 16);
+  assert.equal(helper.Device.parse('W10').index, 10);
+  c.write(c.device('s').offset(7), 9);
+  assert.deepEqual(c.answer().writes, { W20: 9 });
+});
+
 /** Runs serveCodec in process over the given messages; resolves with the answers. */
 async function inProcess(options, messages) {
   const input = new PassThrough();

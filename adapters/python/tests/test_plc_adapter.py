@@ -305,6 +305,17 @@ class InProcess(unittest.TestCase):
         self.assertEqual(case.read(plc_adapter.Device.parse("K4M132")),
                          plc_adapter.fill_word("B", 8))
 
+    def test_a_hexadecimal_numbered_code_reads_steps_and_answers_in_hexadecimal(self):
+        message = habin_case(1, hexadecimal=["W"], operands={"s": "W19", "d": "W1A"},
+                             memory=[{"start": "W19", "words": [1, 2]}])
+        case = plc_adapter.Case(message)
+        self.assertEqual(str(case.device("s").offset(1)), "W1A")
+        self.assertEqual(case.read(case.device("d")), 2)
+        self.assertEqual(plc_adapter.Device.parse("W10", ["W"]).index, 16)
+        self.assertEqual(plc_adapter.Device.parse("W10").index, 10)
+        case.write(case.device("s").offset(7), 9)
+        self.assertEqual(case.answer()["writes"], {"W20": 9})
+
     def test_module_buffer_memory_is_a_device(self):
         device = plc_adapter.Device.parse("U1\\G10")
         self.assertEqual((device.code, device.index), ("U1\\G", 10))

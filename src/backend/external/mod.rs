@@ -897,6 +897,7 @@ pub fn case_request(req: &Request<'_>, id: u64) -> CaseRequest {
             Fill::B => FillName::B,
         },
         memory: window::memory(req),
+        hexadecimal: req.profile.devices.hexadecimal_codes(),
     }
 }
 
@@ -910,7 +911,7 @@ fn outcome(
     error: Option<ErrorReport>,
 ) -> Result<Outcome, ProtocolViolation> {
     let device = |name: &str| {
-        name.parse::<Device>()
+        case.device(name)
             .map_err(|e| ProtocolViolation(format!("bad device in the answer: {e}")))
     };
     // Only an echoed window needs the words before; a list of writes is taken as it is.
@@ -920,7 +921,7 @@ fn outcome(
         case.memory
             .iter()
             .filter_map(|r| {
-                let start = r.start.parse::<Device>().ok()?;
+                let start = case.device(&r.start).ok()?;
                 Some((start, r.values(unit).ok()?))
             })
             .flat_map(|(d, values)| {
@@ -1088,7 +1089,31 @@ mod tests {
             operands: BTreeMap::new(),
             fill: FillName::A,
             memory: vec![MemoryRange::new("D200".into(), Unit::Word, vec![0, 0])],
+            hexadecimal: Vec::new(),
         }
+    }
+
+    /// A code the request lists as hexadecimal is read so in the answer: `W1A` is the word
+    /// after `W19`, and `W10` is W 16.
+    #[test]
+    fn an_answer_names_hexadecimal_devices_as_the_request_does() {
+        let mut case = request();
+        case.hexadecimal = vec!["W".into()];
+        case.memory = vec![MemoryRange::new("W19".into(), Unit::Word, vec![0, 0])];
+        let writes = BTreeMap::from([("W1A".to_string(), 7), ("D10".to_string(), 8)]);
+        let o = outcome(&case, Unit::Word, Vec::new(), writes, None).expect("an outcome");
+        assert_eq!(
+            o.writes,
+            BTreeMap::from([(Device::hexadecimal("W", 26), 7), (Device::new("D", 10), 8)])
+        );
+        let echoed = vec![MemoryRange::new("W19".into(), Unit::Word, vec![0, 5])];
+        let o = outcome(&case, Unit::Word, echoed, BTreeMap::new(), None).expect("an outcome");
+        assert_eq!(
+            o.writes,
+            BTreeMap::from([(Device::hexadecimal("W", 26), 5)])
+        );
+        let bad = BTreeMap::from([("W1G".to_string(), 7)]);
+        assert!(outcome(&case, Unit::Word, Vec::new(), bad, None).is_err());
     }
 
     #[test]

@@ -10,6 +10,7 @@ use std::collections::BTreeMap;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
+use crate::device::{code_matches, Device, DeviceSyntaxError};
 use crate::memory::Unit;
 use crate::model::cross_vendor::{ErrorClass, Operation};
 
@@ -74,6 +75,19 @@ pub struct CaseRequest {
     /// The memory before execution: every word the case may touch, fill included. The backend
     /// reports memory after for these same ranges (or lists its writes).
     pub memory: Vec<MemoryRange>,
+    /// The device codes of the profile whose numbers are hexadecimal (MELSEC `W`, `SW`): `W1A`
+    /// is word 26, the one after `W19`. Left out when the profile has none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub hexadecimal: Vec<String>,
+}
+
+impl CaseRequest {
+    /// A device name of the case or of its answer, read with the case's numbering.
+    pub fn device(&self, text: &str) -> Result<Device, DeviceSyntaxError> {
+        Device::parse_numbered(text, |code| {
+            self.hexadecimal.iter().any(|h| code_matches(h, code))
+        })
+    }
 }
 
 /// One case of a `run` message: an instruction to execute (levels 1 and 2) or a conversion to

@@ -13,7 +13,6 @@ use super::protocol::{
     OperandValue, RunCase, SignalReport, PROTOCOL_VERSION,
 };
 use crate::backend::{Backend, Request, Response};
-use crate::device::Device;
 use crate::memory::{Fill, Image};
 use crate::model::profile::Profile;
 use crate::model::{ErrorSignal, Operand};
@@ -139,7 +138,7 @@ fn answer(backend: &dyn Backend, profile: &Profile, case: &CaseRequest) -> Backe
     let mut operands = BTreeMap::new();
     for (name, value) in &case.operands {
         let operand = match value {
-            OperandValue::Device(d) => match d.parse::<Device>() {
+            OperandValue::Device(d) => match case.device(d) {
                 Ok(d) => Operand::Device(d),
                 Err(e) => return unsupported(e.to_string()),
             },
@@ -155,7 +154,7 @@ fn answer(backend: &dyn Backend, profile: &Profile, case: &CaseRequest) -> Backe
     // the rest, inside the window and past it alike.
     let mut words = BTreeMap::new();
     for range in &case.memory {
-        let Ok(mut device) = range.start.parse::<Device>() else {
+        let Ok(mut device) = case.device(&range.start) else {
             return unsupported(format!("bad device `{}` in memory", range.start));
         };
         let values = match range.values(profile.unit) {

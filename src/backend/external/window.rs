@@ -24,10 +24,13 @@ const CONSTANT_LIMIT: u32 = 4096;
 /// Ranges closer than this are sent as one.
 const MERGE_GAP: u32 = 8;
 
-/// The ranges of a request's window, per device code in ascending order: `(code, first, last)`,
-/// the units from `first` to `last` a unit apart ([`Device::points`]: every number for a plain
-/// device, every 16th for `K4M`).
-pub fn ranges(req: &Request<'_>) -> Vec<(String, u32, u32)> {
+/// A code's spans `(first, last)`, and a device of the code whose numbering its heads take.
+type Spans<'a> = (&'a Device, Vec<(u32, u32)>);
+
+/// The ranges of a request's window, per device code in ascending order: `(head, last)`, the
+/// units from `head` to the number `last` a unit apart ([`Device::points`]: every number for a
+/// plain device, every 16th for `K4M`). The head is numbered as the case's devices are.
+pub fn ranges(req: &Request<'_>) -> Vec<(Device, u32)> {
     let longest_constant = req
         .operands
         .values()
@@ -39,7 +42,7 @@ pub fn ranges(req: &Request<'_>) -> Vec<(String, u32, u32)> {
         .max()
         .unwrap_or(0);
     let operand_span = OPERAND_SPAN + longest_constant;
-    let mut spans: BTreeMap<&str, Vec<(u32, u32)>> = BTreeMap::new();
+    let mut spans: BTreeMap<&str, Spans<'_>> = BTreeMap::new();
     let operands = req.operands.values().filter_map(|o| match o {
         Operand::Device(d) => Some((d, operand_span)),
         Operand::Constant(_) => None,
@@ -47,14 +50,18 @@ pub fn ranges(req: &Request<'_>) -> Vec<(String, u32, u32)> {
     let set = req.memory.explicit().keys().map(|d| (d, SET_SPAN));
     for (d, len) in operands.chain(set) {
         let last = d.index.saturating_add((len - 1).saturating_mul(d.points()));
-        spans.entry(d.code()).or_default().push((d.index, last));
+        spans
+            .entry(d.code())
+            .or_insert_with(|| (d, Vec::new()))
+            .1
+            .push((d.index, last));
     }
     let mut out = Vec::new();
-    for (code, list) in spans {
+    for (code, (device, list)) in spans {
         let Some(ranges) = req.profile.ranges(req.variant, code) else {
             continue;
         };
-        let step = Device::new(code, 0).points();
+        let step = device.points();
         // Clip every span to each range the device has (a gap between ranges holds no word),
         // keeping its units on their grid and whole inside the range.
         let mut pieces: Vec<(u32, u32)> = list
@@ -81,7 +88,7 @@ pub fn ranges(req: &Request<'_>) -> Vec<(String, u32, u32)> {
                 _ => merged.push((first, last)),
             }
         }
-        out.extend(merged.into_iter().map(|(f, l)| (code.to_string(), f, l)));
+        out.extend(merged.into_iter().map(|(f, l)| (device.with_index(f), l)));
     }
     out
 }
@@ -91,16 +98,15 @@ pub fn memory(req: &Request<'_>) -> Vec<MemoryRange> {
     let (fill, unit) = (req.memory.fill(), req.memory.unit());
     ranges(req)
         .into_iter()
-        .map(|(code, first, last)| {
-            let head = Device::new(&code, first);
-            let step = head.points();
+        .map(|(head, last)| {
+            let (first, step) = (head.index, head.points());
             let mut device = head.clone();
             let mut words = Vec::with_capacity(((last - first) / step + 1) as usize);
             for index in (first..=last).step_by(step as usize) {
                 device.index = index;
                 words.push(fill.value(&device, unit));
             }
-            let end = Device::new(&code, last);
+            let end = head.with_index(last);
             for (d, value) in req.memory.explicit().range(&head..=&end) {
                 if (d.index - first) % step == 0 {
                     words[((d.index - first) / step) as usize] = *value;
@@ -154,6 +160,9 @@ mod tests {
             memory: &image,
         };
         ranges(&req)
+            .into_iter()
+            .map(|(head, last)| (head.code().to_string(), head.index, last))
+            .collect()
     }
 
     fn dev(i: u32) -> Operand {
@@ -210,7 +219,7 @@ mod tests {
             memory: &image,
         };
         // K4M100 .. K4M996: the last whole 16 points end at M1011, before M1023.
-        assert_eq!(ranges(&req), vec![("K4M".into(), 100, 996)]);
+        assert_eq!(ranges(&req), vec![(head.clone(), 996)]);
         let window = memory(&req);
         let range = serde_json::to_value(&window[0]).expect("json");
         let words = range["words"].as_array().expect("words");

@@ -105,11 +105,12 @@ pub fn rung_key(instruction: &str, operands: &BTreeMap<String, Operand>) -> Stri
     key
 }
 
-/// Reads an operand as the manifest writes it.
-pub fn parse_operand(text: &str) -> Result<Operand, String> {
+/// Reads an operand as the manifest writes it; `hexadecimal` says which codes the profile
+/// numbers in hexadecimal (only an unrealisable rung names one).
+pub fn parse_operand(text: &str, hexadecimal: &dyn Fn(&str) -> bool) -> Result<Operand, String> {
     // Constants are written `K<decimal>`, as [`Operand`]'s display does; a device that starts
     // with K is a digit designation (`K4M0`), which is no number.
-    let device = || text.parse::<Device>().map(Operand::Device);
+    let device = || Device::parse_numbered(text, hexadecimal).map(Operand::Device);
     if text.starts_with('K') {
         return crate::value::parse_number(text)
             .map(Operand::Constant)
@@ -158,7 +159,7 @@ impl Manifest {
                 .operands
                 .iter()
                 .map(|(k, v)| {
-                    parse_operand(v)
+                    parse_operand(v, &|_| false)
                         .map(|o| (k.clone(), o))
                         .map_err(|e| format!("rung {} operand `{k}`: {e}", rung.id))
                 })
@@ -305,15 +306,19 @@ mod tests {
 
     #[test]
     fn operands_read_back() {
-        assert_eq!(parse_operand("K-1"), Ok(Operand::Constant(-1)));
+        assert_eq!(parse_operand("K-1", &|_| false), Ok(Operand::Constant(-1)));
         assert_eq!(
-            parse_operand("D100"),
+            parse_operand("D100", &|_| false),
             Ok(Operand::Device(Device::new("D", 100)))
         );
-        assert!(parse_operand("x").is_err());
+        assert!(parse_operand("x", &|_| false).is_err());
         assert_eq!(
-            parse_operand("K4M0"),
+            parse_operand("K4M0", &|_| false),
             Ok(Operand::Device(Device::new("K4M", 0)))
+        );
+        assert_eq!(
+            parse_operand("SWF", &|code| code == "SW"),
+            Ok(Operand::Device(Device::hexadecimal("SW", 15)))
         );
     }
 }

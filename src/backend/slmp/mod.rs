@@ -196,7 +196,10 @@ impl SlmpBackend {
                 let operands = u
                     .operands
                     .iter()
-                    .map(|(k, v)| manifest::parse_operand(v).map(|o| (k.clone(), o)))
+                    .map(|(k, v)| {
+                        manifest::parse_operand(v, &|code| profile.devices.is_hexadecimal(code))
+                            .map(|o| (k.clone(), o))
+                    })
                     .collect::<Result<BTreeMap<_, _>, _>>()?;
                 Ok((
                     manifest::rung_key(&u.instruction, &operands),
@@ -292,23 +295,28 @@ impl SlmpBackend {
             .filter(|(_, f)| all.get(*f).copied().unwrap_or(false))
             .fold(0u16, |acc, (i, _)| acc | 1 << i);
         let mut window = Vec::new();
-        for (code, first, last) in window::ranges(req) {
-            if frame::device_code(&code).is_none() {
+        for (head, last) in window::ranges(req) {
+            let (code, first) = (head.code(), head.index);
+            if head.is_hexadecimal() {
                 return Err(format!(
-                    "not run: the case sets {} words, which this client cannot address (it \
+                    "not run: the case sets {code} words, numbered in hexadecimal, which this \
+                     backend does not carry yet"
+                ));
+            }
+            if frame::device_code(code).is_none() {
+                return Err(format!(
+                    "not run: the case sets {code} words, which this client cannot address (it \
                      addresses {})",
-                    code,
                     frame::DEVICE_LETTERS.join(", ")
                 ));
             }
-            let range = WordRange::new(&code, first, last);
+            let range = WordRange::new(code, first, last);
             self.fence.check(&range).map_err(|e| {
                 format!("not run: {e}; declare a sandbox that covers the manifest's `writes`")
             })?;
-            let head = Device::new(&code, first);
             let words = (first..=last)
                 .step_by(head.points() as usize)
-                .map(|i| req.memory.read(&Device::new(&code, i)))
+                .map(|i| req.memory.read(&head.with_index(i)))
                 .collect();
             window.push((head, words));
         }

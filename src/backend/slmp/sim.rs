@@ -198,7 +198,10 @@ impl Simulator {
                 let operands = r
                     .operands
                     .iter()
-                    .map(|(k, v)| parse_operand(v).map(|o| (k.clone(), o)))
+                    .map(|(k, v)| {
+                        parse_operand(v, &|code| profile.devices.is_hexadecimal(code))
+                            .map(|o| (k.clone(), o))
+                    })
                     .collect::<Result<BTreeMap<_, _>, _>>()?;
                 let pulse = is_pulse(&profile, &r.instruction);
                 Ok((r.id, r.instruction.clone(), operands, pulse))
