@@ -12,7 +12,9 @@
 //!
 //! The syntax is the same for every family, a code and the number after it; which codes exist is
 //! data in the vendor profile (`devices:`), where a `#` in a code stands for a block number
-//! (`DB#.DBB` is every data block's bytes).
+//! (`DB#.DBB` is every data block's bytes). The number is decimal unless the profile numbers the
+//! code in hexadecimal (MELSEC `W1A`), which only a reader that knows the profile can tell:
+//! [`Device::parse_numbered`].
 
 use std::fmt;
 use std::str::FromStr;

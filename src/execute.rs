@@ -44,6 +44,24 @@ pub enum Progress {
     },
 }
 
+/// Whether a backend's next chunk waits until the trials of the one before are judged.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Pace {
+    /// Execution runs ahead of judging: the fastest.
+    Ahead,
+    /// A chunk starts only once every observation sent before it has been handed to
+    /// `progress`, so a stop set there (`--fail-fast`) holds every later chunk back however
+    /// slowly the verdicts are written.
+    Judged,
+}
+
+/// What a backend's thread sends the calling thread.
+enum Message {
+    Progress(Progress),
+    /// Answered once everything sent before it has been handed on.
+    Judged(mpsc::Sender<()>),
+}
+
 /// How often a chunk still being answered is reported.
 pub const ANSWERING_EVERY: Duration = Duration::from_millis(250);
 
@@ -52,17 +70,17 @@ pub const ANSWERING_EVERY: Duration = Duration::from_millis(250);
 fn answering<'a>(
     backend: &'a str,
     of: usize,
-    tx: &'a mpsc::Sender<Progress>,
+    tx: &'a mpsc::Sender<Message>,
 ) -> impl FnMut(usize) + 'a {
     let mut last = Instant::now();
     move |answered| {
         if answered < of && last.elapsed() >= ANSWERING_EVERY {
             last = Instant::now();
-            let _ = tx.send(Progress::Answering {
+            let _ = tx.send(Message::Progress(Progress::Answering {
                 backend: backend.to_string(),
                 answered,
                 of,
-            });
+            }));
         }
     }
 }
@@ -132,12 +150,13 @@ fn pair(results: Vec<Result<Response, Fault>>) -> Vec<Observation> {
 /// Runs the trials at `indices` (skipped trials are not sent), each backend's in chunks on a
 /// thread of its own with at most `jobs` backends at once, and calls `progress` on the calling
 /// thread as results come in. Once `stop` is set, or `progress` breaks, no further chunk
-/// starts.
+/// starts; `pace` says whether a chunk may start before the previous one is handed on.
 pub fn execute_all(
     trials: &[Trial],
     indices: &[usize],
     jobs: usize,
     stop: &AtomicBool,
+    pace: Pace,
     mut progress: impl FnMut(Progress) -> ControlFlow<()>,
 ) {
     let mut by_backend: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
@@ -153,28 +172,41 @@ pub fn execute_all(
     // `jobs` workers take backends in turn: a backend starts as soon as a worker is free, so a
     // slow backend holds up only its own worker.
     let next = AtomicUsize::new(0);
-    let (tx, rx) = mpsc::channel::<Progress>();
+    let (tx, rx) = mpsc::channel::<Message>();
     std::thread::scope(|scope| {
         for _ in 0..jobs.clamp(1, groups.len().max(1)) {
             let (tx, groups, next) = (tx.clone(), &groups, &next);
             scope.spawn(move || {
                 while let Some(group) = groups.get(next.fetch_add(1, Ordering::Relaxed)) {
-                    run_backend(trials, group, stop, &tx);
+                    run_backend(trials, group, stop, pace, &tx);
                 }
             });
         }
         drop(tx);
         // Breaking drops the receiver: every backend's next send fails and it stops.
-        for p in rx {
-            if progress(p).is_break() {
-                break;
+        for message in rx {
+            match message {
+                Message::Progress(p) => {
+                    if progress(p).is_break() {
+                        break;
+                    }
+                }
+                Message::Judged(handed_on) => {
+                    let _ = handed_on.send(());
+                }
             }
         }
     });
 }
 
 /// One backend's trials, chunk by chunk.
-fn run_backend(trials: &[Trial], group: &[usize], stop: &AtomicBool, tx: &mpsc::Sender<Progress>) {
+fn run_backend(
+    trials: &[Trial],
+    group: &[usize],
+    stop: &AtomicBool,
+    pace: Pace,
+    tx: &mpsc::Sender<Message>,
+) {
     let Some(&first) = group.first() else {
         return;
     };
@@ -201,7 +233,11 @@ fn run_backend(trials: &[Trial], group: &[usize], stop: &AtomicBool, tx: &mpsc::
                     Err(Fault::Protocol("no answer to a codec question".into()))
                 });
                 if tx
-                    .send(Progress::Observed(i, pair(vec![answer]), time))
+                    .send(Message::Progress(Progress::Observed(
+                        i,
+                        pair(vec![answer]),
+                        time,
+                    )))
                     .is_err()
                 {
                     return;
@@ -222,7 +258,8 @@ fn run_backend(trials: &[Trial], group: &[usize], stop: &AtomicBool, tx: &mpsc::
             let time = each(started);
             for (i, len) in spans {
                 let answers: Vec<_> = results.by_ref().take(len).collect();
-                if tx.send(Progress::Observed(i, pair(answers), time)).is_err() {
+                let observed = Progress::Observed(i, pair(answers), time);
+                if tx.send(Message::Progress(observed)).is_err() {
                     return;
                 }
             }
@@ -230,10 +267,16 @@ fn run_backend(trials: &[Trial], group: &[usize], stop: &AtomicBool, tx: &mpsc::
         let now = backend.restarts();
         if now != restarts {
             restarts = now;
-            let _ = tx.send(Progress::Restarted {
+            let _ = tx.send(Message::Progress(Progress::Restarted {
                 backend: backend.name().to_string(),
                 restarts,
-            });
+            }));
+        }
+        if pace == Pace::Judged {
+            let (handed_on, wait) = mpsc::channel();
+            if tx.send(Message::Judged(handed_on)).is_err() || wait.recv().is_err() {
+                return;
+            }
         }
     }
 }

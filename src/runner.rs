@@ -11,7 +11,7 @@ use std::time::Duration;
 
 use crate::backend::external::{ExternalBackend, ExternalError};
 use crate::backend::{reference_backends, Backend};
-use crate::execute::{execute, execute_all, Progress};
+use crate::execute::{execute, execute_all, Pace, Progress};
 use crate::judge::{judge, skipped, Verdict};
 use crate::load::{
     embedded_vectors, embedded_vendors, load_corpus, load_known, load_profiles, LoadErrors,
@@ -167,6 +167,7 @@ pub fn run(
     trials: &[Trial],
     jobs: usize,
     stop: &AtomicBool,
+    pace: Pace,
     reporter: &mut dyn Reporter,
 ) -> std::io::Result<Summary> {
     let mut summary = Summary::default();
@@ -187,7 +188,7 @@ pub fn run(
     }
     let indices: Vec<usize> = (0..trials.len()).collect();
     let mut failed = None;
-    execute_all(trials, &indices, jobs, stop, |progress| {
+    execute_all(trials, &indices, jobs, stop, pace, |progress| {
         let written = match progress {
             Progress::Observed(i, observations, elapsed) => {
                 let mut verdict = judge(&trials[i], &observations);
@@ -244,7 +245,7 @@ pub fn verdicts(trials: &[Trial]) -> Vec<Verdict> {
     }
     let mut keep = Keep(vec![None; trials.len()]);
     // Keep writes nothing, so it cannot fail.
-    let _ = run(trials, 1, &AtomicBool::new(false), &mut keep);
+    let _ = run(trials, 1, &AtomicBool::new(false), Pace::Ahead, &mut keep);
     keep.0
         .into_iter()
         .map(|v| v.unwrap_or_else(|| skipped("not run")))

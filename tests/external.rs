@@ -960,7 +960,7 @@ fn trials_a_backend_declines_are_listed_ignored_and_never_pass_alone() {
 /// first trial is judged, and the live progress line shows it.
 #[test]
 fn a_slow_batch_reports_its_answers_as_they_come() {
-    use plc_conformance::execute::{execute_all, Progress};
+    use plc_conformance::execute::{execute_all, Pace, Progress};
     use plc_conformance::report::progress::ProgressReporter;
     use plc_conformance::report::{Event, Reporter};
     use std::sync::atomic::AtomicBool;
@@ -978,16 +978,23 @@ fn a_slow_batch_reports_its_answers_as_they_come() {
     let indices: Vec<usize> = (0..trials.len()).collect();
     let mut answering = Vec::new();
     let mut observed = 0;
-    execute_all(&trials, &indices, 1, &AtomicBool::new(false), |p| {
-        match p {
-            Progress::Answering { answered, of, .. } if observed == 0 => {
-                answering.push((answered, of))
+    execute_all(
+        &trials,
+        &indices,
+        1,
+        &AtomicBool::new(false),
+        Pace::Ahead,
+        |p| {
+            match p {
+                Progress::Answering { answered, of, .. } if observed == 0 => {
+                    answering.push((answered, of))
+                }
+                Progress::Observed(..) => observed += 1,
+                _ => {}
             }
-            Progress::Observed(..) => observed += 1,
-            _ => {}
-        }
-        std::ops::ControlFlow::Continue(())
-    });
+            std::ops::ControlFlow::Continue(())
+        },
+    );
     assert_eq!(observed, trials.len());
     // 3 trials under 2 fills, 0.15 s an answer: about 0.9 s, reported every 0.25 s.
     assert!(answering.len() >= 2, "{answering:?}");

@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 use common::{reference, session};
 use plc_conformance::backend::{Backend, Fault, Request, Response};
-use plc_conformance::execute::execute_all;
+use plc_conformance::execute::{execute_all, Pace};
 
 /// The reference model answering each batch after a pause, counting how many backends are
 /// answering at the same moment.
@@ -82,12 +82,19 @@ fn run(jobs: usize) -> (usize, Duration) {
     let indices: Vec<usize> = (0..trials.len()).collect();
     let mut observed = 0;
     let started = Instant::now();
-    execute_all(&trials, &indices, jobs, &AtomicBool::new(false), |p| {
-        if matches!(p, plc_conformance::execute::Progress::Observed(..)) {
-            observed += 1;
-        }
-        std::ops::ControlFlow::Continue(())
-    });
+    execute_all(
+        &trials,
+        &indices,
+        jobs,
+        &AtomicBool::new(false),
+        Pace::Ahead,
+        |p| {
+            if matches!(p, plc_conformance::execute::Progress::Observed(..)) {
+                observed += 1;
+            }
+            std::ops::ControlFlow::Continue(())
+        },
+    );
     assert_eq!(observed, trials.len());
     (most.load(Ordering::SeqCst), started.elapsed())
 }
@@ -103,4 +110,39 @@ fn backends_run_side_by_side_up_to_jobs() {
     let (most, took) = run(1);
     assert_eq!(most, 1);
     assert!(took >= Duration::from_millis(900), "{took:?}");
+}
+
+/// With `Pace::Judged` a stop set while the first chunk's observations are handed on holds
+/// every later chunk back, however slowly they are handed on; with `Pace::Ahead` execution may
+/// run past it (the executor does not wait), which is why `--fail-fast` asks for `Judged`.
+#[test]
+fn a_judged_pace_starts_no_chunk_after_a_stop_set_while_judging() {
+    let project = session();
+    let model = reference(&project, "mitsubishi-iqr");
+    let trials: Vec<_> = project
+        .plan(std::slice::from_ref(&model))
+        .into_iter()
+        .filter(|t| t.skip.is_none() && !t.is_cross_vendor())
+        .collect();
+    let chunk = model.chunk_trials();
+    assert!(trials.len() > 3 * chunk, "{} trials", trials.len());
+    let indices: Vec<usize> = (0..trials.len()).collect();
+    let observed = |pace: Pace| {
+        let stop = AtomicBool::new(false);
+        let mut observed = 0;
+        execute_all(&trials, &indices, 1, &stop, pace, |p| {
+            if matches!(p, plc_conformance::execute::Progress::Observed(..)) {
+                observed += 1;
+                // A slow reporter: the first verdict is a failure, and writing it takes time.
+                if observed == 1 {
+                    std::thread::sleep(Duration::from_millis(200));
+                    stop.store(true, Ordering::Relaxed);
+                }
+            }
+            std::ops::ControlFlow::Continue(())
+        });
+        observed
+    };
+    assert_eq!(observed(Pace::Judged), chunk);
+    assert!(observed(Pace::Ahead) > chunk);
 }

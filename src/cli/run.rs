@@ -13,7 +13,7 @@ use super::{
     EXIT_OK,
 };
 use crate::backend::Backend;
-use crate::execute::execute;
+use crate::execute::{execute, Pace};
 use crate::judge::Verdict;
 use crate::plan::Trial;
 use crate::report::baseline;
@@ -116,11 +116,18 @@ fn execute_command(
             reporters.push(&mut stopper);
         }
         let mut all = All(reporters);
+        // `--fail-fast` holds every chunk back until the one before is judged: a run that
+        // executes faster than it reports would otherwise finish before the first failure
+        // is seen.
+        let pace = match backend_args.fail_fast {
+            true => Pace::Judged,
+            false => Pace::Ahead,
+        };
         if cli.quiet {
-            runner::run(&trials, jobs, stop, &mut all)
+            runner::run(&trials, jobs, stop, pace, &mut all)
         } else {
             let mut progress = ProgressReporter::new(&trials, &mut all);
-            runner::run(&trials, jobs, stop, &mut progress)
+            runner::run(&trials, jobs, stop, pace, &mut progress)
         }
     };
     if let Err(e) = ran {
@@ -452,7 +459,7 @@ fn against(cli: &Cli, args: &BackendArgs, other: &str) -> Outcome {
                 elapsed: std::time::Duration::ZERO,
             })
         })
-        .and_then(|()| runner::run(&paired, 1, stop, &mut text));
+        .and_then(|()| runner::run(&paired, 1, stop, Pace::Ahead, &mut text));
     let summary = written.map_err(|e| CliError::write(None, e))?;
     let differing = summary.failed + unpaired.len();
     let mut out = text.into_inner();

@@ -366,7 +366,13 @@ impl Sweep {
                 out: &mut out,
             };
             // Keep writes nothing, so the run cannot fail on a report.
-            let _ = crate::runner::run(&trials, self.settings.jobs.max(1), stop, &mut keep);
+            let _ = crate::runner::run(
+                &trials,
+                self.settings.jobs.max(1),
+                stop,
+                crate::execute::Pace::Ahead,
+                &mut keep,
+            );
         }
         out.into_iter()
             .map(|row| row.into_iter().collect::<Option<Vec<Reply>>>())
