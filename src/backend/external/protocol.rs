@@ -84,6 +84,11 @@ pub struct CaseRequest {
 impl CaseRequest {
     /// A device name of the case or of its answer, read with the case's numbering.
     pub fn device(&self, text: &str) -> Result<Device, DeviceSyntaxError> {
+        // Most profiles number nothing in hexadecimal: read those names the short way, as
+        // every request and answer names several.
+        if self.hexadecimal.is_empty() {
+            return text.parse();
+        }
         Device::parse_numbered(text, |code| {
             self.hexadecimal.iter().any(|h| code_matches(h, code))
         })
