@@ -1128,14 +1128,20 @@ fn a_shrunk_input_is_shown_once_per_group() {
     assert!(shrunk > 0, "{stdout}");
 }
 
-/// `sweep --operation --backend CODEC` over a random sample, with `extra` arguments.
+/// `sweep --operation hex-to-value --backend CODEC` over a random sample, with `extra`
+/// arguments.
 fn judged_sweep(mode: &str, extra: &[&str]) -> std::process::Output {
+    judged_sweep_of("hex-to-value", mode, extra)
+}
+
+/// [`judged_sweep`] of either operation.
+fn judged_sweep_of(operation: &str, mode: &str, extra: &[&str]) -> std::process::Output {
     let script = root().join("tests/fixtures/external/judged_codec.py");
     let backend = format!("external:judged=python3 {} {mode}", script.display());
     let mut args = vec![
         "sweep",
         "--operation",
-        "hex-to-value",
+        operation,
         "--generator",
         "random",
         "--count",
@@ -1209,8 +1215,6 @@ fn a_value_sweep_says_which_known_entries_can_cover_it() {
         return;
     }
     let dir = common::scratch();
-    let script = root().join("tests/fixtures/external/judged_codec.py");
-    let backend = format!("external:judged=python3 {} lenient", script.display());
     let sweep = |entry: &str| {
         let file = dir.path().join("judged.known.yaml");
         std::fs::write(
@@ -1219,23 +1223,7 @@ fn a_value_sweep_says_which_known_entries_can_cover_it() {
         )
         .expect("known file");
         let known = format!("judged={}", file.display());
-        common::cli(&[
-            "sweep",
-            "--operation",
-            "value-to-hex",
-            "--generator",
-            "random",
-            "--count",
-            "200",
-            "--seed",
-            "5",
-            "--digits",
-            "4",
-            "--backend",
-            &backend,
-            "--known-differences",
-            &known,
-        ])
+        judged_sweep_of("value-to-hex", "lenient", &["--known-differences", &known])
     };
     let by_class = sweep("input: [lowercase]");
     let stderr = String::from_utf8_lossy(&by_class.stderr);
