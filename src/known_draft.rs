@@ -177,7 +177,7 @@ fn describe(difference: &Difference) -> String {
                     .as_ref()
                     .map_or("no error".to_string(), |e| format!("error {e}"))
             ),
-            Some(m) if m.registers_differ() => m
+            Some(m) if m.only_registers_differ() => m
                 .wrong_registers()
                 .map(|r| {
                     format!(

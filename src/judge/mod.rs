@@ -542,7 +542,19 @@ mod tests {
         else {
             panic!("a stale SD8067 must differ");
         };
-        assert!(!mismatches[0].error_differs() && mismatches[0].registers_differ());
+        assert!(!mismatches[0].error_differs() && mismatches[0].only_registers_differ());
+        // With a stray word too, the trial is one of wrong words (in every report and draft).
+        let also_a_word = with_registers(
+            done(&[(300, 1)], code.clone()),
+            &[("SD0", 0x3401), ("SD8067", 0)],
+        );
+        let Verdict::Differs {
+            difference: Difference::Words { mismatches: both },
+        } = judge(&trial(c.clone()), &also_a_word)
+        else {
+            panic!("a stray word must differ");
+        };
+        assert!(both[0].registers_differ() && !both[0].only_registers_differ());
         let wrong = &mismatches[0].registers;
         assert_eq!(
             (wrong[1].device.to_string(), wrong[1].actual),

@@ -61,6 +61,11 @@ impl Mismatch {
     pub fn registers_differ(&self) -> bool {
         self.wrong_registers().next().is_some()
     }
+    /// Whether the run differs in its error registers alone: the one rule by which every
+    /// report and `record --known` call a trial "wrong register" rather than "wrong words".
+    pub fn only_registers_differ(&self) -> bool {
+        !self.words_differ() && self.registers_differ()
+    }
     /// The error registers that do not hold the code.
     pub fn wrong_registers(&self) -> impl Iterator<Item = &RegisterRow> {
         self.registers.iter().filter(|r| r.differs())

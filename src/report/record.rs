@@ -285,7 +285,7 @@ fn behaviour(trial: &Trial, verdict: &Verdict) -> Behaviour {
                     expected: m.expected_error.clone(),
                     actual: m.actual_error.clone(),
                 },
-                Some(m) if !m.words_differ() && m.registers_differ() => Behaviour::WrongRegister {
+                Some(m) if m.only_registers_differ() => Behaviour::WrongRegister {
                     registers: m.wrong_registers().map(|r| r.device.to_string()).collect(),
                 },
                 _ => Behaviour::WrongWords,
