@@ -201,7 +201,7 @@ impl fmt::Display for DeviceSyntaxError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "`{}` is not a device name; expected a code of uppercase letters followed by a decimal number, like `D100`, `MB20` or `DB1.DBB10`",
+            "`{}` is not a device name; expected a code of uppercase letters followed by a decimal number, like `D100`, `MB20` or `DB1.DBB10` (a hexadecimal one, like `W1A`, only for a code the profile numbers in hexadecimal)",
             self.0
         )
     }
