@@ -75,7 +75,8 @@ pub struct SweepArgs {
     pub oracle: Option<String>,
     /// A known-differences file for an `external:` backend given here (those of the project
     /// file's backends are read as for `run`). A judged column's group is a known difference,
-    /// not a failure, when an entry names its cause by the classes of its input (`input:`).
+    /// not a failure, when an entry names its cause by the classes of its input (`input:`) or
+    /// covers every case (`cases: ['*']`, the only kind that covers a value-to-hex sweep).
     #[arg(long, value_name = "NAME=FILE")]
     pub known_differences: Vec<String>,
     /// Seconds an `external:` backend may take to answer one case.

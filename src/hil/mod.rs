@@ -14,10 +14,9 @@ use std::sync::Arc;
 
 use crate::backend::external::window;
 use crate::backend::slmp::fence::{self, WordRange};
-use crate::backend::slmp::frame;
 use crate::backend::slmp::mailbox;
 use crate::backend::slmp::manifest::{self, ErrorDevices, Manifest, Rung, Unrealisable};
-use crate::backend::slmp::SlmpBackend;
+use crate::backend::slmp::{self, SlmpBackend};
 use crate::backend::Backend;
 use crate::device::Device;
 use crate::execute::{images, requests};
@@ -70,24 +69,11 @@ pub fn unrealisable(instruction: &str, operand: &str, value: i64) -> Option<Stri
     })
 }
 
-/// Why a device operand cannot be part of a live case: the client has no SLMP device code for
-/// it (timers, counters and index registers are not addressed here), so the case's memory could
-/// be neither set nor read back.
+/// Why a device operand cannot be part of a live case ([`slmp::unaddressable`]): the case's
+/// memory could be neither set nor read back.
 pub fn unaddressable(operand: &str, device: &Device) -> Option<String> {
-    if device.is_hexadecimal() {
-        return Some(format!(
-            "operand {operand} = {device}: {} is numbered in hexadecimal, which the program \
-             and its manifest do not carry yet, so no program can hold it as written",
-            device.code()
-        ));
-    }
-    frame::device_code(device.code()).is_none().then(|| {
-        format!(
-            "operand {operand} = {device}: {} has no SLMP device code in this client (it \
-                 addresses {}), so no program can hold it as written",
-            device.code(),
-            frame::DEVICE_LETTERS.join(", ")
-        )
+    slmp::unaddressable(device).map(|why| {
+        format!("operand {operand} = {device}: {why}, so no program can hold it as written")
     })
 }
 
@@ -178,9 +164,7 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
             windows.extend(
                 window::ranges(&req)
                     .into_iter()
-                    .filter(|(head, _)| {
-                        frame::device_code(head.code()).is_some() && !head.is_hexadecimal()
-                    })
+                    .filter(|(head, _)| slmp::unaddressable(head).is_none())
                     .map(|(head, last)| WordRange::new(head.code(), head.index, last)),
             );
         }

@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 use super::cross_vendor::CrossVendorSection;
 use super::ErrorSignal;
-use crate::device::{code_matches, Device, DeviceSyntaxError};
+use crate::device::{code_matches, Device};
 use crate::memory::Unit;
 pub use crate::spec::profile::{
     DeviceDef, DeviceRange, DeviceRanges, FlagDef, InstructionDef, Manual, Numbering, OperandDef,
@@ -77,12 +77,6 @@ impl DeviceTable {
             .filter(|(_, d)| d.numbering == Numbering::Hexadecimal)
             .map(|(code, _)| code.clone())
             .collect()
-    }
-
-    /// Reads a device name with this table's numbering: `W1A` is W 26 where W is numbered in
-    /// hexadecimal.
-    pub fn device(&self, text: &str) -> Result<Device, DeviceSyntaxError> {
-        Device::parse_numbered(text, |code| self.is_hexadecimal(code))
     }
 
     pub fn contains_key(&self, code: &str) -> bool {

@@ -1,9 +1,10 @@
 //! Known differences in a sweep: the entries of a judged backend's known-differences file that
 //! name their cause by the classes of its input (`input: [lowercase, sign, ...]`) cover the
 //! generated inputs of those classes too, so a codec's author can sweep in CI and fail only on
-//! what is not yet listed. An entry covers a group of a column when it covers the group's
-//! first input and the first input of each of its classes, with the column's instruction (or
-//! lowering, or `codec`) and variant; a case entry never covers a generated input. A sweep
+//! what is not yet listed; an entry for every case (`cases: ['*']`) covers any input, values
+//! included. An entry covers a group of a column when it covers the group's first input and
+//! the first input of each of its classes, with the column's instruction (or lowering, or
+//! `codec`) and variant; a case entry never covers a generated input. A sweep
 //! does not report stale entries: it asks what its generator makes, not every case a cause
 //! names.
 

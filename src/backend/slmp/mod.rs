@@ -147,6 +147,26 @@ pub struct Plan {
     pub window: Vec<(Device, Vec<u16>)>,
 }
 
+/// Why this backend can neither set nor read a device's words, if it cannot: the client has no
+/// SLMP device code for it (timers, counters and index registers are not addressed here), or
+/// its number is hexadecimal, which the program and its manifest do not carry yet. The one
+/// rule for a case's operands (`hil generate`), its sandbox and its window.
+pub fn unaddressable(device: &Device) -> Option<String> {
+    if device.is_hexadecimal() {
+        return Some(format!(
+            "{} is numbered in hexadecimal, which the program and its manifest do not carry yet",
+            device.code()
+        ));
+    }
+    frame::device_code(device.code()).is_none().then(|| {
+        format!(
+            "{} has no SLMP device code in this client (it addresses {})",
+            device.code(),
+            frame::DEVICE_LETTERS.join(", ")
+        )
+    })
+}
+
 impl SlmpBackend {
     /// The backend, checked against the profiles, without any connection.
     pub fn new(settings: SlmpSettings, profiles: &Profiles) -> Result<SlmpBackend, String> {
@@ -297,18 +317,8 @@ impl SlmpBackend {
         let mut window = Vec::new();
         for (head, last) in window::ranges(req) {
             let (code, first) = (head.code(), head.index);
-            if head.is_hexadecimal() {
-                return Err(format!(
-                    "not run: the case sets {code} words, numbered in hexadecimal, which this \
-                     backend does not carry yet"
-                ));
-            }
-            if frame::device_code(code).is_none() {
-                return Err(format!(
-                    "not run: the case sets {code} words, which this client cannot address (it \
-                     addresses {})",
-                    frame::DEVICE_LETTERS.join(", ")
-                ));
+            if let Some(why) = unaddressable(&head) {
+                return Err(format!("not run: the case sets {code} words: {why}"));
             }
             let range = WordRange::new(code, first, last);
             self.fence.check(&range).map_err(|e| {
