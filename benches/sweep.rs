@@ -114,6 +114,7 @@ fn overhead(project: &Project, count: u64) {
                     case_id: "bench",
                     flags: &input.flags,
                     operands: &input.operands,
+                    indirect: &input.indirect,
                     memory: &image,
                 };
                 if column.backend.execute(&req).is_ok() {

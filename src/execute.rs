@@ -108,6 +108,7 @@ pub fn requests<'a>(trial: &'a Trial, images: &'a [Image]) -> Vec<Request<'a>> {
             case_id: trial.case_id(),
             flags: &trial.input.flags,
             operands: &trial.input.operands,
+            indirect: &trial.input.indirect,
             memory,
         })
         .collect()

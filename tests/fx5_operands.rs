@@ -2,7 +2,8 @@
 //! real constants (E) and character strings ($) as (s); T, ST and C as (d) ("*1 T, ST, and C
 //! cannot be used"), and Z as (d). A vector that names one is refused at load, with the
 //! operand's key; so is one naming a device the table allows but the profile does not model,
-//! and one whose digit-designated words share points (K4M0 with K4M8).
+//! and one whose digit-designated words share points (K4M0 with K4M8). Indirect specification
+//! (`@D10`) is accepted with the device its pointer addresses, and refused without it.
 
 use std::path::Path;
 
@@ -11,6 +12,19 @@ use rstest::rstest;
 
 /// An ASCI vector with the given source and destination, loaded against the real profile.
 fn load_asci(s: &str, d: &str) -> Result<(), String> {
+    load_asci_with(s, d, "")
+}
+
+/// The same with more keys for the case (`addresses: ...`), one per line.
+fn load_asci_with(s: &str, d: &str, more: &str) -> Result<(), String> {
+    let expect = if more.contains("expect:") {
+        ""
+    } else {
+        "expect: {error: none}"
+    };
+    let more: String = (more.lines().chain([expect]))
+        .map(|l| format!("    {l}\n"))
+        .collect();
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let profiles = load_profiles(&root.join("vendors")).map_err(|e| e.to_string())?;
     let text = format!(
@@ -24,9 +38,7 @@ cases:
     cite: "the applicable devices table"
     flags: {{SM701: on}}
     operands: {{s: '{s}', d: '{d}', n: K4}}
-    expect:
-      error: none
-"#
+{more}"#
     );
     let mut builder = CorpusBuilder::default();
     builder.add_file(Path::new("probe.yaml"), &text, &profiles);
@@ -91,10 +103,53 @@ fn bit_devices_link_registers_and_buffer_memory_are_accepted(#[case] s: &str, #[
 #[case::no_hexadecimal_digit_as_s("W1G", "D200", "operands.s")]
 #[case::decimal_device_with_hexadecimal_digits_as_s("D1A", "D200", "operands.s")]
 #[case::module_number_in_hexadecimal_as_s("U1A\\G10", "D200", "operands.s")]
-#[case::indirect_as_d("D100", "@D0", "operands.d")]
+#[case::indirect_without_an_address_as_d("D100", "@D0", "operands.d")]
 // Two digit-designated words of one case that share points.
 #[case::bit_words_off_one_grid("K4M0", "K4M8", "operands.s")]
 fn a_forbidden_operand_is_refused(#[case] s: &str, #[case] d: &str, #[case] key: &str) {
     let errors = load_asci(s, d).expect_err("the vector is refused");
+    assert!(errors.contains(key), "{errors}");
+}
+
+/// Indirect specification: `@D10` with the device D10 addresses, for (s) and (d), to any
+/// device the operand takes.
+#[rstest]
+#[case("@D10", "D200", "addresses: {D10: D100}")]
+#[case("D100", "@D20", "addresses: {D20: R200}")]
+#[case("@D10", "@D20", "addresses: {D10: K4M0, D20: D200}")]
+#[case("@D7998", "D200", "addresses: {D7998: D100}")]
+fn an_indirect_operand_with_its_address_is_accepted(
+    #[case] s: &str,
+    #[case] d: &str,
+    #[case] addresses: &str,
+) {
+    assert_eq!(load_asci_with(s, d, addresses), Ok(()));
+}
+
+#[rstest]
+#[case::pointer_not_a_data_register("@R10", "D200", "addresses: {R10: D100}", "operands.s")]
+#[case::pointer_past_the_last_word("@D7999", "D200", "addresses: {D7999: D100}", "operands.s")]
+#[case::address_of_a_forbidden_destination("D100", "@D20", "addresses: {D20: T0}", "operands.d")]
+#[case::address_for_no_operand("D100", "D200", "addresses: {D10: D100}", "addresses.D10")]
+#[case::address_not_a_device("@D10", "D200", "addresses: {D10: 100}", "addresses.D10")]
+#[case::pointer_word_set_before(
+    "@D10",
+    "D200",
+    "addresses: {D10: D100}\nbefore: {D11: 5}",
+    "before"
+)]
+#[case::pointer_word_expected_after(
+    "D100",
+    "@D20",
+    "addresses: {D20: D200}\nexpect: {after: {D20: 5}, error: none}",
+    "expect.after"
+)]
+fn a_wrong_indirect_operand_is_refused(
+    #[case] s: &str,
+    #[case] d: &str,
+    #[case] more: &str,
+    #[case] key: &str,
+) {
+    let errors = load_asci_with(s, d, more).expect_err("the vector is refused");
     assert!(errors.contains(key), "{errors}");
 }

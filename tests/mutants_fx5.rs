@@ -474,6 +474,18 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                 head.is_hexadecimal().then(|| head.with_index(index))
             })
         }),
+        // An operand given by indirect specification taken to be its pointer (`@D10` read as
+        // D10), as a backend that drops the `@` would.
+        Mutant::new("pointer-taken-for-the-operand", base, |req, b| {
+            let mut operands = req.operands.clone();
+            for (name, pointer) in req.indirect {
+                operands.insert(name.clone(), Operand::Device(pointer.clone()));
+            }
+            b.execute(&Request {
+                operands: &operands,
+                ..*req
+            })
+        }),
         Mutant::new("destination-written-on-error", base, |req, b| {
             reshape(req, b, |req, mut o| {
                 if let (Some(_), Some(d)) = (&o.error, device(req, "d")) {

@@ -45,14 +45,18 @@ export class Case {
   readonly ignoredFlags: Record<string, boolean>;
   readonly operands: Record<string, string | number>;
   readonly fill: 'A' | 'B';
+  /** Indirect specification: a pointer's key ("D10") -> the device whose address it holds. */
+  readonly addresses: Map<string, Device>;
   /** The window: "D100" -> word. */
   readonly memory: Map<string, number>;
   readonly writes: Map<string, number>;
   error: { code: number } | { flag: string } | null;
   /** The flag as this variant's CPU sees it (ignored_flags wins). */
   flag(name: string): boolean;
-  /** A device operand as a Device, a constant as a number. */
+  /** A device operand as a Device, a constant as a number; `@D10` is the device D10 addresses. */
   operand(name: string): Device | number;
+  /** The pointer of an operand given by indirect specification (`@D10`: D10), else null. */
+  pointer(name: string): Device | null;
   /** An operand that must be a device (else Unsupported). */
   device(name: string): Device;
   /** The word: its latest write, else the window, else the fill. */

@@ -139,6 +139,9 @@ class Case {
     this.fill = message.fill || 'A';
     // The codes whose numbers are hexadecimal (W1A is the word after W19).
     this.hexadecimal = message.hexadecimal || [];
+    // Indirect specification: each pointer's key with the device whose address it holds.
+    this.addresses = new Map(Object.entries(message.addresses || {}).map(([pointer, target]) =>
+      [Device.parse(pointer, this.hexadecimal).key, Device.parse(target, this.hexadecimal)]));
     this.memory = new Map();
     // A byte-addressed family's ranges carry bytes (protocol version 3).
     this.unit = 'word';
@@ -163,13 +166,31 @@ class Case {
     return Boolean(this.flags[name]);
   }
 
-  /** A device operand as a Device, a constant as a number. */
+  /**
+   * A device operand as a Device, a constant as a number. An operand given by indirect
+   * specification (`@D10`) is the device its pointer addresses (`addresses`), as the CPU
+   * resolves it; an emulator with indirect specification of its own reads `operands` and
+   * `addresses` as they came, and stores the address in the pointer itself.
+   */
   operand(name) {
     if (!Object.prototype.hasOwnProperty.call(this.operands, name)) {
       throw new Unsupported(`${this.instruction} needs operand ${JSON.stringify(name)}`);
     }
     const value = this.operands[name];
-    return typeof value === 'string' ? Device.parse(value, this.hexadecimal) : value;
+    if (typeof value !== 'string') return value;
+    const pointer = this.pointer(name);
+    if (pointer === null) return Device.parse(value, this.hexadecimal);
+    const target = this.addresses.get(pointer.key);
+    if (!target) throw new Error(`${value} is indirect and \`addresses\` says nothing of ${pointer}`);
+    return target;
+  }
+
+  /** The device holding the address of an operand given by indirect specification, else null. */
+  pointer(name) {
+    const value = this.operands[name];
+    return typeof value === 'string' && value.startsWith('@')
+      ? Device.parse(value.slice(1), this.hexadecimal)
+      : null;
   }
 
   /** An operand that must be a device. */

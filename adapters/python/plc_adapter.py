@@ -159,6 +159,11 @@ class Case:
         self.fill = message.get("fill", "A")
         # The codes whose numbers are hexadecimal (W1A is the word after W19).
         self.hexadecimal = tuple(message.get("hexadecimal", ()))
+        # Indirect specification: each pointer with the device whose address it holds.
+        self.addresses = {
+            Device.parse(pointer, self.hexadecimal): Device.parse(target, self.hexadecimal)
+            for pointer, target in message.get("addresses", {}).items()
+        }
         memory = {}
         # A byte-addressed family's ranges carry bytes (protocol version 3).
         self.unit = "word"
@@ -181,11 +186,29 @@ class Case:
         return bool(self.flags.get(name, False))
 
     def operand(self, name):
-        """A device operand as a Device, a constant as an int."""
+        """A device operand as a Device, a constant as an int. An operand given by indirect
+        specification (`@D10`) is the device its pointer addresses (`addresses`), as the CPU
+        resolves it; an emulator with indirect specification of its own reads `operands` and
+        `addresses` as they came, and stores the address in the pointer itself."""
         if name not in self.operands:
             raise Unsupported("%s needs operand %r" % (self.instruction, name))
         value = self.operands[name]
-        return Device.parse(value, self.hexadecimal) if isinstance(value, str) else value
+        if not isinstance(value, str):
+            return value
+        if value.startswith("@"):
+            pointer = Device.parse(value[1:], self.hexadecimal)
+            if pointer not in self.addresses:
+                raise ValueError("%s is indirect and `addresses` says nothing of %s" % (value, pointer))
+            return self.addresses[pointer]
+        return Device.parse(value, self.hexadecimal)
+
+    def pointer(self, name):
+        """The device holding the address of an operand given by indirect specification, or
+        None for an operand given directly."""
+        value = self.operands.get(name)
+        if isinstance(value, str) and value.startswith("@"):
+            return Device.parse(value[1:], self.hexadecimal)
+        return None
 
     def device(self, name):
         """An operand that must be a device."""

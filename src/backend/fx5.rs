@@ -383,6 +383,7 @@ mod tests {
                 case_id: "property",
                 flags: &flags,
                 operands: &operands,
+                indirect: crate::model::DIRECT,
                 memory,
             };
             match self.backend.execute(&req) {

@@ -28,7 +28,7 @@ use crate::device::Device;
 use crate::memory::Image;
 use crate::model::cross_vendor::{Answer, CodecAbilities, Operation};
 use crate::model::profile::{Profile, Profiles, Variant};
-use crate::model::{ErrorSignal, Operand};
+use crate::model::{ErrorSignal, Indirect, Operand};
 
 /// Everything a backend needs to execute one case.
 #[derive(Debug, Clone, Copy)]
@@ -41,6 +41,10 @@ pub struct Request<'a> {
     /// The flags the case sets; [`Request::flag`] applies defaults and the variant.
     pub flags: &'a BTreeMap<String, bool>,
     pub operands: &'a BTreeMap<String, Operand>,
+    /// The operands given by indirect specification, with their pointers: a reference model
+    /// executes on the addressed device in `operands` and needs nothing more; an external
+    /// backend is told the pointer and what it addresses.
+    pub indirect: &'a Indirect,
     pub memory: &'a Image,
 }
 
@@ -93,6 +97,7 @@ pub struct Setting<'a> {
     /// The flags set (the rest hold the profile default).
     pub flags: &'a BTreeMap<String, bool>,
     pub operands: &'a BTreeMap<String, Operand>,
+    pub indirect: &'a Indirect,
 }
 
 /// What an instruction did.

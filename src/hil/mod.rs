@@ -128,16 +128,14 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
     let mut windows: Vec<WordRange> = Vec::new();
     for t in &trials {
         let input = &t.input;
-        let key = manifest::rung_key(&input.instruction, &input.operands);
+        let operands = manifest::written(&input.operands, &input.indirect);
+        let key = manifest::rung_key(&input.instruction, &operands);
         if !seen.contains_key(&key) {
-            let operands: BTreeMap<String, String> = input
-                .operands
-                .iter()
-                .map(|(k, v)| (k.clone(), v.to_string()))
-                .collect();
-            let why = input.operands.iter().find_map(|(name, o)| match o {
-                Operand::Constant(k) => unrealisable(&input.instruction, name, *k),
-                Operand::Device(d) => unaddressable(name, d),
+            let why = slmp::indirect(&input.indirect).or_else(|| {
+                input.operands.iter().find_map(|(name, o)| match o {
+                    Operand::Constant(k) => unrealisable(&input.instruction, name, *k),
+                    Operand::Device(d) => unaddressable(name, d),
+                })
             });
             seen.insert(key.clone(), why.is_none());
             match why {

@@ -405,6 +405,7 @@ mod tests {
                 instruction: "HABIN".into(),
                 flags: BTreeMap::new(),
                 operands: BTreeMap::new(),
+                indirect: Default::default(),
                 before: case.before.clone(),
             }),
             check: Check::Native {
@@ -438,6 +439,7 @@ mod tests {
             variants: None,
             flags: BTreeMap::new(),
             operands: BTreeMap::new(),
+            indirect: Default::default(),
             before: BTreeMap::from([(d(100), 0x4135)]),
             expect,
             note: None,

@@ -398,6 +398,7 @@ mod tests {
             variants: variants.map(|v| v.iter().map(|s| s.to_string()).collect::<BTreeSet<_>>()),
             flags: BTreeMap::new(),
             operands: BTreeMap::new(),
+            indirect: BTreeMap::new(),
             before: BTreeMap::new(),
             expect: None,
             note: None,

@@ -173,10 +173,17 @@ fn check_profile(p: &ProfileSpec, cx: &mut FileContext<'_>) {
                     );
                 }
             }
-            for (i, code) in def.devices.iter().enumerate() {
+            let listed = (def.devices.iter().map(|c| ("devices", c)))
+                .chain(def.indirect.iter().map(|c| ("indirect", c)));
+            for (i, (list, code)) in listed.enumerate() {
                 if !p.devices.contains_key(code) {
+                    let i = if list == "devices" {
+                        i
+                    } else {
+                        i - def.devices.len()
+                    };
                     cx.error(
-                        format!("instructions.{name}.operands.{op}.devices[{i}]"),
+                        format!("instructions.{name}.operands.{op}.{list}[{i}]"),
                         unknown("device", code, &devices),
                     );
                 }

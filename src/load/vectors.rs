@@ -9,7 +9,7 @@ use super::{read_file, yaml_files, FileContext, LoadError, LoadErrorKind, LoadEr
 use crate::device::{code_matches, Device};
 use crate::memory::Unit;
 use crate::model::profile::{Profile, Profiles, SignalKind};
-use crate::model::{Case, Citation, Corpus, ErrorSignal, Expectation, Location, Operand};
+use crate::model::{Case, Citation, Corpus, ErrorSignal, Expectation, Indirect, Location, Operand};
 use crate::spec::vectors::{
     CaseSpec, ExpectSpec, FlagSpec, ScalarSpec, SourceSpec, ValueSpec, VectorFileSpec,
 };
@@ -267,7 +267,7 @@ fn read_case(key: &str, spec: &CaseSpec, h: &Header<'_>, cx: &mut FileContext<'_
     });
 
     let flags = read_flags(key, &spec.flags, h, cx);
-    let operands = read_operands(key, &spec.operands, h, cx);
+    let (operands, indirect) = read_operands(key, spec, h, cx);
     let before = read_memory(&format!("{key}.before"), &spec.before, h, cx);
     let expect = match &spec.expect {
         Some(e) => Some(read_expect(&format!("{key}.expect"), e, h, cx)),
@@ -276,6 +276,7 @@ fn read_case(key: &str, spec: &CaseSpec, h: &Header<'_>, cx: &mut FileContext<'_
             None
         }
     };
+    check_pointer_words(key, &indirect, &before, expect.as_ref(), cx);
 
     check_digit_grids(key, spec, h, cx);
 
@@ -293,6 +294,7 @@ fn read_case(key: &str, spec: &CaseSpec, h: &Header<'_>, cx: &mut FileContext<'_
         variants,
         flags,
         operands,
+        indirect,
         before,
         expect,
         note: spec.note.clone(),
@@ -349,13 +351,18 @@ fn read_flags(
     out
 }
 
+/// The operands, with those given by indirect specification (`@D10`) holding the device their
+/// pointer addresses (from `addresses`), and the pointers of those.
 fn read_operands(
     key: &str,
-    spec: &BTreeMap<String, ScalarSpec>,
+    case: &CaseSpec,
     h: &Header<'_>,
     cx: &mut FileContext<'_>,
-) -> BTreeMap<String, Operand> {
+) -> (BTreeMap<String, Operand>, Indirect) {
+    let spec = &case.operands;
+    let addresses = read_addresses(key, &case.addresses, h, cx);
     let mut out = BTreeMap::new();
+    let mut indirect = Indirect::new();
     for p in &h.profiles {
         for instr in h.instructions.iter() {
             let Some(def) = p.instructions.get(instr) else {
@@ -380,6 +387,15 @@ fn read_operands(
         let okey = format!("{key}.operands.{name}");
         let operand = match value {
             ScalarSpec::Number(n) => Operand::Constant(*n),
+            ScalarSpec::Text(t) if t.starts_with('@') => {
+                match read_pointer(&okey, name, &t[1..], &addresses, h, cx) {
+                    Some((pointer, target)) => {
+                        indirect.insert(name.clone(), pointer);
+                        Operand::Device(target)
+                    }
+                    None => continue,
+                }
+            }
             ScalarSpec::Text(t) => match parse_number(t) {
                 Ok(n) => Operand::Constant(n),
                 Err(_) => match h.device(t) {
@@ -452,7 +468,141 @@ fn read_operands(
         }
         out.insert(name.clone(), operand);
     }
+    let named: BTreeSet<Device> = (spec.values())
+        .filter_map(|v| match v {
+            ScalarSpec::Text(t) => h.device(t.strip_prefix('@')?).ok(),
+            ScalarSpec::Number(_) => None,
+        })
+        .collect();
+    for (pointer, (akey, _)) in &addresses {
+        if !named.contains(pointer) {
+            cx.error(
+                akey,
+                LoadErrorKind::Invalid(format!(
+                    "no operand is `@{pointer}`: an address is given for the pointer of an \
+                     operand written with indirect specification"
+                )),
+            );
+        }
+    }
+    (out, indirect)
+}
+
+/// `addresses`, read: each pointer with its key and the device it addresses.
+fn read_addresses(
+    key: &str,
+    spec: &BTreeMap<String, String>,
+    h: &Header<'_>,
+    cx: &mut FileContext<'_>,
+) -> BTreeMap<Device, (String, Device)> {
+    let mut out = BTreeMap::new();
+    for (pointer, target) in spec {
+        let akey = format!("{key}.addresses.{pointer}");
+        match (h.device(pointer), h.device(target)) {
+            (Ok(p), Ok(t)) => {
+                out.insert(p, (akey, t));
+            }
+            (Err(e), _) | (_, Err(e)) => cx.error(&akey, LoadErrorKind::Device(e)),
+        }
+    }
     out
+}
+
+/// The pointer of `@pointer` and the device it addresses, checked against every profile:
+/// the operand must take indirect specification through the pointer's code, and both of the
+/// pointer's words must exist.
+fn read_pointer(
+    okey: &str,
+    name: &str,
+    pointer: &str,
+    addresses: &BTreeMap<Device, (String, Device)>,
+    h: &Header<'_>,
+    cx: &mut FileContext<'_>,
+) -> Option<(Device, Device)> {
+    let pointer = h
+        .device(pointer)
+        .map_err(|e| cx.error(okey, LoadErrorKind::Device(e)))
+        .ok()?;
+    let before = cx.errors.len();
+    for p in &h.profiles {
+        for instr in h.instructions.iter() {
+            let Some(def) = p.instructions.get(instr).and_then(|d| d.operands.get(name)) else {
+                continue;
+            };
+            if !def.indirect.iter().any(|c| code_matches(c, pointer.code())) {
+                let how = match def.indirect.as_slice() {
+                    [] => "no indirect specification".to_string(),
+                    codes => format!("indirect specification through {} only", codes.join(", ")),
+                };
+                cx.error(
+                    okey,
+                    LoadErrorKind::Invalid(format!(
+                        "{instr} operand `{name}` takes {how} ({})",
+                        p.id
+                    )),
+                );
+            } else if let Some(missing) = [Some(pointer.clone()), pointer.offset(1)]
+                .into_iter()
+                .find(|w| !w.as_ref().is_some_and(|w| p.word_exists_anywhere(w)))
+            {
+                let word = missing.map_or_else(|| format!("{pointer}+1"), |w| w.to_string());
+                cx.error(
+                    okey,
+                    LoadErrorKind::Invalid(format!(
+                        "`@{pointer}` needs {pointer} and the word after it to hold an address, \
+                         and {word} does not exist on any {} variant",
+                        p.id
+                    )),
+                );
+            }
+        }
+    }
+    let Some((_, target)) = addresses.get(&pointer) else {
+        cx.error(
+            okey,
+            LoadErrorKind::Invalid(format!(
+                "`@{pointer}` is indirect specification: say which device {pointer} holds the \
+                 address of in the case's `addresses` (`addresses: {{{pointer}: D100}}`)"
+            )),
+        );
+        return None;
+    };
+    (cx.errors.len() == before).then(|| (pointer, target.clone()))
+}
+
+/// Refuses a case that sets or expects a word of a pointer: the two words hold an address in
+/// ADRSET's encoding, which no page the project quotes gives.
+fn check_pointer_words(
+    key: &str,
+    indirect: &Indirect,
+    before: &BTreeMap<Device, u16>,
+    expect: Option<&Expectation>,
+    cx: &mut FileContext<'_>,
+) {
+    for pointer in indirect.values() {
+        for word in [Some(pointer.clone()), pointer.offset(1)]
+            .into_iter()
+            .flatten()
+        {
+            let mut places = vec![(format!("{key}.before"), before)];
+            if let Some(e) = expect {
+                places.push((format!("{key}.expect.after"), &e.after));
+            }
+            for (at, memory) in places {
+                if memory.contains_key(&word) {
+                    cx.error(
+                        &at,
+                        LoadErrorKind::Invalid(format!(
+                            "{word} is a word of the pointer `@{pointer}`: it holds an address \
+                             as ADRSET stores it, which the manuals do not give, so a case \
+                             cannot set or expect it; move the pointer away from the words \
+                             the case names"
+                        )),
+                    );
+                }
+            }
+        }
+    }
 }
 
 /// Refuses a case whose digit-designated words of one code are not 16 points apart

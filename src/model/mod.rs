@@ -105,6 +105,13 @@ impl fmt::Display for Citation {
     }
 }
 
+/// Operands given by indirect specification, by name, with the device holding each one's
+/// address.
+pub type Indirect = BTreeMap<String, Device>;
+
+/// No operand given by indirect specification: for requests that are not a vector's.
+pub const DIRECT: &Indirect = &BTreeMap::new();
+
 /// One validated test vector.
 #[derive(Debug, Clone, Serialize)]
 pub struct Case {
@@ -120,7 +127,13 @@ pub struct Case {
     pub variants: Option<BTreeSet<String>>,
     /// Flags the case sets; the rest hold the profile default.
     pub flags: BTreeMap<String, bool>,
+    /// Operands by name; one given by indirect specification holds the device it addresses.
     pub operands: BTreeMap<String, Operand>,
+    /// The operands given by indirect specification (`s: '@D10'`), with the device holding
+    /// their address (`s` -> D10): models execute on the addressed device in `operands`, an
+    /// emulator over the protocol is given the pointer and the address to store in it.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub indirect: Indirect,
     pub before: BTreeMap<Device, u16>,
     /// `None` only for `unspecified` cases that record without a guess.
     pub expect: Option<Expectation>,

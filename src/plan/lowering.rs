@@ -5,7 +5,7 @@
 use super::Input;
 use crate::memory::Unit;
 use crate::model::cross_vendor::{CrossVendorCase, Lowering, Operation, TextLayout, ValueOrder};
-use crate::model::Operand;
+use crate::model::{Indirect, Operand};
 use crate::text::{pack_low_first, significant_digits};
 
 /// Text with its 00H terminator, in memory units as `layout` stores it.
@@ -106,6 +106,7 @@ pub fn input(lowering: &Lowering, case: &CrossVendorCase) -> Input {
         instruction: lowering.instruction.clone(),
         flags: lowering.flags.clone(),
         operands,
+        indirect: Indirect::new(),
         before,
     }
 }

@@ -21,7 +21,7 @@ use crate::memory::{Fill, Image, Unit};
 use crate::model::cross_vendor::{Answer, CrossVendorCase, ErrorClass, Lowering};
 use crate::model::known::{Entry, KnownDifferences, Subject};
 use crate::model::profile::{Profile, Profiles};
-use crate::model::{Basis, Case, Citation, Corpus, Location, Operand};
+use crate::model::{Basis, Case, Citation, Corpus, Indirect, Location, Operand};
 
 /// What a trial checks.
 #[derive(Debug, Clone)]
@@ -47,6 +47,8 @@ pub struct Input {
     /// The flags set; the rest hold the profile default.
     pub flags: BTreeMap<String, bool>,
     pub operands: BTreeMap<String, Operand>,
+    /// The operands given by indirect specification, with their pointers.
+    pub indirect: Indirect,
     /// The memory set before execution; every other word holds the fill.
     pub before: BTreeMap<Device, u16>,
 }
@@ -193,6 +195,7 @@ pub fn plan(
                     instruction: instruction.clone(),
                     flags: case.flags.clone(),
                     operands: case.operands.clone(),
+                    indirect: case.indirect.clone(),
                     before: case.before.clone(),
                 });
                 for variant in profile.variants.iter().filter(|v| case.runs_on(&v.id)) {
@@ -323,6 +326,7 @@ pub fn declined(
         variant: profile.variant(variant)?,
         flags: &input.flags,
         operands: &input.operands,
+        indirect: &input.indirect,
     })
 }
 

@@ -256,6 +256,11 @@ pub struct OperandDef {
     /// device has (IDEC ATOH D1: M0-M1277 only).
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub limits: BTreeMap<String, DeviceRange>,
+    /// Device codes that can hold the operand's address for indirect specification (`@D10`:
+    /// the device whose address D10 and D11 hold, as ADRSET stores it). Empty when the
+    /// manual's table does not allow it.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub indirect: Vec<String>,
 }
 
 /// An inclusive range of constants.

@@ -107,6 +107,13 @@ pub struct CaseSpec {
     /// `D100` or a constant such as `K4` / `H0ABC`.
     #[serde(default)]
     pub operands: BTreeMap<String, ScalarSpec>,
+    /// For an operand written with indirect specification (`s: '@D10'`): the device whose
+    /// address each pointer holds, as ADRSET stores it (`{D10: D100}`: D10 and D11 hold D100's
+    /// address, so `@D10` is D100). The manuals do not give that encoding, so `before` and
+    /// `expect.after` cannot name a pointer's two words.
+    #[serde(default)]
+    #[schemars(extend("propertyNames" = {"pattern": crate::device::PATTERN}))]
+    pub addresses: BTreeMap<String, String>,
     /// Memory before execution, by device (`D100`). Every word not listed holds a fill pattern.
     #[serde(default)]
     #[schemars(extend("propertyNames" = {"pattern": crate::device::PATTERN}))]
@@ -316,7 +323,7 @@ mod schema_shapes {
     use schemars::JsonSchema;
 
     /// A number as the manuals write it (`4135H`, `0ABCH`, `K100`, `K-1`, `H0ABC`, `0x4135`,
-    /// 16693) or a device / name (`D100`, `none`, `M8004`).
+    /// 16693) or a device / name (`D100`, `@D10`, `none`, `M8004`).
     #[derive(JsonSchema)]
     #[serde(untagged)]
     #[allow(dead_code)]
@@ -324,7 +331,7 @@ mod schema_shapes {
         Number(i64),
         Text(
             #[schemars(regex(
-                pattern = r"^\s*(K-?[0-9]+|0[xX][0-9A-Fa-f]+|[0-9A-Fa-f]+[Hh]|H[0-9A-Fa-f]+|-?[0-9]+|[A-Z]([A-Z0-9.\\]*[A-Z])?([0-9]+\.[0-7]|[0-9]+)|[A-Z]([A-Z0-9.\\]*[A-Z])?[0-9A-F]+|none)\s*$"
+                pattern = r"^\s*(K-?[0-9]+|0[xX][0-9A-Fa-f]+|[0-9A-Fa-f]+[Hh]|H[0-9A-Fa-f]+|-?[0-9]+|@?[A-Z]([A-Z0-9.\\]*[A-Z])?([0-9]+\.[0-7]|[0-9]+)|@?[A-Z]([A-Z0-9.\\]*[A-Z])?[0-9A-F]+|none)\s*$"
             ))]
             String,
         ),

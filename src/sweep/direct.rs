@@ -71,6 +71,7 @@ pub fn reply(column: &Column, cases: &Cases, native: Option<&(Input, Images)>) -
             case_id: "sweep",
             flags: &input.flags,
             operands: &input.operands,
+            indirect: &input.indirect,
             memory: image,
         };
         match column.backend.execute(&request) {

@@ -18,7 +18,7 @@ use crate::backend::Backend;
 use crate::device::Device;
 use crate::model::cross_vendor::{CrossVendorCase, Lowering, Operation, TextLayout, ValueOrder};
 use crate::model::profile::{Profile, Profiles};
-use crate::model::{Basis, Case, Citation, Location, Operand};
+use crate::model::{Basis, Case, Citation, Indirect, Location, Operand};
 use crate::plan::lowering::{text_units, value_memory};
 use crate::plan::{codec_declined, declined, lowered_input, Check, Input, Trial};
 
@@ -246,6 +246,7 @@ impl Shape {
             instruction: self.instruction.clone(),
             flags: point.flags.clone(),
             operands,
+            indirect: Indirect::new(),
             before,
         }
     }
@@ -434,6 +435,7 @@ fn lowering_skip(backend: &Arc<dyn Backend>, profile: &Profile, l: &Lowering) ->
         instruction: l.instruction.clone(),
         flags: l.flags.clone(),
         operands: l.operands.clone(),
+        indirect: Indirect::new(),
         before: BTreeMap::new(),
     };
     declined(backend.as_ref(), profile, &l.variant, &input)
@@ -491,6 +493,7 @@ impl Cases {
                         variants: None,
                         flags: input.flags,
                         operands: input.operands,
+                        indirect: input.indirect,
                         before: input.before,
                         expect: None,
                         note: None,
@@ -546,6 +549,7 @@ impl Cases {
                     instruction: case.instructions[0].clone(),
                     flags: case.flags.clone(),
                     operands: case.operands.clone(),
+                    indirect: case.indirect.clone(),
                     before: case.before.clone(),
                 }),
             ),

@@ -243,6 +243,20 @@ test('a hexadecimal-numbered code reads, steps and answers in hexadecimal', () =
   assert.deepEqual(c.answer().writes, { W20: 9 });
 });
 
+test('an indirect operand is the device its pointer addresses', () => {
+  const message = habinCase(1, {
+    operands: { s: '@D10', d: 'D200' },
+    memory: [{ start: 'D100', words: [7] }],
+    addresses: { D10: 'D100' },
+  });
+  const c = new helper.Case(message);
+  assert.equal(c.device('s').toString(), 'D100');
+  assert.equal(c.read(c.device('s')), 7);
+  assert.equal(c.pointer('s').toString(), 'D10');
+  assert.equal(c.pointer('d'), null);
+  assert.throws(() => new helper.Case({ ...message, addresses: {} }).operand('s'), /D10/);
+});
+
 /** Runs serveCodec in process over the given messages; resolves with the answers. */
 async function inProcess(options, messages) {
   const input = new PassThrough();

@@ -321,6 +321,19 @@ class InProcess(unittest.TestCase):
         self.assertEqual((device.code, device.index), ("U1\\G", 10))
         self.assertEqual(str(device.offset(1)), "U1\\G11")
 
+    def test_an_indirect_operand_is_the_device_its_pointer_addresses(self):
+        message = habin_case(1, operands={"s": "@D10", "d": "D200"},
+                             memory=[{"start": "D100", "words": [7]}])
+        message["addresses"] = {"D10": "D100"}
+        case = plc_adapter.Case(message)
+        self.assertEqual(case.device("s"), plc_adapter.Device.parse("D100"))
+        self.assertEqual(case.read(case.device("s")), 7)
+        self.assertEqual(case.pointer("s"), plc_adapter.Device.parse("D10"))
+        self.assertIsNone(case.pointer("d"))
+        message["addresses"] = {}
+        with self.assertRaises(ValueError):
+            plc_adapter.Case(message).operand("s")
+
 
 if __name__ == "__main__":
     unittest.main()

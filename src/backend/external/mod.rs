@@ -885,11 +885,22 @@ pub fn case_request(req: &Request<'_>, id: u64) -> CaseRequest {
             .operands
             .iter()
             .map(|(k, v)| {
-                let value = match v {
-                    Operand::Device(d) => OperandValue::Device(d.to_string()),
-                    Operand::Constant(k) => OperandValue::Constant(*k),
+                let value = match (v, req.indirect.get(k)) {
+                    (Operand::Device(_), Some(pointer)) => {
+                        OperandValue::Device(format!("@{pointer}"))
+                    }
+                    (Operand::Device(d), None) => OperandValue::Device(d.to_string()),
+                    (Operand::Constant(k), _) => OperandValue::Constant(*k),
                 };
                 (k.clone(), value)
+            })
+            .collect(),
+        addresses: req
+            .indirect
+            .iter()
+            .filter_map(|(name, pointer)| match req.operands.get(name) {
+                Some(Operand::Device(d)) => Some((pointer.to_string(), d.to_string())),
+                _ => None,
             })
             .collect(),
         fill: match req.memory.fill() {
@@ -933,6 +944,8 @@ fn outcome(
             .collect()
     };
     let mut out = Outcome::default();
+    // A pointer's words hold the address in the backend's own encoding: not judged.
+    let pointers = case.pointer_words();
     // One word given two values in one answer is no answer: which one would count?
     let mut in_memory: BTreeMap<Device, String> = BTreeMap::new();
     for range in memory {
@@ -949,7 +962,7 @@ fn outcome(
                     range.start
                 )));
             }
-            if before.get(&d) != Some(&word) {
+            if before.get(&d) != Some(&word) && !pointers.contains(&d) {
                 out.writes.insert(d, word);
             }
         }
@@ -969,7 +982,9 @@ fn outcome(
                 "`{first}` and `{name}` in `writes` are the same word, {d}"
             )));
         }
-        out.writes.insert(d, word);
+        if !pointers.contains(&d) {
+            out.writes.insert(d, word);
+        }
     }
     out.error = match error {
         None => None,
@@ -1087,10 +1102,39 @@ mod tests {
             flags: BTreeMap::new(),
             ignored_flags: BTreeMap::new(),
             operands: BTreeMap::new(),
+            addresses: BTreeMap::new(),
             fill: FillName::A,
             memory: vec![MemoryRange::new("D200".into(), Unit::Word, vec![0, 0])],
             hexadecimal: Vec::new(),
         }
+    }
+
+    /// The words of a pointer hold an address the backend encodes its own way: an answer
+    /// that echoes them changed, or lists them as writes, says nothing the case can judge.
+    #[test]
+    fn an_answer_for_the_pointer_words_is_not_judged() {
+        let mut case = request();
+        case.operands
+            .insert("s".into(), OperandValue::Device("@D10".into()));
+        case.addresses.insert("D10".into(), "D100".into());
+        assert_eq!(
+            case.operand_device("@D10"),
+            Ok((Device::new("D", 100), Some(Device::new("D", 10))))
+        );
+        assert!(case.operand_device("@D12").is_err(), "no address for D12");
+        let writes = BTreeMap::from([
+            ("D10".to_string(), 0x0064),
+            ("D11".to_string(), 0),
+            ("D12".to_string(), 7),
+        ]);
+        let out = outcome(&case, Unit::Word, Vec::new(), writes, None).expect("outcome");
+        assert_eq!(out.writes, BTreeMap::from([(Device::new("D", 12), 7)]));
+        let echoed = vec![
+            MemoryRange::new("D10".into(), Unit::Word, vec![0x0064, 0]),
+            MemoryRange::new("D200".into(), Unit::Word, vec![0, 5]),
+        ];
+        let out = outcome(&case, Unit::Word, echoed, BTreeMap::new(), None).expect("outcome");
+        assert_eq!(out.writes, BTreeMap::from([(Device::new("D", 201), 5)]));
     }
 
     /// A code the request lists as hexadecimal is read so in the answer: `W1A` is the word

@@ -26,6 +26,9 @@ pub const BYTES_VERSION: u32 = 3;
 /// A device name as the protocol carries it: a code and a decimal number (`D100`, `MB20`,
 /// `DB1.DBB10`).
 const DEVICE_PATTERN: &str = crate::device::PATTERN;
+/// A device operand: a device name, or `@` and one for indirect specification (`@D10`).
+const OPERAND_PATTERN: &str =
+    r"^@?([A-Z]([A-Z0-9.\\]*[A-Z])?([0-9]+\.[0-7]|[0-9]+)|[A-Z]([A-Z0-9.\\]*[A-Z])?[0-9A-F]+)$";
 
 /// A message from the harness to a backend.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
@@ -66,9 +69,15 @@ pub struct CaseRequest {
     /// if the flag held this value whatever `flags` says.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub ignored_flags: BTreeMap<String, bool>,
-    /// Operands by the manual's names: a device as a string (`"D100"`) or a constant as an
-    /// integer (`4`, `-1`).
+    /// Operands by the manual's names: a device as a string (`"D100"`, or `"@D10"` for
+    /// indirect specification) or a constant as an integer (`4`, `-1`).
     pub operands: BTreeMap<String, OperandValue>,
+    /// For each pointer of an operand given by indirect specification, the device whose
+    /// address it holds: `{"D10": "D100"}` makes `@D10` address D100. The backend stores the
+    /// address in the pointer's two words its own way (as its ADRSET would) before executing;
+    /// what it answers for those two words is not judged. Left out when no operand is indirect.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub addresses: BTreeMap<String, String>,
     /// The fill pattern of the words the case does not set (see `docs/protocol.md` for the
     /// formula): what a word outside `memory` holds.
     pub fill: FillName,
@@ -92,6 +101,40 @@ impl CaseRequest {
         Device::parse_numbered(text, |code| {
             self.hexadecimal.iter().any(|h| code_matches(h, code))
         })
+    }
+
+    /// A device operand as the instruction reaches it: `D100` itself, or for `@D10` the device
+    /// `addresses` gives for D10, with the pointer.
+    pub fn operand_device(&self, text: &str) -> Result<(Device, Option<Device>), String> {
+        let Some(pointer) = text.strip_prefix('@') else {
+            return self
+                .device(text)
+                .map(|d| (d, None))
+                .map_err(|e| e.to_string());
+        };
+        let pointer = self.device(pointer).map_err(|e| e.to_string())?;
+        for (name, target) in &self.addresses {
+            if self.device(name).as_ref() == Ok(&pointer) {
+                let target = self
+                    .device(target)
+                    .map_err(|e| format!("`addresses.{name}`: {e}"))?;
+                return Ok((target, Some(pointer)));
+            }
+        }
+        Err(format!(
+            "`{text}` is indirect, and `addresses` says nothing of {pointer}"
+        ))
+    }
+
+    /// The words of the pointers in `addresses`: two from each, which hold an address in the
+    /// backend's own encoding.
+    pub fn pointer_words(&self) -> Vec<Device> {
+        self.addresses
+            .keys()
+            .filter_map(|name| self.device(name).ok())
+            .flat_map(|p| [p.offset(1), Some(p)])
+            .flatten()
+            .collect()
     }
 }
 
@@ -142,8 +185,9 @@ pub struct CodecRequest {
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(untagged)]
 pub enum OperandValue {
-    /// A word device as the manuals write it, e.g. `D100`.
-    Device(#[schemars(regex(pattern = DEVICE_PATTERN))] String),
+    /// A word device as the manuals write it, e.g. `D100`; `@D10` is the device whose address
+    /// D10 holds (see `addresses`).
+    Device(#[schemars(regex(pattern = OPERAND_PATTERN))] String),
     /// A constant (`K4` is `4`, `H0ABC` is `2748`).
     Constant(i64),
 }
@@ -624,6 +668,12 @@ pub fn protocol_schema() -> serde_json::Value {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An operand is a device name as [`DEVICE_PATTERN`] has it, with an optional `@`.
+    #[test]
+    fn the_operand_pattern_is_the_device_pattern_with_indirection() {
+        assert_eq!(OPERAND_PATTERN, DEVICE_PATTERN.replacen('^', "^@?", 1));
+    }
 
     #[test]
     fn messages_read_as_documented() {

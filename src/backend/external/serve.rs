@@ -135,12 +135,17 @@ fn answer(backend: &dyn Backend, profile: &Profile, case: &CaseRequest) -> Backe
     let Some(variant) = profile.variant(&case.variant) else {
         return unsupported(format!("no variant {} in {}", case.variant, profile.id));
     };
-    let mut operands = BTreeMap::new();
+    let (mut operands, mut indirect) = (BTreeMap::new(), BTreeMap::new());
     for (name, value) in &case.operands {
         let operand = match value {
-            OperandValue::Device(d) => match case.device(d) {
-                Ok(d) => Operand::Device(d),
-                Err(e) => return unsupported(e.to_string()),
+            OperandValue::Device(d) => match case.operand_device(d) {
+                Ok((d, pointer)) => {
+                    if let Some(pointer) = pointer {
+                        indirect.insert(name.clone(), pointer);
+                    }
+                    Operand::Device(d)
+                }
+                Err(e) => return unsupported(e),
             },
             OperandValue::Constant(k) => Operand::Constant(*k),
         };
@@ -186,6 +191,7 @@ fn answer(backend: &dyn Backend, profile: &Profile, case: &CaseRequest) -> Backe
         case_id: &case.case,
         flags: &case.flags,
         operands: &operands,
+        indirect: &indirect,
         memory: &memory,
     };
     match backend.execute(&request) {

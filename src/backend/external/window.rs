@@ -157,6 +157,7 @@ mod tests {
             case_id: "c",
             flags: &flags,
             operands: &operands,
+            indirect: crate::model::DIRECT,
             memory: &image,
         };
         ranges(&req)
@@ -216,6 +217,7 @@ mod tests {
             case_id: "c",
             flags: &flags,
             operands: &operands,
+            indirect: crate::model::DIRECT,
             memory: &image,
         };
         // K4M100 .. K4M996: the last whole 16 points end at M1011, before M1023.

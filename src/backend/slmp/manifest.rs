@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 
 use super::mailbox;
 use crate::device::Device;
-use crate::model::Operand;
+use crate::model::{Indirect, Operand};
 
 /// The manifest format this harness reads and writes.
 pub const FORMAT: u32 = 1;
@@ -96,18 +96,39 @@ fn fnv1a64(bytes: &[u8]) -> u64 {
     })
 }
 
-/// The key a request and a rung share: instruction and operands in one canonical text.
-pub fn rung_key(instruction: &str, operands: &BTreeMap<String, Operand>) -> String {
+/// The key a request and a rung share: instruction and operands, as [`written`] gives them,
+/// in one canonical text.
+pub fn rung_key(instruction: &str, written: &BTreeMap<String, String>) -> String {
     let mut key = instruction.to_string();
-    for (name, value) in operands {
+    for (name, value) in written {
         key.push_str(&format!(" {name}={value}"));
     }
     key
 }
 
+/// The operands as a program writes them: `K4`, `D100`, and `@D10` for one given by indirect
+/// specification, so that such a case never shares the rung of the device it addresses.
+pub fn written(
+    operands: &BTreeMap<String, Operand>,
+    indirect: &Indirect,
+) -> BTreeMap<String, String> {
+    operands
+        .iter()
+        .map(|(name, value)| {
+            let text = match indirect.get(name) {
+                Some(pointer) => format!("@{pointer}"),
+                None => value.to_string(),
+            };
+            (name.clone(), text)
+        })
+        .collect()
+}
+
 /// Reads an operand as the manifest writes it; `hexadecimal` says which codes the profile
 /// numbers in hexadecimal (only an unrealisable rung names one).
 pub fn parse_operand(text: &str, hexadecimal: &dyn Fn(&str) -> bool) -> Result<Operand, String> {
+    // An indirect operand (`@D10`) is read as its pointer: only an unrealisable rung names one.
+    let text = text.strip_prefix('@').unwrap_or(text);
     // Constants are written `K<decimal>`, as [`Operand`]'s display does; a device that starts
     // with K is a digit designation (`K4M0`), which is no number.
     let device = || Device::parse_numbered(text, hexadecimal).map(Operand::Device);
@@ -155,17 +176,12 @@ impl Manifest {
     pub fn rung_index(&self) -> Result<HashMap<String, u16>, String> {
         let mut index = HashMap::new();
         for rung in &self.rungs {
-            let operands = rung
-                .operands
-                .iter()
-                .map(|(k, v)| {
-                    parse_operand(v, &|_| false)
-                        .map(|o| (k.clone(), o))
-                        .map_err(|e| format!("rung {} operand `{k}`: {e}", rung.id))
-                })
-                .collect::<Result<BTreeMap<_, _>, _>>()?;
+            for (k, v) in &rung.operands {
+                parse_operand(v, &|_| false)
+                    .map_err(|e| format!("rung {} operand `{k}`: {e}", rung.id))?;
+            }
             if index
-                .insert(rung_key(&rung.instruction, &operands), rung.id)
+                .insert(rung_key(&rung.instruction, &rung.operands), rung.id)
                 .is_some()
             {
                 return Err(format!(
@@ -289,7 +305,15 @@ mod tests {
             ("s".to_string(), Operand::Constant(-1)),
             ("d".to_string(), Operand::Device(Device::new("D", 200))),
         ]);
-        assert_eq!(index.get(&rung_key("BINHA", &ops)), Some(&2));
+        let key = rung_key("BINHA", &written(&ops, crate::model::DIRECT));
+        assert_eq!(index.get(&key), Some(&2));
+        let indirect = BTreeMap::from([("d".to_string(), Device::new("D", 10))]);
+        let key = rung_key("BINHA", &written(&ops, &indirect));
+        assert_eq!(
+            key, "BINHA d=@D10 s=K-1",
+            "an indirect operand is written as such"
+        );
+        assert_eq!(index.get(&key), None);
     }
 
     #[test]

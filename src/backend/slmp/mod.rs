@@ -32,7 +32,7 @@ pub mod manifest;
 pub mod settings;
 pub mod sim;
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::HashMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -46,6 +46,7 @@ use super::external::{closing, window};
 use super::{Backend, Fault, Outcome, Request, Response, Setting};
 use crate::device::Device;
 use crate::model::profile::{Profile, Profiles, Variant};
+use crate::model::Indirect;
 
 /// The special register with the CPU's operating status.
 pub const STATUS_REGISTER: &str = "SD203";
@@ -167,6 +168,19 @@ pub fn unaddressable(device: &Device) -> Option<String> {
     })
 }
 
+/// Why no program holds a case with an operand given by indirect specification, if it has one:
+/// the rung would need the address stored in the pointer (ADRSET) before the instruction. The
+/// one rule for `hil generate` and for a request.
+pub fn indirect(indirect: &Indirect) -> Option<String> {
+    indirect.iter().next().map(|(name, pointer)| {
+        format!(
+            "operand {name} = @{pointer}: indirect specification needs the address stored in the \
+             pointer (ADRSET) before the instruction, which the generated program does not \
+             write yet"
+        )
+    })
+}
+
 impl SlmpBackend {
     /// The backend, checked against the profiles, without any connection.
     pub fn new(settings: SlmpSettings, profiles: &Profiles) -> Result<SlmpBackend, String> {
@@ -213,16 +227,11 @@ impl SlmpBackend {
             .unrealisable
             .iter()
             .map(|u| {
-                let operands = u
-                    .operands
-                    .iter()
-                    .map(|(k, v)| {
-                        manifest::parse_operand(v, &|code| profile.devices.is_hexadecimal(code))
-                            .map(|o| (k.clone(), o))
-                    })
-                    .collect::<Result<BTreeMap<_, _>, _>>()?;
+                for v in u.operands.values() {
+                    manifest::parse_operand(v, &|code| profile.devices.is_hexadecimal(code))?;
+                }
                 Ok((
-                    manifest::rung_key(&u.instruction, &operands),
+                    manifest::rung_key(&u.instruction, &u.operands),
                     u.reason.clone(),
                 ))
             })
@@ -301,7 +310,13 @@ impl SlmpBackend {
     /// The rung, flags and window a request would run with, each window range checked against
     /// the fence; no socket is involved. `Err` is why the case cannot run on this program.
     pub fn plan(&self, req: &Request<'_>) -> Result<Plan, String> {
-        let key = manifest::rung_key(req.instruction, req.operands);
+        if let Some(why) = indirect(req.indirect) {
+            return Err(format!("the program cannot hold the case: {why}"));
+        }
+        let key = manifest::rung_key(
+            req.instruction,
+            &manifest::written(req.operands, req.indirect),
+        );
         let Some(&rung) = self.rungs.get(&key) else {
             return Err(self.no_rung(&key));
         };
@@ -621,7 +636,13 @@ impl Backend for SlmpBackend {
     }
 
     fn declines(&self, setting: &Setting<'_>) -> Option<String> {
-        let key = manifest::rung_key(setting.instruction, setting.operands);
+        if let Some(why) = indirect(setting.indirect) {
+            return Some(format!("the program cannot hold the case: {why}"));
+        }
+        let key = manifest::rung_key(
+            setting.instruction,
+            &manifest::written(setting.operands, setting.indirect),
+        );
         (!self.rungs.contains_key(&key)).then(|| self.no_rung(&key))
     }
 

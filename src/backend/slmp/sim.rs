@@ -511,6 +511,7 @@ fn execute(
         case_id: "simulated",
         flags: &flags,
         operands,
+        indirect: crate::model::DIRECT,
         memory: &image,
     };
     match shared.model.execute(&request) {
