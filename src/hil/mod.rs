@@ -15,7 +15,7 @@ use std::sync::Arc;
 use crate::backend::external::window;
 use crate::backend::slmp::fence::{self, WordRange};
 use crate::backend::slmp::mailbox;
-use crate::backend::slmp::manifest::{self, ErrorDevices, Manifest, Rung, Unrealisable};
+use crate::backend::slmp::manifest::{self, Call, ErrorDevices, Manifest, Rung, Unrealisable};
 use crate::backend::slmp::{self, SlmpBackend};
 use crate::backend::Backend;
 use crate::device::Device;
@@ -128,26 +128,37 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
     let mut windows: Vec<WordRange> = Vec::new();
     for t in &trials {
         let input = &t.input;
-        let operands = manifest::written(&input.operands, &input.indirect);
-        let key = manifest::rung_key(&input.instruction, &operands);
+        let call = Call::new(&input.operands, &input.indirect);
+        let key = call.key(&input.instruction);
         if !seen.contains_key(&key) {
-            let why = slmp::indirect(&input.indirect).or_else(|| {
-                input.operands.iter().find_map(|(name, o)| match o {
+            let why = input
+                .operands
+                .iter()
+                .find_map(|(name, o)| match o {
                     Operand::Constant(k) => unrealisable(&input.instruction, name, *k),
                     Operand::Device(d) => unaddressable(name, d),
                 })
-            });
+                .or_else(|| {
+                    (input.indirect.iter())
+                        .find_map(|(name, p)| unaddressable(&format!("{name}'s pointer"), p))
+                });
             seen.insert(key.clone(), why.is_none());
+            let Call {
+                operands,
+                addresses,
+            } = call;
             match why {
                 Some(reason) => unrealisables.push(Unrealisable {
                     instruction: input.instruction.clone(),
                     operands,
+                    addresses,
                     reason,
                 }),
                 None => rungs.push(Rung {
                     id: rungs.len() as u16 + 1,
                     instruction: input.instruction.clone(),
                     operands,
+                    addresses,
                 }),
             }
         }

@@ -5,6 +5,7 @@
 //! the instructions under test, so that as little as possible depends on the engineering tool's
 //! dialect. What a bench user must still check in the tool is in the setup checklist.
 
+use std::collections::BTreeMap;
 use std::fmt::Write;
 
 use crate::backend::slmp::mailbox::{self, off, state};
@@ -134,20 +135,22 @@ pub fn structured_text(manifest: &Manifest, profile: &Profile) -> String {
         names.sort_by_key(|n| operand_rank(n));
         let args: Vec<String> = names
             .iter()
-            .map(|n| match parse_operand(&rung.operands[*n], &|_| false) {
-                Ok(Operand::Constant(k)) => k.to_string(),
-                Ok(Operand::Device(d)) => d.to_string(),
-                Err(_) => rung.operands[*n].clone(),
+            .map(|n| {
+                let text = &rung.operands[*n];
+                match parse_operand(text, &|_| false) {
+                    // Indirect specification is written as it is: `@D10`.
+                    _ if text.starts_with('@') => text.clone(),
+                    Ok(Operand::Constant(k)) => k.to_string(),
+                    Ok(Operand::Device(d)) => d.to_string(),
+                    Err(_) => text.clone(),
+                }
             })
             .collect();
-        let _ = writeln!(
-            t,
-            "{}(bExec AND {} = {}, {});",
-            rung.instruction,
-            w(off::RUNG),
-            rung.id,
-            args.join(", ")
-        );
+        let enable = format!("bExec AND {} = {}", w(off::RUNG), rung.id);
+        for (pointer, target) in &rung.addresses {
+            let _ = writeln!(t, "ADRSET({enable}, {target}, {pointer});");
+        }
+        let _ = writeln!(t, "{}({enable}, {});", rung.instruction, args.join(", "));
     }
     t.push_str("\n(* Capture the error in the scan of the instruction, and the register one scan later; acknowledge last. *)\n");
     t.push_str("IF bExec THEN\n");
@@ -177,6 +180,13 @@ pub fn structured_text(manifest: &Manifest, profile: &Profile) -> String {
     let _ = writeln!(t, "  {} := {};", w(off::ACK), w(off::TRIGGER));
     t.push_str("END_IF;\n");
     t
+}
+
+/// Operands as `s=D100 d=@D20`, then what each pointer addresses: `(@D20: D200)`.
+fn call_text(operands: &BTreeMap<String, String>, addresses: &BTreeMap<String, String>) -> String {
+    let operands = operands.iter().map(|(k, v)| format!("{k}={v}"));
+    let addresses = addresses.iter().map(|(p, t)| format!("(@{p}: {t})"));
+    operands.chain(addresses).collect::<Vec<_>>().join(" ")
 }
 
 /// The setup checklist (`SETUP.md`).
@@ -232,6 +242,14 @@ pub fn setup_text(manifest: &Manifest, profile: &Profile, trials: usize) -> Stri
          a rung that does not convert cannot be run (remove it and regenerate with a filter, \
          or report it).\n",
     );
+    if manifest.rungs.iter().any(|r| !r.addresses.is_empty()) {
+        t.push_str(
+            "   Rungs with indirect specification store the address first: \
+             `ADRSET(enable, D100, D10)` puts D100's address in D10 and D11, and the \
+             instruction's `@D10` is D100. *check* that ADRSET takes the device, then the \
+             pointer, and that `@D10` converts in structured text.\n",
+        );
+    }
     t.push_str("5. Write parameters and program to the CPU; switch to RUN.\n\n");
     t.push_str("## From the PC\n\n");
     let _ = writeln!(
@@ -255,15 +273,15 @@ pub fn setup_text(manifest: &Manifest, profile: &Profile, trials: usize) -> Stri
             "## Cases no program can hold\n\nTheir trials are skipped with this reason:\n\n",
         );
         for u in &manifest.unrealisable {
-            let ops: Vec<String> = u.operands.iter().map(|(k, v)| format!("{k}={v}")).collect();
-            let _ = writeln!(t, "- {} {}: {}", u.instruction, ops.join(" "), u.reason);
+            let call = call_text(&u.operands, &u.addresses);
+            let _ = writeln!(t, "- {} {call}: {}", u.instruction, u.reason);
         }
         t.push('\n');
     }
     t.push_str("## Rungs\n\n| rung | instruction | operands |\n|---|---|---|\n");
     for r in &manifest.rungs {
-        let ops: Vec<String> = r.operands.iter().map(|(k, v)| format!("{k}={v}")).collect();
-        let _ = writeln!(t, "| {} | {} | {} |", r.id, r.instruction, ops.join(" "));
+        let call = call_text(&r.operands, &r.addresses);
+        let _ = writeln!(t, "| {} | {} | {call} |", r.id, r.instruction);
     }
     t
 }

@@ -580,10 +580,7 @@ fn check_pointer_words(
     cx: &mut FileContext<'_>,
 ) {
     for pointer in indirect.values() {
-        for word in [Some(pointer.clone()), pointer.offset(1)]
-            .into_iter()
-            .flatten()
-        {
+        for word in crate::model::pointer_words([pointer]) {
             let mut places = vec![(format!("{key}.before"), before)];
             if let Some(e) = expect {
                 places.push((format!("{key}.expect.after"), &e.after));

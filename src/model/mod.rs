@@ -112,6 +112,15 @@ pub type Indirect = BTreeMap<String, Device>;
 /// No operand given by indirect specification: for requests that are not a vector's.
 pub const DIRECT: &Indirect = &BTreeMap::new();
 
+/// The words of these pointers: two from each, holding an address in the CPU's own encoding.
+pub fn pointer_words<'a>(pointers: impl IntoIterator<Item = &'a Device>) -> Vec<Device> {
+    pointers
+        .into_iter()
+        .flat_map(|p| [Some(p.clone()), p.offset(1)])
+        .flatten()
+        .collect()
+}
+
 /// One validated test vector.
 #[derive(Debug, Clone, Serialize)]
 pub struct Case {

@@ -129,12 +129,10 @@ impl CaseRequest {
     /// The words of the pointers in `addresses`: two from each, which hold an address in the
     /// backend's own encoding.
     pub fn pointer_words(&self) -> Vec<Device> {
-        self.addresses
-            .keys()
+        let pointers: Vec<Device> = (self.addresses.keys())
             .filter_map(|name| self.device(name).ok())
-            .flat_map(|p| [p.offset(1), Some(p)])
-            .flatten()
-            .collect()
+            .collect();
+        crate::model::pointer_words(&pointers)
     }
 }
 

@@ -25,8 +25,12 @@ pub struct Rung {
     /// 1 upwards; 0 in the mailbox selects no rung.
     pub id: u16,
     pub instruction: String,
-    /// Operand name -> `D100`, or a constant as `K-1`.
+    /// Operand name -> `D100`, a constant as `K-1`, or `@D10` for indirect specification.
     pub operands: BTreeMap<String, String>,
+    /// For each pointer of an `@` operand, the device whose address the rung stores in it
+    /// (ADRSET) before the instruction.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub addresses: BTreeMap<String, String>,
 }
 
 /// An instruction and operands the corpus uses but the program cannot hold, with why.
@@ -35,6 +39,8 @@ pub struct Rung {
 pub struct Unrealisable {
     pub instruction: String,
     pub operands: BTreeMap<String, String>,
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub addresses: BTreeMap<String, String>,
     pub reason: String,
 }
 
@@ -96,32 +102,64 @@ fn fnv1a64(bytes: &[u8]) -> u64 {
     })
 }
 
-/// The key a request and a rung share: instruction and operands, as [`written`] gives them,
-/// in one canonical text.
-pub fn rung_key(instruction: &str, written: &BTreeMap<String, String>) -> String {
+/// An instruction call as a program writes it: the operands (`K4`, `D100`, and `@D10` for one
+/// given by indirect specification, so that such a call never shares the rung of the device it
+/// addresses), and each pointer with the device whose address the rung stores in it first.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Call {
+    pub operands: BTreeMap<String, String>,
+    pub addresses: BTreeMap<String, String>,
+}
+
+impl Call {
+    pub fn new(operands: &BTreeMap<String, Operand>, indirect: &Indirect) -> Call {
+        let mut call = Call::default();
+        for (name, value) in operands {
+            let text = match (indirect.get(name), value) {
+                (Some(pointer), Operand::Device(target)) => {
+                    call.addresses
+                        .insert(pointer.to_string(), target.to_string());
+                    format!("@{pointer}")
+                }
+                _ => value.to_string(),
+            };
+            call.operands.insert(name.clone(), text);
+        }
+        call
+    }
+
+    /// The key a request and a rung share: the instruction and the call in one canonical
+    /// text (`ASCI d=D200 n=K4 s=@D10 @D10=D100`).
+    pub fn key(&self, instruction: &str) -> String {
+        rung_key(instruction, &self.operands, &self.addresses)
+    }
+}
+
+fn rung_key(
+    instruction: &str,
+    operands: &BTreeMap<String, String>,
+    addresses: &BTreeMap<String, String>,
+) -> String {
     let mut key = instruction.to_string();
-    for (name, value) in written {
+    for (name, value) in operands {
         key.push_str(&format!(" {name}={value}"));
+    }
+    for (pointer, target) in addresses {
+        key.push_str(&format!(" @{pointer}={target}"));
     }
     key
 }
 
-/// The operands as a program writes them: `K4`, `D100`, and `@D10` for one given by indirect
-/// specification, so that such a case never shares the rung of the device it addresses.
-pub fn written(
-    operands: &BTreeMap<String, Operand>,
-    indirect: &Indirect,
-) -> BTreeMap<String, String> {
-    operands
-        .iter()
-        .map(|(name, value)| {
-            let text = match indirect.get(name) {
-                Some(pointer) => format!("@{pointer}"),
-                None => value.to_string(),
-            };
-            (name.clone(), text)
-        })
-        .collect()
+impl Rung {
+    pub fn key(&self) -> String {
+        rung_key(&self.instruction, &self.operands, &self.addresses)
+    }
+}
+
+impl Unrealisable {
+    pub fn key(&self) -> String {
+        rung_key(&self.instruction, &self.operands, &self.addresses)
+    }
 }
 
 /// Reads an operand as the manifest writes it; `hexadecimal` says which codes the profile
@@ -176,14 +214,13 @@ impl Manifest {
     pub fn rung_index(&self) -> Result<HashMap<String, u16>, String> {
         let mut index = HashMap::new();
         for rung in &self.rungs {
-            for (k, v) in &rung.operands {
+            let texts = (rung.operands.iter())
+                .chain(rung.addresses.iter().flat_map(|(p, t)| [(p, p), (p, t)]));
+            for (k, v) in texts {
                 parse_operand(v, &|_| false)
                     .map_err(|e| format!("rung {} operand `{k}`: {e}", rung.id))?;
             }
-            if index
-                .insert(rung_key(&rung.instruction, &rung.operands), rung.id)
-                .is_some()
-            {
+            if index.insert(rung.key(), rung.id).is_some() {
                 return Err(format!(
                     "rung {} repeats an earlier rung's instruction and operands",
                     rung.id
@@ -278,6 +315,7 @@ mod tests {
                         ("s".into(), "D100".into()),
                         ("d".into(), "D200".into()),
                     ]),
+                    addresses: BTreeMap::new(),
                 },
                 Rung {
                     id: 2,
@@ -286,6 +324,7 @@ mod tests {
                         ("s".into(), "K-1".into()),
                         ("d".into(), "D200".into()),
                     ]),
+                    addresses: BTreeMap::new(),
                 },
             ],
             unrealisable: vec![],
@@ -305,13 +344,13 @@ mod tests {
             ("s".to_string(), Operand::Constant(-1)),
             ("d".to_string(), Operand::Device(Device::new("D", 200))),
         ]);
-        let key = rung_key("BINHA", &written(&ops, crate::model::DIRECT));
+        let key = Call::new(&ops, crate::model::DIRECT).key("BINHA");
         assert_eq!(index.get(&key), Some(&2));
         let indirect = BTreeMap::from([("d".to_string(), Device::new("D", 10))]);
-        let key = rung_key("BINHA", &written(&ops, &indirect));
+        let key = Call::new(&ops, &indirect).key("BINHA");
         assert_eq!(
-            key, "BINHA d=@D10 s=K-1",
-            "an indirect operand is written as such"
+            key, "BINHA d=@D10 s=K-1 @D10=D200",
+            "an indirect operand is written as such, with what its pointer addresses"
         );
         assert_eq!(index.get(&key), None);
     }

@@ -45,8 +45,9 @@ pub use settings::SlmpSettings;
 use super::external::{closing, window};
 use super::{Backend, Fault, Outcome, Request, Response, Setting};
 use crate::device::Device;
+use crate::model::pointer_words;
 use crate::model::profile::{Profile, Profiles, Variant};
-use crate::model::Indirect;
+use manifest::Call;
 
 /// The special register with the CPU's operating status.
 pub const STATUS_REGISTER: &str = "SD203";
@@ -168,19 +169,6 @@ pub fn unaddressable(device: &Device) -> Option<String> {
     })
 }
 
-/// Why no program holds a case with an operand given by indirect specification, if it has one:
-/// the rung would need the address stored in the pointer (ADRSET) before the instruction. The
-/// one rule for `hil generate` and for a request.
-pub fn indirect(indirect: &Indirect) -> Option<String> {
-    indirect.iter().next().map(|(name, pointer)| {
-        format!(
-            "operand {name} = @{pointer}: indirect specification needs the address stored in the \
-             pointer (ADRSET) before the instruction, which the generated program does not \
-             write yet"
-        )
-    })
-}
-
 impl SlmpBackend {
     /// The backend, checked against the profiles, without any connection.
     pub fn new(settings: SlmpSettings, profiles: &Profiles) -> Result<SlmpBackend, String> {
@@ -230,10 +218,7 @@ impl SlmpBackend {
                 for v in u.operands.values() {
                     manifest::parse_operand(v, &|code| profile.devices.is_hexadecimal(code))?;
                 }
-                Ok((
-                    manifest::rung_key(&u.instruction, &u.operands),
-                    u.reason.clone(),
-                ))
+                Ok((u.key(), u.reason.clone()))
             })
             .collect::<Result<HashMap<_, _>, String>>()?;
         let mut instructions: Vec<String> = manifest
@@ -310,13 +295,7 @@ impl SlmpBackend {
     /// The rung, flags and window a request would run with, each window range checked against
     /// the fence; no socket is involved. `Err` is why the case cannot run on this program.
     pub fn plan(&self, req: &Request<'_>) -> Result<Plan, String> {
-        if let Some(why) = indirect(req.indirect) {
-            return Err(format!("the program cannot hold the case: {why}"));
-        }
-        let key = manifest::rung_key(
-            req.instruction,
-            &manifest::written(req.operands, req.indirect),
-        );
+        let key = Call::new(req.operands, req.indirect).key(req.instruction);
         let Some(&rung) = self.rungs.get(&key) else {
             return Err(self.no_rung(&key));
         };
@@ -544,13 +523,14 @@ impl SlmpBackend {
             ))));
         }
         let mut outcome = Outcome::default();
+        // The rung stores each address in its pointer its own way: not judged.
+        let pointers = pointer_words(req.indirect.values());
         for (head, before) in &plan.window {
             let after = live.client.read_words(head, before.len() as u32)?;
             for (i, (b, a)) in before.iter().zip(&after).enumerate() {
-                if a != b {
-                    outcome
-                        .writes
-                        .insert(Device::new(head.code(), head.index + i as u32), *a);
+                let device = Device::new(head.code(), head.index + i as u32);
+                if a != b && !pointers.contains(&device) {
+                    outcome.writes.insert(device, *a);
                 }
             }
         }
@@ -636,13 +616,7 @@ impl Backend for SlmpBackend {
     }
 
     fn declines(&self, setting: &Setting<'_>) -> Option<String> {
-        if let Some(why) = indirect(setting.indirect) {
-            return Some(format!("the program cannot hold the case: {why}"));
-        }
-        let key = manifest::rung_key(
-            setting.instruction,
-            &manifest::written(setting.operands, setting.indirect),
-        );
+        let key = Call::new(setting.operands, setting.indirect).key(setting.instruction);
         (!self.rungs.contains_key(&key)).then(|| self.no_rung(&key))
     }
 

@@ -15,7 +15,7 @@
 //! Everything it received is audited: the commands, and every written word that lies outside
 //! the manifest's `writes` and the mailbox's PC words (a stray write the tests fail on).
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -139,6 +139,26 @@ struct Cpu {
     prev_reset: bool,
     audit: Audit,
     faults: Vec<(FaultRule, usize)>,
+    /// The devices ADRSET has stored an address of: this CPU's address of a device is its
+    /// place here, with [`ADDRESS_TAG`] in the pointer's second word.
+    addressed: Vec<Device>,
+}
+
+/// The second word of an address as this simulated CPU's ADRSET stores it: an encoding of its
+/// own, since the manuals the project quotes do not give the real one.
+const ADDRESS_TAG: u16 = 0xADD5;
+
+/// One rung of the program as the simulated CPU runs it.
+struct SimRung {
+    id: u16,
+    instruction: String,
+    /// Operands, an indirect one as its pointer.
+    operands: BTreeMap<String, Operand>,
+    /// The operands given by indirect specification.
+    indirect: BTreeSet<String>,
+    /// ADRSET before the instruction: (pointer, the device whose address it stores).
+    addresses: Vec<(Device, Device)>,
+    pulse: bool,
 }
 
 struct Shared {
@@ -148,7 +168,7 @@ struct Shared {
     profile: Arc<Profile>,
     model: Arc<dyn Backend>,
     mailbox: Device,
-    rungs: Vec<(u16, String, BTreeMap<String, Operand>, bool)>,
+    rungs: Vec<SimRung>,
     allowed: Vec<WordRange>,
 }
 
@@ -195,16 +215,28 @@ impl Simulator {
             .rungs
             .iter()
             .map(|r| {
+                let hexadecimal = |code: &str| profile.devices.is_hexadecimal(code);
                 let operands = r
                     .operands
                     .iter()
-                    .map(|(k, v)| {
-                        parse_operand(v, &|code| profile.devices.is_hexadecimal(code))
-                            .map(|o| (k.clone(), o))
-                    })
+                    .map(|(k, v)| parse_operand(v, &hexadecimal).map(|o| (k.clone(), o)))
                     .collect::<Result<BTreeMap<_, _>, _>>()?;
-                let pulse = is_pulse(&profile, &r.instruction);
-                Ok((r.id, r.instruction.clone(), operands, pulse))
+                let device = |text: &str| Device::parse_numbered(text, hexadecimal);
+                let addresses = (r.addresses.iter())
+                    .map(|(p, t)| Ok((device(p)?, device(t)?)))
+                    .collect::<Result<Vec<_>, crate::device::DeviceSyntaxError>>()
+                    .map_err(|e| format!("rung {}: {e}", r.id))?;
+                Ok(SimRung {
+                    id: r.id,
+                    instruction: r.instruction.clone(),
+                    operands,
+                    indirect: (r.operands.iter())
+                        .filter(|(_, v)| v.starts_with('@'))
+                        .map(|(k, _)| k.clone())
+                        .collect(),
+                    addresses,
+                    pulse: is_pulse(&profile, &r.instruction),
+                })
             })
             .collect::<Result<Vec<_>, String>>()?;
         let mut allowed = parse_ranges(&settings.manifest.writes.join(","))?;
@@ -225,6 +257,7 @@ impl Simulator {
             prev_reset: false,
             audit: Audit::default(),
             faults: settings.faults.iter().map(|f| (f.clone(), 0)).collect(),
+            addressed: Vec::new(),
         };
         let shared = Arc::new(Shared {
             cpu: Mutex::new(cpu),
@@ -312,6 +345,46 @@ impl Shared {
 }
 
 impl Cpu {
+    /// ADRSET: stores the address of `target` in `pointer` and the word after it.
+    fn adrset(&mut self, target: &Device, pointer: &Device) {
+        let place = match self.addressed.iter().position(|d| d == target) {
+            Some(place) => place,
+            None => {
+                self.addressed.push(target.clone());
+                self.addressed.len() - 1
+            }
+        };
+        self.set_word(pointer, place as u16);
+        if let Some(next) = pointer.offset(1) {
+            self.set_word(&next, ADDRESS_TAG);
+        }
+    }
+
+    /// A rung's operands with each indirect one read through its pointer, as the CPU does when
+    /// the instruction runs.
+    fn resolve(&self, rung: &SimRung) -> Result<BTreeMap<String, Operand>, String> {
+        let mut operands = rung.operands.clone();
+        for name in &rung.indirect {
+            let Some(Operand::Device(pointer)) = rung.operands.get(name) else {
+                continue;
+            };
+            let place = self.word(pointer);
+            let tag = pointer.offset(1).and_then(|d| self.word(&d));
+            let target = match (place, tag) {
+                (Some(place), Some(ADDRESS_TAG)) => self.addressed.get(usize::from(place)),
+                _ => None,
+            };
+            let Some(target) = target else {
+                return Err(format!(
+                    "{}: @{pointer} holds no address ADRSET stored",
+                    rung.instruction
+                ));
+            };
+            operands.insert(name.clone(), Operand::Device(target.clone()));
+        }
+        Ok(operands)
+    }
+
     fn word(&self, d: &Device) -> Option<u16> {
         self.words
             .get(d.code())
@@ -429,20 +502,29 @@ fn scan(shared: &Shared, cpu: &mut Cpu) {
         }
     }
     let selected = cpu.word(&at(off::RUNG)).unwrap_or(0);
-    for (id, instruction, operands, pulse) in &shared.rungs {
-        let enable = exec && selected == *id;
-        let i = usize::from(*id);
+    for rung in &shared.rungs {
+        let enable = exec && selected == rung.id;
+        let i = usize::from(rung.id);
         if shared.settings.rungs_in_case && !enable {
             continue;
         }
-        let fire = if *pulse {
+        // ADRSET is no pulse form: it stores the addresses whenever the rung is enabled.
+        if enable {
+            for (pointer, target) in &rung.addresses {
+                cpu.adrset(target, pointer);
+            }
+        }
+        let fire = if rung.pulse {
             enable && !cpu.prev[i]
         } else {
             enable
         };
         cpu.prev[i] = enable;
         if fire {
-            execute(shared, cpu, instruction, operands);
+            match cpu.resolve(rung) {
+                Ok(operands) => execute(shared, cpu, &rung.instruction, &operands),
+                Err(why) => cpu.audit.anomalies.push(why),
+            }
         }
     }
     if exec {
@@ -747,5 +829,55 @@ fn handle(shared: &Shared, request: &Request, decoded: Decoded) -> (u16, Vec<u8>
             (0, Vec::new())
         }
         Decoded::Other { .. } => (0xC059, Vec::new()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cpu() -> Cpu {
+        Cpu {
+            words: BTreeMap::from([("D".to_string(), vec![0; 400])]),
+            bits: BTreeMap::new(),
+            running: true,
+            prev: Vec::new(),
+            prev_reset: false,
+            audit: Audit::default(),
+            faults: Vec::new(),
+            addressed: Vec::new(),
+        }
+    }
+
+    /// `@D10` is read through D10 and D11 when the instruction runs: nothing before ADRSET,
+    /// the device whose address ADRSET stored after it.
+    #[test]
+    fn an_indirect_operand_is_read_through_the_address_adrset_stored() {
+        let d = |i| Device::new("D", i);
+        let rung = SimRung {
+            id: 1,
+            instruction: "ASCI".into(),
+            operands: BTreeMap::from([
+                ("s".to_string(), Operand::Device(d(10))),
+                ("d".to_string(), Operand::Device(d(200))),
+            ]),
+            indirect: BTreeSet::from(["s".to_string()]),
+            addresses: vec![(d(10), d(100))],
+            pulse: false,
+        };
+        let mut cpu = cpu();
+        let e = cpu.resolve(&rung).expect_err("no address stored yet");
+        assert!(e.contains("@D10"), "{e}");
+        cpu.adrset(&d(300), &d(20));
+        cpu.adrset(&d(100), &d(10));
+        let operands = cpu.resolve(&rung).expect("resolved");
+        assert_eq!(operands["s"], Operand::Device(d(100)));
+        assert_eq!(operands["d"], Operand::Device(d(200)));
+        assert_eq!(cpu.word(&d(11)), Some(ADDRESS_TAG));
+        assert_ne!(
+            cpu.word(&d(10)),
+            cpu.word(&d(20)),
+            "two devices, two addresses"
+        );
     }
 }
