@@ -132,6 +132,12 @@ fn an_indirect_operand_with_its_address_is_accepted(
 #[case::address_of_a_forbidden_destination("D100", "@D20", "addresses: {D20: T0}", "operands.d")]
 #[case::address_for_no_operand("D100", "D200", "addresses: {D10: D100}", "addresses.D10")]
 #[case::address_not_a_device("@D10", "D200", "addresses: {D10: 100}", "addresses.D10")]
+#[case::address_off_the_grid_of_another_operand(
+    "K4M0",
+    "@D20",
+    "addresses: {D20: K4M8}",
+    "addresses.D20"
+)]
 #[case::pointer_word_set_before(
     "@D10",
     "D200",

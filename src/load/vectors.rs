@@ -614,6 +614,11 @@ fn check_digit_grids(key: &str, spec: &CaseSpec, h: &Header<'_>, cx: &mut FileCo
             ScalarSpec::Text(t) => Some((format!("{key}.operands.{name}"), t.as_str())),
             ScalarSpec::Number(_) => None,
         });
+    // What an indirect operand addresses is an operand too.
+    let addressed = spec
+        .addresses
+        .iter()
+        .map(|(pointer, target)| (format!("{key}.addresses.{pointer}"), target.as_str()));
     let before = spec
         .before
         .keys()
@@ -624,7 +629,7 @@ fn check_digit_grids(key: &str, spec: &CaseSpec, h: &Header<'_>, cx: &mut FileCo
             .map(|name| (format!("{key}.expect.after.{name}"), name.as_str()))
     });
     let mut grids: BTreeMap<String, Device> = BTreeMap::new();
-    for (at, text) in operands.chain(before).chain(after) {
+    for (at, text) in operands.chain(addressed).chain(before).chain(after) {
         let Ok(device) = h.device(text) else {
             continue;
         };

@@ -117,7 +117,10 @@ pub fn describe_setting(trial: &Trial) -> String {
     let operands: Vec<String> = input
         .operands
         .iter()
-        .map(|(k, v)| format!("{k}={v}"))
+        .map(|(k, v)| match input.indirect.get(k) {
+            Some(pointer) => format!("{k}=@{pointer} ({v})"),
+            None => format!("{k}={v}"),
+        })
         .collect();
     let _ = writeln!(out, "  operands:    {}", operands.join(" "));
     let before: Vec<String> = input
