@@ -566,6 +566,30 @@ fn a_case_with_an_indirect_operand_runs_after_adrset() {
     assert!(audit.anomalies.is_empty(), "{:?}", audit.anomalies);
 }
 
+/// The link registers, numbered in hexadecimal (`W9`, then `WA`), run as MELSEC numbers them:
+/// the rung, the manifest's windows and the frames carry `WA`, and what the CPU did is judged
+/// against the case's `W` words.
+#[test]
+fn a_case_on_hexadecimal_numbered_devices_runs() {
+    let project = session();
+    let (sim, backend) = fx5u_live(&project);
+    let b: Arc<dyn Backend> = backend.clone();
+    let trials: Vec<Trial> = project
+        .plan(&[b])
+        .into_iter()
+        .filter(|t| t.case_id().starts_with("asci-devices-") && t.case_id().contains("link"))
+        .filter(|t| t.variant == "fx5u")
+        .collect();
+    assert_eq!(trials.len(), 6, "3 cases as ASCI and ASCIP");
+    for (t, v) in trials.iter().zip(verdicts(&trials)) {
+        assert_eq!(t.skip, None, "{}", t.name());
+        assert!(matches!(v, Verdict::Conforms), "{}: {v:?}", t.name());
+    }
+    assert!(sim.audit().anomalies.is_empty());
+    let writes: Vec<String> = manifest(&project, "mitsubishi-fx5").writes;
+    assert!(writes.iter().any(|w| w.starts_with("SWF-")), "{writes:?}");
+}
+
 #[test]
 fn a_sandbox_over_the_mailbox_is_refused() {
     let project = session();

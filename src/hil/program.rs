@@ -137,7 +137,7 @@ pub fn structured_text(manifest: &Manifest, profile: &Profile) -> String {
             .iter()
             .map(|n| {
                 let text = &rung.operands[*n];
-                match parse_operand(text, &|_| false) {
+                match parse_operand(text, &|code| profile.devices.is_hexadecimal(code)) {
                     // Indirect specification is written as it is: `@D10`.
                     _ if text.starts_with('@') => text.clone(),
                     Ok(Operand::Constant(k)) => k.to_string(),

@@ -5,7 +5,7 @@
 //! sends `01 04`), and the data length counts characters. Two fields differ in kind: a device is
 //! named by its letters padded with `*` (`D*` in the Q-compatible form, `D***` in the long form)
 //! and its number in 6 (8) digits, decimal for decimal-numbered devices (D, SD, R, ...) and
-//! hexadecimal for hexadecimal-numbered ones (X, Y, B, W); and the type name of 0101 travels as
+//! hexadecimal for hexadecimal-numbered ones (X, Y, B, SB, W, SW); and the type name of 0101 travels as
 //! its 16 characters. Every word of data is 4 characters.
 //!
 //! The binary [`Request`] and [`Response`] stay the one model of a message: a request is
@@ -13,12 +13,9 @@
 //! client's readers of words and type names serve both codes.
 
 use super::frame::{
-    command, device_letters, DeviceForm, FrameError, FrameKind, Request, Response, Route,
-    MAX_MESSAGE,
+    command, device_letters, hex_numbered, DeviceForm, FrameError, FrameKind, Request, Response,
+    Route, MAX_MESSAGE,
 };
-
-/// Devices numbered in hexadecimal: their numbers travel as hex digits.
-const HEX_NUMBERED: [&str; 4] = ["X", "Y", "B", "W"];
 
 /// Characters before the end of the length field: subheader, (serial and reserved area), route
 /// and length.
@@ -85,7 +82,7 @@ fn device(out: &mut Vec<u8>, form: DeviceForm, data: &[u8]) -> Result<usize, Fra
     let letters = device_letters(code)
         .ok_or_else(|| FrameError::Body(format!("device code {code:04X}H has no letters")))?;
     out.extend_from_slice(format!("{letters:*<letters_width$}").as_bytes());
-    let number = if HEX_NUMBERED.contains(&letters) {
+    let number = if hex_numbered(letters) {
         format!("{number:0digits$X}")
     } else {
         format!("{number:0digits$}")

@@ -56,12 +56,15 @@ impl WordRange {
     }
 }
 
+/// Numbers as MELSEC writes them: `W1A-W1F` for a hexadecimal-numbered device.
 impl fmt::Display for WordRange {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if self.first == self.last {
-            write!(f, "{}{}", self.code, self.first)
-        } else {
-            write!(f, "{}{}-{}{}", self.code, self.first, self.code, self.last)
+        let (code, first, last) = (&self.code, self.first, self.last);
+        match (frame::hex_numbered(code), first == last) {
+            (true, true) => write!(f, "{code}{first:X}"),
+            (true, false) => write!(f, "{code}{first:X}-{code}{last:X}"),
+            (false, true) => write!(f, "{code}{first}"),
+            (false, false) => write!(f, "{code}{first}-{code}{last}"),
         }
     }
 }
@@ -72,8 +75,9 @@ impl FromStr for WordRange {
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         let s = s.trim();
         let parse = |t: &str| {
-            t.parse::<Device>()
-                .map_err(|e| format!("`{s}`: {e}; a range is written `D0-D11999` or `D12000`"))
+            Device::parse_numbered(t, frame::hex_numbered).map_err(|e| {
+                format!("`{s}`: {e}; a range is written `D0-D11999`, `W0-W1FF` or `D12000`")
+            })
         };
         let (first, last) = match s.split_once('-') {
             Some((a, b)) => (parse(a)?, parse(b)?),
@@ -276,6 +280,24 @@ mod tests {
             .expect("inside");
         let ranges: Vec<String> = writes.iter().map(|w| w.range().to_string()).collect();
         assert_eq!(ranges, ["D0-D959", "D960-D1919", "D1920-D2000"]);
+    }
+
+    /// Link registers read and print in hexadecimal, as MELSEC numbers them; data registers
+    /// in decimal.
+    #[test]
+    fn a_range_is_numbered_as_melsec_numbers_its_device() {
+        let r: Vec<WordRange> = parse_ranges("W0-W1FF,SW10,D10-D20").expect("ranges");
+        assert_eq!(
+            r,
+            [
+                WordRange::new("W", 0, 0x1FF),
+                WordRange::new("SW", 16, 16),
+                WordRange::new("D", 10, 20)
+            ]
+        );
+        let shown: Vec<String> = r.iter().map(ToString::to_string).collect();
+        assert_eq!(shown, ["W0-W1FF", "SW10", "D10-D20"]);
+        assert!(parse_ranges("D1A").is_err(), "D is decimal");
     }
 
     #[test]

@@ -149,8 +149,10 @@ pub fn device_code(letters: &str) -> Option<u16> {
         "F" => 0x93,
         "V" => 0x94,
         "B" => 0xA0,
+        "SB" => 0xA1,
         "D" => 0xA8,
         "W" => 0xB4,
+        "SW" => 0xB5,
         "R" => 0xAF,
         "ZR" => 0xB0,
         _ => return None,
@@ -158,9 +160,15 @@ pub fn device_code(letters: &str) -> Option<u16> {
 }
 
 /// Every device [`device_code`] knows, by its letters.
-pub const DEVICE_LETTERS: [&str; 13] = [
-    "SM", "SD", "X", "Y", "M", "L", "F", "V", "B", "D", "W", "R", "ZR",
+pub const DEVICE_LETTERS: [&str; 15] = [
+    "SM", "SD", "X", "Y", "M", "L", "F", "V", "B", "SB", "D", "W", "SW", "R", "ZR",
 ];
+
+/// Whether MELSEC numbers a device in hexadecimal (`W1A`, `SW0F`): how ASCII code carries its
+/// number, and how a manifest, a sandbox and a rung write it.
+pub fn hex_numbered(letters: &str) -> bool {
+    matches!(letters, "X" | "Y" | "B" | "SB" | "W" | "SW")
+}
 
 /// The letters of a device code (the inverse of [`device_code`]).
 pub fn device_letters(code: u16) -> Option<&'static str> {

@@ -162,8 +162,9 @@ impl Unrealisable {
     }
 }
 
-/// Reads an operand as the manifest writes it; `hexadecimal` says which codes the profile
-/// numbers in hexadecimal (only an unrealisable rung names one).
+/// Reads an operand as the manifest writes it; `hexadecimal` says which codes are numbered in
+/// hexadecimal (a rung's devices as MELSEC numbers them, an unrealisable one's as the profile
+/// does).
 pub fn parse_operand(text: &str, hexadecimal: &dyn Fn(&str) -> bool) -> Result<Operand, String> {
     // An indirect operand (`@D10`) is read as its pointer: only an unrealisable rung names one.
     let text = text.strip_prefix('@').unwrap_or(text);
@@ -217,7 +218,7 @@ impl Manifest {
             let texts = (rung.operands.iter())
                 .chain(rung.addresses.iter().flat_map(|(p, t)| [(p, p), (p, t)]));
             for (k, v) in texts {
-                parse_operand(v, &|_| false)
+                parse_operand(v, &super::frame::hex_numbered)
                     .map_err(|e| format!("rung {} operand `{k}`: {e}", rung.id))?;
             }
             if index.insert(rung.key(), rung.id).is_some() {

@@ -151,21 +151,23 @@ pub struct Plan {
 
 /// Why this backend can neither set nor read a device's words, if it cannot: the client has no
 /// SLMP device code for it (timers, counters and index registers are not addressed here), or
-/// its number is hexadecimal, which the program and its manifest do not carry yet. The one
-/// rule for a case's operands (`hil generate`), its sandbox and its window.
+/// the profile numbers it otherwise than MELSEC does (the program, the manifest and a sandbox
+/// write `W1A` in hexadecimal, `D100` in decimal). The one rule for a case's operands
+/// (`hil generate`), its sandbox and its window.
 pub fn unaddressable(device: &Device) -> Option<String> {
-    if device.is_hexadecimal() {
+    let code = device.code();
+    if frame::device_code(code).is_none() {
         return Some(format!(
-            "{} is numbered in hexadecimal, which the program and its manifest do not carry yet",
-            device.code()
+            "{code} has no SLMP device code in this client (it addresses {})",
+            frame::DEVICE_LETTERS.join(", ")
         ));
     }
-    frame::device_code(device.code()).is_none().then(|| {
-        format!(
-            "{} has no SLMP device code in this client (it addresses {})",
-            device.code(),
-            frame::DEVICE_LETTERS.join(", ")
-        )
+    (device.is_hexadecimal() != frame::hex_numbered(code)).then(|| {
+        let (profile, melsec) = match device.is_hexadecimal() {
+            true => ("hexadecimal", "decimal"),
+            false => ("decimal", "hexadecimal"),
+        };
+        format!("the profile numbers {code} in {profile}, and MELSEC in {melsec}")
     })
 }
 
@@ -528,7 +530,7 @@ impl SlmpBackend {
         for (head, before) in &plan.window {
             let after = live.client.read_words(head, before.len() as u32)?;
             for (i, (b, a)) in before.iter().zip(&after).enumerate() {
-                let device = Device::new(head.code(), head.index + i as u32);
+                let device = head.with_index(head.index + i as u32);
                 if a != b && !pointers.contains(&device) {
                     outcome.writes.insert(device, *a);
                 }
@@ -665,5 +667,25 @@ impl Backend for SlmpBackend {
                 Err(fault)
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A device is addressed when the client has its code and the profile numbers it as MELSEC
+    /// does, since the program, the manifest and the frames write its number MELSEC's way.
+    #[test]
+    fn a_device_is_addressed_when_its_code_and_numbering_agree() {
+        assert_eq!(unaddressable(&Device::new("D", 100)), None);
+        assert_eq!(unaddressable(&Device::hexadecimal("W", 0x1A)), None);
+        assert_eq!(unaddressable(&Device::hexadecimal("SW", 0x0F)), None);
+        let decimal_w = unaddressable(&Device::new("W", 26)).expect("refused");
+        assert!(decimal_w.contains("MELSEC in hexadecimal"), "{decimal_w}");
+        let hex_d = unaddressable(&Device::hexadecimal("D", 26)).expect("refused");
+        assert!(hex_d.contains("MELSEC in decimal"), "{hex_d}");
+        let timer = unaddressable(&Device::new("T", 5)).expect("refused");
+        assert!(timer.contains("no SLMP device code"), "{timer}");
     }
 }

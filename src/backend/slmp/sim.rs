@@ -574,15 +574,21 @@ fn execute(
         .iter()
         .map(|f| (f.clone(), cpu.bit(f)))
         .collect();
-    // The whole of every word device, so that the model reads what the CPU holds.
+    // The whole of every word device, so that the model reads what the CPU holds, each named
+    // as the profile numbers it (`W1A`).
+    let devices = &shared.profile.devices;
     let image: BTreeMap<Device, u16> = cpu
         .words
         .iter()
         .flat_map(|(code, words)| {
-            words
-                .iter()
-                .enumerate()
-                .map(move |(i, w)| (Device::new(code, i as u32), *w))
+            let hexadecimal = devices.is_hexadecimal(code);
+            words.iter().enumerate().map(move |(i, w)| {
+                let device = match hexadecimal {
+                    true => Device::hexadecimal(code, i as u32),
+                    false => Device::new(code, i as u32),
+                };
+                (device, *w)
+            })
         })
         .collect();
     let image = Image::new(image, Fill::A);
