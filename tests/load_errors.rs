@@ -561,6 +561,41 @@ fn a_lowering_on_a_device_the_variant_lacks_is_a_profile_error() {
     }
 }
 
+/// A lowering's operand is numbered as the profile numbers its code: FX5 W is hexadecimal, so
+/// `W1F0` is W 496 (which exists) and `W200` is W 512 (past W1FF), not W 200.
+#[test]
+fn a_lowering_reads_device_numbers_as_the_profile_numbers_them() {
+    let scratch = tempfile::tempdir().expect("temp dir");
+    let dir = scratch.path();
+    let vendors = Path::new(env!("CARGO_MANIFEST_DIR")).join("vendors");
+    let fx5 = std::fs::read_to_string(vendors.join("mitsubishi-fx5.yaml")).expect("profile");
+    let lowering = "    - name: asci-16bit\n";
+    let at = fx5
+        .find(lowering)
+        .expect("the FX5 profile has the asci-16bit lowering");
+    let operands = "operands: {s: D100, d: D200}";
+    let offset = at + fx5[at..].find(operands).expect("its operands");
+    let line = fx5[..offset].lines().count();
+    let with = |d: &str| {
+        let mut changed = fx5.clone();
+        changed.replace_range(
+            offset..offset + operands.len(),
+            &operands.replace("D200", d),
+        );
+        std::fs::write(dir.join("mitsubishi-fx5.yaml"), changed).expect("write");
+        load_profiles(dir)
+    };
+    with("W1F0").expect("W1F0 is W 496, which exists");
+    let errors = with("W200").expect_err("W200 is W 512").to_string();
+    let message = "W200 does not exist";
+    assert!(
+        errors.contains(&format!(
+            "mitsubishi-fx5.yaml:{line}: cross_vendor.lowerings[2].operands.d: {message}"
+        )),
+        "{message}\nin:\n{errors}"
+    );
+}
+
 #[test]
 fn written_on_error_must_name_one_of_the_section_s_errors() {
     let scratch = tempfile::tempdir().expect("temp dir");

@@ -11,7 +11,7 @@ use crate::memory::Unit;
 use crate::model::cross_vendor::{
     Answer, CrossVendorCase, CrossVendorSection, ErrorClass, Lowering, Operation, TextLayout,
 };
-use crate::model::profile::{Profiles, SignalKind};
+use crate::model::profile::{DeviceTable, Profiles, SignalKind};
 use crate::model::{Citation, ErrorSignal, Operand};
 use crate::spec::cross_vendor::{CrossVendorCaseSpec, CrossVendorFileSpec};
 use crate::spec::profile::ProfileSpec;
@@ -243,12 +243,23 @@ fn number(key: &str, v: &ScalarSpec, bits: u32, cx: &mut FileContext<'_>) -> Opt
         .ok()
 }
 
-/// Parses a lowering's operand: a device or a constant.
-pub(crate) fn parse_operand(text: &str) -> Result<Operand, crate::device::DeviceSyntaxError> {
+/// Parses a lowering's operand: a device (numbered as the profile numbers its code: `W1A`
+/// is W 26) or a constant.
+pub(crate) fn parse_operand(
+    text: &str,
+    devices: &DeviceTable,
+) -> Result<Operand, crate::device::DeviceSyntaxError> {
     if let Ok(k) = parse_number(text) {
         return Ok(Operand::Constant(k));
     }
-    text.parse::<Device>().map(Operand::Device)
+    parse_device(text, devices).map(Operand::Device)
+}
+
+fn parse_device(
+    text: &str,
+    devices: &DeviceTable,
+) -> Result<Device, crate::device::DeviceSyntaxError> {
+    Device::parse_numbered(text, |code| devices.is_hexadecimal(code))
 }
 
 /// Checks a profile's `cross_vendor` section against the rest of the profile and parses it.
@@ -257,10 +268,11 @@ pub(crate) fn read_section(p: &ProfileSpec, cx: &mut FileContext<'_>) -> CrossVe
     let Some(section) = &p.cross_vendor else {
         return out;
     };
+    let devices = DeviceTable::new(p.devices.clone());
     let signal_of = |key: &String| match p.errors.signal {
         SignalKind::Code => parse_word(key).ok().map(ErrorSignal::Code),
         SignalKind::Flag => (Some(key) == p.errors.flag.as_ref())
-            .then(|| key.parse::<Device>().ok().map(ErrorSignal::Flag))
+            .then(|| parse_device(key, &devices).ok().map(ErrorSignal::Flag))
             .flatten(),
     };
     for (key, class) in &section.errors {
@@ -328,7 +340,7 @@ pub(crate) fn read_section(p: &ProfileSpec, cx: &mut FileContext<'_>) -> CrossVe
                 );
                 continue;
             }
-            match parse_operand(text) {
+            match parse_operand(text, &devices) {
                 Ok(o) => {
                     if let Operand::Device(d) = &o {
                         let allowed = def.operands.get(name).map(|o| &o.devices);
@@ -402,7 +414,7 @@ pub(crate) fn read_section(p: &ProfileSpec, cx: &mut FileContext<'_>) -> CrossVe
             .and_then(|c| def.operands.get(c))
             .and_then(|d| d.constants);
         let count_register = match &l.count_register {
-            Some(text) => match text.parse::<Device>() {
+            Some(text) => match parse_device(text, &devices) {
                 Ok(d) => Some(d),
                 Err(e) => {
                     cx.error(format!("{key}.count_register"), LoadErrorKind::Device(e));
