@@ -12,6 +12,7 @@ use std::time::{Duration, Instant};
 
 use plc_conformance::backend::slmp::fence::{parse_ranges, WordRange};
 use plc_conformance::backend::slmp::frame::{command, DeviceForm, FrameKind};
+use plc_conformance::backend::slmp::mailbox;
 use plc_conformance::backend::slmp::manifest::Manifest;
 use plc_conformance::backend::slmp::sim::{FaultAction, FaultRule, SimSettings, Simulator};
 use plc_conformance::backend::slmp::{SlmpBackend, SlmpSettings};
@@ -586,6 +587,37 @@ fn a_case_on_hexadecimal_numbered_devices_runs() {
     );
     let writes: Vec<String> = manifest(&project, "mitsubishi-fx5").writes;
     assert!(writes.iter().any(|w| w.starts_with("SWF-")), "{writes:?}");
+}
+
+/// A mailbox in link registers is numbered as MELSEC numbers W: `--mailbox W100` is W 256, the
+/// program writes its trigger as `W108`, and the PC finds the signature and runs a case there.
+/// A mailbox the client cannot address is refused when the program is generated.
+#[test]
+fn a_mailbox_in_link_registers_is_numbered_in_hexadecimal() {
+    let project = session();
+    let options = |at: &str| GenerateOptions {
+        profile: "mitsubishi-fx5".into(),
+        variants: vec!["fx5u".into()],
+        mailbox: Some(mailbox::head(at).expect("a device")),
+        ..GenerateOptions::default()
+    };
+    let generated = generate(&project, &options("W100")).expect("generate");
+    let m = generated.manifest;
+    assert_eq!(m.mailbox, "W100");
+    assert_eq!(m.mailbox_head().expect("head").index, 0x100);
+    assert!(generated.program.contains("W108"), "the trigger is W108");
+    let sim = simulator(&project, &m, "fx5u", vec![]);
+    let backend =
+        Arc::new(SlmpBackend::new(settings(&m, "fx5u", &sim), &project.profiles).expect("backend"));
+    backend.connect().expect("the signature is found at W100");
+    let trial = first_trial(&project, &backend, "ASCI");
+    let verdict = verdicts(std::slice::from_ref(&trial)).remove(0);
+    assert!(matches!(verdict, Verdict::Conforms), "{verdict:?}");
+    let e = generate(&project, &options("T100")).expect_err("T100 refused");
+    assert!(
+        e.contains("the mailbox cannot be at T100: T has no SLMP device code"),
+        "{e}"
+    );
 }
 
 #[test]

@@ -10,11 +10,10 @@ use std::time::Duration;
 use super::backends::{load, paths};
 use super::{output, Cli, CliError, Outcome, EXIT_DIFFERENCES, EXIT_OK};
 use crate::backend::slmp::doctor::doctor;
-use crate::backend::slmp::fence;
 use crate::backend::slmp::manifest::Manifest;
 use crate::backend::slmp::sim::{SimSettings, Simulator};
+use crate::backend::slmp::{fence, mailbox};
 use crate::backend::slmp::{SlmpBackend, SlmpSettings};
-use crate::device::Device;
 use crate::hil::{dry_run, generate, pulse_self_test, GenerateOptions};
 
 #[derive(Debug, clap::Subcommand)]
@@ -28,7 +27,8 @@ pub enum HilCommand {
         /// Only this variant's trials; repeat for several [default: every variant].
         #[arg(long = "variant", value_name = "ID")]
         variants: Vec<String>,
-        /// The mailbox's first data register, e.g. D12000 [default: clear of every case window].
+        /// The mailbox's first word, e.g. D12000, or W100 (W, SW, X, Y, B, SB are hexadecimal)
+        /// [default: data registers clear of every case window].
         #[arg(long, value_name = "DEVICE")]
         mailbox: Option<String>,
         /// Only trials whose name contains this text.
@@ -90,8 +90,7 @@ pub fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
             let mailbox = mailbox
                 .as_deref()
                 .map(|m| {
-                    m.parse::<Device>()
-                        .map_err(|e| CliError::input(format!("--mailbox {m}: {e}")))
+                    mailbox::head(m).map_err(|e| CliError::input(format!("--mailbox {m}: {e}")))
                 })
                 .transpose()?;
             let project = load(&paths(cli, &[], "--vectors")?)?;

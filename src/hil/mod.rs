@@ -189,6 +189,9 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
         Some(m) => m.clone(),
         None => choose_mailbox(&profile, &variants, &writes)?,
     };
+    if let Some(why) = slmp::unaddressable(&mailbox) {
+        return Err(format!("the mailbox cannot be at {mailbox}: {why}"));
+    }
     let whole = mailbox::range(&mailbox);
     if let Some(w) = writes.iter().find(|w| w.overlaps(&whole)) {
         return Err(format!(

@@ -9,7 +9,8 @@
 //! says which program runs, the scan counter that says it runs, and the error flag now.
 
 use super::fence::WordRange;
-use crate::device::Device;
+use super::frame;
+use crate::device::{Device, DeviceSyntaxError};
 
 /// The layout version the program and the PC agree on.
 pub const LAYOUT: u16 = 1;
@@ -84,9 +85,15 @@ pub fn range(head: &Device) -> WordRange {
     WordRange::new(head.code(), head.index, head.index + WORDS - 1)
 }
 
-/// The device at an offset.
+/// The mailbox head as `--mailbox` and a manifest write it, numbered as MELSEC numbers the code
+/// (`W100` is W 256), as the program and the frames will.
+pub fn head(text: &str) -> Result<Device, DeviceSyntaxError> {
+    Device::parse_numbered(text, frame::hex_numbered)
+}
+
+/// The device at an offset, numbered as the head is (`W100` + 8 is `W108`).
 pub fn at(head: &Device, offset: u32) -> Device {
-    Device::new(head.code(), head.index + offset)
+    head.with_index(head.index + offset)
 }
 
 /// What the program writes every scan, read back.
@@ -163,6 +170,19 @@ mod tests {
     fn magic_reads_as_pchi() {
         let bytes: Vec<u8> = MAGIC.iter().flat_map(|w| w.to_le_bytes()).collect();
         assert_eq!(bytes, b"PCHI");
+    }
+
+    /// A mailbox in link registers is numbered in hexadecimal throughout: its words, its range
+    /// and the words the PC writes read as MELSEC writes them.
+    #[test]
+    fn a_mailbox_keeps_the_numbering_of_its_head() {
+        let w = head("W100").expect("W100");
+        assert_eq!(w.index, 0x100);
+        assert_eq!(at(&w, off::TRIGGER).to_string(), "W108");
+        assert_eq!(range(&w).to_string(), "W100-W11F");
+        let d = head("D11000").expect("D11000");
+        assert_eq!(at(&d, off::FLAGS).to_string(), "D11011");
+        assert_eq!(range(&d).to_string(), "D11000-D11031");
     }
 
     #[test]

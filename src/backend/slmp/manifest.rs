@@ -201,9 +201,7 @@ impl Manifest {
 
     /// The mailbox head.
     pub fn mailbox_head(&self) -> Result<Device, String> {
-        self.mailbox
-            .parse::<Device>()
-            .map_err(|e| format!("`mailbox`: {e}"))
+        mailbox::head(&self.mailbox).map_err(|e| format!("`mailbox`: {e}"))
     }
 
     /// What the program writes into the mailbox's signature words.
