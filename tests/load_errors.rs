@@ -529,12 +529,22 @@ fn deep_nesting_is_refused_in_bounded_time() {
     }
 }
 
+/// A vendor profile as the project ships it.
+fn vendor_profile(file: &str) -> String {
+    let vendors = Path::new(env!("CARGO_MANIFEST_DIR")).join("vendors");
+    std::fs::read_to_string(vendors.join(file)).expect("profile")
+}
+
+/// The profiles of a folder holding only `file`, with this text; the load errors as text.
+fn load_profile_text(file: &str, text: &str) -> Result<Profiles, String> {
+    let scratch = tempfile::tempdir().expect("temp dir");
+    std::fs::write(scratch.path().join(file), text).expect("write");
+    load_profiles(scratch.path()).map_err(|e| e.to_string())
+}
+
 #[test]
 fn a_lowering_on_a_device_the_variant_lacks_is_a_profile_error() {
-    let scratch = tempfile::tempdir().expect("temp dir");
-    let dir = scratch.path();
-    let vendors = Path::new(env!("CARGO_MANIFEST_DIR")).join("vendors");
-    let iqr = std::fs::read_to_string(vendors.join("mitsubishi-iqr.yaml")).expect("profile");
+    let iqr = vendor_profile("mitsubishi-iqr.yaml");
     let lowering = "      operands: {s: D100, d: D200}\n      source: s\n      destination: d\n      text: packed\n      width: 4\n    - name: habin-terminated";
     assert!(iqr.contains(lowering), "the iQ-R profile changed");
     for (operands, message) in [
@@ -552,8 +562,7 @@ fn a_lowering_on_a_device_the_variant_lacks_is_a_profile_error() {
             &lowering.replacen("{s: D100, d: D200}", operands, 1),
             1,
         );
-        std::fs::write(dir.join("mitsubishi-iqr.yaml"), changed).expect("write");
-        let errors = load_profiles(dir).expect_err("the profile loaded").to_string();
+        let errors = load_profile_text("mitsubishi-iqr.yaml", &changed).expect_err("the profile loaded");
         assert!(
             errors.contains(&format!("mitsubishi-iqr.yaml:99: {message}")),
             "{message}\nin:\n{errors}"
@@ -565,10 +574,7 @@ fn a_lowering_on_a_device_the_variant_lacks_is_a_profile_error() {
 /// `W1F0` is W 496 (which exists) and `W200` is W 512 (past W1FF), not W 200.
 #[test]
 fn a_lowering_reads_device_numbers_as_the_profile_numbers_them() {
-    let scratch = tempfile::tempdir().expect("temp dir");
-    let dir = scratch.path();
-    let vendors = Path::new(env!("CARGO_MANIFEST_DIR")).join("vendors");
-    let fx5 = std::fs::read_to_string(vendors.join("mitsubishi-fx5.yaml")).expect("profile");
+    let fx5 = vendor_profile("mitsubishi-fx5.yaml");
     let lowering = "    - name: asci-16bit\n";
     let at = fx5
         .find(lowering)
@@ -582,11 +588,10 @@ fn a_lowering_reads_device_numbers_as_the_profile_numbers_them() {
             offset..offset + operands.len(),
             &operands.replace("D200", d),
         );
-        std::fs::write(dir.join("mitsubishi-fx5.yaml"), changed).expect("write");
-        load_profiles(dir)
+        load_profile_text("mitsubishi-fx5.yaml", &changed)
     };
     with("W1F0").expect("W1F0 is W 496, which exists");
-    let errors = with("W200").expect_err("W200 is W 512").to_string();
+    let errors = with("W200").expect_err("W200 is W 512");
     let message = "W200 does not exist";
     assert!(
         errors.contains(&format!(
@@ -598,10 +603,7 @@ fn a_lowering_reads_device_numbers_as_the_profile_numbers_them() {
 
 #[test]
 fn written_on_error_must_name_one_of_the_section_s_errors() {
-    let scratch = tempfile::tempdir().expect("temp dir");
-    let dir = scratch.path();
-    let vendors = Path::new(env!("CARGO_MANIFEST_DIR")).join("vendors");
-    let s7 = std::fs::read_to_string(vendors.join("siemens-s7-1200.yaml")).expect("profile");
+    let s7 = vendor_profile("siemens-s7-1200.yaml");
     let declared = "  written_on_error: [0007H]\n";
     assert!(s7.contains(declared), "the S7-1200 profile changed");
     let line = s7[..s7.find(declared).expect("found")].lines().count() + 1;
@@ -610,10 +612,8 @@ fn written_on_error_must_name_one_of_the_section_s_errors() {
         ("[M8004]", "`M8004` is not one of this section's `errors`"),
     ] {
         let changed = s7.replacen(declared, &format!("  written_on_error: {listed}\n"), 1);
-        std::fs::write(dir.join("siemens-s7-1200.yaml"), changed).expect("write");
-        let errors = load_profiles(dir)
-            .expect_err("the profile loaded")
-            .to_string();
+        let errors =
+            load_profile_text("siemens-s7-1200.yaml", &changed).expect_err("the profile loaded");
         assert!(
             errors.contains(&format!(
                 "siemens-s7-1200.yaml:{line}: cross_vendor.written_on_error[0]: {message}"

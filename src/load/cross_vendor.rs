@@ -252,27 +252,23 @@ pub(crate) fn parse_operand(
     if let Ok(k) = parse_number(text) {
         return Ok(Operand::Constant(k));
     }
-    parse_device(text, devices).map(Operand::Device)
-}
-
-fn parse_device(
-    text: &str,
-    devices: &DeviceTable,
-) -> Result<Device, crate::device::DeviceSyntaxError> {
-    Device::parse_numbered(text, |code| devices.is_hexadecimal(code))
+    devices.parse(text).map(Operand::Device)
 }
 
 /// Checks a profile's `cross_vendor` section against the rest of the profile and parses it.
-pub(crate) fn read_section(p: &ProfileSpec, cx: &mut FileContext<'_>) -> CrossVendorSection {
+pub(crate) fn read_section(
+    p: &ProfileSpec,
+    devices: &DeviceTable,
+    cx: &mut FileContext<'_>,
+) -> CrossVendorSection {
     let mut out = CrossVendorSection::default();
     let Some(section) = &p.cross_vendor else {
         return out;
     };
-    let devices = DeviceTable::new(p.devices.clone());
     let signal_of = |key: &String| match p.errors.signal {
         SignalKind::Code => parse_word(key).ok().map(ErrorSignal::Code),
         SignalKind::Flag => (Some(key) == p.errors.flag.as_ref())
-            .then(|| parse_device(key, &devices).ok().map(ErrorSignal::Flag))
+            .then(|| devices.parse(key).ok().map(ErrorSignal::Flag))
             .flatten(),
     };
     for (key, class) in &section.errors {
@@ -340,7 +336,7 @@ pub(crate) fn read_section(p: &ProfileSpec, cx: &mut FileContext<'_>) -> CrossVe
                 );
                 continue;
             }
-            match parse_operand(text, &devices) {
+            match parse_operand(text, devices) {
                 Ok(o) => {
                     if let Operand::Device(d) = &o {
                         let allowed = def.operands.get(name).map(|o| &o.devices);
@@ -414,7 +410,7 @@ pub(crate) fn read_section(p: &ProfileSpec, cx: &mut FileContext<'_>) -> CrossVe
             .and_then(|c| def.operands.get(c))
             .and_then(|d| d.constants);
         let count_register = match &l.count_register {
-            Some(text) => match parse_device(text, &devices) {
+            Some(text) => match devices.parse(text) {
                 Ok(d) => Some(d),
                 Err(e) => {
                     cx.error(format!("{key}.count_register"), LoadErrorKind::Device(e));

@@ -5,7 +5,6 @@ use std::path::Path;
 
 use super::checks::unknown;
 use super::{read_file, yaml_files, FileContext, LineIndex, LoadError, LoadErrorKind, LoadErrors};
-use crate::device::Device;
 use crate::model::profile::{DeviceTable, ErrorSignalling, Profile, Profiles};
 use crate::spec::profile::{DeviceDef, DeviceRanges, ProfileSpec, SignalKind};
 
@@ -58,12 +57,15 @@ pub fn parse_profile(file: &Path, text: &str, errors: &mut Vec<LoadError>) -> Op
     let before = errors.len();
     let mut cx = FileContext::new(file, text, errors);
     let spec = super::parse_document::<ProfileSpec>(text, &mut cx)?;
-    check_profile(&spec, &mut cx);
-    let cross_vendor = super::cross_vendor::read_section(&spec, &mut cx);
+    // One table serves the checks and the profile, so every device name of the profile is
+    // read with the same numbering.
+    let devices = DeviceTable::new(spec.devices.clone());
+    check_profile(&spec, &devices, &mut cx);
+    let cross_vendor = super::cross_vendor::read_section(&spec, &devices, &mut cx);
     if cx.errors.len() != before {
         return None;
     }
-    let device = |name: &str| name.parse::<Device>().ok();
+    let device = |name: &str| devices.parse(name).ok();
     let errors = ErrorSignalling {
         signal: spec.errors.signal,
         flag: spec.errors.flag.as_deref().and_then(device),
@@ -79,19 +81,19 @@ pub fn parse_profile(file: &Path, text: &str, errors: &mut Vec<LoadError>) -> Op
         errors,
         flags: spec.flags,
         unit: spec.memory_unit,
-        devices: DeviceTable::new(spec.devices),
+        devices,
         instructions: spec.instructions,
         variants: spec.variants,
         cross_vendor,
     })
 }
 
-fn check_profile(p: &ProfileSpec, cx: &mut FileContext<'_>) {
+fn check_profile(p: &ProfileSpec, table: &DeviceTable, cx: &mut FileContext<'_>) {
     let flags: Vec<String> = p.flags.keys().cloned().collect();
     let devices: Vec<String> = p.devices.keys().cloned().collect();
     let instructions: Vec<String> = p.instructions.keys().cloned().collect();
     let device_names = |key: &str, name: &str, cx: &mut FileContext<'_>| {
-        if let Err(e) = name.parse::<Device>() {
+        if let Err(e) = table.parse(name) {
             cx.error(key, LoadErrorKind::Device(e));
         }
     };

@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 use super::cross_vendor::CrossVendorSection;
 use super::ErrorSignal;
-use crate::device::{code_matches, Device};
+use crate::device::{code_matches, Device, DeviceSyntaxError};
 use crate::memory::Unit;
 pub use crate::spec::profile::{
     DeviceDef, DeviceRange, DeviceRanges, FlagDef, InstructionDef, Manual, Numbering, OperandDef,
@@ -68,6 +68,11 @@ impl DeviceTable {
     pub fn is_hexadecimal(&self, code: &str) -> bool {
         self.get(code)
             .is_some_and(|d| d.numbering == Numbering::Hexadecimal)
+    }
+
+    /// A device name read with this table's numbering (`W1A` is W 26 where W is hexadecimal).
+    pub fn parse(&self, text: &str) -> Result<Device, DeviceSyntaxError> {
+        Device::parse_numbered(text, |code| self.is_hexadecimal(code))
     }
 
     /// The codes numbered in hexadecimal, as the protocol tells an external backend.
