@@ -702,7 +702,7 @@ fn every_generated_rung_sits_outside_if_and_case() {
             depth -= 1;
         }
         if t.contains("(bExec AND ") {
-            if t.starts_with("ADRSET(") {
+            if t.contains(":= ADRSET(") {
                 adrsets += 1;
             } else {
                 rungs += 1;
@@ -725,12 +725,8 @@ fn every_generated_rung_sits_outside_if_and_case() {
     assert!(g.program.contains(":= SD8067;"));
 }
 
-/// `record` through the simulated CPU, as a bench user would run it: the unspecified cases of a
-/// copy of the corpus become observed with the CPU, program and transport in the provenance,
-/// manual ones are untouched, and the copy still validates.
-#[test]
-fn record_through_the_simulated_cpu_writes_observed_vectors_with_provenance() {
-    let project = session();
+/// A copy of the iQ-R vectors and the manifest in a scratch folder, for `record`.
+fn record_scratch() -> (tempfile::TempDir, std::path::PathBuf, std::path::PathBuf) {
     let scratch_dir = common::scratch();
     let dir = scratch_dir.path().join("vectors");
     std::fs::create_dir_all(&dir).expect("mkdir");
@@ -745,7 +741,19 @@ fn record_through_the_simulated_cpu_writes_observed_vectors_with_provenance() {
         serde_json::to_string_pretty(m).expect("json"),
     )
     .expect("write");
-    let sim = iqr_sim(&project, |_| {});
+    (scratch_dir, dir, manifest_file)
+}
+
+/// `record` through a live backend, as a bench user would run it, with the simulated CPU
+/// standing in for a real one (it does not say it is the simulator): the unspecified cases of a
+/// copy of the corpus become observed with the CPU, program and transport in the provenance,
+/// manual ones are untouched, and the copy still validates.
+#[test]
+fn record_through_a_cpu_writes_observed_vectors_with_provenance() {
+    let project = session();
+    let (_scratch, dir, manifest_file) = record_scratch();
+    let m = iqr_manifest();
+    let sim = iqr_sim(&project, |s| s.identifies = false);
     let spec = format!(
         "slmp:bench={}?manifest={}&confirm=R04CPU&sandbox=manifest&variant=rcpu",
         sim.address(),
@@ -774,7 +782,7 @@ fn record_through_the_simulated_cpu_writes_observed_vectors_with_provenance() {
         "a manual expectation was replaced"
     );
     let habin = std::fs::read_to_string(dir.join("habin.yaml")).expect("habin.yaml");
-    let wanted = format!("live CPU R04CPU (4800H), mitsubishi-iqr variant rcpu, program {} (mailbox layout 1), SLMP 4E binary TCP", m.hash);
+    let wanted = format!("live CPU R04CPU (4800H), mitsubishi-iqr variant rcpu, program {} (mailbox layout 2), SLMP 4E binary TCP", m.hash);
     assert!(habin.contains("backend: bench"), "{habin}");
     assert!(habin.contains(&wanted), "{habin}");
     let valid = common::cli(&["validate", dir.to_str().expect("utf-8")]);
@@ -804,12 +812,15 @@ fn count(dir: &std::path::Path, text: &str) -> usize {
 fn a_program_with_its_rungs_in_a_case_is_caught() {
     let project = session();
     let sim = iqr_sim(&project, |s| s.rungs_in_case = true);
-    let backend = iqr_backend(&project, &sim, |_| {});
+    let backend = iqr_backend(&project, &sim, |s| s.max_consecutive_faults = usize::MAX);
     backend.connect().expect("interlocks");
     let trial = first_trial(&project, &backend, "BINHAP");
-    let first = execute_once(&backend, &trial).expect("first");
-    let second = execute_once(&backend, &trial).expect("second");
-    assert_ne!(first, second, "the second run of a pulse rung did the same");
+    execute_once(&backend, &trial).expect("first");
+    let second = execute_once(&backend, &trial).expect_err("the second run cannot pass");
+    assert!(
+        second.to_string().contains("ENO FALSE and no error"),
+        "the rung's proof says it did not execute: {second}"
+    );
     let b: Arc<dyn Backend> = backend.clone();
     let trials: Vec<Trial> = project
         .plan(&[b])
@@ -985,4 +996,208 @@ fn the_pulse_self_test(#[case] rungs_in_case: bool, #[case] passes: bool) {
     assert_eq!(check.fired_twice, passes, "{check:?}");
     assert!(check.trial.contains("p::"), "{check:?}");
     assert!(sim.audit().stray_writes.is_empty());
+}
+
+/// `record` against the simulated CPU writes no `observed` vector: the mailbox says a
+/// simulator runs the program, and the command refuses, naming it, with the files untouched.
+#[test]
+fn record_through_the_simulated_cpu_writes_nothing() {
+    let project = session();
+    let (_scratch, dir, manifest_file) = record_scratch();
+    let sim = iqr_sim(&project, |_| {});
+    let before = count(&dir, "basis: observed");
+    let spec = format!(
+        "slmp:bench={}?manifest={}&confirm=R04CPU&sandbox=manifest&variant=rcpu",
+        sim.address(),
+        manifest_file.display()
+    );
+    let out = common::cli(&[
+        "record",
+        "--backend",
+        &spec,
+        "--vectors",
+        dir.to_str().expect("utf-8"),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("the simulated CPU (plc-conformance hil sim)"),
+        "{stderr}"
+    );
+    assert_eq!(
+        count(&dir, "basis: observed"),
+        before,
+        "an observed vector was written"
+    );
+}
+
+/// The trials of a rung, and the backend on a simulated CPU changed by `change`.
+fn rung_trials(
+    project: &Project,
+    change: impl FnOnce(&mut SimSettings, u16),
+) -> (Simulator, Arc<SlmpBackend>, Trial, u16) {
+    let probe = iqr_sim(project, |_| {});
+    let probe_backend = iqr_backend(project, &probe, |_| {});
+    let trial = first_trial(project, &probe_backend, "HABIN");
+    let imgs = images(&trial);
+    let rung = probe_backend
+        .plan(&requests(&trial, &imgs)[0])
+        .expect("plan")
+        .rung;
+    drop(probe);
+    let sim = iqr_sim(project, |s| change(s, rung));
+    let backend = iqr_backend(project, &sim, |_| {});
+    backend.connect().expect("interlocks");
+    (sim, backend, trial, rung)
+}
+
+/// A rung missing from the program, or whose call never executes, is a fault that names the
+/// rung, never a verdict: the program acknowledges the trigger either way, and "no change, no
+/// error" would otherwise read as a result.
+#[rstest::rstest]
+#[case::missing(true, "did not run for case")]
+#[case::disabled(false, "ENO FALSE and no error")]
+fn a_rung_that_did_not_execute_is_a_fault(#[case] missing: bool, #[case] says: &str) {
+    let project = session();
+    let (sim, backend, trial, rung) = rung_trials(&project, |s, rung| {
+        if missing {
+            s.missing_rungs.insert(rung);
+        } else {
+            s.disabled_rungs.insert(rung);
+        }
+    });
+    let fault = execute_once(&backend, &trial).expect_err("not a verdict");
+    let text = fault.to_string();
+    assert_eq!(fault.kind(), "protocol-error", "{text}");
+    assert!(text.contains(&format!("rung {rung} ")), "{text}");
+    assert!(text.contains(says), "{text}");
+    assert_eq!(
+        sim.audit().executions,
+        0,
+        "the simulated CPU executed the rung"
+    );
+}
+
+/// A proxy that keeps every trigger after the first from the CPU and answers the polls with
+/// ack = trigger in state 1: the acknowledgement alone is never taken for a case done, so no
+/// trial after the first passes, and every one of them is a fault.
+#[test]
+fn an_acknowledgement_without_the_program_done_is_a_fault() {
+    let mut project = session();
+    let m = iqr_manifest();
+    let sim = iqr_sim(&project, |s| s.premature_ack = true);
+    let mut s = settings(m, "rcpu", &sim);
+    s.max_consecutive_faults = usize::MAX;
+    let backend = live(&mut project, s);
+    let trials: Vec<Trial> = project
+        .plan(std::slice::from_ref(&backend))
+        .into_iter()
+        .filter(|t| t.skip.is_none())
+        .take(6)
+        .collect();
+    assert_eq!(trials.len(), 6);
+    let verdicts = verdicts(&trials);
+    let passed = verdicts
+        .iter()
+        .filter(|v| matches!(v, Verdict::Conforms))
+        .count();
+    // Each trial runs fill A then fill B: only the very first execution reached the program.
+    assert_eq!(passed, 0, "{verdicts:?}");
+    let faults = verdicts
+        .iter()
+        .filter(|v| format!("{v:?}").contains("while the program's state says 1"))
+        .count();
+    assert_eq!(faults, 6, "{verdicts:?}");
+}
+
+/// Every generated call, in both programs, passes its operands in the order the manual's
+/// structured-text form prints them, with exactly its operands. The forms are written out here
+/// from the manual pages (docs/semantics.md#structured-text-calls), independently of the
+/// profiles' tables the generator reads.
+#[test]
+fn every_call_takes_the_operands_in_the_manuals_order() {
+    let quoted: BTreeMap<&str, &[&str]> = BTreeMap::from([
+        // fx5-instructions p.ASCI(P): "ENO:=ASCI(EN,s,n,d); ENO:=ASCIP(EN,s,n,d);"
+        ("ASCI", &["s", "n", "d"][..]),
+        ("ASCIP", &["s", "n", "d"][..]),
+        // Inferred (docs/semantics.md#structured-text-calls), unconfirmed on a CPU.
+        ("HEXA", &["s", "n", "d"][..]),
+        ("HEXAP", &["s", "n", "d"][..]),
+        ("ADRSET", &["s", "d"][..]),
+        ("HABIN", &["s", "d"][..]),
+        ("HABINP", &["s", "d"][..]),
+        ("DHABIN", &["s", "d"][..]),
+        ("DHABINP", &["s", "d"][..]),
+        ("BINHA", &["s", "d"][..]),
+        ("BINHAP", &["s", "d"][..]),
+        ("DBINHA", &["s", "d"][..]),
+        ("DBINHAP", &["s", "d"][..]),
+    ]);
+    let project = session();
+    for profile in ["mitsubishi-iqr", "mitsubishi-fx5"] {
+        let g = generate(
+            &project,
+            &GenerateOptions {
+                profile: profile.into(),
+                ..GenerateOptions::default()
+            },
+        )
+        .expect("generate");
+        let mut instructions = std::collections::BTreeSet::new();
+        for rung in &g.manifest.rungs {
+            let enable = format!("(bExec AND {} = {}, ", rung_word(&g.manifest), rung.id);
+            let calls: Vec<&str> = g.program.lines().filter(|l| l.contains(&enable)).collect();
+            assert_eq!(calls.len(), 1 + rung.addresses.len(), "rung {}", rung.id);
+            let mut addresses = rung.addresses.iter();
+            for line in calls {
+                let (head, args) = line.split_once(&enable).expect("call");
+                let name = head.trim_start_matches("bEno := ").trim_end_matches('(');
+                assert!(head.starts_with("bEno := "), "{line}");
+                let args: Vec<&str> = args.trim_end_matches(");").split(", ").collect();
+                let order = quoted
+                    .get(name)
+                    .unwrap_or_else(|| panic!("no quoted form: {line}"));
+                assert_eq!(args.len(), order.len(), "{line}");
+                // One ADRSET per pointer, in the order of the manifest's `addresses`.
+                let (pointer, target) = match name {
+                    "ADRSET" => addresses.next().expect("an ADRSET per pointer"),
+                    _ => (&String::new(), &String::new()),
+                };
+                for (arg, operand) in args.iter().zip(order.iter()) {
+                    let wanted = match name {
+                        "ADRSET" if *operand == "s" => target.to_string(),
+                        "ADRSET" => pointer.to_string(),
+                        _ => as_written(&rung.operands[*operand]),
+                    };
+                    assert_eq!(*arg, wanted, "operand {operand} of {line}");
+                }
+                instructions.insert(name.to_string());
+            }
+        }
+        let expected: Vec<&str> = match profile {
+            "mitsubishi-iqr" => vec![
+                "BINHA", "BINHAP", "DBINHA", "DBINHAP", "DHABIN", "DHABINP", "HABIN", "HABINP",
+            ],
+            _ => vec!["ADRSET", "ASCI", "ASCIP", "HEXA", "HEXAP"],
+        };
+        assert_eq!(
+            instructions.iter().map(String::as_str).collect::<Vec<_>>(),
+            expected,
+            "{profile}"
+        );
+    }
+}
+
+/// The mailbox word that selects the rung, as the program writes it.
+fn rung_word(m: &Manifest) -> String {
+    let head = mailbox::head(&m.mailbox).expect("mailbox");
+    mailbox::at(&head, mailbox::off::RUNG).to_string()
+}
+
+/// A manifest operand as the program writes it: a constant `K4` as `4`.
+fn as_written(text: &str) -> String {
+    match text.strip_prefix('K').map(str::parse::<i64>) {
+        Some(Ok(k)) => k.to_string(),
+        _ => text.to_string(),
+    }
 }

@@ -230,6 +230,12 @@ pub trait Backend: Send + Sync {
     fn version(&self) -> Option<String> {
         None
     }
+    /// What answers in the backend's place when that is a simulator, not the device it stands
+    /// for: `record` writes no `observed` expectation from it. A live backend knows once it
+    /// has connected.
+    fn simulated_by(&self) -> Option<String> {
+        None
+    }
     /// Whether the backend claims to implement an instruction on a variant. Trials it does not
     /// claim are listed as skipped with a reason; a claimed trial answered "unsupported" is a
     /// difference.

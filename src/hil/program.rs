@@ -3,7 +3,11 @@
 //! The program is written in the plainest structured text: direct device names, signed decimal
 //! constants, bit-specified word devices (`D12011.0`) for the flag bits, and no functions beyond
 //! the instructions under test, so that as little as possible depends on the engineering tool's
-//! dialect. What a bench user must still check in the tool is in the setup checklist.
+//! dialect. Every call takes its operand order from the profile's `structured_text` table (the
+//! form the manual prints), never from the operand names: FX5 ASCI is `ASCI(EN,s,n,d)`, and a
+//! call in the ladder's (s), (d), (n) order would convert the wrong words. Each rung proves that
+//! it ran: in the scan it is enabled it writes its number, the trigger and its ENO into the
+//! mailbox. What a bench user must still check in the tool is in the setup checklist.
 
 use std::collections::BTreeMap;
 use std::fmt::Write;
@@ -14,15 +18,30 @@ use crate::device::Device;
 use crate::model::profile::Profile;
 use crate::model::Operand;
 
-/// Operands in the order the instruction pages list them: (s), then (d), then (n).
-fn operand_rank(name: &str) -> (u8, &str) {
-    let rank = match name.chars().next() {
-        Some('s') => 0,
-        Some('d') => 1,
-        Some('n') => 2,
-        _ => 3,
-    };
-    (rank, name)
+/// The label that receives each call's ENO.
+pub const ENO_LABEL: &str = "bEno";
+
+/// A call statement from the profile's table: `bEno := ASCI(enable, D100, 4, D200);`.
+fn call(
+    profile: &Profile,
+    instruction: &str,
+    enable: &str,
+    operands: &BTreeMap<String, String>,
+) -> Result<String, String> {
+    let form = profile.calls.get(instruction).ok_or_else(|| {
+        format!(
+            "{} has no structured-text form for {instruction} (`structured_text` in its \
+             profile): the program cannot call it",
+            profile.id
+        )
+    })?;
+    form.render(ENO_LABEL, enable, operands).ok_or_else(|| {
+        format!(
+            "the structured-text form of {instruction} takes {}, the rung has {}",
+            form.operands.join(", "),
+            operands.keys().cloned().collect::<Vec<_>>().join(", ")
+        )
+    })
 }
 
 fn word(head: &Device, offset: u32) -> String {
@@ -34,11 +53,9 @@ fn int(value: u16) -> String {
     format!("{}", value as i16)
 }
 
-/// The structured text of the test program.
-pub fn structured_text(manifest: &Manifest, profile: &Profile) -> String {
-    let Ok(mb) = manifest.mailbox_head() else {
-        return String::new();
-    };
+/// The structured text of the test program; `Err` when an instruction has no call form.
+pub fn structured_text(manifest: &Manifest, profile: &Profile) -> Result<String, String> {
+    let mb = manifest.mailbox_head()?;
     let w = |o| word(&mb, o);
     let e = &manifest.error;
     let hash = manifest.hash32();
@@ -63,7 +80,8 @@ pub fn structured_text(manifest: &Manifest, profile: &Profile) -> String {
     t.push_str(
         "(* Generated: do not edit. Every rung is evaluated in every scan, each with its own \
          enable, so that a pulse form sees its enable fall between two cases and executes again \
-         on the next one: keep the rungs out of IF and CASE. Declare the label bExec (BOOL). *)\n\n",
+         on the next one: keep the rungs out of IF and CASE. Declare the labels bExec and bEno \
+         (BOOL). *)\n\n",
     );
     t.push_str("(* Signature, scan counter and the error flag, every scan. *)\n");
     let _ = writeln!(
@@ -94,6 +112,11 @@ pub fn structured_text(manifest: &Manifest, profile: &Profile) -> String {
         (hash >> 16) as u16
     );
     let _ = writeln!(t, "{} := {};", w(off::RUNGS), manifest.rungs.len());
+    let _ = writeln!(
+        t,
+        "{} := 0; (* a CPU runs this program; the simulated CPU writes 'SI' *)",
+        w(off::ORIGIN)
+    );
     let _ = writeln!(t, "{} := {} + 1;", w(off::SCANS), w(off::SCANS));
     let _ = writeln!(
         t,
@@ -111,6 +134,9 @@ pub fn structured_text(manifest: &Manifest, profile: &Profile) -> String {
     let _ = writeln!(t, "  CASE {} OF", w(off::STATE));
     let _ = writeln!(t, "    {}, {}:", state::IDLE, state::RESET_FAILED);
     let _ = writeln!(t, "      {} := TRUE;", e.reset);
+    for o in [off::RAN, off::RAN_FOR, off::ENO] {
+        let _ = writeln!(t, "      {} := 0;", w(o));
+    }
     let _ = writeln!(t, "      {} := {};", w(off::STATE), state::RESETTING);
     let _ = writeln!(t, "    {}:", state::RESETTING);
     let _ = writeln!(t, "      {} := FALSE;", e.reset);
@@ -129,28 +155,45 @@ pub fn structured_text(manifest: &Manifest, profile: &Profile) -> String {
     t.push_str("      bExec := TRUE;\n");
     t.push_str("  END_CASE;\n");
     t.push_str("END_IF;\n\n");
-    t.push_str("(* The rungs: instruction(enable, operands...), one per instruction and operand tuple of the corpus. *)\n");
+    t.push_str(
+        "(* The rungs: one per instruction and operand tuple of the corpus, each call in the \
+         form the manual prints, then the rung's proof that it ran: its number, the trigger and \
+         its ENO. *)\n",
+    );
+    let hexadecimal = |code: &str| profile.devices.is_hexadecimal(code);
     for rung in &manifest.rungs {
-        let mut names: Vec<&String> = rung.operands.keys().collect();
-        names.sort_by_key(|n| operand_rank(n));
-        let args: Vec<String> = names
-            .iter()
-            .map(|n| {
-                let text = &rung.operands[*n];
-                match parse_operand(text, &|code| profile.devices.is_hexadecimal(code)) {
+        let args: BTreeMap<String, String> = (rung.operands.iter())
+            .map(|(name, text)| {
+                let arg = match parse_operand(text, &hexadecimal) {
                     // Indirect specification is written as it is: `@D10`.
                     _ if text.starts_with('@') => text.clone(),
                     Ok(Operand::Constant(k)) => k.to_string(),
                     Ok(Operand::Device(d)) => d.to_string(),
                     Err(_) => text.clone(),
-                }
+                };
+                (name.clone(), arg)
             })
             .collect();
         let enable = format!("bExec AND {} = {}", w(off::RUNG), rung.id);
         for (pointer, target) in &rung.addresses {
-            let _ = writeln!(t, "ADRSET({enable}, {target}, {pointer});");
+            let operands = BTreeMap::from([
+                ("s".to_string(), target.clone()),
+                ("d".to_string(), pointer.clone()),
+            ]);
+            let _ = writeln!(t, "{}", call(profile, "ADRSET", &enable, &operands)?);
         }
-        let _ = writeln!(t, "{}({enable}, {});", rung.instruction, args.join(", "));
+        let _ = writeln!(t, "{}", call(profile, &rung.instruction, &enable, &args)?);
+        let _ = writeln!(
+            t,
+            "IF {enable} THEN {} := {}; {} := {}; IF {ENO_LABEL} THEN {} := 1; ELSE {} := 0; \
+             END_IF; END_IF;",
+            w(off::RAN),
+            rung.id,
+            w(off::RAN_FOR),
+            w(off::TRIGGER),
+            w(off::ENO),
+            w(off::ENO)
+        );
     }
     t.push_str("\n(* Capture the error in the scan of the instruction, and the register one scan later; acknowledge last. *)\n");
     t.push_str("IF bExec THEN\n");
@@ -179,7 +222,7 @@ pub fn structured_text(manifest: &Manifest, profile: &Profile) -> String {
     let _ = writeln!(t, "  {} := {};", w(off::STATE), state::IDLE);
     let _ = writeln!(t, "  {} := {};", w(off::ACK), w(off::TRIGGER));
     t.push_str("END_IF;\n");
-    t
+    Ok(t)
 }
 
 /// Operands as `s=D100 d=@D20`, then what each pointer addresses: `(@D20: D200)`.
@@ -237,7 +280,7 @@ pub fn setup_text(manifest: &Manifest, profile: &Profile, trials: usize) -> Stri
          connection allowed during RUN (*check* whether your model has such a setting).\n",
     );
     t.push_str(
-        "4. A program in structured text: paste `executive.st`, declare the label `bExec` \
+        "4. A program in structured text: paste `executive.st`, declare the labels `bExec` and `bEno` \
          (BOOL), convert. *check* that every instruction call converts with its enable first; \
          a rung that does not convert cannot be run (remove it and regenerate with a filter, \
          or report it).\n",

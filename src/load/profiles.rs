@@ -1,12 +1,12 @@
 //! Loading and checking vendor profiles.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 use super::checks::unknown;
 use super::{read_file, yaml_files, FileContext, LineIndex, LoadError, LoadErrorKind, LoadErrors};
-use crate::model::profile::{DeviceTable, ErrorSignalling, Profile, Profiles};
-use crate::spec::profile::{DeviceDef, DeviceRanges, ProfileSpec, SignalKind};
+use crate::model::profile::{CallForm, DeviceTable, ErrorSignalling, Profile, Profiles};
+use crate::spec::profile::{CallBasis, DeviceDef, DeviceRanges, ProfileSpec, SignalKind};
 
 /// Loads every profile in a folder.
 pub fn load_profiles(dir: &Path) -> Result<Profiles, LoadErrors> {
@@ -62,6 +62,7 @@ pub fn parse_profile(file: &Path, text: &str, errors: &mut Vec<LoadError>) -> Op
     let devices = DeviceTable::new(spec.devices.clone());
     check_profile(&spec, &devices, &mut cx);
     let cross_vendor = super::cross_vendor::read_section(&spec, &devices, &mut cx);
+    let calls = read_calls(&spec, &mut cx);
     if cx.errors.len() != before {
         return None;
     }
@@ -85,7 +86,74 @@ pub fn parse_profile(file: &Path, text: &str, errors: &mut Vec<LoadError>) -> Op
         instructions: spec.instructions,
         variants: spec.variants,
         cross_vendor,
+        calls,
     })
+}
+
+/// The structured-text call table: each form read, named after its key, and holding exactly
+/// the operands of the instruction it calls; a `manual` form cites one of the profile's manuals.
+fn read_calls(p: &ProfileSpec, cx: &mut FileContext<'_>) -> BTreeMap<String, CallForm> {
+    let mut calls = BTreeMap::new();
+    for (name, spec) in &p.structured_text {
+        let key = format!("structured_text.{name}");
+        let form = match CallForm::parse(&spec.form, spec.basis, &spec.source) {
+            Ok(form) => form,
+            Err(why) => {
+                cx.error(format!("{key}.form"), LoadErrorKind::Invalid(why));
+                continue;
+            }
+        };
+        if form.instruction != *name {
+            cx.error(
+                format!("{key}.form"),
+                LoadErrorKind::Invalid(format!(
+                    "the form calls {}, but it stands under {name}",
+                    form.instruction
+                )),
+            );
+            continue;
+        }
+        let mut sorted = form.operands.clone();
+        sorted.sort();
+        if sorted.windows(2).any(|w| w[0] == w[1]) {
+            cx.error(
+                format!("{key}.form"),
+                LoadErrorKind::Invalid(format!("`{}` names an operand twice", spec.form)),
+            );
+            continue;
+        }
+        if let Some(def) = p.instructions.get(name) {
+            let expected: Vec<String> = def.operands.keys().cloned().collect();
+            if sorted != expected {
+                cx.error(
+                    format!("{key}.form"),
+                    LoadErrorKind::Invalid(format!(
+                        "`{}` names the operands {}, but {name} has {}",
+                        spec.form,
+                        form.operands.join(", "),
+                        expected.join(", ")
+                    )),
+                );
+                continue;
+            }
+        }
+        let cites_a_manual = p
+            .manuals
+            .keys()
+            .any(|id| spec.source.split_whitespace().next() == Some(id.as_str()));
+        if spec.basis == CallBasis::Manual && !cites_a_manual {
+            cx.error(
+                format!("{key}.source"),
+                LoadErrorKind::Invalid(format!(
+                    "a `manual` form starts its source with the manual's id ({}) and page",
+                    p.manuals.keys().cloned().collect::<Vec<_>>().join(", ")
+                )),
+            );
+            continue;
+        }
+        calls.insert(name.clone(), form);
+    }
+    calls
 }
 
 fn check_profile(p: &ProfileSpec, table: &DeviceTable, cx: &mut FileContext<'_>) {

@@ -13,8 +13,8 @@ use super::ErrorSignal;
 use crate::device::{code_matches, Device, DeviceSyntaxError};
 use crate::memory::Unit;
 pub use crate::spec::profile::{
-    DeviceDef, DeviceRange, DeviceRanges, FlagDef, InstructionDef, Manual, Numbering, OperandDef,
-    SignalKind, Variant,
+    CallBasis, DeviceDef, DeviceRange, DeviceRanges, FlagDef, InstructionDef, Manual, Numbering,
+    OperandDef, SignalKind, Variant,
 };
 
 #[derive(Debug, Clone)]
@@ -35,6 +35,74 @@ pub struct Profile {
     pub variants: Vec<Variant>,
     /// How the profile answers the cross-vendor operations (empty when it does not).
     pub cross_vendor: CrossVendorSection,
+    /// The structured-text call of each instruction a program on the CPU writes, by
+    /// instruction.
+    pub calls: BTreeMap<String, CallForm>,
+}
+
+/// An instruction's structured-text call, read from the form the manual prints
+/// (`ENO:=ASCI(EN,s,n,d);`): the one place the live CPU's program takes its operand order from.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CallForm {
+    pub instruction: String,
+    /// The operand names after `EN`, in the manual's order.
+    pub operands: Vec<String>,
+    pub basis: CallBasis,
+    /// The quoted page, or the reasoning of an inferred form.
+    pub source: String,
+}
+
+impl CallForm {
+    /// Reads `ENO:=NAME(EN,a,b,...);` (blanks allowed between the parts). `Err` says what is
+    /// wrong with the form.
+    pub fn parse(form: &str, basis: CallBasis, source: &str) -> Result<CallForm, String> {
+        let compact: String = form.chars().filter(|c| !c.is_whitespace()).collect();
+        let shape = "a form is written `ENO:=NAME(EN,s,d);`";
+        let call = compact
+            .strip_prefix("ENO:=")
+            .and_then(|c| c.strip_suffix(");"))
+            .ok_or_else(|| format!("`{form}`: {shape}"))?;
+        let (instruction, arguments) = call
+            .split_once('(')
+            .ok_or_else(|| format!("`{form}`: {shape}"))?;
+        let mut names = arguments.split(',');
+        if names.next() != Some("EN") {
+            return Err(format!("`{form}`: the enable `EN` comes first; {shape}"));
+        }
+        let operands: Vec<String> = names.map(str::to_string).collect();
+        if instruction.is_empty() || operands.iter().any(String::is_empty) {
+            return Err(format!("`{form}`: {shape}"));
+        }
+        Ok(CallForm {
+            instruction: instruction.to_string(),
+            operands,
+            basis,
+            source: source.to_string(),
+        })
+    }
+
+    /// The call with the enable and each operand's text in the form's order, as a statement:
+    /// `ENO := ASCI(enable, D100, 4, D200);` with `eno` for ENO. `None` when `operands` does
+    /// not name exactly the form's operands.
+    pub fn render(
+        &self,
+        eno: &str,
+        enable: &str,
+        operands: &BTreeMap<String, String>,
+    ) -> Option<String> {
+        if operands.len() != self.operands.len() {
+            return None;
+        }
+        let mut args = vec![enable.to_string()];
+        for name in &self.operands {
+            args.push(operands.get(name)?.clone());
+        }
+        Some(format!(
+            "{eno} := {}({});",
+            self.instruction,
+            args.join(", ")
+        ))
+    }
 }
 
 /// A profile's device codes, looked up by the code a device has: an entry is a code (`D`) or a

@@ -48,6 +48,35 @@ pub struct ProfileSpec {
     /// How the profile answers the cross-vendor operations.
     #[serde(default)]
     pub cross_vendor: Option<CrossVendorSectionSpec>,
+    /// The structured-text call of each instruction a program on the CPU writes (the
+    /// instructions under test, and helpers such as ADRSET), as the manual prints it: the
+    /// live CPU's test program writes every call with its operands in this order, and a
+    /// program that passed (n) where the manual has (d) would convert the wrong words.
+    #[serde(default)]
+    pub structured_text: BTreeMap<String, CallFormSpec>,
+}
+
+/// One instruction's structured-text call and the evidence for its operand order.
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CallFormSpec {
+    /// The call as the manual prints it, e.g. `ENO:=ASCI(EN,s,n,d);`: `ENO:=`, the
+    /// instruction, `EN` first, then the operands by the names the instruction's operands have.
+    pub form: String,
+    /// `manual` where a quoted page prints this form, `inferred` where it is read from a
+    /// neighbouring page or the family's convention (unconfirmed on a CPU).
+    pub basis: CallBasis,
+    /// For `manual`, the manual id and page with the quoted form; for `inferred`, the
+    /// reasoning.
+    pub source: String,
+}
+
+/// What a structured-text call form rests on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
+#[serde(rename_all = "lowercase")]
+pub enum CallBasis {
+    Manual,
+    Inferred,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]

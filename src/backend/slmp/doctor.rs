@@ -57,7 +57,7 @@ pub fn doctor(settings: &SlmpSettings) -> (Vec<Finding>, u64) {
             let expected = settings.manifest.signature();
             push(
                 "program signature",
-                match read.and_then(|r| r.mismatch(&expected)) {
+                match read.mismatch(&expected) {
                     None => Ok(format!(
                         "program {} (layout {}, {} rungs) at {}",
                         settings.manifest.hash, expected.layout, expected.rungs, head
@@ -66,6 +66,15 @@ pub fn doctor(settings: &SlmpSettings) -> (Vec<Finding>, u64) {
                 },
             );
             let get = |o: u32| words.get(o as usize).copied().unwrap_or(0);
+            push(
+                "answered by",
+                Ok(match get(off::ORIGIN) {
+                    mailbox::SIMULATOR => "the simulated CPU (plc-conformance hil sim): nothing \
+                                           it answers is recorded as observed"
+                        .to_string(),
+                    _ => "a CPU running the generated program".to_string(),
+                }),
+            );
             let (trigger, ack, st) = (get(off::TRIGGER), get(off::ACK), get(off::STATE));
             push(
                 "program state",

@@ -1,23 +1,30 @@
 //! The mailbox: 32 data registers through which the PC hands the CPU's test program one case at
-//! a time and reads back what happened (layout 1).
+//! a time and reads back what happened (layout 2).
 //!
 //! The PC writes the case's memory window, then the rung and the flags, then the trigger alone,
 //! a sequence number. The program answers with `ack` equal to the trigger once the case is done,
 //! having reset the error state first, executed the selected rung for exactly one scan, and
-//! captured the error flag and registers in that scan and in the next. Everything else here is
-//! written by the program every scan: a signature (magic, layout, program hash, rung count) that
-//! says which program runs, the scan counter that says it runs, and the error flag now.
+//! captured the error flag and registers in that scan and in the next. An acknowledgement alone
+//! proves nothing about the rung (a program acknowledges a trigger whether or not the rung is
+//! there), so the rung itself, in the scan it is enabled, writes its number, the trigger it ran
+//! for and its ENO: the proof of execution the PC checks before it judges anything. Everything
+//! else here is written by the program every scan: a signature (magic, layout, program hash,
+//! rung count) that says which program runs, whether a simulator runs it, the scan counter that
+//! says it runs, and the error flag now.
 
 use super::fence::WordRange;
 use super::frame;
 use crate::device::{Device, DeviceSyntaxError};
 
 /// The layout version the program and the PC agree on.
-pub const LAYOUT: u16 = 1;
+pub const LAYOUT: u16 = 2;
 /// Words in the mailbox.
 pub const WORDS: u32 = 32;
 /// `'P','C'`, `'H','I'` as two characters per word, low byte first.
 pub const MAGIC: [u16; 2] = [0x4350, 0x4948];
+/// `'S','I'`: what the simulated CPU writes at [`off::ORIGIN`], where the generated program on a
+/// CPU writes 0, so that nothing a simulator answered is ever taken for an observation.
+pub const SIMULATOR: u16 = 0x4953;
 
 /// Word offsets from the mailbox head.
 pub mod off {
@@ -29,6 +36,8 @@ pub mod off {
     pub const HASH: u32 = 3;
     /// Rung count (program).
     pub const RUNGS: u32 = 5;
+    /// 0 from the program on a CPU, [`super::SIMULATOR`] from the simulated CPU (program).
+    pub const ORIGIN: u32 = 6;
     /// Sequence number of the case asked for, 1-65535 (PC; written last, alone).
     pub const TRIGGER: u32 = 8;
     /// Sequence number of the case done (program).
@@ -53,8 +62,12 @@ pub mod off {
     pub const CODE_EXTRA: u32 = 19;
     /// The error register one scan later (program).
     pub const CODE_NEXT: u32 = 20;
-    /// Words read in one status poll, from [`TRIGGER`] on.
-    pub const STATUS_WORDS: u32 = 13;
+    /// The rung that ran, written by the rung itself in the scan it was enabled (program).
+    pub const RAN: u32 = 21;
+    /// The trigger that rung ran for (program).
+    pub const RAN_FOR: u32 = 22;
+    /// The rung's ENO in that scan, 0 or 1 (program).
+    pub const ENO: u32 = 23;
 }
 
 /// The program's states.
@@ -65,6 +78,18 @@ pub mod state {
     pub const DONE: u16 = 3;
     /// The error flag stayed on after the error reset: the case was not executed.
     pub const RESET_FAILED: u16 = 8;
+
+    /// A state's name, for messages.
+    pub fn name(state: u16) -> &'static str {
+        match state {
+            IDLE => "idle",
+            RESETTING => "resetting errors",
+            EXECUTING => "executing",
+            DONE => "done, acknowledging next scan",
+            RESET_FAILED => "the error reset failed",
+            _ => "no state of the generated program",
+        }
+    }
 }
 
 /// The words of the mailbox the PC writes: the trigger, the rung and the flags. Nothing else of
@@ -106,14 +131,15 @@ pub struct Signature {
 }
 
 impl Signature {
-    /// From the mailbox's first six words.
-    pub fn of(words: &[u16]) -> Option<Signature> {
-        (words.len() >= 6).then(|| Signature {
-            magic: [words[0], words[1]],
-            layout: words[2],
-            hash: u32::from(words[3]) | u32::from(words[4]) << 16,
-            rungs: words[5],
-        })
+    /// From the mailbox's first six words; a cleared mailbox when there are fewer.
+    pub fn of(words: &[u16]) -> Signature {
+        let word = |i: usize| words.get(i).copied().unwrap_or(0);
+        Signature {
+            magic: [word(0), word(1)],
+            layout: word(2),
+            hash: u32::from(word(3)) | u32::from(word(4)) << 16,
+            rungs: word(5),
+        }
     }
 
     /// What a program with this hash and rung count writes.
@@ -205,7 +231,7 @@ mod tests {
     fn signature_mismatches_are_explained() {
         let good = Signature::expected(0xDEADBEEF, 12);
         assert_eq!(good.mismatch(&good), None);
-        let cleared = Signature::of(&[0; 6]).expect("six words");
+        let cleared = Signature::of(&[0; 6]);
         assert!(cleared
             .mismatch(&good)
             .is_some_and(|m| m.contains("no test program")));

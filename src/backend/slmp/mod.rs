@@ -96,6 +96,10 @@ struct Live {
     trigger: u16,
     /// The CPU's type name, once read.
     cpu: Option<String>,
+    /// The mailbox says the simulated CPU runs the program, not a CPU.
+    simulated: bool,
+    /// The rung whose proof of execution said, on the last case, that it did not execute.
+    not_executed: Option<u16>,
     /// Set when the circuit breaker trips or the CPU left RUN: every later case gets this.
     down: Option<String>,
     faults_in_a_row: usize,
@@ -111,6 +115,10 @@ struct Status {
     code: u16,
     extra: u16,
     next: u16,
+    /// The proof of execution: the rung that ran, the trigger it ran for, its ENO.
+    ran: u16,
+    ran_for: u16,
+    eno: u16,
     sd203: u16,
 }
 
@@ -239,6 +247,8 @@ impl SlmpBackend {
                 verified_on: 0,
                 trigger: 0,
                 cpu: None,
+                simulated: false,
+                not_executed: None,
                 down: None,
                 faults_in_a_row: 0,
             }),
@@ -287,6 +297,12 @@ impl SlmpBackend {
     /// The CPU's type name as read by the interlocks (after [`SlmpBackend::connect`]).
     pub fn cpu(&self) -> Option<String> {
         self.lock().cpu.clone()
+    }
+
+    /// The rung the last case's proof of execution found not executed, taken once: what the
+    /// pulse self-test tells from any other fault.
+    pub fn take_not_executed(&self) -> Option<u16> {
+        self.lock().not_executed.take()
     }
 
     /// Requests sent so far.
@@ -369,15 +385,10 @@ impl SlmpBackend {
             )));
         }
         let words = live.client.read_words(&self.mailbox, mailbox::WORDS)?;
-        let read = Signature::of(&words).unwrap_or(Signature {
-            magic: [0, 0],
-            layout: 0,
-            hash: 0,
-            rungs: 0,
-        });
-        if let Some(why) = read.mismatch(&self.signature) {
+        if let Some(why) = Signature::of(&words).mismatch(&self.signature) {
             return Err(CaseError::Stopped(why));
         }
+        live.simulated = words.get(off::ORIGIN as usize) == Some(&mailbox::SIMULATOR);
         let scans = |w: &[u16]| w.get(off::SCANS as usize).copied().unwrap_or(0);
         let first = scans(&words);
         let since = Instant::now();
@@ -429,6 +440,9 @@ impl SlmpBackend {
             at(off::CODE),
             at(off::CODE_EXTRA),
             at(off::CODE_NEXT),
+            at(off::RAN),
+            at(off::RAN_FOR),
+            at(off::ENO),
             Device::new("SD", 203),
         ])?;
         let get = |i: usize| w.get(i).copied().unwrap_or(0);
@@ -440,7 +454,10 @@ impl SlmpBackend {
             code: get(4),
             extra: get(5),
             next: get(6),
-            sd203: get(7),
+            ran: get(7),
+            ran_for: get(8),
+            eno: get(9),
+            sd203: get(10),
         })
     }
 
@@ -451,6 +468,7 @@ impl SlmpBackend {
         req: &Request<'_>,
         plan: &Plan,
     ) -> Result<Outcome, CaseError> {
+        live.not_executed = None;
         if !live.verified
             || live.verified_on != live.client.connections
             || !live.client.is_connected()
@@ -498,6 +516,18 @@ impl SlmpBackend {
                 )));
             }
             if s.ack == trigger {
+                // The program acknowledges in the scan it goes idle (or finds the error reset
+                // failed): an acknowledgement in any other state is not the program's.
+                if s.state != state::IDLE && s.state != state::RESET_FAILED {
+                    return Err(CaseError::Fault(Fault::Protocol(format!(
+                        "case {} is acknowledged (trigger {trigger}) while the program's state \
+                         says {} ({}): the generated program acknowledges only once it is done, \
+                         so something other than it answered; nothing is judged",
+                        req.case_id,
+                        s.state,
+                        state::name(s.state)
+                    ))));
+                }
                 break s;
             }
             if Instant::now() >= deadline {
@@ -522,6 +552,26 @@ impl SlmpBackend {
                 self.settings.manifest.error.reset,
                 req.case_id,
                 status.code
+            ))));
+        }
+        let ran = status.ran == plan.rung && status.ran_for == trigger;
+        if !ran || (status.eno == 0 && status.flag_after == 0) {
+            live.not_executed = Some(plan.rung);
+        }
+        if !ran {
+            return Err(CaseError::Fault(Fault::Protocol(format!(
+                "rung {} did not run for case {} (trigger {trigger}): the mailbox says rung {} \
+                 ran last, for trigger {}; the rung is missing from the program on the CPU or \
+                 did not execute, so nothing is judged",
+                plan.rung, req.case_id, status.ran, status.ran_for
+            ))));
+        }
+        if status.eno == 0 && status.flag_after == 0 {
+            return Err(CaseError::Fault(Fault::Protocol(format!(
+                "rung {} was enabled for case {} but its instruction reported ENO FALSE and no \
+                 error: it did not execute (a pulse form whose enable did not fall since the \
+                 last case, or a call edited out of the rung), so nothing is judged",
+                plan.rung, req.case_id
             ))));
         }
         let mut outcome = Outcome::default();
@@ -561,6 +611,29 @@ impl SlmpBackend {
         Ok(outcome)
     }
 
+    /// The CPU (or the simulated one) as it reported itself, the variant, the program and the
+    /// transport.
+    fn what_answers(&self) -> String {
+        let live = self.lock();
+        let cpu = live
+            .cpu
+            .clone()
+            .unwrap_or_else(|| format!("`{}` (not yet read)", self.settings.confirm));
+        let what = if live.simulated {
+            "simulated CPU"
+        } else {
+            "live CPU"
+        };
+        format!(
+            "{what} {cpu}, {} variant {}, program {} (mailbox layout {}), {}",
+            self.profile.id,
+            self.settings.variant,
+            self.settings.manifest.hash,
+            mailbox::LAYOUT,
+            self.settings.client.describe()
+        )
+    }
+
     fn breaker(&self, last: &Fault) -> String {
         format!(
             "not run: {} failed {} requests in a row (the last: {}), so its remaining trials \
@@ -586,27 +659,20 @@ impl Backend for SlmpBackend {
     /// type name and model code, once connected), the profile variant, the program (manifest
     /// hash and mailbox layout) and the transport; both fills of every case are executed.
     fn describe(&self) -> String {
-        let cpu = self
-            .cpu()
-            .unwrap_or_else(|| format!("`{}` (not yet read)", self.settings.confirm));
-        format!(
-            "live CPU {cpu}, {} variant {}, program {} (mailbox layout {}), {}, both fills",
-            self.profile.id,
-            self.settings.variant,
-            self.settings.manifest.hash,
-            mailbox::LAYOUT,
-            self.settings.client.describe()
-        )
+        format!("{}, both fills", self.what_answers())
     }
 
     fn version(&self) -> Option<String> {
-        let cpu = self.cpu().unwrap_or_else(|| self.settings.confirm.clone());
-        Some(format!(
-            "{cpu}, program {} (mailbox layout {}), {}",
-            self.settings.manifest.hash,
-            mailbox::LAYOUT,
-            self.settings.client.describe()
-        ))
+        Some(self.what_answers())
+    }
+
+    fn simulated_by(&self) -> Option<String> {
+        self.lock().simulated.then(|| {
+            format!(
+                "the simulated CPU (plc-conformance hil sim) at {}",
+                self.settings.client.address
+            )
+        })
     }
 
     fn claims(&self, instruction: &str, variant: &str) -> bool {

@@ -90,6 +90,18 @@ pub struct SimSettings {
     /// Error registers the CPU leaves alone on an error (a firmware that does not copy the
     /// code to SD8067): tests use this to show that the judge holds every register to the code.
     pub untouched_registers: Vec<Device>,
+    /// Rungs missing from the program on the CPU: neither the call nor its proof of execution
+    /// is there, while the program still acknowledges every trigger.
+    pub missing_rungs: BTreeSet<u16>,
+    /// Rungs whose call never executes (edited out, or its enable changed): the rung still
+    /// writes its proof of execution, with ENO FALSE.
+    pub disabled_rungs: BTreeSet<u16>,
+    /// Whether the mailbox says a simulator runs the program ([`mailbox::SIMULATOR`]). Off, it
+    /// stands for a CPU, so that what a real CPU's recording keeps can be tested.
+    pub identifies: bool,
+    /// A proxy between the PC and the program: after the first case every trigger written is
+    /// kept from the program, and the status polls answer ack = trigger in state 1.
+    pub premature_ack: bool,
     pub faults: Vec<FaultRule>,
 }
 
@@ -112,6 +124,10 @@ impl SimSettings {
             port: 0,
             rungs_in_case: false,
             untouched_registers: Vec::new(),
+            missing_rungs: BTreeSet::new(),
+            disabled_rungs: BTreeSet::new(),
+            identifies: true,
+            premature_ack: false,
             faults: Vec::new(),
         }
     }
@@ -142,6 +158,9 @@ struct Cpu {
     /// The devices ADRSET has stored an address of: this CPU's address of a device is its
     /// place here, with [`ADDRESS_TAG`] in the pointer's second word.
     addressed: Vec<Device>,
+    /// Triggers written so far, and (with `premature_ack`) the last one kept from the program.
+    triggers: usize,
+    withheld: Option<u16>,
 }
 
 /// The second word of an address as this simulated CPU's ADRSET stores it: an encoding of its
@@ -258,6 +277,8 @@ impl Simulator {
             audit: Audit::default(),
             faults: settings.faults.iter().map(|f| (f.clone(), 0)).collect(),
             addressed: Vec::new(),
+            triggers: 0,
+            withheld: None,
         };
         let shared = Arc::new(Shared {
             cpu: Mutex::new(cpu),
@@ -466,6 +487,11 @@ fn scan(shared: &Shared, cpu: &mut Cpu) {
     cpu.set_word(&at(off::HASH), hash as u16);
     cpu.set_word(&at(off::HASH + 1), (hash >> 16) as u16);
     cpu.set_word(&at(off::RUNGS), m.rungs.len() as u16);
+    let origin = match shared.settings.identifies {
+        true => mailbox::SIMULATOR,
+        false => 0,
+    };
+    cpu.set_word(&at(off::ORIGIN), origin);
     let scans = cpu.word(&at(off::SCANS)).unwrap_or(0).wrapping_add(1);
     cpu.set_word(&at(off::SCANS), scans);
     let flag_now = u16::from(cpu.bit(&m.error.flag));
@@ -478,6 +504,9 @@ fn scan(shared: &Shared, cpu: &mut Cpu) {
         match st {
             state::IDLE | state::RESET_FAILED => {
                 cpu.set_bit(&m.error.reset, true);
+                for o in [off::RAN, off::RAN_FOR, off::ENO] {
+                    cpu.set_word(&at(o), 0);
+                }
                 cpu.set_word(&at(off::STATE), state::RESETTING);
             }
             state::RESETTING => {
@@ -502,10 +531,14 @@ fn scan(shared: &Shared, cpu: &mut Cpu) {
         }
     }
     let selected = cpu.word(&at(off::RUNG)).unwrap_or(0);
+    let settings = &shared.settings;
     for rung in &shared.rungs {
+        if settings.missing_rungs.contains(&rung.id) {
+            continue;
+        }
         let enable = exec && selected == rung.id;
         let i = usize::from(rung.id);
-        if shared.settings.rungs_in_case && !enable {
+        if settings.rungs_in_case && !enable {
             continue;
         }
         // ADRSET is no pulse form: it stores the addresses whenever the rung is enabled.
@@ -518,13 +551,25 @@ fn scan(shared: &Shared, cpu: &mut Cpu) {
             enable && !cpu.prev[i]
         } else {
             enable
-        };
+        } && !settings.disabled_rungs.contains(&rung.id);
         cpu.prev[i] = enable;
+        let mut eno = false;
         if fire {
             match cpu.resolve(rung) {
-                Ok(operands) => execute(shared, cpu, &rung.instruction, &operands),
+                Ok(operands) => {
+                    let flag_before = cpu.bit(&m.error.flag);
+                    execute(shared, cpu, &rung.instruction, &operands);
+                    // ENO FALSE on an operation error, as IEC 61131-3 has it.
+                    eno = flag_before || !cpu.bit(&m.error.flag);
+                }
                 Err(why) => cpu.audit.anomalies.push(why),
             }
+        }
+        // The rung's proof of execution, in the scan it is enabled.
+        if enable {
+            cpu.set_word(&at(off::RAN), rung.id);
+            cpu.set_word(&at(off::RAN_FOR), trigger);
+            cpu.set_word(&at(off::ENO), u16::from(eno));
         }
     }
     if exec {
@@ -782,6 +827,22 @@ fn take_fault(cpu: &mut Cpu, command: u16, head: Option<DeviceRef>) -> Option<Fa
     None
 }
 
+/// What the proxy of `premature_ack` answers for a word of a status poll in the program's
+/// place: the trigger it kept as the ack, and state 1.
+fn proxied(shared: &Shared, cpu: &Cpu, d: DeviceRef) -> Option<u16> {
+    let withheld = cpu.withheld?;
+    let letters = frame::device_letters(d.code)?;
+    let at = |o| mailbox::at(&shared.mailbox, o);
+    let is = |o| letters == at(o).code() && d.number == at(o).index;
+    if is(off::ACK) {
+        Some(withheld)
+    } else if is(off::STATE) {
+        Some(state::RESETTING)
+    } else {
+        None
+    }
+}
+
 /// Answers one decoded request: (end code, data).
 fn handle(shared: &Shared, request: &Request, decoded: Decoded) -> (u16, Vec<u8>) {
     if request.subcommand == 0x0002 && !shared.settings.long_form {
@@ -809,7 +870,10 @@ fn handle(shared: &Shared, request: &Request, decoded: Decoded) -> (u16, Vec<u8>
             let mut data = Vec::with_capacity(2 * devices.len());
             for d in devices {
                 match cpu.device_words(d, 1) {
-                    Ok(w) => data.extend_from_slice(&w[0].to_le_bytes()),
+                    Ok(w) => {
+                        let word = proxied(shared, &cpu, d).unwrap_or(w[0]);
+                        data.extend_from_slice(&word.to_le_bytes());
+                    }
                     Err(code) => return (code, Vec::new()),
                 }
             }
@@ -829,8 +893,17 @@ fn handle(shared: &Shared, request: &Request, decoded: Decoded) -> (u16, Vec<u8>
             if !shared.allowed.iter().any(|r| r.contains(&asked)) {
                 cpu.audit.stray_writes.push(asked.to_string());
             }
+            let trigger = mailbox::at(&shared.mailbox, off::TRIGGER);
             for (i, w) in words.iter().enumerate() {
-                cpu.set_word(&Device::new(letters, head.number + i as u32), *w);
+                let device = Device::new(letters, head.number + i as u32);
+                if device.code() == trigger.code() && device.index == trigger.index {
+                    cpu.triggers += 1;
+                    if shared.settings.premature_ack && cpu.triggers > 1 {
+                        cpu.withheld = Some(*w);
+                        continue;
+                    }
+                }
+                cpu.set_word(&device, *w);
             }
             (0, Vec::new())
         }
@@ -852,6 +925,8 @@ mod tests {
             audit: Audit::default(),
             faults: Vec::new(),
             addressed: Vec::new(),
+            triggers: 0,
+            withheld: None,
         }
     }
 
