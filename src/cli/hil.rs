@@ -10,8 +10,9 @@ use std::time::Duration;
 use super::backends::{load, paths};
 use super::{output, Cli, CliError, Outcome, EXIT_DIFFERENCES, EXIT_OK};
 use crate::backend::slmp::doctor::doctor;
+use crate::backend::slmp::limits::Family;
 use crate::backend::slmp::manifest::Manifest;
-use crate::backend::slmp::sim::{SimSettings, Simulator};
+use crate::backend::slmp::sim::{self, FaultRule, SimSettings, Simulator};
 use crate::backend::slmp::{fence, mailbox};
 use crate::backend::slmp::{SlmpBackend, SlmpSettings};
 use crate::hil::{dry_run, generate, pulse_self_test, GenerateOptions};
@@ -66,15 +67,26 @@ pub enum HilCommand {
         /// The profile variant the simulated CPU is [default: the manifest's only one].
         #[arg(long, value_name = "ID")]
         variant: Option<String>,
-        /// The type name 0101 answers.
-        #[arg(long, value_name = "NAME", default_value = "R04CPU")]
-        type_name: String,
+        /// The type name 0101 answers [default: R04CPU, FX5U-32MT/DS for an FX5 manifest].
+        #[arg(long, value_name = "NAME")]
+        type_name: Option<String>,
+        /// The model code 0101 answers, in hexadecimal [default: the one the manuals give the
+        /// type name].
+        #[arg(long, value_name = "HEX")]
+        model_code: Option<String>,
         /// The port on 127.0.0.1 [default: any free one].
         #[arg(long, default_value_t = 0)]
         port: u16,
         /// Microseconds between scans.
         #[arg(long, value_name = "US", default_value_t = 200)]
         scan_us: u64,
+        /// Start in STOP (SD203 says so, the program does not scan).
+        #[arg(long)]
+        stop: bool,
+        /// A port fault, COMMAND:NTH:ACTION: `1401:3:drop` closes the connection on the third
+        /// write; actions drop, delay=MS, end=CODE, garbage, serial, stop. Repeat for several.
+        #[arg(long = "fault", value_name = "RULE")]
+        faults: Vec<String>,
     },
 }
 
@@ -213,9 +225,16 @@ pub fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
             manifest,
             variant,
             type_name,
+            model_code,
             port,
             scan_us,
+            stop,
+            faults,
         } => {
+            let faults = faults
+                .iter()
+                .map(|f| FaultRule::parse(f).map_err(|e| CliError::input(format!("--fault {e}"))))
+                .collect::<Result<Vec<_>, _>>()?;
             let project = load(&paths(cli, &[], "--vectors")?)?;
             let m = Manifest::load(manifest).map_err(CliError::input)?;
             let variant = match variant {
@@ -240,9 +259,29 @@ pub fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
                 .ok_or_else(|| {
                     CliError::input(format!("no built-in reference model for {}", m.profile))
                 })?;
-            let mut settings = SimSettings::new(m, variant, type_name.clone());
+            let type_name =
+                type_name
+                    .clone()
+                    .unwrap_or_else(|| match Family::of_profile(&m.profile) {
+                        Family::Fx5 => "FX5U-32MT/DS".into(),
+                        Family::Iqr => "R04CPU".into(),
+                    });
+            let model_code = match model_code {
+                Some(hex) => u16::from_str_radix(hex.trim_end_matches('H'), 16).map_err(|_| {
+                    CliError::input(format!("--model-code {hex}: give four hexadecimal digits"))
+                })?,
+                None => sim::model_code(&type_name).ok_or_else(|| {
+                    CliError::input(format!(
+                        "no model code is known for `{type_name}`: give --model-code"
+                    ))
+                })?,
+            };
+            let mut settings = SimSettings::new(m, variant, type_name);
+            settings.model_code = model_code;
             settings.port = *port;
             settings.scan = Duration::from_micros(*scan_us);
+            settings.run = !*stop;
+            settings.faults = faults;
             let sim = Simulator::start(settings, profile, model).map_err(CliError::input)?;
             output::write(None, &format!("listening on {}", sim.address()))?;
             loop {

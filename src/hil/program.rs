@@ -12,6 +12,7 @@
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
+use crate::backend::slmp::fence;
 use crate::backend::slmp::mailbox::{self, off, state};
 use crate::backend::slmp::manifest::{parse_operand, Manifest};
 use crate::device::Device;
@@ -250,8 +251,9 @@ pub fn setup_text(manifest: &Manifest, profile: &Profile, trials: usize) -> Stri
         manifest.generator
     );
     t.push_str(
-        "**A bench CPU only.** The harness writes data registers of the CPU while it runs. \
-         Use a CPU that controls nothing: no outputs wired, no other program.\n\n",
+        "**A bench CPU only.** The harness writes words of the CPU while it runs (listed under \
+         \"What the run writes\"). Use a CPU that controls nothing: no outputs wired, no other \
+         program.\n\n",
     );
     t.push_str("## In the engineering tool (GX Works3)\n\n");
     t.push_str("Items marked *check* are not confirmed from a manual; note what you found.\n\n");
@@ -285,6 +287,33 @@ pub fn setup_text(manifest: &Manifest, profile: &Profile, trials: usize) -> Stri
          a rung that does not convert cannot be run (remove it and regenerate with a filter, \
          or report it).\n",
     );
+    t.push_str(
+        "   Each call passes its operands in this order (docs/semantics.md, structured-text \
+         calls); a form no quoted manual page prints is marked *check*: confirm it in the \
+         instruction's help before the first run.\n",
+    );
+    let mut unconfirmed: Vec<String> = manifest
+        .rungs
+        .iter()
+        .map(|r| r.instruction.clone())
+        .chain((manifest.rungs.iter().any(|r| !r.addresses.is_empty())).then(|| "ADRSET".into()))
+        .collect();
+    unconfirmed.sort();
+    unconfirmed.dedup();
+    for name in unconfirmed {
+        if let Some(form) = profile.calls.get(&name) {
+            let mark = match form.basis {
+                crate::model::profile::CallBasis::Manual => "as the manual prints it",
+                crate::model::profile::CallBasis::Inferred => "*check*",
+            };
+            let _ = writeln!(
+                t,
+                "   - `ENO:={}(EN,{});` {mark}",
+                form.instruction,
+                form.operands.join(",")
+            );
+        }
+    }
     if manifest.rungs.iter().any(|r| !r.addresses.is_empty()) {
         t.push_str(
             "   Rungs with indirect specification store the address first: \
@@ -304,13 +333,66 @@ pub fn setup_text(manifest: &Manifest, profile: &Profile, trials: usize) -> Stri
     );
     t.push_str(
         "`confirm` is the type name the CPU reports (0101), e.g. `R04CPU`; nothing is written \
-         unless it matches. `sandbox` is the set of data registers the harness may write \
-         besides the mailbox's three PC words: `manifest` takes the manifest's `writes`:\n\n",
+         unless it matches. `sandbox` is the set of words the harness may write besides the \
+         mailbox's three PC words.\n\n",
     );
-    for w in &manifest.writes {
-        let _ = writeln!(t, "- {w}");
+    t.push_str("## What the run writes\n\n");
+    let ranges = fence::parse_ranges(&manifest.writes.join(",")).unwrap_or_default();
+    let (data, special): (Vec<_>, Vec<_>) = ranges
+        .iter()
+        .partition(|r| fence::Kind::of(&r.code) == fence::Kind::Data);
+    let list = |rs: &[&fence::WordRange]| {
+        rs.iter()
+            .map(ToString::to_string)
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    if !data.is_empty() {
+        let _ = writeln!(
+            t,
+            "- **Data and link registers** the case windows write (`sandbox=manifest` covers \
+             them): {}.",
+            list(&data)
+        );
     }
-    t.push('\n');
+    if !special.is_empty() {
+        let _ = writeln!(
+            t,
+            "- **Special registers** the case windows write, only when you name them \
+             (`sandbox=manifest,{}`); their cases are not run otherwise: {}.",
+            special
+                .iter()
+                .map(ToString::to_string)
+                .collect::<Vec<_>>()
+                .join(","),
+            list(&special)
+        );
+    }
+    if let Ok(head) = manifest.mailbox_head() {
+        let pc = mailbox::pc_words(&head);
+        let _ =
+            writeln!(
+            t,
+            "- **The mailbox** {}: the PC writes {} (trigger, rung, flags); the program writes \
+             the rest.",
+            mailbox::range(&head),
+            pc.iter().map(ToString::to_string).collect::<Vec<_>>().join(", ")
+        );
+    }
+    let _ = writeln!(
+        t,
+        "- **The program** also sets the error reset {} and the mode flags {} for the scan of \
+         each case, and each instruction writes its destination inside the case windows.\n",
+        manifest.error.reset,
+        if manifest.flags.is_empty() {
+            "(none)".to_string()
+        } else {
+            manifest.flags.join(", ")
+        }
+    );
+    t.push_str(
+        "Nothing else is written: no bit device, output or timer, and no word outside these.\n\n",
+    );
     if !manifest.unrealisable.is_empty() {
         t.push_str(
             "## Cases no program can hold\n\nTheir trials are skipped with this reason:\n\n",

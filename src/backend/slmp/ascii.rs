@@ -314,6 +314,7 @@ mod tests {
         let w = fence
             .writes(
                 DeviceForm::Short,
+                960,
                 &crate::device::Device::new("D", 10),
                 &[0x5A8D, 0x0001],
             )

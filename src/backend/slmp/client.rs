@@ -18,8 +18,9 @@ use super::ascii;
 use super::fence::FencedWrite;
 use super::frame::{
     self, hex, message_len, DeviceForm, DeviceRef, FrameError, FrameKind, Request, Response, Route,
-    TypeName, MAX_BATCH_WORDS, MAX_RANDOM_WORDS,
+    TypeName,
 };
+use super::limits::{limits, Family, Limits};
 use crate::device::Device;
 
 /// How to reach and talk to one CPU port.
@@ -40,6 +41,8 @@ pub struct ClientSettings {
     pub connect_timeout: Duration,
     /// How many times a read is sent again after a timeout or a lost connection.
     pub read_retries: u32,
+    /// What one request may carry on this port.
+    pub limits: Limits,
 }
 
 impl ClientSettings {
@@ -57,6 +60,7 @@ impl ClientSettings {
             reply_timeout: Duration::from_millis(2500),
             connect_timeout: Duration::from_secs(3),
             read_retries: 2,
+            limits: limits(Family::Iqr, Code::Binary, DeviceForm::Long),
         }
     }
 
@@ -94,8 +98,12 @@ pub enum ClientError {
     Closed { what: String, error: String },
     /// A reply that does not decode, or answers another request.
     Frame { what: String, detail: String },
-    /// The CPU answered with an error end code.
-    EndCode { what: String, code: u16 },
+    /// The CPU answered with an error end code; `form` is the device form the request used.
+    EndCode {
+        what: String,
+        code: u16,
+        form: DeviceForm,
+    },
     /// A request this client refuses to build (a limit of the protocol).
     Request { what: String, detail: String },
 }
@@ -122,9 +130,9 @@ impl fmt::Display for ClientError {
                     "the reply to {what} is not a valid SLMP response: {detail}"
                 )
             }
-            ClientError::EndCode { what, code } => {
+            ClientError::EndCode { what, code, form } => {
                 write!(f, "the CPU answered {what} with end code {code:04X}H")?;
-                if let Some(meaning) = end_code_meaning(*code) {
+                if let Some(meaning) = end_code_meaning(*code, *form) {
                     write!(f, " ({meaning})")?;
                 }
                 Ok(())
@@ -137,12 +145,17 @@ impl fmt::Display for ClientError {
 impl std::error::Error for ClientError {}
 
 /// What the common end codes mean, in a few words, for messages. The SLMP manuals list them;
-/// these few are the ones a misconfigured bench meets.
-pub fn end_code_meaning(code: u16) -> Option<&'static str> {
+/// these few are the ones a misconfigured bench meets. C059H blames the long device form only
+/// when the request used it.
+pub fn end_code_meaning(code: u16, form: DeviceForm) -> Option<&'static str> {
     Some(match code {
         0xC051..=0xC054 => "too many points for one request",
         0xC056 => "a device past the end of its range",
-        0xC059 => "command or subcommand not supported (an FX5 refuses the long device form)",
+        0xC059 if form == DeviceForm::Long => {
+            "command or subcommand not supported (an FX5 refuses the long device form: give \
+             form=short)"
+        }
+        0xC059 => "command or subcommand not supported",
         0xC05B | 0xC05C => "device not supported or request malformed",
         0xC061 => "request data length does not match",
         _ => return None,
@@ -295,6 +308,7 @@ impl Client {
                 return Err(ClientError::EndCode {
                     what: what.into(),
                     code: response.end_code,
+                    form: self.settings.form,
                 });
             }
             Ok(response.data)
@@ -333,7 +347,7 @@ impl Client {
         })
     }
 
-    /// 0401: `count` words from `head`, in batches of at most 960.
+    /// 0401: `count` words from `head`, in batches of at most the port's limit.
     pub fn read_words(&mut self, head: &Device, count: u32) -> Result<Vec<u16>, ClientError> {
         let mut out = Vec::with_capacity(count as usize);
         let first = device_ref(head).map_err(|detail| ClientError::Request {
@@ -341,7 +355,7 @@ impl Client {
             detail,
         })?;
         while out.len() < count as usize {
-            let n = (count as usize - out.len()).min(MAX_BATCH_WORDS);
+            let n = (count as usize - out.len()).min(self.settings.limits.batch_words.max(1));
             let at = DeviceRef {
                 number: first.number + out.len() as u32,
                 ..first
@@ -361,7 +375,7 @@ impl Client {
         Ok(out)
     }
 
-    /// 0403: one word from each device, in one request (at most 192).
+    /// 0403: one word from each device, in one request (at most the port's limit).
     pub fn random_read(&mut self, devices: &[Device]) -> Result<Vec<u16>, ClientError> {
         let names: Vec<String> = devices.iter().map(ToString::to_string).collect();
         let what = format!("0403 (read {})", names.join(" "));
@@ -373,10 +387,11 @@ impl Client {
                 what: what.clone(),
                 detail,
             })?;
-        if refs.len() > MAX_RANDOM_WORDS {
+        let most = self.settings.limits.random_points;
+        if refs.len() > most {
             return Err(ClientError::Request {
                 what,
-                detail: format!("more than {MAX_RANDOM_WORDS} points"),
+                detail: format!("more than {most} points, the limit of this port"),
             });
         }
         let body =
@@ -657,7 +672,7 @@ mod tests {
     fn a_refused_write_sends_nothing() {
         let (address, server) = scripted(vec![]);
         let fence = WriteFence::new(vec![WordRange::new("D", 0, 99)]);
-        let refused = fence.writes(DeviceForm::Short, &Device::new("D", 99), &[1, 2]);
+        let refused = fence.writes(DeviceForm::Short, 960, &Device::new("D", 99), &[1, 2]);
         assert!(refused.is_err());
         let c = Client::new(settings(&address));
         assert!(!c.is_connected(), "a client connects only when it sends");

@@ -10,7 +10,7 @@
 use std::fmt;
 use std::str::FromStr;
 
-use super::frame::{self, Body, DeviceForm, DeviceRef, MAX_BATCH_WORDS};
+use super::frame::{self, Body, DeviceForm, DeviceRef};
 use crate::device::Device;
 
 /// A run of words of one device code, both ends included: `D0-D11999`, or `D12000` alone.
@@ -95,6 +95,39 @@ impl FromStr for WordRange {
         }
         Ok(WordRange::new(first.code(), first.index, last.index))
     }
+}
+
+/// What a device is to a sandbox: the harness writes word devices only, and a special one only
+/// when the user names it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// Data, file and link registers (D, R, ZR, W): memory a test program may own.
+    Data,
+    /// Special and link special registers (SD, SW): the CPU's and the network's own words.
+    Special,
+    /// Bit devices (X, Y, M, SM, ...): inputs, outputs and relays, 16 points to a word.
+    Bit,
+}
+
+impl Kind {
+    pub fn of(code: &str) -> Kind {
+        match code {
+            "D" | "R" | "ZR" | "W" => Kind::Data,
+            "SD" | "SW" => Kind::Special,
+            _ => Kind::Bit,
+        }
+    }
+}
+
+/// Why a range cannot be part of a sandbox, if it cannot: a bit device (an output, a relay; a
+/// word of one is 16 points) is never written, whatever the sandbox says.
+pub fn sandbox_refuses(range: &WordRange) -> Option<String> {
+    (Kind::of(&range.code) == Kind::Bit).then(|| {
+        format!(
+            "{range}: a sandbox holds word devices only (D, R, ZR, W, and SD or SW when named); \
+             the live backend never writes a bit device such as an output or a relay"
+        )
+    })
 }
 
 /// Reads a comma-separated list of ranges.
@@ -205,11 +238,12 @@ impl WriteFence {
         }
     }
 
-    /// The batch writes of `words` from `head`, at most [`MAX_BATCH_WORDS`] each, once every
-    /// word is inside the fence; nothing is built when one is not.
+    /// The batch writes of `words` from `head`, at most `batch` words each (the port's limit,
+    /// [`super::limits`]), once every word is inside the fence; nothing is built when one is not.
     pub fn writes(
         &self,
         form: DeviceForm,
+        batch: usize,
         head: &Device,
         words: &[u16],
     ) -> Result<Vec<FencedWrite>, Refused> {
@@ -230,9 +264,10 @@ impl WriteFence {
         self.check(&asked)?;
         let code = frame::device_code(head.code())
             .ok_or_else(|| refuse(format!("{} has no SLMP device code", head.code())))?;
-        let mut out = Vec::with_capacity(words.len().div_ceil(MAX_BATCH_WORDS));
-        for (i, chunk) in words.chunks(MAX_BATCH_WORDS).enumerate() {
-            let number = head.index + (i * MAX_BATCH_WORDS) as u32;
+        let batch = batch.clamp(1, frame::MAX_BATCH_WORDS);
+        let mut out = Vec::with_capacity(words.len().div_ceil(batch));
+        for (i, chunk) in words.chunks(batch).enumerate() {
+            let number = head.index + (i * batch) as u32;
             let body = frame::write_words(form, DeviceRef { code, number }, chunk)
                 .map_err(|e| refuse(e.to_string()))?;
             out.push(FencedWrite {
@@ -267,7 +302,7 @@ mod tests {
     #[case("SD0", 1, false)]
     fn allows_only_inside(#[case] head: &str, #[case] count: usize, #[case] ok: bool) {
         let head: Device = head.parse().expect("device");
-        let r = fence().writes(DeviceForm::Short, &head, &vec![0; count]);
+        let r = fence().writes(DeviceForm::Short, 960, &head, &vec![0; count]);
         assert_eq!(r.is_ok(), ok, "{head} x{count}: {r:?}");
     }
 
@@ -276,10 +311,16 @@ mod tests {
         let f = WriteFence::new(parse_ranges("D0-D99,D100-D2000").expect("ranges"));
         assert_eq!(f.allowed(), &[WordRange::new("D", 0, 2000)]);
         let writes = f
-            .writes(DeviceForm::Short, &Device::new("D", 0), &[7; 2001])
+            .writes(DeviceForm::Short, 960, &Device::new("D", 0), &[7; 2001])
             .expect("inside");
         let ranges: Vec<String> = writes.iter().map(|w| w.range().to_string()).collect();
         assert_eq!(ranges, ["D0-D959", "D960-D1919", "D1920-D2000"]);
+        // An FX5 in ASCII code takes 480 words a request.
+        let writes = f
+            .writes(DeviceForm::Short, 480, &Device::new("D", 0), &[7; 961])
+            .expect("inside");
+        let ranges: Vec<String> = writes.iter().map(|w| w.range().to_string()).collect();
+        assert_eq!(ranges, ["D0-D479", "D480-D959", "D960"]);
     }
 
     /// Link registers read and print in hexadecimal, as MELSEC numbers them; data registers
@@ -303,13 +344,27 @@ mod tests {
     #[test]
     fn a_refusal_names_the_words_and_the_fence() {
         let e = fence()
-            .writes(DeviceForm::Short, &Device::new("D", 11990), &[0; 20])
+            .writes(DeviceForm::Short, 960, &Device::new("D", 11990), &[0; 20])
             .expect_err("outside");
         assert_eq!(
             e.to_string(),
             "a write to D11990-D12009 is refused: it lies outside the words the harness may \
              write (D0-D11999, D12008-D12011, D12100-D18431)"
         );
+    }
+
+    #[test]
+    fn a_sandbox_holds_word_devices_only() {
+        for bits in ["Y0-Y17", "M0-M15", "SM0", "B0-BF", "X0"] {
+            let r: WordRange = bits.parse().expect("range");
+            assert!(sandbox_refuses(&r).is_some(), "{bits}");
+        }
+        for words in ["D0-D10", "R5", "W0-W1F", "SD100-SD167", "SW0-SW1"] {
+            let r: WordRange = words.parse().expect("range");
+            assert_eq!(sandbox_refuses(&r), None, "{words}");
+        }
+        assert_eq!(Kind::of("SD"), Kind::Special);
+        assert_eq!(Kind::of("W"), Kind::Data);
     }
 
     #[rstest]
@@ -333,7 +388,7 @@ mod tests {
             let ranges: Vec<WordRange> = allowed.iter().map(|(a, n)| WordRange::new("D", *a, a + n)).collect();
             let fence = WriteFence::new(ranges.clone());
             let inside = (head..head + count as u32).all(|w| ranges.iter().any(|r| r.first <= w && w <= r.last));
-            let built = fence.writes(DeviceForm::Short, &Device::new("D", head), &vec![0; count]);
+            let built = fence.writes(DeviceForm::Short, 960, &Device::new("D", head), &vec![0; count]);
             proptest::prop_assert_eq!(built.is_ok(), inside);
         }
     }

@@ -11,6 +11,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+use super::fence::{parse_ranges, Kind};
 use super::mailbox;
 use crate::device::Device;
 use crate::model::{Indirect, Operand};
@@ -85,7 +86,8 @@ pub struct Manifest {
     pub hash: String,
 }
 
-/// The fields that define the program: what the hash covers.
+/// The fields that define the program, and the words its cases write: what the hash covers,
+/// so that neither the program nor the sandbox `sandbox=manifest` takes can be edited by hand.
 #[derive(Serialize)]
 struct Program<'a> {
     profile: &'a str,
@@ -94,7 +96,15 @@ struct Program<'a> {
     flags: &'a [String],
     error: &'a ErrorDevices,
     rungs: &'a [Rung],
+    writes: &'a [String],
 }
+
+/// The largest manifest read: a corpus's program is tens of kilobytes.
+pub const MAX_BYTES: u64 = 16 << 20;
+
+/// The highest device number the Q-compatible device form can carry (three bytes): no
+/// mailbox word or write may lie past it.
+pub const MAX_NUMBER: u32 = 0x00FF_FFFF;
 
 fn fnv1a64(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, b| {
@@ -189,6 +199,7 @@ impl Manifest {
             flags: &self.flags,
             error: &self.error,
             rungs: &self.rungs,
+            writes: &self.writes,
         };
         let bytes = serde_json::to_vec(&program).unwrap_or_default();
         format!("{:016X}", fnv1a64(&bytes))
@@ -199,9 +210,25 @@ impl Manifest {
         u64::from_str_radix(&self.hash, 16).map_or(0, |h| h as u32)
     }
 
-    /// The mailbox head.
+    /// The mailbox head, where a mailbox may be: in a data or link register (where a sandbox
+    /// may be, never a special, bit or timer device), all 32 words within the device numbers.
     pub fn mailbox_head(&self) -> Result<Device, String> {
-        mailbox::head(&self.mailbox).map_err(|e| format!("`mailbox`: {e}"))
+        let head = mailbox::head(&self.mailbox).map_err(|e| format!("`mailbox`: {e}"))?;
+        if Kind::of(head.code()) != Kind::Data || super::frame::device_code(head.code()).is_none() {
+            return Err(format!(
+                "`mailbox`: {head} is not a data or link register (D, R, ZR, W): the mailbox \
+                 lies where a sandbox may be"
+            ));
+        }
+        let fits = (head.index.checked_add(mailbox::WORDS - 1)).is_some_and(|l| l <= MAX_NUMBER);
+        if !fits {
+            return Err(format!(
+                "`mailbox`: {head} leaves no room for its {} words below {}{MAX_NUMBER}",
+                mailbox::WORDS,
+                head.code()
+            ));
+        }
+        Ok(head)
     }
 
     /// What the program writes into the mailbox's signature words.
@@ -257,6 +284,17 @@ impl Manifest {
         if self.flags.len() > 16 {
             return Err("more than 16 flags do not fit the mailbox flag word".into());
         }
+        for range in parse_ranges(&self.writes.join(",")).map_err(|e| format!("`writes`: {e}"))? {
+            if range.last > MAX_NUMBER {
+                return Err(format!(
+                    "`writes`: {range} runs past {}{MAX_NUMBER}",
+                    range.code
+                ));
+            }
+            if let Some(why) = super::fence::sandbox_refuses(&range) {
+                return Err(format!("`writes`: {why}"));
+            }
+        }
         self.rung_index()?;
         let computed = self.compute_hash();
         if computed != self.hash {
@@ -269,10 +307,21 @@ impl Manifest {
         Ok(())
     }
 
-    /// Reads and validates a manifest file; errors name the file.
+    /// Reads and validates a manifest file; errors name the file. Read as the YAML files are:
+    /// a regular file only (a FIFO would block, a device never end), and at most
+    /// [`MAX_BYTES`].
     pub fn load(path: &Path) -> Result<Manifest, String> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| format!("{}: cannot be read: {e}", path.display()))?;
+        let unreadable =
+            |e: &dyn std::fmt::Display| format!("{}: cannot be read: {e}", path.display());
+        let size = std::fs::metadata(path).map_err(|e| unreadable(&e))?.len();
+        if size > MAX_BYTES {
+            return Err(format!(
+                "{}: {size} bytes; a manifest is at most {MAX_BYTES}",
+                path.display()
+            ));
+        }
+        let bytes = crate::load::read_regular(path).map_err(|e| unreadable(&e))?;
+        let text = String::from_utf8(bytes).map_err(|e| unreadable(&e))?;
         let manifest: Manifest = serde_json::from_str(&text).map_err(|e| {
             format!(
                 "{}:{}: not a plc-conformance manifest: {e}",
@@ -360,10 +409,50 @@ mod tests {
         m.rungs[0].operands.insert("s".into(), "D101".into());
         let e = m.validate().expect_err("stale hash");
         assert!(e.contains("changed after it was generated"), "{e}");
-        // Fields outside the program do not change the hash.
+        // The words the cases write are under the hash too: a sandbox taken from them cannot
+        // be widened by hand.
         let mut m = sample();
         m.writes.push("D0".into());
-        m.validate().expect("writes are not hashed");
+        let e = m.validate().expect_err("writes are hashed");
+        assert!(e.contains("changed after it was generated"), "{e}");
+        // The generator's name is not.
+        let mut m = sample();
+        m.generator = "another".into();
+        m.validate().expect("the generator is not hashed");
+    }
+
+    /// A mailbox lies where a sandbox may be, with its 32 words within the device numbers:
+    /// never at the end of the numbers (where its words would wrap), in special registers,
+    /// outputs, relays or timers.
+    #[test]
+    fn a_mailbox_lies_where_a_sandbox_may_be() {
+        for (mailbox, says) in [
+            ("D16777200", "leaves no room"),
+            ("D4294967290", "leaves no room"),
+            ("SD0", "not a data or link register"),
+            ("SM0", "not a data or link register"),
+            ("Y0", "not a data or link register"),
+            ("T0", "not a data or link register"),
+        ] {
+            let mut m = sample();
+            m.mailbox = mailbox.into();
+            m.hash = m.compute_hash();
+            let e = m.validate().expect_err(mailbox);
+            assert!(e.contains(says), "{mailbox}: {e}");
+        }
+        let mut m = sample();
+        m.mailbox = "W100".into();
+        m.hash = m.compute_hash();
+        m.validate().expect("link registers take a mailbox");
+    }
+
+    #[test]
+    fn writes_to_bit_devices_are_refused() {
+        let mut m = sample();
+        m.writes.push("Y0-Y17".into());
+        m.hash = m.compute_hash();
+        let e = m.validate().expect_err("a bit device");
+        assert!(e.contains("word devices only"), "{e}");
     }
 
     #[test]

@@ -27,6 +27,7 @@ pub mod client;
 pub mod doctor;
 pub mod fence;
 pub mod frame;
+pub mod limits;
 pub mod mailbox;
 pub mod manifest;
 pub mod settings;
@@ -212,6 +213,16 @@ impl SlmpBackend {
         }
         let mailbox = manifest.mailbox_head()?;
         let whole = mailbox::range(&mailbox);
+        if let Some(why) = settings.sandbox.iter().find_map(fence::sandbox_refuses) {
+            return Err(format!("`sandbox`: {why}"));
+        }
+        let variant = profile.variant(&settings.variant).ok_or("no variant")?;
+        if !profile.words_exist(variant, &mailbox, mailbox::WORDS) {
+            return Err(format!(
+                "the mailbox {whole} does not exist on variant {} of {}",
+                settings.variant, profile.id
+            ));
+        }
         if let Some(r) = settings.sandbox.iter().find(|r| r.overlaps(&whole)) {
             return Err(format!(
                 "the sandbox range {r} overlaps the mailbox {whole}: the program's own words \
@@ -333,9 +344,17 @@ impl SlmpBackend {
                 return Err(format!("not run: the case sets {code} words: {why}"));
             }
             let range = WordRange::new(code, first, last);
-            self.fence.check(&range).map_err(|e| {
-                format!("not run: {e}; declare a sandbox that covers the manifest's `writes`")
-            })?;
+            self.fence
+                .check(&range)
+                .map_err(|e| match fence::Kind::of(code) {
+                    fence::Kind::Special => format!(
+                        "not run: {e}; {code} is a special register, which `sandbox=manifest` \
+                     leaves out: name it to let the harness write it (sandbox=manifest,{range})"
+                    ),
+                    _ => format!(
+                        "not run: {e}; declare a sandbox that covers the manifest's `writes`"
+                    ),
+                })?;
             let words = (first..=last)
                 .step_by(head.points() as usize)
                 .map(|i| req.memory.read(&head.with_index(i)))
@@ -479,16 +498,21 @@ impl SlmpBackend {
             self.verify(live)?;
         }
         let form = self.settings.client.form;
+        let batch = self.settings.client.limits.batch_words;
         let refused = |e: fence::Refused| CaseError::Fault(Fault::Protocol(e.to_string()));
         for (head, words) in &plan.window {
-            for w in self.fence.writes(form, head, words).map_err(refused)? {
+            for w in self
+                .fence
+                .writes(form, batch, head, words)
+                .map_err(refused)?
+            {
                 live.client.write(&w)?;
             }
         }
         let rung_at = mailbox::at(&self.mailbox, off::RUNG);
         for w in self
             .fence
-            .writes(form, &rung_at, &[plan.rung, plan.flags])
+            .writes(form, batch, &rung_at, &[plan.rung, plan.flags])
             .map_err(refused)?
         {
             live.client.write(&w)?;
@@ -497,7 +521,7 @@ impl SlmpBackend {
         let trigger_at = mailbox::at(&self.mailbox, off::TRIGGER);
         for w in self
             .fence
-            .writes(form, &trigger_at, &[trigger])
+            .writes(form, batch, &trigger_at, &[trigger])
             .map_err(refused)?
         {
             live.client.write(&w)?;

@@ -5,8 +5,9 @@ use std::path::Path;
 use std::time::Duration;
 
 use super::client::{ClientSettings, Code};
-use super::fence::{parse_ranges, WordRange};
+use super::fence::{parse_ranges, Kind, WordRange};
 use super::frame::{DeviceForm, FrameKind};
+use super::limits::{self, Family};
 use super::manifest::Manifest;
 
 /// The case time limit unless configured: the program needs three or four scans.
@@ -38,8 +39,16 @@ pub struct SlmpSettings {
 }
 
 impl SlmpSettings {
-    /// Settings with the defaults of the manifest's family: FX5 CPUs get 3E frames and the
-    /// Q-compatible device form (an FX5U refuses the long form); others 4E and the long form.
+    /// The limits of the port as now configured: to call after changing the code or the form.
+    pub fn fit_limits(&mut self) {
+        let family = Family::of_profile(&self.manifest.profile);
+        self.client.limits = limits::limits(family, self.client.code, self.client.form);
+    }
+
+    /// Settings with the defaults of the manifest's family: FX5 CPUs get 3E frames, the
+    /// Q-compatible device form (an FX5U refuses the long form) and the monitoring timer 0;
+    /// others 4E, the long form and 2 s. The limits follow the code and the form
+    /// ([`SlmpSettings::fit_limits`]).
     pub fn new(
         name: impl Into<String>,
         address: impl Into<String>,
@@ -49,10 +58,13 @@ impl SlmpSettings {
         sandbox: Vec<WordRange>,
     ) -> Self {
         let mut client = ClientSettings::new(address);
-        if manifest.profile == "mitsubishi-fx5" {
+        let family = Family::of_profile(&manifest.profile);
+        if family == Family::Fx5 {
             client.frame = FrameKind::E3;
             client.form = DeviceForm::Short;
         }
+        client.timer = limits::monitoring_timer(family);
+        client.limits = limits::limits(family, client.code, client.form);
         SlmpSettings {
             name: name.into(),
             client,
@@ -69,7 +81,8 @@ impl SlmpSettings {
 
     /// Reads `slmp:NAME=HOST:PORT?key=value&...`; `None` when `text` is not of this form.
     /// Keys: `manifest` (path), `confirm` (the CPU type name), `sandbox` (ranges such as
-    /// `D0-D4359,D7900-D7999`, or `manifest` for the manifest's `writes`), and optionally
+    /// `D0-D4359,D7900-D7999`, where `manifest` stands for the data and link registers of the
+    /// manifest's `writes`: `manifest,SD100-SD167` adds special registers), and optionally
     /// `variant`, `frame` (3e, 4e), `code` (binary, ascii), `form` (short, long), `timeout` (case seconds), `monitor`
     /// (monitoring timer, units of 250 ms), `max_faults`, `poll_ms`.
     pub fn parse(text: &str, base: &Path) -> Result<Option<SlmpSettings>, String> {
@@ -136,11 +149,25 @@ impl SlmpSettings {
                 ))
             }
         };
-        let sandbox = match need("sandbox")? {
-            "manifest" => parse_ranges(&manifest.writes.join(","))
-                .map_err(|e| format!("{}: `writes`: {e}", manifest_path.display()))?,
-            ranges => parse_ranges(ranges).map_err(|e| format!("`sandbox`: {e}"))?,
-        };
+        // `manifest` stands for the data and link registers of the manifest's `writes`; special
+        // registers (SD, SW) are written only where the user names them.
+        let mut sandbox = Vec::new();
+        for token in need("sandbox")?.split(',').map(str::trim) {
+            match token {
+                "" => {}
+                "manifest" => sandbox.extend(
+                    parse_ranges(&manifest.writes.join(","))
+                        .map_err(|e| format!("{}: `writes`: {e}", manifest_path.display()))?
+                        .into_iter()
+                        .filter(|r| Kind::of(&r.code) == Kind::Data),
+                ),
+                range => sandbox.push(
+                    range
+                        .parse::<WordRange>()
+                        .map_err(|e| format!("`sandbox`: {e}"))?,
+                ),
+            }
+        }
         let confirm = need("confirm")?.to_string();
         let mut s = SlmpSettings::new(name, address, manifest, variant, confirm, sandbox);
         if let Some(f) = get("frame") {
@@ -177,15 +204,17 @@ impl SlmpSettings {
         if let Some(v) = get("timeout") {
             s.case_timeout = Duration::from_secs_f64(number("timeout", v)?);
         }
+        s.fit_limits();
         if let Some(v) = get("monitor") {
-            let units = v
-                .parse::<u16>()
-                .ok()
-                .filter(|n| *n > 0 && *n <= 240)
-                .ok_or_else(|| format!("`monitor={v}`: give 1 to 240 (units of 250 ms)"))?;
+            let units = v.parse::<u16>().ok().filter(|n| *n <= 240).ok_or_else(|| {
+                format!("`monitor={v}`: give 0 (the FX5 value) to 240 (units of 250 ms)")
+            })?;
             s.client.timer = units;
-            s.client.reply_timeout =
-                Duration::from_millis(250 * u64::from(units)) + Duration::from_millis(500);
+            // With 0 the CPU does not time itself, and the client's default reply time holds.
+            if units > 0 {
+                s.client.reply_timeout =
+                    Duration::from_millis(250 * u64::from(units)) + Duration::from_millis(500);
+            }
         }
         if let Some(v) = get("max_faults") {
             s.max_consecutive_faults = v

@@ -63,6 +63,62 @@ pub struct FaultRule {
     pub action: FaultAction,
 }
 
+impl FaultRule {
+    /// Reads `COMMAND:NTH:ACTION` as `hil sim --fault` takes it: `1401:3:drop` closes the
+    /// connection on the third write; actions `drop`, `delay=MS`, `end=C051` (an end code in
+    /// hexadecimal), `garbage`, `serial` (another 4E serial), `stop` (go to STOP).
+    pub fn parse(text: &str) -> Result<FaultRule, String> {
+        let usage = "a fault is COMMAND:NTH:ACTION, e.g. 1401:3:drop, 0403:2:delay=3000, \
+                     0401:1:end=C051; actions: drop, delay=MS, end=CODE, garbage, serial, stop";
+        let mut parts = text.split(':');
+        let (Some(command), Some(nth), Some(action), None) =
+            (parts.next(), parts.next(), parts.next(), parts.next())
+        else {
+            return Err(format!("`{text}`: {usage}"));
+        };
+        let command = u16::from_str_radix(command, 16)
+            .ok()
+            .filter(|c| {
+                [
+                    frame::command::READ_TYPE_NAME,
+                    frame::command::READ,
+                    frame::command::RANDOM_READ,
+                    frame::command::WRITE,
+                ]
+                .contains(c)
+            })
+            .ok_or_else(|| format!("`{text}`: the command is 0101, 0401, 0403 or 1401"))?;
+        let nth = nth
+            .parse::<usize>()
+            .ok()
+            .filter(|n| *n > 0)
+            .ok_or_else(|| format!("`{text}`: NTH counts requests from 1"))?;
+        let action = match action.split_once('=') {
+            None if action == "drop" => FaultAction::Drop,
+            None if action == "garbage" => FaultAction::Garbage,
+            None if action == "serial" => FaultAction::WrongSerial,
+            None if action == "stop" => FaultAction::Stop,
+            Some(("delay", ms)) => FaultAction::Delay(Duration::from_millis(
+                ms.parse()
+                    .map_err(|_| format!("`{text}`: delay=MS takes milliseconds"))?,
+            )),
+            Some(("end", code)) => FaultAction::EndCode(
+                u16::from_str_radix(code.trim_end_matches('H'), 16)
+                    .ok()
+                    .filter(|c| *c != 0)
+                    .ok_or_else(|| format!("`{text}`: end=CODE takes a non-zero hex code"))?,
+            ),
+            _ => return Err(format!("`{text}`: {usage}")),
+        };
+        Ok(FaultRule {
+            command,
+            head: None,
+            nth,
+            action,
+        })
+    }
+}
+
 /// How the simulated CPU is set up.
 #[derive(Debug, Clone)]
 pub struct SimSettings {
@@ -112,11 +168,12 @@ impl SimSettings {
         type_name: impl Into<String>,
     ) -> Self {
         let long_form = manifest.profile != "mitsubishi-fx5";
+        let type_name = type_name.into();
         SimSettings {
             manifest,
             variant: variant.into(),
-            type_name: type_name.into(),
-            model_code: 0x4800,
+            model_code: model_code(&type_name).unwrap_or(0),
+            type_name,
             scan: Duration::from_micros(200),
             program: true,
             run: true,
@@ -131,6 +188,34 @@ impl SimSettings {
             faults: Vec::new(),
         }
     }
+}
+
+/// The model code a CPU reports to 0101 beside its type name, for the CPUs the simulator is
+/// usually asked to be. iQ-R: the SLMP reference manual's CPU module model codes (R04CPU 4800H
+/// to R120CPU 4804H), which an independent client library's table repeats. FX5: the FX5 SLMP
+/// manual's processor type table (FX5U-32MR/ES 4A21H ... FX5UC-32MT/DSS 4A99H); FX5U-32MT/DS
+/// 4A49H is on a later revision's table and was read off an FX5U-32MT/DS by the aslmp project.
+pub fn model_code(type_name: &str) -> Option<u16> {
+    Some(match type_name {
+        "R04CPU" => 0x4800,
+        "R08CPU" => 0x4801,
+        "R16CPU" => 0x4802,
+        "R32CPU" => 0x4803,
+        "R120CPU" => 0x4804,
+        "FX5U-32MR/ES" => 0x4A21,
+        "FX5U-64MR/ES" => 0x4A23,
+        "FX5U-80MR/ES" => 0x4A24,
+        "FX5U-32MT/ES" => 0x4A29,
+        "FX5U-64MT/ES" => 0x4A2B,
+        "FX5U-80MT/ES" => 0x4A2C,
+        "FX5U-32MT/ESS" => 0x4A31,
+        "FX5U-64MT/ESS" => 0x4A33,
+        "FX5U-80MT/ESS" => 0x4A34,
+        "FX5U-32MT/DS" => 0x4A49,
+        "FX5UC-32MT/D" => 0x4A91,
+        "FX5UC-32MT/DSS" => 0x4A99,
+        _ => return None,
+    })
 }
 
 /// What the simulator received and did.
@@ -211,6 +296,10 @@ fn word_devices(profile: &Profile, variant: &str) -> BTreeMap<String, Vec<u16>> 
     }
     // Special registers: SD0, SD203, SD8067 and their neighbours.
     words.entry("SD".into()).or_insert_with(|| vec![0; 12288]);
+    // Link registers, which every MELSEC CPU has though a profile may not name them (iQ-R's
+    // default allocation: W0-W1FFF, SW0-SW7FF).
+    words.entry("W".into()).or_insert_with(|| vec![0; 0x2000]);
+    words.entry("SW".into()).or_insert_with(|| vec![0; 0x800]);
     words
 }
 
@@ -855,6 +944,7 @@ fn handle(shared: &Shared, request: &Request, decoded: Decoded) -> (u16, Vec<u8>
             frame::type_name_data(&shared.settings.type_name, shared.settings.model_code),
         ),
         Decoded::Read { head, count } => {
+            // The batch limit of binary code, the same on both families.
             if count == 0 || count > MAX_BATCH_WORDS {
                 return (0xC051, Vec::new());
             }
@@ -864,7 +954,12 @@ fn handle(shared: &Shared, request: &Request, decoded: Decoded) -> (u16, Vec<u8>
             }
         }
         Decoded::RandomRead { devices } => {
-            if devices.is_empty() || devices.len() > MAX_RANDOM_WORDS {
+            // 96 points in the long device form (limits.rs).
+            let most = match request.subcommand {
+                0x0002 => MAX_RANDOM_WORDS / 2,
+                _ => MAX_RANDOM_WORDS,
+            };
+            if devices.is_empty() || devices.len() > most {
                 return (0xC054, Vec::new());
             }
             let mut data = Vec::with_capacity(2 * devices.len());
@@ -932,6 +1027,30 @@ mod tests {
 
     /// `@D10` is read through D10 and D11 when the instruction runs: nothing before ADRSET,
     /// the device whose address ADRSET stored after it.
+    #[test]
+    fn fault_rules_read_from_the_command_line() {
+        let rule = FaultRule::parse("1401:3:drop").expect("drop");
+        assert_eq!(
+            (rule.command, rule.nth, rule.action),
+            (0x1401, 3, FaultAction::Drop)
+        );
+        let rule = FaultRule::parse("0403:2:delay=3000").expect("delay");
+        assert_eq!(rule.action, FaultAction::Delay(Duration::from_secs(3)));
+        let rule = FaultRule::parse("0401:1:end=C051").expect("end code");
+        assert_eq!(rule.action, FaultAction::EndCode(0xC051));
+        for bad in [
+            "1401:0:drop",
+            "1402:1:drop",
+            "1401:1:explode",
+            "1401:1",
+            "0401:1:end=0",
+        ] {
+            assert!(FaultRule::parse(bad).is_err(), "{bad}");
+        }
+        assert_eq!(model_code("FX5U-32MT/DS"), Some(0x4A49));
+        assert_eq!(model_code("R04CPU"), Some(0x4800));
+    }
+
     #[test]
     fn an_indirect_operand_is_read_through_the_address_adrset_stored() {
         let d = |i| Device::new("D", i);
