@@ -1201,3 +1201,180 @@ fn as_written(text: &str) -> String {
         _ => text.to_string(),
     }
 }
+
+/// Starts `hil sim` with `args` on a manifest file; the child and the address it serves.
+fn hil_sim(manifest_file: &std::path::Path, args: &[&str]) -> (std::process::Child, String) {
+    use std::io::{BufRead, BufReader};
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin!("plc-conformance"))
+        .args(["--root", common::root().to_str().expect("utf-8"), "hil", "sim"])
+        .args(["--manifest", manifest_file.to_str().expect("utf-8")])
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .expect("hil sim starts");
+    let stdout = child.stdout.take().expect("stdout");
+    let line = BufReader::new(stdout)
+        .lines()
+        .next()
+        .expect("a line")
+        .expect("text");
+    let address = line
+        .strip_prefix("listening on ")
+        .unwrap_or_else(|| panic!("{line}"))
+        .to_string();
+    (child, address)
+}
+
+/// `hil sim --stop` starts a CPU in STOP, and `--fault` injects a port fault from the command
+/// line: doctor sees the STOP, and a type-name request answered with an end code fails the
+/// connection check with that code.
+#[test]
+fn hil_sim_starts_in_stop_or_with_a_fault_from_the_command_line() {
+    let dir = common::scratch();
+    let manifest_file = dir.path().join("manifest.json");
+    std::fs::write(
+        &manifest_file,
+        serde_json::to_string_pretty(iqr_manifest()).expect("json"),
+    )
+    .expect("write");
+    let spec = |address: &str| {
+        format!(
+            "slmp:bench={address}?manifest={}&confirm=R04CPU&sandbox=manifest&variant=rcpu",
+            manifest_file.display()
+        )
+    };
+    let (mut child, address) = hil_sim(&manifest_file, &["--variant", "rcpu", "--stop"]);
+    let doctor = common::cli(&["hil", "doctor", "--backend", &spec(&address)]);
+    let _ = child.kill();
+    let _ = child.wait();
+    let shown = String::from_utf8_lossy(&doctor.stdout);
+    assert_eq!(doctor.status.code(), Some(1), "{shown}");
+    assert!(shown.contains("FAIL  operating status: STOP"), "{shown}");
+    assert!(shown.contains("R04CPU (4800H)"), "{shown}");
+    let (mut child, address) = hil_sim(
+        &manifest_file,
+        &["--variant", "rcpu", "--fault", "0101:1:end=C059"],
+    );
+    let doctor = common::cli(&["hil", "doctor", "--backend", &spec(&address)]);
+    let _ = child.kill();
+    let _ = child.wait();
+    let shown = String::from_utf8_lossy(&doctor.stdout);
+    assert!(shown.contains("end code C059H"), "{shown}");
+    let bad = common::cli(&[
+        "hil",
+        "sim",
+        "--manifest",
+        manifest_file.to_str().expect("utf-8"),
+        "--fault",
+        "1401:0:drop",
+    ]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--fault"));
+}
+
+/// A manifest that is no regular file (a FIFO, /dev/zero), or whose mailbox lies where no
+/// sandbox may be or where its words would run past the device numbers (hash recomputed), is
+/// refused by every command that reads one, before any socket is opened.
+#[test]
+fn a_bad_manifest_is_refused_before_any_socket() {
+    let dir = common::scratch();
+    let fifo = dir.path().join("fifo.json");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .expect("mkfifo");
+    assert!(made.success());
+    let mut files = vec![
+        (fifo, "not a regular file".to_string()),
+        (
+            std::path::PathBuf::from("/dev/zero"),
+            "not a regular file".to_string(),
+        ),
+    ];
+    for (mailbox, says) in [
+        ("SD0", "not a data or link register"),
+        ("Y0", "not a data or link register"),
+        ("D16777200", "leaves no room"),
+        ("D4294967290", "leaves no room"),
+    ] {
+        let mut m = iqr_manifest().clone();
+        m.mailbox = mailbox.into();
+        m.hash = m.compute_hash();
+        let file = dir.path().join(format!("{mailbox}.json"));
+        std::fs::write(&file, serde_json::to_string_pretty(&m).expect("json")).expect("write");
+        files.push((file, says.to_string()));
+    }
+    // Nothing listens here: a command that got as far as a socket would say so instead.
+    let unused = TcpListener::bind("127.0.0.1:0").expect("port");
+    let address = unused.local_addr().expect("address");
+    drop(unused);
+    for (file, says) in &files {
+        let spec = format!(
+            "slmp:bench={address}?manifest={}&confirm=R04CPU&sandbox=manifest&variant=rcpu",
+            file.display()
+        );
+        for args in [
+            vec!["hil", "dry-run", "--backend", &spec],
+            vec!["hil", "doctor", "--backend", &spec],
+            vec!["run", "--backend", &spec],
+            vec!["hil", "sim", "--manifest", file.to_str().expect("utf-8")],
+        ] {
+            let out = common::cli(&args);
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+            assert!(stderr.contains(says.as_str()), "{args:?}: {stderr}");
+        }
+    }
+}
+
+/// `sandbox=manifest` takes the data and link registers of the manifest's writes and leaves
+/// special registers out: an FX5 case that sets SD words is refused by the fence with how to
+/// name them, and runs once they are named.
+#[test]
+fn special_registers_are_written_only_when_named() {
+    let project = session();
+    let m = manifest(&project, "mitsubishi-fx5");
+    let dir = common::scratch();
+    let file = dir.path().join("manifest.json");
+    std::fs::write(&file, serde_json::to_string_pretty(&m).expect("json")).expect("write");
+    let special: Vec<&String> = m.writes.iter().filter(|w| w.starts_with("SD")).collect();
+    assert!(!special.is_empty(), "the FX5 corpus sets SD words");
+    let spec = |sandbox: &str| {
+        format!(
+            "slmp:bench=127.0.0.1:1?manifest={}&confirm=FX5U-32MT/DS&sandbox={sandbox}&variant=fx5u",
+            file.display()
+        )
+    };
+    let parsed = |sandbox: &str| {
+        SlmpSettings::parse(&spec(sandbox), std::path::Path::new("."))
+            .expect("parses")
+            .expect("a live backend")
+    };
+    let backend = Arc::new(SlmpBackend::new(parsed("manifest"), &project.profiles).expect("backend"));
+    assert!(backend.fence().allowed().iter().all(|r| r.code != "SD" && r.code != "SW"));
+    let found = dry_run(&project, &backend);
+    let sd: Vec<&(String, String)> = found
+        .refused
+        .iter()
+        .filter(|(_, why)| why.contains("special register"))
+        .collect();
+    assert!(!sd.is_empty(), "{:?}", found.refused);
+    assert!(sd[0].1.contains("sandbox=manifest,SD"), "{}", sd[0].1);
+    let named = format!(
+        "manifest,{}",
+        m.writes
+            .iter()
+            .filter(|w| w.starts_with("SD") || w.starts_with("SW"))
+            .cloned()
+            .collect::<Vec<_>>()
+            .join(",")
+    );
+    let backend = Arc::new(SlmpBackend::new(parsed(&named), &project.profiles).expect("backend"));
+    let found = dry_run(&project, &backend);
+    assert_eq!(found.refused, Vec::<(String, String)>::new());
+    let bits = SlmpSettings::parse(&spec("manifest,Y0-Y17"), std::path::Path::new("."))
+        .expect("parses")
+        .expect("a live backend");
+    let e = SlmpBackend::new(bits, &project.profiles).err().expect("refused");
+    assert!(e.contains("word devices only"), "{e}");
+}

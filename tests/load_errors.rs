@@ -622,3 +622,40 @@ fn written_on_error_must_name_one_of_the_section_s_errors() {
         );
     }
 }
+
+/// The structured-text call table: a form that is not `ENO:=NAME(EN,...);`, one under another
+/// instruction's name, one that names other operands than the instruction has, and a `manual`
+/// form whose source names none of the profile's manuals are refused, each at its key.
+#[test]
+fn a_structured_text_form_is_checked_against_its_instruction() {
+    let fx5 = vendor_profile("mitsubishi-fx5.yaml");
+    let quoted = r#"  ASCI: {form: "ENO:=ASCI(EN,s,n,d);", basis: manual, source: &asci-quoted "fx5-instructions"#;
+    assert!(fx5.contains(quoted), "the FX5 profile changed");
+    for (form, message) in [
+        (
+            r#"  ASCI: {form: "ASCI(EN,s,n,d)", basis: manual, source: &asci-quoted "fx5-instructions"#,
+            "fx5.yaml:107: structured_text.ASCI.form: `ASCI(EN,s,n,d)`: a form is written",
+        ),
+        (
+            r#"  ASCI: {form: "ENO:=ASCI(s,n,d,EN);", basis: manual, source: &asci-quoted "fx5-instructions"#,
+            "the enable `EN` comes first",
+        ),
+        (
+            r#"  ASCI: {form: "ENO:=HEXA(EN,s,n,d);", basis: manual, source: &asci-quoted "fx5-instructions"#,
+            "the form calls HEXA, but it stands under ASCI",
+        ),
+        (
+            r#"  ASCI: {form: "ENO:=ASCI(EN,s,d);", basis: manual, source: &asci-quoted "fx5-instructions"#,
+            "names the operands s, d, but ASCI has d, n, s",
+        ),
+        (
+            r#"  ASCI: {form: "ENO:=ASCI(EN,s,n,d);", basis: manual, source: &asci-quoted "a forum post"#,
+            "structured_text.ASCI.source: a `manual` form starts its source with the manual's id",
+        ),
+    ] {
+        let e = load_profile_text("fx5.yaml", &fx5.replacen(quoted, form, 1))
+            .err()
+            .unwrap_or_else(|| panic!("accepted: {form}"));
+        assert!(e.contains(message), "{form}: {e}");
+    }
+}

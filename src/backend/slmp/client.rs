@@ -668,6 +668,15 @@ mod tests {
         assert!(c.is_connected());
     }
 
+    /// C059H blames the long device form only when the request used it.
+    #[test]
+    fn c059_names_the_long_form_only_when_it_was_sent() {
+        let long = end_code_meaning(0xC059, DeviceForm::Long).expect("known");
+        assert!(long.contains("long device form"), "{long}");
+        let short = end_code_meaning(0xC059, DeviceForm::Short).expect("known");
+        assert!(!short.contains("long"), "{short}");
+    }
+
     #[test]
     fn a_refused_write_sends_nothing() {
         let (address, server) = scripted(vec![]);
