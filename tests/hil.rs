@@ -1206,7 +1206,12 @@ fn as_written(text: &str) -> String {
 fn hil_sim(manifest_file: &std::path::Path, args: &[&str]) -> (std::process::Child, String) {
     use std::io::{BufRead, BufReader};
     let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin!("plc-conformance"))
-        .args(["--root", common::root().to_str().expect("utf-8"), "hil", "sim"])
+        .args([
+            "--root",
+            common::root().to_str().expect("utf-8"),
+            "hil",
+            "sim",
+        ])
         .args(["--manifest", manifest_file.to_str().expect("utf-8")])
         .args(args)
         .stdout(std::process::Stdio::piped())
@@ -1350,8 +1355,13 @@ fn special_registers_are_written_only_when_named() {
             .expect("parses")
             .expect("a live backend")
     };
-    let backend = Arc::new(SlmpBackend::new(parsed("manifest"), &project.profiles).expect("backend"));
-    assert!(backend.fence().allowed().iter().all(|r| r.code != "SD" && r.code != "SW"));
+    let backend =
+        Arc::new(SlmpBackend::new(parsed("manifest"), &project.profiles).expect("backend"));
+    assert!(backend
+        .fence()
+        .allowed()
+        .iter()
+        .all(|r| r.code != "SD" && r.code != "SW"));
     let found = dry_run(&project, &backend);
     let sd: Vec<&(String, String)> = found
         .refused
@@ -1375,6 +1385,8 @@ fn special_registers_are_written_only_when_named() {
     let bits = SlmpSettings::parse(&spec("manifest,Y0-Y17"), std::path::Path::new("."))
         .expect("parses")
         .expect("a live backend");
-    let e = SlmpBackend::new(bits, &project.profiles).err().expect("refused");
+    let e = SlmpBackend::new(bits, &project.profiles)
+        .err()
+        .expect("refused");
     assert!(e.contains("word devices only"), "{e}");
 }

@@ -13,12 +13,17 @@ use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 
 use plc_conformance::backend::slmp::client::{Client, ClientError, ClientSettings, Code};
-use plc_conformance::backend::slmp::fault_of;
-use plc_conformance::backend::slmp::fence::{WordRange, WriteFence};
+use plc_conformance::backend::slmp::fence::{self, WordRange, WriteFence};
 use plc_conformance::backend::slmp::frame::{DeviceForm, FrameKind};
-use plc_conformance::backend::slmp::sim::{SimSettings, Simulator};
+use plc_conformance::backend::slmp::limits::{self, Family};
+use plc_conformance::backend::slmp::sim::{RemoteProgram, SimSettings, Simulator};
+use plc_conformance::backend::slmp::{fault_of, SlmpBackend, SlmpSettings};
+use plc_conformance::backend::Backend;
 use plc_conformance::device::Device;
 use plc_conformance::hil::{generate, GenerateOptions};
+use plc_conformance::plan::Trial;
+use plc_conformance::runner::verdicts;
+use std::sync::Arc;
 
 use common::{reference, root, session};
 
@@ -27,16 +32,17 @@ fn venv_python() -> Option<PathBuf> {
     let python = root().join(".venv-adapters/bin/python");
     let ok = python.exists()
         && Command::new(&python)
-            .args(["-c", "import virtual_plc, pymcprotocol"])
+            .args(["-c", "import virtual_plc, pymcprotocol, aslmp, slmp"])
             .output()
             .is_ok_and(|o| o.status.success());
     assert!(
         ok || std::env::var_os("PLC_CONFORMANCE_REQUIRE_BACKENDS").is_none(),
-        "virtual-plc and pymcprotocol are required (.venv-adapters)"
+        "virtual-plc, pymcprotocol, aslmp and plc-comm-slmp are required (.venv-adapters)"
     );
     if !ok {
         eprintln!(
-            "skipped: virtual-plc and pymcprotocol are not installed; install them with \
+            "skipped: virtual-plc, pymcprotocol, aslmp or plc-comm-slmp is not installed; install \
+             them with \
              `python3 -m venv .venv-adapters && .venv-adapters/bin/pip install -r \
              adapters/python/requirements.txt`"
         );
@@ -123,7 +129,7 @@ fn the_client_talks_to_virtual_plc() {
         let fence = WriteFence::new(vec![WordRange::new("D", 100, 199)]);
         let words = [0x0001, 0x8000, 0xFFFF, 0x5A8D];
         for w in fence
-            .writes(form, &Device::new("D", 100), &words)
+            .writes(form, 960, &Device::new("D", 100), &words)
             .expect("inside")
         {
             c.write(&w)
@@ -174,7 +180,7 @@ fn virtual_plc_faults_map_to_their_kinds() {
     let fence = WriteFence::new(vec![WordRange::new("D", 0, 9)]);
     let write = || {
         fence
-            .writes(DeviceForm::Long, &Device::new("D", 0), &[7])
+            .writes(DeviceForm::Long, 960, &Device::new("D", 0), &[7])
             .expect("inside")
             .remove(0)
     };
@@ -250,7 +256,7 @@ fn pymcprotocol_talks_to_the_simulated_cpu() {
         let hash = manifest.hash32();
         let signed = |w: u32| i32::from(w as u16 as i16);
         let expected = format!(
-            "[17232, 18760, 1, {}, {}, {}]\n[1, -2, 300]\n[300, 1]\nR04CPU\n",
+            "[17232, 18760, 2, {}, {}, {}]\n[1, -2, 300]\n[300, 2]\nR04CPU\n",
             signed(hash & 0xFFFF),
             signed(hash >> 16),
             manifest.rungs.len()
@@ -259,4 +265,341 @@ fn pymcprotocol_talks_to_the_simulated_cpu() {
         assert_eq!(sim.read(&Device::new("D", 101)), 0xFFFE, "{plctype}");
         assert!(sim.audit().stray_writes.is_empty(), "{plctype}");
     }
+}
+
+/// aslmp's simulated CPU (`aslmp serve`) on 127.0.0.1, killed when dropped: its entries by name
+/// (`tcp` 3E binary, `tcp-4e` 4E binary, `tcp-ascii` 3E ASCII code), as its banner lists them.
+struct Aslmp {
+    child: Child,
+    entries: std::collections::BTreeMap<String, String>,
+}
+
+impl Aslmp {
+    fn start(python: &PathBuf, target: &str) -> Aslmp {
+        let mut child = Command::new(python)
+            .args(["-m", "aslmp.tools", "serve", "--target", target])
+            .args(["--host", "127.0.0.1"])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("aslmp serve starts");
+        let stdout = child.stdout.take().expect("stdout");
+        let mut lines = BufReader::new(stdout).lines();
+        let mut entries = std::collections::BTreeMap::new();
+        for line in lines.by_ref() {
+            let line = line.expect("a line");
+            if line.starts_with("Ctrl-C") {
+                break;
+            }
+            let mut words = line.split_whitespace();
+            if let (Some(name), Some(address)) = (words.next(), words.next()) {
+                if address.starts_with("127.0.0.1:") {
+                    entries.insert(name.to_string(), address.to_string());
+                }
+            }
+        }
+        std::thread::spawn(move || for _ in lines {});
+        assert!(entries.contains_key("tcp-ascii"), "{entries:?}");
+        Aslmp { child, entries }
+    }
+
+    fn address(&self, entry: &str) -> &str {
+        &self.entries[entry]
+    }
+}
+
+impl Drop for Aslmp {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// A client for a port of the family, with the limits of its code.
+fn family_client(address: &str, family: Family, frame: FrameKind, code: Code) -> ClientSettings {
+    let mut s = ClientSettings::new(address);
+    s.frame = frame;
+    s.code = code;
+    s.form = match family {
+        Family::Fx5 => DeviceForm::Short,
+        Family::Iqr => DeviceForm::Long,
+    };
+    s.timer = limits::monitoring_timer(family);
+    s.limits = limits::limits(family, code, s.form);
+    s.reply_timeout = Duration::from_millis(1500);
+    s
+}
+
+/// The client against aslmp's simulated FX5U-32MT/DS, in binary and ASCII code: 961 words
+/// written and read back in batches the port takes (480 words in ASCII code), a random read
+/// at the port's limit, and 0101; a batch of 481 words in ASCII code is refused with C052H,
+/// which is what the split avoids.
+#[test]
+fn the_client_keeps_to_the_limits_of_aslmps_simulated_fx5u() {
+    let Some(python) = venv_python() else { return };
+    let server = Aslmp::start(&python, "fx5u-32mt-ds");
+    for (entry, code) in [("tcp", Code::Binary), ("tcp-ascii", Code::Ascii)] {
+        let settings = family_client(server.address(entry), Family::Fx5, FrameKind::E3, code);
+        let batch = settings.limits.batch_words;
+        let points = settings.limits.random_points;
+        let mut c = Client::new(settings.clone());
+        let name = c.type_name().unwrap_or_else(|e| panic!("{code}: {e}"));
+        assert_eq!(
+            (name.name.as_str(), name.code),
+            ("FX5U-32MT/DS", 0x4A49),
+            "{code}"
+        );
+        let head = Device::new("D", 1000);
+        let words: Vec<u16> = (0..961u16).map(|i| i.wrapping_mul(37) ^ 0x5A00).collect();
+        let fence = WriteFence::new(vec![WordRange::new("D", 1000, 1960)]);
+        let writes = fence
+            .writes(DeviceForm::Short, batch, &head, &words)
+            .expect("inside");
+        assert_eq!(writes.len(), 961usize.div_ceil(batch), "{code}");
+        for w in &writes {
+            c.write(w).unwrap_or_else(|e| panic!("{code}: {e}"));
+        }
+        let back = c
+            .read_words(&head, 961)
+            .unwrap_or_else(|e| panic!("{code}: {e}"));
+        assert_eq!(back, words, "{code}");
+        let many: Vec<Device> = (0..points as u32)
+            .map(|i| Device::new("D", 1000 + i))
+            .collect();
+        let read = c
+            .random_read(&many)
+            .unwrap_or_else(|e| panic!("{code}: {e}"));
+        assert_eq!(read, words[..points], "{code}");
+        // The limit is the server's: past it, the batch is refused (binary code's 960 is also
+        // the most a request can encode). An FX5U takes one connection a port at a time.
+        drop(c);
+        if batch >= 960 {
+            continue;
+        }
+        let mut over = settings.clone();
+        over.limits.batch_words = batch + 1;
+        over.read_retries = 0;
+        let e = Client::new(over)
+            .read_words(&head, batch as u32 + 1)
+            .expect_err("over the limit");
+        assert!(
+            matches!(e, ClientError::EndCode { code: 0xC052, .. }),
+            "{code}: {e}"
+        );
+    }
+}
+
+/// A live run against aslmp's simulated CPUs, with the test program's behaviour scanning their
+/// memory over a second port ([`RemoteProgram`]): the live backend talks to the third-party
+/// server in binary and in ASCII code, in its frames and within its limits, and every trial it
+/// runs gets the built-in model's verdict; `hil doctor` through the binary finds the bench
+/// ready in the same codes.
+#[rstest::rstest]
+#[case::fx5u_binary(
+    "fx5u-32mt-ds",
+    "mitsubishi-fx5",
+    "fx5u",
+    "tcp",
+    Code::Binary,
+    FrameKind::E3,
+    "tcp-4e"
+)]
+#[case::fx5u_ascii(
+    "fx5u-32mt-ds",
+    "mitsubishi-fx5",
+    "fx5u",
+    "tcp-ascii",
+    Code::Ascii,
+    FrameKind::E3,
+    "tcp-4e"
+)]
+#[case::r04cpu_binary(
+    "r04cpu",
+    "mitsubishi-iqr",
+    "rcpu",
+    "tcp-4e",
+    Code::Binary,
+    FrameKind::E4,
+    "tcp"
+)]
+#[case::r04cpu_ascii(
+    "r04cpu",
+    "mitsubishi-iqr",
+    "rcpu",
+    "tcp-ascii",
+    Code::Ascii,
+    FrameKind::E3,
+    "tcp"
+)]
+fn a_live_run_against_aslmps_simulated_cpu(
+    #[case] target: &str,
+    #[case] profile: &str,
+    #[case] variant: &str,
+    #[case] entry: &str,
+    #[case] code: Code,
+    #[case] frame: FrameKind,
+    #[case] program_entry: &str,
+) {
+    let Some(python) = venv_python() else { return };
+    let server = Aslmp::start(&python, target);
+    let mut project = session();
+    let manifest = generate(
+        &project,
+        &GenerateOptions {
+            profile: profile.into(),
+            variants: vec![variant.into()],
+            ..GenerateOptions::default()
+        },
+    )
+    .expect("generate")
+    .manifest;
+    let family = Family::of_profile(profile);
+    let (type_name, model_code) = match family {
+        Family::Fx5 => ("FX5U-32MT/DS", 0x4A49),
+        Family::Iqr => ("R04CPU", 0x4800),
+    };
+    let model = reference(&project, profile);
+    let program = RemoteProgram::start(
+        SimSettings::new(manifest.clone(), variant, type_name),
+        project.profiles.get(profile).cloned().expect("profile"),
+        model.clone(),
+        family_client(
+            server.address(program_entry),
+            family,
+            if program_entry == "tcp-4e" {
+                FrameKind::E4
+            } else {
+                FrameKind::E3
+            },
+            Code::Binary,
+        ),
+    )
+    .expect("the program scans");
+    let dir = common::scratch();
+    let file = dir.path().join("manifest.json");
+    std::fs::write(
+        &file,
+        serde_json::to_string_pretty(&manifest).expect("json"),
+    )
+    .expect("write");
+    let code_key = match code {
+        Code::Binary => "binary",
+        Code::Ascii => "ascii",
+    };
+    let frame_key = match frame {
+        FrameKind::E3 => "3e",
+        FrameKind::E4 => "4e",
+    };
+    let spec = format!(
+        "slmp:aslmp={}?manifest={}&confirm={type_name}&sandbox=manifest&code={code_key}&frame={frame_key}",
+        server.address(entry),
+        file.display()
+    );
+    // `hil doctor` first: an FX5U takes one connection a port at a time.
+    let doctor = common::cli(&["hil", "doctor", "--backend", &spec]);
+    let shown = String::from_utf8_lossy(&doctor.stdout);
+    assert!(doctor.status.success(), "{shown}");
+    assert!(shown.contains("ok    program signature"), "{shown}");
+    let sandbox = fence::parse_ranges(&manifest.writes.join(",")).expect("writes");
+    let mut s = SlmpSettings::new(
+        "aslmp",
+        server.address(entry),
+        manifest.clone(),
+        variant,
+        type_name,
+        sandbox,
+    );
+    s.client.frame = frame;
+    s.client.code = code;
+    s.fit_limits();
+    s.case_timeout = Duration::from_secs(5);
+    let backend = Arc::new(SlmpBackend::new(s, &project.profiles).expect("backend"));
+    backend
+        .connect()
+        .unwrap_or_else(|e| panic!("interlocks: {e}"));
+    assert!(
+        backend.describe().contains(&format!("({model_code:04X}H)")),
+        "{}",
+        backend.describe()
+    );
+    let live: Arc<dyn Backend> = backend.clone();
+    project.backends.push(live.clone());
+    // Every 12th trial the program can hold: pulse forms, errors and both fills among them.
+    let trials: Vec<Trial> = project
+        .plan(std::slice::from_ref(&live))
+        .into_iter()
+        .filter(|t| t.skip.is_none())
+        .step_by(12)
+        .collect();
+    assert!(trials.len() > 8, "{}", trials.len());
+    let expected: Vec<Trial> = project
+        .plan(std::slice::from_ref(&model))
+        .into_iter()
+        .filter(|t| t.variant == variant)
+        .collect();
+    let want = verdicts(&expected);
+    let got = verdicts(&trials);
+    for (t, v) in trials.iter().zip(&got) {
+        let i = expected
+            .iter()
+            .position(|e| e.check_name() == t.check_name() && e.case_id() == t.case_id())
+            .unwrap_or_else(|| panic!("{}: not a model trial", t.name()));
+        assert_eq!(v, &want[i], "{} ({code})", t.name());
+    }
+    assert!(program.audit().executions > 0);
+}
+
+/// plc-comm-slmp, a second independent client (binary code only), against the simulated CPU
+/// as an iQ-F port: the type name and model code, the program's signature, a write read back.
+#[test]
+fn plc_comm_slmp_talks_to_the_simulated_cpu() {
+    let Some(python) = venv_python() else { return };
+    let project = session();
+    let manifest = generate(
+        &project,
+        &GenerateOptions {
+            profile: "mitsubishi-fx5".into(),
+            variants: vec!["fx5u".into()],
+            ..GenerateOptions::default()
+        },
+    )
+    .expect("generate")
+    .manifest;
+    let head = manifest.mailbox_head().expect("mailbox");
+    let profile = project
+        .profiles
+        .get("mitsubishi-fx5")
+        .cloned()
+        .expect("profile");
+    let s = SimSettings::new(manifest.clone(), "fx5u", "FX5U-32MT/DS");
+    let sim =
+        Simulator::start(s, profile, reference(&project, "mitsubishi-fx5")).expect("simulator");
+    let script = format!(
+        "from slmp.client import SlmpClient\n\
+         from slmp import SlmpTarget\n\
+         t = SlmpTarget(network=0, station=0xFF, module_io=0x03FF, multidrop=0)\n\
+         with SlmpClient('127.0.0.1', {port}, transport='tcp', plc_profile='melsec:iq-f', default_target=t) as c:\n\
+         \x20   info = c.read_type_name()\n\
+         \x20   print(info.model, hex(info.model_code))\n\
+         \x20   print(list(c.read_devices('{head}', 3, bit_unit=False)))\n\
+         \x20   c.write_devices('D100', [1, 2, 65535], bit_unit=False)\n\
+         \x20   print(list(c.read_devices('D100', 3, bit_unit=False)))\n",
+        port = sim.address().port(),
+    );
+    let out = Command::new(&python)
+        .args(["-c", &script])
+        .output()
+        .expect("python runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        stdout, "FX5U-32MT/DS 0x4a49\n[17232, 18760, 2]\n[1, 2, 65535]\n",
+        "the signature reads as the program writes it"
+    );
+    assert_eq!(sim.read(&Device::new("D", 102)), 0xFFFF);
+    assert!(sim.audit().stray_writes.is_empty());
 }

@@ -15,6 +15,10 @@
 //! Everything it received is audited: the commands, and every written word that lies outside
 //! the manifest's `writes` and the mailbox's PC words (a stray write the tests fail on).
 
+mod remote;
+
+pub use remote::RemoteProgram;
+
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
@@ -310,75 +314,16 @@ impl Simulator {
         profile: Arc<Profile>,
         model: Arc<dyn Backend>,
     ) -> Result<Simulator, String> {
-        settings.manifest.validate()?;
-        if profile.variant(&settings.variant).is_none() {
-            return Err(format!(
-                "`{}` is not a variant of {}",
-                settings.variant, profile.id
-            ));
-        }
-        let mailbox = settings.manifest.mailbox_head()?;
-        let rungs = settings
-            .manifest
-            .rungs
-            .iter()
-            .map(|r| {
-                let hexadecimal = |code: &str| profile.devices.is_hexadecimal(code);
-                let operands = r
-                    .operands
-                    .iter()
-                    .map(|(k, v)| parse_operand(v, &hexadecimal).map(|o| (k.clone(), o)))
-                    .collect::<Result<BTreeMap<_, _>, _>>()?;
-                let device = |text: &str| Device::parse_numbered(text, hexadecimal);
-                let addresses = (r.addresses.iter())
-                    .map(|(p, t)| Ok((device(p)?, device(t)?)))
-                    .collect::<Result<Vec<_>, crate::device::DeviceSyntaxError>>()
-                    .map_err(|e| format!("rung {}: {e}", r.id))?;
-                Ok(SimRung {
-                    id: r.id,
-                    instruction: r.instruction.clone(),
-                    operands,
-                    indirect: (r.operands.iter())
-                        .filter(|(_, v)| v.starts_with('@'))
-                        .map(|(k, _)| k.clone())
-                        .collect(),
-                    addresses,
-                    pulse: is_pulse(&profile, &r.instruction),
-                })
-            })
-            .collect::<Result<Vec<_>, String>>()?;
-        let mut allowed = parse_ranges(&settings.manifest.writes.join(","))?;
-        allowed.extend(mailbox::pc_words(&mailbox));
-        let listener = TcpListener::bind(("127.0.0.1", settings.port))
-            .map_err(|e| format!("cannot listen on 127.0.0.1:{}: {e}", settings.port))?;
+        let shared = Shared::new(settings, profile, model)?;
+        let port = shared.settings.port;
+        let listener = TcpListener::bind(("127.0.0.1", port))
+            .map_err(|e| format!("cannot listen on 127.0.0.1:{port}: {e}"))?;
         let address = listener
             .local_addr()
             .map_err(|e| format!("no local address: {e}"))?;
         listener
             .set_nonblocking(true)
             .map_err(|e| format!("cannot poll the listener: {e}"))?;
-        let cpu = Cpu {
-            words: word_devices(&profile, &settings.variant),
-            bits: BTreeMap::new(),
-            running: settings.run,
-            prev: vec![false; rungs.len() + 1],
-            prev_reset: false,
-            audit: Audit::default(),
-            faults: settings.faults.iter().map(|f| (f.clone(), 0)).collect(),
-            addressed: Vec::new(),
-            triggers: 0,
-            withheld: None,
-        };
-        let shared = Arc::new(Shared {
-            cpu: Mutex::new(cpu),
-            stop: AtomicBool::new(false),
-            settings,
-            profile,
-            model,
-            mailbox,
-            rungs,
-            allowed,
-        });
         {
             // A CPU in RUN has scanned before anyone can connect to it.
             let mut cpu = shared.lock();
@@ -446,6 +391,75 @@ fn is_pulse(profile: &Profile, instruction: &str) -> bool {
 }
 
 impl Shared {
+    /// The program, its rungs and a CPU's cleared memory, from the settings.
+    fn new(
+        settings: SimSettings,
+        profile: Arc<Profile>,
+        model: Arc<dyn Backend>,
+    ) -> Result<Arc<Shared>, String> {
+        settings.manifest.validate()?;
+        if profile.variant(&settings.variant).is_none() {
+            return Err(format!(
+                "`{}` is not a variant of {}",
+                settings.variant, profile.id
+            ));
+        }
+        let mailbox = settings.manifest.mailbox_head()?;
+        let rungs = settings
+            .manifest
+            .rungs
+            .iter()
+            .map(|r| {
+                let hexadecimal = |code: &str| profile.devices.is_hexadecimal(code);
+                let operands = r
+                    .operands
+                    .iter()
+                    .map(|(k, v)| parse_operand(v, &hexadecimal).map(|o| (k.clone(), o)))
+                    .collect::<Result<BTreeMap<_, _>, _>>()?;
+                let device = |text: &str| Device::parse_numbered(text, hexadecimal);
+                let addresses = (r.addresses.iter())
+                    .map(|(p, t)| Ok((device(p)?, device(t)?)))
+                    .collect::<Result<Vec<_>, crate::device::DeviceSyntaxError>>()
+                    .map_err(|e| format!("rung {}: {e}", r.id))?;
+                Ok(SimRung {
+                    id: r.id,
+                    instruction: r.instruction.clone(),
+                    operands,
+                    indirect: (r.operands.iter())
+                        .filter(|(_, v)| v.starts_with('@'))
+                        .map(|(k, _)| k.clone())
+                        .collect(),
+                    addresses,
+                    pulse: is_pulse(&profile, &r.instruction),
+                })
+            })
+            .collect::<Result<Vec<_>, String>>()?;
+        let mut allowed = parse_ranges(&settings.manifest.writes.join(","))?;
+        allowed.extend(mailbox::pc_words(&mailbox));
+        let cpu = Cpu {
+            words: word_devices(&profile, &settings.variant),
+            bits: BTreeMap::new(),
+            running: settings.run,
+            prev: vec![false; rungs.len() + 1],
+            prev_reset: false,
+            audit: Audit::default(),
+            faults: settings.faults.iter().map(|f| (f.clone(), 0)).collect(),
+            addressed: Vec::new(),
+            triggers: 0,
+            withheld: None,
+        };
+        Ok(Arc::new(Shared {
+            cpu: Mutex::new(cpu),
+            stop: AtomicBool::new(false),
+            settings,
+            profile,
+            model,
+            mailbox,
+            rungs,
+            allowed,
+        }))
+    }
+
     fn lock(&self) -> MutexGuard<'_, Cpu> {
         match self.cpu.lock() {
             Ok(c) => c,
