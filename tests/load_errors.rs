@@ -547,6 +547,7 @@ fn a_lowering_on_a_device_the_variant_lacks_is_a_profile_error() {
     let iqr = vendor_profile("mitsubishi-iqr.yaml");
     let lowering = "      operands: {s: D100, d: D200}\n      source: s\n      destination: d\n      text: packed\n      width: 4\n    - name: habin-terminated";
     assert!(iqr.contains(lowering), "the iQ-R profile changed");
+    let line = iqr[..iqr.find(lowering).expect("found")].lines().count() + 1;
     for (operands, message) in [
         (
             "{s: D99999, d: D200}",
@@ -564,7 +565,7 @@ fn a_lowering_on_a_device_the_variant_lacks_is_a_profile_error() {
         );
         let errors = load_profile_text("mitsubishi-iqr.yaml", &changed).expect_err("the profile loaded");
         assert!(
-            errors.contains(&format!("mitsubishi-iqr.yaml:99: {message}")),
+            errors.contains(&format!("mitsubishi-iqr.yaml:{line}: {message}")),
             "{message}\nin:\n{errors}"
         );
     }

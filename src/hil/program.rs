@@ -288,8 +288,8 @@ pub fn setup_text(manifest: &Manifest, profile: &Profile, trials: usize) -> Stri
          or report it).\n",
     );
     t.push_str(
-        "   Each call passes its operands in this order (docs/semantics.md, structured-text \
-         calls); a form no quoted manual page prints is marked *check*: confirm it in the \
+        "   Each call passes its operands in this order \
+         (docs/semantics.md#structured-text-calls); a form no quoted manual page prints is marked *check*: confirm it in the \
          instruction's help before the first run.\n",
     );
     let mut unconfirmed: Vec<String> = manifest

@@ -16,6 +16,7 @@ use std::time::{Duration, Instant};
 
 use super::ascii;
 use super::fence::FencedWrite;
+pub use super::frame::Code;
 use super::frame::{
     self, hex, message_len, DeviceForm, DeviceRef, FrameError, FrameKind, Request, Response, Route,
     TypeName,
@@ -67,23 +68,6 @@ impl ClientSettings {
     /// The transport as provenance names it: `SLMP 4E binary TCP 192.0.2.10:5007`.
     pub fn describe(&self) -> String {
         format!("SLMP {} {} TCP {}", self.frame, self.code, self.address)
-    }
-}
-
-/// How a port codes its messages.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Code {
-    Binary,
-    /// Every field as hexadecimal text ([`ascii`]).
-    Ascii,
-}
-
-impl fmt::Display for Code {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            Code::Binary => "binary",
-            Code::Ascii => "ASCII",
-        })
     }
 }
 

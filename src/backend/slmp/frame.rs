@@ -128,6 +128,23 @@ pub mod command {
     pub const WRITE: u16 = 0x1401;
 }
 
+/// How a port codes its messages.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Code {
+    Binary,
+    /// Every field as hexadecimal text ([`super::ascii`]).
+    Ascii,
+}
+
+impl fmt::Display for Code {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Code::Binary => "binary",
+            Code::Ascii => "ASCII",
+        })
+    }
+}
+
 /// Most words one batch read or write may carry (the SLMP limit for word units; one FX5U
 /// measured the same: 960 accepted, 961 refused).
 pub const MAX_BATCH_WORDS: usize = 960;

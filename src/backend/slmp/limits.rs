@@ -3,8 +3,7 @@
 //! limit is answered with an error end code (an FX5 answers a 481-word ASCII read with C052H),
 //! so the client splits every batch at the limit of the port it talks to.
 
-use super::client::Code;
-use super::frame::DeviceForm;
+use super::frame::{Code, DeviceForm};
 
 /// The CPU families the live backend reaches, as their limits differ.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -38,7 +37,7 @@ pub struct Limits {
 ///
 /// - iQ-R: 960 words a batch in either code; a random read 192 points in the Q-compatible form
 ///   (subcommand 0000) and 96 in the long form (0002). MELSEC Communication Protocol Reference
-///   Manual, Appendix 5 "Number of Processing per One Communication" (p.465): "Batch read in
+///   Manual, Appendix 5 "Number of Processing per One Communication" (page 465): "Batch read in
 ///   word units 0401 ... Word device points 960 points", "Random read in word units 0403 0000
 ///   ... 192 points ... 0002 ... 96 points".
 /// - FX5: "1 to 480 points" a batch in ASCII code and "1 to 960 points" in binary code (FX5
