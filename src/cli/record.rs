@@ -78,16 +78,20 @@ pub fn record_command(cli: &Cli, args: &RecordArgs) -> Outcome {
         version: backend.describe(),
         date: args.date.clone().unwrap_or_else(today),
     };
-    let recording = record(&project, backend, args.filter.as_deref(), &provenance)
-        .map_err(|e| CliError::input(e.to_string()))?;
-    // Known only once the backend has answered: a live backend reads it from the mailbox.
-    if let Some(simulator) = backend.simulated_by() {
-        return Err(CliError::input(format!(
-            "{simulator} answered for `{}`: a simulator answers with the harness's own \
+    // A live backend reads it from the mailbox when it connects, and again after a
+    // reconnection: asked before anything runs, and before anything is written.
+    let simulated = || match backend.simulated_by() {
+        Some(simulator) => Err(CliError::input(format!(
+            "{simulator} answers for `{}`: a simulator answers with the harness's own \
              reference model, which is no observation of a CPU, so record writes nothing",
             provenance.backend
-        )));
-    }
+        ))),
+        None => Ok(()),
+    };
+    simulated()?;
+    let recording = record(&project, backend, args.filter.as_deref(), &provenance)
+        .map_err(|e| CliError::input(e.to_string()))?;
+    simulated()?;
     let (mut filled, mut replaced, mut kept, mut skipped, mut faulted) = (0, 0, 0, 0, 0);
     let mut out = String::new();
     for e in &recording.entries {
