@@ -1390,3 +1390,28 @@ fn special_registers_are_written_only_when_named() {
         .expect("refused");
     assert!(e.contains("word devices only"), "{e}");
 }
+
+/// The simulated iQ-R CPU holds link registers (W, SW) like a CPU, though the iQ-R profile
+/// names only D: a client writes W1F0 and reads it back.
+#[test]
+fn the_simulated_iqr_cpu_serves_link_registers() {
+    use plc_conformance::backend::slmp::client::{Client, ClientSettings};
+    use plc_conformance::backend::slmp::fence::WriteFence;
+    let project = session();
+    let sim = iqr_sim(&project, |_| {});
+    let mut c = Client::new(ClientSettings::new(sim.address().to_string()));
+    let w = Device::hexadecimal("W", 0x1F0);
+    let fence = WriteFence::new(vec![WordRange::new("W", 0x1F0, 0x1F1)]);
+    for write in fence
+        .writes(DeviceForm::Long, 960, &w, &[0x1234, 0x5678])
+        .expect("inside")
+    {
+        c.write(&write).expect("W is served");
+    }
+    assert_eq!(c.read_words(&w, 2).expect("read"), [0x1234, 0x5678]);
+    assert_eq!(
+        c.read_words(&Device::hexadecimal("SW", 0x7FF), 1)
+            .expect("SW"),
+        [0]
+    );
+}

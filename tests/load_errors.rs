@@ -660,3 +660,48 @@ fn a_structured_text_form_is_checked_against_its_instruction() {
         assert!(e.contains(message), "{form}: {e}");
     }
 }
+
+/// A `manual` expectation holds for the variants its manual covers: a case citing the S7-1200
+/// System Manual that also runs on the S7-1500 is refused at its key, and loads once it is
+/// restricted to the S7-1200 (the S7-1500 then needs an `inferred` case of its own).
+#[test]
+fn a_manual_case_runs_only_on_the_variants_its_manual_covers() {
+    let s7 = vendor_profile("siemens-s7-1200.yaml");
+    let title = "    title: \"S7-1200 Programmable controller System Manual, A5E02486680-05, edition 11/2011";
+    assert!(s7.contains(title), "the S7 profile changed");
+    // The shipped profile says so already or not: the manual covers the S7-1200 alone here.
+    let s7 = s7.replacen("    covers: [s7-1200]\n", "", 1);
+    let marked = s7.replacen(
+        "  s7-1200-2011:\n",
+        "  s7-1200-2011:\n    covers: [s7-1200]\n",
+        1,
+    );
+    let profiles = load_profile_text("siemens-s7-1200.yaml", &marked).expect("profile loads");
+    let case = |variants: &str| {
+        format!(
+            "instructions: [ATH]\nprofiles: [siemens-s7-1200]\nsource: {{manual: s7-1200-2011, page: 253}}\n\
+             cases:\n  - id: example\n    basis: manual\n    cite: the example row\n{variants}\
+             \x20   operands: {{IN: DB1.DBB0, N: 2, OUT: DB2.DBB0}}\n    before:\n      DB1.DBB0: {{ascii: \"01\"}}\n\
+             \x20   expect:\n      after: {{DB2.DBB0: 01H}}\n      error: none\n"
+        )
+    };
+    let load_with = |text: &str| {
+        let mut builder = CorpusBuilder::default();
+        builder.add_file(Path::new("s7.yaml"), text, &profiles);
+        builder.finish().map(|c| c.cases.len()).map_err(|e| {
+            e.0.iter()
+                .map(ToString::to_string)
+                .collect::<Vec<_>>()
+                .join("\n")
+        })
+    };
+    let e = load_with(&case("")).expect_err("runs on the S7-1500 too");
+    assert!(
+        e.contains("cases[0].basis: `basis: manual` rests on s7-1200-2011, the manual of s7-1200, and the case also runs on s7-1500"),
+        "{e}"
+    );
+    assert_eq!(load_with(&case("    variants: [s7-1200]\n")), Ok(1));
+    let unknown = marked.replacen("covers: [s7-1200]", "covers: [s7-1300]", 1);
+    let e = load_profile_text("siemens-s7-1200.yaml", &unknown).expect_err("no such variant");
+    assert!(e.contains("manuals.s7-1200-2011.covers[0]"), "{e}");
+}

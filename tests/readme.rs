@@ -296,12 +296,50 @@ fn every_case_count_in_the_docs_is_the_corpus_s() {
     assert!(seen > 0, "no case count found in docs/");
 }
 
-/// Every row of the README's families table names a vector folder and its case count, and
-/// every vector folder has a row: a count that goes stale, or a family left out, fails here.
+/// Each folder's cases by basis, as the families table writes them: `80 manual, 40 inferred,
+/// 4 unspecified` (a basis no case has is left out).
+fn bases_by_folder() -> std::collections::BTreeMap<String, String> {
+    use plc_conformance::model::Basis;
+    let project = common::session();
+    let mut by = std::collections::BTreeMap::<String, [usize; 4]>::new();
+    let slot = |b: Basis| match b {
+        Basis::Manual => 0,
+        Basis::Inferred => 1,
+        Basis::Unspecified => 2,
+        Basis::Observed => 3,
+    };
+    for case in &project.corpus.cases {
+        let folder = case.location.file.parent().and_then(|p| p.file_name());
+        if let Some(name) = folder {
+            by.entry(name.to_string_lossy().into_owned()).or_default()[slot(case.basis)] += 1;
+        }
+    }
+    for case in &project.corpus.cross_vendor {
+        by.entry("cross-vendor".into()).or_default()[slot(case.basis)] += 1;
+    }
+    by.into_iter()
+        .map(|(folder, n)| {
+            let text = ["manual", "inferred", "unspecified", "observed"]
+                .iter()
+                .zip(n)
+                .filter(|(_, n)| *n > 0)
+                .map(|(name, n)| format!("{n} {name}"))
+                .collect::<Vec<_>>()
+                .join(", ");
+            (folder, text)
+        })
+        .collect()
+}
+
+/// Every row of the README's families table names a vector folder, its case count and the
+/// count of each basis (so that a reader sees each family's footing), and every vector folder
+/// has a row: a count that goes stale, or a family left out, fails here.
 #[test]
 fn the_families_table_counts_every_family_s_cases() {
     let readme = std::fs::read_to_string(root().join("README.md")).expect("README.md");
     let counted = cases_by_folder();
+    let bases = bases_by_folder();
+    let mut footing = std::collections::BTreeMap::<String, String>::new();
     let mut rows = std::collections::BTreeMap::<String, usize>::new();
     for line in readme.lines().filter(|l| l.starts_with("| ")) {
         let Some(at) = line.find("`vectors/") else {
@@ -317,9 +355,19 @@ fn the_families_table_counts_every_family_s_cases() {
             .and_then(|n| n.parse().ok())
             .unwrap_or_else(|| panic!("no case count in: {line}"));
         rows.insert(folder.to_string(), count);
+        let basis = after
+            .split_once(" cases (")
+            .and_then(|(_, b)| b.split_once(')'))
+            .map(|(b, _)| b.to_string())
+            .unwrap_or_else(|| panic!("no count by basis in: {line}"));
+        footing.insert(folder.to_string(), basis);
     }
     assert_eq!(
         rows, counted,
         "the README's families table (left) against the corpus (right)"
+    );
+    assert_eq!(
+        footing, bases,
+        "the README's families table's counts by basis (left) against the corpus (right)"
     );
 }

@@ -6,8 +6,8 @@
 //! reading order; an odd count leaves 0 in the last low nibble. Unlike every Mitsubishi and
 //! IDEC instruction, a character that is not a hex digit is converted to 0 and the conversion
 //! goes on: OUT is written, and RET_VAL 0007H (ENO FALSE) reports it. Which characters are
-//! digits (lowercase a-f?) is the open question `s7-ath-lowercase`; the model takes uppercase
-//! only. A buffer that cannot hold N (here: an array that runs past the end of its data block
+//! digits (lowercase a-f?) is the open question `s7-ath-lowercase`; the model takes lowercase
+//! a-f as digits too, the reading most of the documentation supports. A buffer that cannot hold N (here: an array that runs past the end of its data block
 //! or marker area) is RET_VAL 8182H (IN) or 8382H (OUT), and nothing is written. HTA writes 2N
 //! uppercase characters and always ends with ENO TRUE.
 
@@ -47,12 +47,14 @@ impl Model for S71200 {
     }
 }
 
-/// The value of an ASCII hex digit as the S7-1200 reads it: 0-9 and uppercase A-F
-/// (`docs/semantics.md#s7-ath-lowercase`).
+/// The value of an ASCII hex digit as the S7-1200 reads it: 0-9, A-F and a-f (the 0007H
+/// condition, the 'a23' and '0a23' rows and the 09/2016 body text;
+/// `docs/semantics.md#s7-ath-lowercase`).
 pub(super) fn digit(ch: u16) -> Option<u8> {
     match u8::try_from(ch).ok()? {
         c @ b'0'..=b'9' => Some(c - b'0'),
         c @ b'A'..=b'F' => Some(c - b'A' + 10),
+        c @ b'a'..=b'f' => Some(c - b'a' + 10),
         _ => None,
     }
 }
@@ -136,10 +138,12 @@ mod tests {
     #[case(b'9', Some(9))]
     #[case(b'A', Some(10))]
     #[case(b'F', Some(15))]
-    #[case(b'a', None)]
+    #[case(b'a', Some(10))]
+    #[case(b'f', Some(15))]
+    #[case(b'g', None)]
     #[case(b'G', None)]
     #[case(b' ', None)]
-    fn digits_are_0_to_9_and_uppercase_a_to_f(#[case] ch: u8, #[case] value: Option<u8>) {
+    fn digits_are_0_to_9_and_a_to_f_in_either_case(#[case] ch: u8, #[case] value: Option<u8>) {
         assert_eq!(digit(u16::from(ch)), value);
     }
 }

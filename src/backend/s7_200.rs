@@ -10,7 +10,6 @@
 //! nothing (open question `s7-200-len-zero`).
 
 use super::reference::{Model, Stop};
-use super::s7::digit;
 use super::{Outcome, Request, Unsupported};
 use crate::device::Device;
 use crate::memory::Scratch;
@@ -77,7 +76,8 @@ fn ath(req: &Request<'_>) -> Result<Outcome, Stop> {
     let mut nibbles = Vec::with_capacity(len as usize);
     for k in 0..len {
         let ch = input.offset(k).map_or(0, |d| req.memory.read(&d));
-        match digit(ch) {
+        // 30H-39H and 41H-46H only: S7-200 ATH's legal characters, unlike the S7-1200's.
+        match u8::try_from(ch).ok().and_then(crate::text::digit_value) {
             Some(v) => nibbles.push(v),
             None => return Err(Stop::Error(ILLEGAL_ASCII)),
         }

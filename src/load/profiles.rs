@@ -266,6 +266,17 @@ fn check_profile(p: &ProfileSpec, table: &DeviceTable, cx: &mut FileContext<'_>)
             LoadErrorKind::Missing("variant: a profile needs at least one"),
         );
     }
+    let variants: Vec<String> = p.variants.iter().map(|v| v.id.clone()).collect();
+    for (id, manual) in &p.manuals {
+        for (i, v) in manual.covers.iter().enumerate() {
+            if !variants.contains(v) {
+                cx.error(
+                    format!("manuals.{id}.covers[{i}]"),
+                    unknown("variant", v, &variants),
+                );
+            }
+        }
+    }
     let mut seen = BTreeSet::new();
     for (v, variant) in p.variants.iter().enumerate() {
         if !seen.insert(&variant.id) {

@@ -221,6 +221,48 @@ fn check_source(key: &str, source: &SourceSpec, profiles: &[&Profile], cx: &mut 
     }
 }
 
+/// A `manual` expectation holds for the variants its manual covers: the manual the cite starts
+/// with (`s7-1200-2011 p.253: ...`), else the source's, must cover every variant the case runs
+/// on. What one CPU's page states is only an inference for another CPU.
+fn check_manual_covers(
+    key: &str,
+    cite: Option<&str>,
+    source: &SourceSpec,
+    variants: Option<&BTreeSet<String>>,
+    h: &Header<'_>,
+    cx: &mut FileContext<'_>,
+) {
+    let first = cite
+        .and_then(|c| c.split_whitespace().next())
+        .map(|w| w.trim_end_matches([',', ':', ';']));
+    for p in &h.profiles {
+        let id = first
+            .filter(|w| p.manuals.contains_key(*w))
+            .unwrap_or(&source.manual);
+        let Some(manual) = p.manuals.get(id).filter(|m| !m.covers.is_empty()) else {
+            continue;
+        };
+        let uncovered: Vec<&str> = (p.variants.iter())
+            .map(|v| v.id.as_str())
+            .filter(|v| variants.is_none_or(|list| list.contains(*v)))
+            .filter(|v| !manual.covers.iter().any(|c| c == v))
+            .collect();
+        if !uncovered.is_empty() {
+            cx.error(
+                format!("{key}.basis"),
+                LoadErrorKind::Invalid(format!(
+                    "`basis: manual` rests on {id}, the manual of {}, and the case also runs \
+                     on {}: restrict it with `variants: [{}]` and give the other variants an \
+                     `inferred` case of their own",
+                    manual.covers.join(", "),
+                    uncovered.join(", "),
+                    manual.covers.join(", ")
+                )),
+            );
+        }
+    }
+}
+
 fn read_case(key: &str, spec: &CaseSpec, h: &Header<'_>, cx: &mut FileContext<'_>) -> Option<Case> {
     let before_count = cx.errors.len();
     check_id(key, &spec.id, cx);
@@ -266,6 +308,9 @@ fn read_case(key: &str, spec: &CaseSpec, h: &Header<'_>, cx: &mut FileContext<'_
         list.iter().cloned().collect::<BTreeSet<String>>()
     });
 
+    if spec.basis == crate::model::Basis::Manual {
+        check_manual_covers(key, cite.as_deref(), source, variants.as_ref(), h, cx);
+    }
     let flags = read_flags(key, &spec.flags, h, cx);
     let (operands, indirect) = read_operands(key, spec, h, cx);
     let before = read_memory(&format!("{key}.before"), &spec.before, h, cx);

@@ -87,6 +87,11 @@ pub struct Manual {
     pub number: Option<String>,
     #[serde(default)]
     pub language: Option<String>,
+    /// The variants whose own manual this is (every variant when left out): a `manual` case
+    /// citing it may run only on these, since what one CPU's page states is an inference for
+    /// another CPU.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub covers: Vec<String>,
 }
 
 /// How an operation error becomes visible to a program.

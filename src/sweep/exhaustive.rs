@@ -42,15 +42,16 @@ use super::{Results, Sweep};
 use crate::model::cross_vendor::{Answer, Operation};
 
 /// How a built-in lowering answers a 4-character text with a count of 4, as a function of the
-/// text's bytes. A digit is 30H-39H or 41H-46H (`crate::text::digit_value`); each lowering has
-/// one error on such a text.
+/// text's bytes. A digit is 30H-39H or 41H-46H (`crate::text::digit_value`), and for S7-1200 ATH
+/// 61H-66H too; each lowering has one error on such a text.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Rule {
     /// All four characters must be digits: their value, else the error. HABIN with SM705 off,
     /// FX5 HEXA, IDEC ATOH, S7-200 ATH, FX3 and Delta HEX, in either packing.
     Whole,
-    /// Each character that is not a digit read as 0: the value, with the error when there was
-    /// one (S7-1200 ATH writes the destination and returns the error, `written_on_error`).
+    /// Each character that is not a digit (lowercase a-f are digits here) read as 0: the value,
+    /// with the error when there was one (S7-1200 ATH writes the destination and returns the
+    /// error, `written_on_error`).
     Zeroed,
     /// The characters before the first 00H (at most four), at least one, each a digit: their
     /// value, else the error. HABIN with SM705 on.
@@ -71,20 +72,26 @@ pub const ERROR: u32 = 1 << 16;
 /// Added to a value by [`answer`] when the lowering gives the error with the value.
 pub const WITH_ERROR: u32 = 1 << 17;
 
-/// Each byte's digit value, or 0xFF.
-const DIGIT: [u8; 256] = {
+/// Each byte's digit value, or 0xFF; with `lowercase`, a-f are digits too.
+const fn digits(lowercase: bool) -> [u8; 256] {
     let mut t = [0xFFu8; 256];
     let mut b = 0;
     while b < 256 {
         t[b] = match b as u8 {
             c @ b'0'..=b'9' => c - b'0',
             c @ b'A'..=b'F' => c - b'A' + 10,
+            c @ b'a'..=b'f' if lowercase => c - b'a' + 10,
             _ => 0xFF,
         };
         b += 1;
     }
     t
-};
+}
+
+/// Each byte's digit value, or 0xFF.
+const DIGIT: [u8; 256] = digits(false);
+/// The same with lowercase a-f as digits (S7-1200 ATH, `docs/semantics.md#s7-ath-lowercase`).
+const DIGIT_ANY_CASE: [u8; 256] = digits(true);
 
 /// The rule of a lowering, by its key; `None` for a lowering this module does not know.
 pub fn rule(key: &str) -> Option<Rule> {
@@ -113,6 +120,7 @@ pub fn answer(rule: Rule, text: [u8; 4]) -> u32 {
     match rule {
         Rule::Whole => whole().unwrap_or(ERROR),
         Rule::Zeroed => {
+            let d = text.map(|b| DIGIT_ANY_CASE[b as usize]);
             let z = d.map(|x| if x < 16 { u32::from(x) } else { 0 });
             let value = z[0] << 12 | z[1] << 8 | z[2] << 4 | z[3];
             if (d[0] | d[1] | d[2] | d[3]) < 16 {
