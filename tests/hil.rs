@@ -935,7 +935,6 @@ fn the_long_device_form_on_an_fx5_is_refused_before_any_write() {
 /// `hil sim` serves until it is ended, on 127.0.0.1, and a live backend runs against it.
 #[test]
 fn hil_sim_serves_a_simulated_cpu_on_loopback() {
-    use std::io::{BufRead, BufReader};
     let dir = common::scratch();
     let manifest_file = dir.path().join("manifest.json");
     std::fs::write(
@@ -943,28 +942,7 @@ fn hil_sim_serves_a_simulated_cpu_on_loopback() {
         serde_json::to_string_pretty(iqr_manifest()).expect("json"),
     )
     .expect("write");
-    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin!("plc-conformance"))
-        .args([
-            "--root",
-            common::root().to_str().expect("utf-8"),
-            "hil",
-            "sim",
-        ])
-        .args(["--manifest", manifest_file.to_str().expect("utf-8")])
-        .args(["--variant", "rcpu"])
-        .stdout(std::process::Stdio::piped())
-        .spawn()
-        .expect("hil sim starts");
-    let stdout = child.stdout.take().expect("stdout");
-    let line = BufReader::new(stdout)
-        .lines()
-        .next()
-        .expect("a line")
-        .expect("text");
-    let address = line
-        .strip_prefix("listening on ")
-        .unwrap_or_else(|| panic!("{line}"))
-        .to_string();
+    let (mut child, address) = hil_sim(&manifest_file, &["--variant", "rcpu"]);
     assert!(address.starts_with("127.0.0.1:"), "{address}");
     let spec = format!(
         "slmp:bench={address}?manifest={}&confirm=R04CPU&sandbox=manifest&variant=rcpu",

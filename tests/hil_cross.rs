@@ -16,6 +16,7 @@ use plc_conformance::backend::slmp::client::{Client, ClientError, ClientSettings
 use plc_conformance::backend::slmp::fence::{self, WordRange, WriteFence};
 use plc_conformance::backend::slmp::frame::{DeviceForm, FrameKind};
 use plc_conformance::backend::slmp::limits::{self, Family};
+use plc_conformance::backend::slmp::manifest::Manifest;
 use plc_conformance::backend::slmp::sim::{RemoteProgram, SimSettings, Simulator};
 use plc_conformance::backend::slmp::{fault_of, SlmpBackend, SlmpSettings};
 use plc_conformance::backend::Backend;
@@ -92,6 +93,20 @@ impl Drop for VirtualPlc {
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
+}
+
+/// The manifest of the program generated for one variant of a profile.
+fn generated(project: &plc_conformance::runner::Project, profile: &str, variant: &str) -> Manifest {
+    generate(
+        project,
+        &GenerateOptions {
+            profile: profile.into(),
+            variants: vec![variant.into()],
+            ..GenerateOptions::default()
+        },
+    )
+    .expect("generate")
+    .manifest
 }
 
 fn client(address: &str, frame: FrameKind, form: DeviceForm) -> Client {
@@ -209,16 +224,7 @@ fn virtual_plc_faults_map_to_their_kinds() {
 fn pymcprotocol_talks_to_the_simulated_cpu() {
     let Some(python) = venv_python() else { return };
     let project = session();
-    let manifest = generate(
-        &project,
-        &GenerateOptions {
-            profile: "mitsubishi-iqr".into(),
-            variants: vec!["rcpu".into()],
-            ..GenerateOptions::default()
-        },
-    )
-    .expect("generate")
-    .manifest;
+    let manifest = generated(&project, "mitsubishi-iqr", "rcpu");
     let head = manifest.mailbox_head().expect("mailbox");
     let profile = project
         .profiles
@@ -443,16 +449,7 @@ fn a_live_run_against_aslmps_simulated_cpu(
     let Some(python) = venv_python() else { return };
     let server = Aslmp::start(&python, target);
     let mut project = session();
-    let manifest = generate(
-        &project,
-        &GenerateOptions {
-            profile: profile.into(),
-            variants: vec![variant.into()],
-            ..GenerateOptions::default()
-        },
-    )
-    .expect("generate")
-    .manifest;
+    let manifest = generated(&project, profile, variant);
     let family = Family::of_profile(profile);
     let (type_name, model_code) = match family {
         Family::Fx5 => ("FX5U-32MT/DS", 0x4A49),
@@ -555,16 +552,7 @@ fn a_live_run_against_aslmps_simulated_cpu(
 fn plc_comm_slmp_talks_to_the_simulated_cpu() {
     let Some(python) = venv_python() else { return };
     let project = session();
-    let manifest = generate(
-        &project,
-        &GenerateOptions {
-            profile: "mitsubishi-fx5".into(),
-            variants: vec!["fx5u".into()],
-            ..GenerateOptions::default()
-        },
-    )
-    .expect("generate")
-    .manifest;
+    let manifest = generated(&project, "mitsubishi-fx5", "fx5u");
     let head = manifest.mailbox_head().expect("mailbox");
     let profile = project
         .profiles
