@@ -27,8 +27,19 @@ fn corpus(dir: &Path) -> Corpus {
     load_corpus(&[dir.to_path_buf()], &profiles).unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// An emulator of the iQ-R CPU as an external backend: the reference model served through the
+/// protocol, which the harness cannot tell from any other implementation.
+fn emulator() -> String {
+    format!(
+        "external:emulator=\"{}\" serve --profile mitsubishi-iqr",
+        assert_cmd::cargo::cargo_bin!("plc-conformance").display()
+    )
+}
+
+/// A built-in reference model is the harness's own reading of the manuals: `record` refuses to
+/// write what it answers as `observed`, and the files stay as they were.
 #[test]
-fn recording_a_backend_fills_in_unspecified_cases_and_keeps_manual_ones() {
+fn recording_a_reference_model_is_refused() {
     let scratch_dir = scratch();
     let dir = scratch_dir.path().join("vectors");
     copy_dir(&root().join("vectors/mitsubishi-iqr"), &dir);
@@ -37,6 +48,34 @@ fn recording_a_backend_fills_in_unspecified_cases_and_keeps_manual_ones() {
         "record",
         "--backend",
         "iqr",
+        "--vectors",
+        dir.to_str().expect("utf-8"),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("the built-in reference model of MELSEC iQ-R CPU answers for `iqr`"),
+        "{stderr}"
+    );
+    let after = corpus(&dir);
+    assert!(before
+        .cases
+        .iter()
+        .zip(&after.cases)
+        .all(|(b, a)| b.basis == a.basis && b.citation == a.citation));
+}
+
+#[test]
+fn recording_a_backend_fills_in_unspecified_cases_and_keeps_manual_ones() {
+    let scratch_dir = scratch();
+    let dir = scratch_dir.path().join("vectors");
+    copy_dir(&root().join("vectors/mitsubishi-iqr"), &dir);
+    let before = corpus(&dir);
+    let emulator = emulator();
+    let out = cli(&[
+        "record",
+        "--backend",
+        &emulator,
         "--vectors",
         dir.to_str().expect("utf-8"),
         "--date",
@@ -63,13 +102,16 @@ fn recording_a_backend_fills_in_unspecified_cases_and_keeps_manual_ones() {
                 assert_eq!(a.basis, Basis::Observed, "{}", a.id);
                 assert!(a.expect.is_some(), "{}", a.id);
                 let cite = a.citation.text.clone().unwrap_or_default();
-                assert!(cite.starts_with("observed on iqr"), "{cite}");
+                assert!(cite.starts_with("observed on emulator"), "{cite}");
                 assert!(cite.contains("2026-01-02"), "{cite}");
             }
         }
     }
     let text = std::fs::read_to_string(dir.join("habin.yaml")).expect("habin.yaml");
-    assert!(text.contains("provenance:\n      backend: iqr"), "{text}");
+    assert!(
+        text.contains("provenance:\n      backend: emulator"),
+        "{text}"
+    );
     assert!(
         text.contains("# --- SM705 OFF: fixed 4 digits"),
         "comments are kept"
@@ -97,11 +139,12 @@ fn recording_again_keeps_one_before_in_every_cite() {
     let scratch_dir = scratch();
     let dir = scratch_dir.path().join("vectors");
     copy_dir(&root().join("vectors/mitsubishi-iqr"), &dir);
+    let emulator = emulator();
     let record = || {
         let out = cli(&[
             "record",
             "--backend",
-            "iqr",
+            &emulator,
             "--vectors",
             dir.to_str().expect("utf-8"),
             "--date",

@@ -230,9 +230,10 @@ pub trait Backend: Send + Sync {
     fn version(&self) -> Option<String> {
         None
     }
-    /// What answers in the backend's place when that is a simulator, not the device it stands
-    /// for: `record` writes no `observed` expectation from it. A live backend knows once it
-    /// has connected.
+    /// What answers in the backend's place when that is the harness's own model (a built-in
+    /// reference model, or the simulated CPU running one), not a device or an implementation
+    /// under test: `record` writes no `observed` expectation from it. A live backend knows once
+    /// it has connected.
     fn simulated_by(&self) -> Option<String> {
         None
     }

@@ -80,6 +80,12 @@ impl<M: Model> Backend for Reference<M> {
     fn version(&self) -> Option<String> {
         Some(format!("plc-conformance {}", env!("CARGO_PKG_VERSION")))
     }
+    fn simulated_by(&self) -> Option<String> {
+        Some(format!(
+            "the built-in reference model of {}",
+            self.profile.name
+        ))
+    }
     fn claims(&self, instruction: &str, variant: &str) -> bool {
         M::models(instruction)
             && self

@@ -82,8 +82,9 @@ pub fn record_command(cli: &Cli, args: &RecordArgs) -> Outcome {
     // reconnection: asked before anything runs, and before anything is written.
     let simulated = || match backend.simulated_by() {
         Some(simulator) => Err(CliError::input(format!(
-            "{simulator} answers for `{}`: a simulator answers with the harness's own \
-             reference model, which is no observation of a CPU, so record writes nothing",
+            "{simulator} answers for `{}`: a model, or a simulator running one, answers with \
+             the harness's own reading of the manuals, which is no observation of a CPU or an \
+             implementation, so record writes nothing",
             provenance.backend
         ))),
         None => Ok(()),
