@@ -897,6 +897,14 @@ fn capabilities_skip_what_a_backend_does_not_model() {
 /// The corpus's own test binary (`tests/conformance.rs`), built beside this one.
 fn conformance_binary() -> Option<std::path::PathBuf> {
     let deps = std::env::current_exe().ok()?.parent()?.to_path_buf();
+    // The workspace's example crates have a `conformance` test of their own: the newest binary
+    // that lists this corpus's iQ-R trials is this crate's.
+    let lists_the_corpus = |p: &std::path::Path| {
+        std::process::Command::new(p)
+            .args(["--list", "--format", "terse"])
+            .output()
+            .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).contains("iqr::habin::"))
+    };
     std::fs::read_dir(deps)
         .ok()?
         .filter_map(Result::ok)
@@ -906,6 +914,7 @@ fn conformance_binary() -> Option<std::path::PathBuf> {
                 .and_then(|n| n.to_str())
                 .is_some_and(|n| n.starts_with("conformance-") && !n.contains('.'))
         })
+        .filter(|p| lists_the_corpus(p))
         .max_by_key(|p| std::fs::metadata(p).and_then(|m| m.modified()).ok())
 }
 
