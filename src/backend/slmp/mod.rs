@@ -578,25 +578,27 @@ impl SlmpBackend {
                 status.code
             ))));
         }
-        let ran = status.ran == plan.rung && status.ran_for == trigger;
-        if !ran || (status.eno == 0 && status.flag_after == 0) {
-            live.not_executed = Some(plan.rung);
-        }
-        if !ran {
-            return Err(CaseError::Fault(Fault::Protocol(format!(
+        // The proof of execution: the rung itself says it ran for this trigger, and executed.
+        let not_executed = if status.ran != plan.rung || status.ran_for != trigger {
+            Some(format!(
                 "rung {} did not run for case {} (trigger {trigger}): the mailbox says rung {} \
                  ran last, for trigger {}; the rung is missing from the program on the CPU or \
                  did not execute, so nothing is judged",
                 plan.rung, req.case_id, status.ran, status.ran_for
-            ))));
-        }
-        if status.eno == 0 && status.flag_after == 0 {
-            return Err(CaseError::Fault(Fault::Protocol(format!(
+            ))
+        } else if status.eno == 0 && status.flag_after == 0 {
+            Some(format!(
                 "rung {} was enabled for case {} but its instruction reported ENO FALSE and no \
                  error: it did not execute (a pulse form whose enable did not fall since the \
                  last case, or a call edited out of the rung), so nothing is judged",
                 plan.rung, req.case_id
-            ))));
+            ))
+        } else {
+            None
+        };
+        if let Some(why) = not_executed {
+            live.not_executed = Some(plan.rung);
+            return Err(CaseError::Fault(Fault::Protocol(why)));
         }
         let mut outcome = Outcome::default();
         // The rung stores each address in its pointer its own way: not judged.
