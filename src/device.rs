@@ -122,6 +122,12 @@ impl Device {
         self.hexadecimal
     }
 
+    /// Whether this is the word `code` `index`, however either is written: a frame names a
+    /// device by its letters and number, without the numbering it prints in.
+    pub fn is(&self, code: &str, index: u32) -> bool {
+        self.code() == code && self.index == index
+    }
+
     /// The device of the same code, numbered the same way, with another number.
     pub fn with_index(&self, index: u32) -> Device {
         Device {

@@ -9,6 +9,14 @@ use common::{cli, root, scratch};
 use plc_conformance::load::{load_corpus, load_profiles};
 use plc_conformance::model::{Basis, Corpus};
 
+/// A copy of the iQ-R vectors in a scratch folder (kept while the first value lives).
+fn iqr_copy() -> (tempfile::TempDir, std::path::PathBuf) {
+    let scratch_dir = scratch();
+    let dir = scratch_dir.path().join("vectors");
+    copy_dir(&root().join("vectors/mitsubishi-iqr"), &dir);
+    (scratch_dir, dir)
+}
+
 fn copy_dir(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).expect("mkdir");
     for entry in std::fs::read_dir(from).expect("read dir") {
@@ -40,9 +48,7 @@ fn emulator() -> String {
 /// write what it answers as `observed`, and the files stay as they were.
 #[test]
 fn recording_a_reference_model_is_refused() {
-    let scratch_dir = scratch();
-    let dir = scratch_dir.path().join("vectors");
-    copy_dir(&root().join("vectors/mitsubishi-iqr"), &dir);
+    let (_scratch, dir) = iqr_copy();
     let before = corpus(&dir);
     let out = cli(&[
         "record",
@@ -67,9 +73,7 @@ fn recording_a_reference_model_is_refused() {
 
 #[test]
 fn recording_a_backend_fills_in_unspecified_cases_and_keeps_manual_ones() {
-    let scratch_dir = scratch();
-    let dir = scratch_dir.path().join("vectors");
-    copy_dir(&root().join("vectors/mitsubishi-iqr"), &dir);
+    let (_scratch, dir) = iqr_copy();
     let before = corpus(&dir);
     let emulator = emulator();
     let out = cli(&[
@@ -136,9 +140,7 @@ fn recording_a_backend_fills_in_unspecified_cases_and_keeps_manual_ones() {
 /// does not grow a "before, observed" each time.
 #[test]
 fn recording_again_keeps_one_before_in_every_cite() {
-    let scratch_dir = scratch();
-    let dir = scratch_dir.path().join("vectors");
-    copy_dir(&root().join("vectors/mitsubishi-iqr"), &dir);
+    let (_scratch, dir) = iqr_copy();
     let emulator = emulator();
     let record = || {
         let out = cli(&[

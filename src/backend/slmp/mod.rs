@@ -191,7 +191,7 @@ impl SlmpBackend {
                 profiles.ids().join(", ")
             )
         })?;
-        if profile.variant(&settings.variant).is_none() {
+        let Some(variant) = profile.variant(&settings.variant) else {
             return Err(format!(
                 "variant `{}` is not a variant of {}; it has: {}",
                 settings.variant,
@@ -203,7 +203,7 @@ impl SlmpBackend {
                     .collect::<Vec<_>>()
                     .join(", ")
             ));
-        }
+        };
         if !manifest.variants.contains(&settings.variant) {
             return Err(format!(
                 "the manifest's program was generated for variants {}, not `{}`",
@@ -216,7 +216,6 @@ impl SlmpBackend {
         if let Some(why) = settings.sandbox.iter().find_map(fence::sandbox_refuses) {
             return Err(format!("`sandbox`: {why}"));
         }
-        let variant = profile.variant(&settings.variant).ok_or("no variant")?;
         if !profile.words_exist(variant, &mailbox, mailbox::WORDS) {
             return Err(format!(
                 "the mailbox {whole} does not exist on variant {} of {}",

@@ -64,8 +64,7 @@ impl SlmpSettings {
             client.form = DeviceForm::Short;
         }
         client.timer = limits::monitoring_timer(family);
-        client.limits = limits::limits(family, client.code, client.form);
-        SlmpSettings {
+        let mut settings = SlmpSettings {
             name: name.into(),
             client,
             manifest,
@@ -76,7 +75,9 @@ impl SlmpSettings {
             max_consecutive_faults: DEFAULT_MAX_FAULTS,
             first_poll: Duration::from_millis(2),
             max_poll: Duration::from_millis(20),
-        }
+        };
+        settings.fit_limits();
+        settings
     }
 
     /// Reads `slmp:NAME=HOST:PORT?key=value&...`; `None` when `text` is not of this form.

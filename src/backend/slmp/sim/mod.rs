@@ -29,9 +29,10 @@ use std::time::Duration;
 
 use super::fence::{parse_ranges, WordRange};
 use super::frame::{
-    self, decode_body, message_len, Decoded, DeviceRef, FrameKind, Request, Response,
-    MAX_BATCH_WORDS, MAX_RANDOM_WORDS,
+    self, decode_body, message_len, Code, Decoded, DeviceForm, DeviceRef, FrameKind, Request,
+    Response,
 };
+use super::limits::{Family, Limits};
 use super::mailbox::{self, off, state};
 use super::manifest::{parse_operand, Manifest};
 use crate::backend::{Backend, Request as ModelRequest, Response as ModelResponse};
@@ -916,7 +917,7 @@ fn take_fault(cpu: &mut Cpu, command: u16, head: Option<DeviceRef>) -> Option<Fa
         }
         if let Some(want) = &rule.head {
             let matches = head.is_some_and(|h| {
-                frame::device_letters(h.code) == Some(want.code()) && h.number == want.index
+                frame::device_letters(h.code).is_some_and(|letters| want.is(letters, h.number))
             });
             if !matches {
                 continue;
@@ -936,7 +937,7 @@ fn proxied(shared: &Shared, cpu: &Cpu, d: DeviceRef) -> Option<u16> {
     let withheld = cpu.withheld?;
     let letters = frame::device_letters(d.code)?;
     let at = |o| mailbox::at(&shared.mailbox, o);
-    let is = |o| letters == at(o).code() && d.number == at(o).index;
+    let is = |o| at(o).is(letters, d.number);
     if is(off::ACK) {
         Some(withheld)
     } else if is(off::STATE) {
@@ -944,6 +945,20 @@ fn proxied(shared: &Shared, cpu: &Cpu, d: DeviceRef) -> Option<u16> {
     } else {
         None
     }
+}
+
+/// What a request may carry on this CPU: the limits of its family in binary code, the one this
+/// simulator speaks, for the device form the request uses.
+fn limits(shared: &Shared, request: &Request) -> Limits {
+    let form = match request.subcommand {
+        0x0002 => DeviceForm::Long,
+        _ => DeviceForm::Short,
+    };
+    super::limits::limits(
+        Family::of_profile(&shared.settings.manifest.profile),
+        Code::Binary,
+        form,
+    )
 }
 
 /// Answers one decoded request: (end code, data).
@@ -958,8 +973,7 @@ fn handle(shared: &Shared, request: &Request, decoded: Decoded) -> (u16, Vec<u8>
             frame::type_name_data(&shared.settings.type_name, shared.settings.model_code),
         ),
         Decoded::Read { head, count } => {
-            // The batch limit of binary code, the same on both families.
-            if count == 0 || count > MAX_BATCH_WORDS {
+            if count == 0 || count > limits(shared, request).batch_words {
                 return (0xC051, Vec::new());
             }
             match cpu.device_words(head, count) {
@@ -968,12 +982,7 @@ fn handle(shared: &Shared, request: &Request, decoded: Decoded) -> (u16, Vec<u8>
             }
         }
         Decoded::RandomRead { devices } => {
-            // 96 points in the long device form (limits.rs).
-            let most = match request.subcommand {
-                0x0002 => MAX_RANDOM_WORDS / 2,
-                _ => MAX_RANDOM_WORDS,
-            };
-            if devices.is_empty() || devices.len() > most {
+            if devices.is_empty() || devices.len() > limits(shared, request).random_points {
                 return (0xC054, Vec::new());
             }
             let mut data = Vec::with_capacity(2 * devices.len());
@@ -989,7 +998,7 @@ fn handle(shared: &Shared, request: &Request, decoded: Decoded) -> (u16, Vec<u8>
             (0, data)
         }
         Decoded::Write { head, words } => {
-            if words.is_empty() || words.len() > MAX_BATCH_WORDS {
+            if words.is_empty() || words.len() > limits(shared, request).batch_words {
                 return (0xC051, Vec::new());
             }
             if let Err(code) = cpu.device_words(head, words.len()) {
@@ -1005,7 +1014,7 @@ fn handle(shared: &Shared, request: &Request, decoded: Decoded) -> (u16, Vec<u8>
             let trigger = mailbox::at(&shared.mailbox, off::TRIGGER);
             for (i, w) in words.iter().enumerate() {
                 let device = Device::new(letters, head.number + i as u32);
-                if device.code() == trigger.code() && device.index == trigger.index {
+                if trigger.is(letters, device.index) {
                     cpu.triggers += 1;
                     if shared.settings.premature_ack && cpu.triggers > 1 {
                         cpu.withheld = Some(*w);

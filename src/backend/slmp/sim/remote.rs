@@ -35,13 +35,19 @@ impl RemoteProgram {
     ) -> Result<RemoteProgram, String> {
         let shared = Shared::new(settings, profile, model)?;
         let writes = parse_ranges(&shared.settings.manifest.writes.join(","))?;
+        // Every word of the copy is the program's to write, as a CPU's own memory is.
+        let fence = WriteFence::new(
+            (shared.lock().words.iter())
+                .map(|(code, w)| WordRange::new(code, 0, w.len().saturating_sub(1) as u32))
+                .collect(),
+        );
         // A CPU in RUN has scanned before anyone can connect to it.
         let mut client = Client::new(client);
-        remote_scan(&shared, &mut client, &writes)?;
+        remote_scan(&shared, &mut client, &writes, &fence)?;
         let s = shared.clone();
         let thread = std::thread::spawn(move || {
             while !s.stop.load(Ordering::SeqCst) {
-                if let Err(why) = remote_scan(&s, &mut client, &writes) {
+                if let Err(why) = remote_scan(&s, &mut client, &writes, &fence) {
                     s.lock().audit.anomalies.push(why);
                 }
                 std::thread::sleep(s.settings.scan);
@@ -68,7 +74,12 @@ impl Drop for RemoteProgram {
 }
 
 /// One scan: memory in, the program, changed words out.
-fn remote_scan(shared: &Shared, client: &mut Client, writes: &[WordRange]) -> Result<(), String> {
+fn remote_scan(
+    shared: &Shared,
+    client: &mut Client,
+    writes: &[WordRange],
+    fence: &WriteFence,
+) -> Result<(), String> {
     let mut cpu = shared.lock();
     let mb = &shared.mailbox;
     let mut reads = vec![mailbox::range(mb)];
@@ -91,11 +102,6 @@ fn remote_scan(shared: &Shared, client: &mut Client, writes: &[WordRange]) -> Re
     }
     let before: BTreeMap<String, Vec<u16>> = cpu.words.clone();
     scan(shared, &mut cpu);
-    // Every word of the copy is the program's to write, as a CPU's own memory is.
-    let everything: Vec<WordRange> = (cpu.words.iter())
-        .map(|(code, w)| WordRange::new(code, 0, w.len().saturating_sub(1) as u32))
-        .collect();
-    let fence = WriteFence::new(everything);
     let limits = client.settings().limits;
     let mut out = Vec::new();
     for (code, after) in &cpu.words {
@@ -111,7 +117,7 @@ fn remote_scan(shared: &Shared, client: &mut Client, writes: &[WordRange]) -> Re
     let ack = mailbox::at(mb, off::ACK);
     let (last, first): (Vec<_>, Vec<_>) = split_off(out, &ack)
         .into_iter()
-        .partition(|(d, _)| d.code() == ack.code() && d.index == ack.index);
+        .partition(|(d, _)| ack.is(d.code(), d.index));
     for (head, words) in first.iter().chain(&last) {
         let built = fence
             .writes(client.settings().form, limits.batch_words, head, words)
