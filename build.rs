@@ -31,7 +31,7 @@ fn main() {
     files.sort();
     let mut code = String::from(
         "/// Every embedded file: its path relative to the project root, `/`-separated, and its \
-         text.\npub static FILES: &[(&str, &str)] = &[\n",
+         text.\npub(crate) static FILES: &[(&str, &str)] = &[\n",
     );
     for file in &files {
         let relative = file

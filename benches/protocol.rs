@@ -16,12 +16,12 @@ static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use plc_conformance::backend::external::ExternalBackend;
-use plc_conformance::backend::{Backend, Request};
-use plc_conformance::execute::{images, requests};
-use plc_conformance::memory::Image;
-use plc_conformance::model::project::{ExternalSettings, Launch};
-use plc_conformance::runner::{Paths, Project};
+use plc_conformance::testing::backend::external::ExternalBackend;
+use plc_conformance::testing::backend::{Backend, Request};
+use plc_conformance::testing::execute::{images, requests};
+use plc_conformance::testing::memory::Image;
+use plc_conformance::testing::model::project::{ExternalSettings, Launch};
+use plc_conformance::testing::runner::{Paths, Project};
 
 struct Setup {
     name: &'static str,
@@ -193,5 +193,5 @@ fn row(name: &str, cases: usize, time: Duration) {
 }
 
 fn thousands(x: f64) -> String {
-    plc_conformance::sweep::render::thousands(x.round() as u64)
+    plc_conformance::testing::sweep::render::thousands(x.round() as u64)
 }

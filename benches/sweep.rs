@@ -22,17 +22,17 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use std::time::Instant;
 
-use plc_conformance::backend::{Backend, Request};
-use plc_conformance::memory::{Fill, Image};
-use plc_conformance::model::cross_vendor::Operation;
-use plc_conformance::model::project::{ExternalSettings, Launch};
-use plc_conformance::plan::Input;
-use plc_conformance::runner::{Paths, Project};
-use plc_conformance::sweep::generate::Generator;
-use plc_conformance::sweep::group::Groups;
-use plc_conformance::sweep::input::Point;
-use plc_conformance::sweep::target::{Cases, Target};
-use plc_conformance::sweep::{Settings, Sweep};
+use plc_conformance::testing::backend::{Backend, Request};
+use plc_conformance::testing::memory::{Fill, Image};
+use plc_conformance::testing::model::cross_vendor::Operation;
+use plc_conformance::testing::model::project::{ExternalSettings, Launch};
+use plc_conformance::testing::plan::Input;
+use plc_conformance::testing::runner::{Paths, Project};
+use plc_conformance::testing::sweep::generate::Generator;
+use plc_conformance::testing::sweep::group::Groups;
+use plc_conformance::testing::sweep::input::Point;
+use plc_conformance::testing::sweep::target::{Cases, Target};
+use plc_conformance::testing::sweep::{Settings, Sweep};
 
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");

@@ -36,13 +36,13 @@ pub struct Device {
 
 /// The longest device code: MELSEC's are up to three letters (`ZR`, `SW`, `LCN`), a Siemens data
 /// block's bytes carry the block number (`DB65535.DBB`).
-pub const MAX_CODE_LEN: usize = 12;
+pub(crate) const MAX_CODE_LEN: usize = 12;
 
 /// The device syntax as a JSON Schema pattern (vector files, the protocol):
 /// [`Device::parse_numbered`] is the rule, this is the same rule for editors and other
 /// languages, with any code allowed a hexadecimal number (which codes have one is the
 /// profile's).
-pub const PATTERN: &str =
+pub(crate) const PATTERN: &str =
     r"^([A-Z]([A-Z0-9.\\]*[A-Z])?([0-9]+\.[0-7]|[0-9]+)|[A-Z]([A-Z0-9.\\]*[A-Z])?[0-9A-F]+)$";
 
 /// A device code kept inline, zero-padded. Memory images and effects are maps keyed
@@ -94,7 +94,7 @@ impl fmt::Debug for Code {
 impl Device {
     /// A device from a code the profiles define. Profile and vector loading reject longer
     /// codes ([`Device::from_str`], the profile checks), so the only codes that reach here fit;
-    /// one that does not is kept cut to [`MAX_CODE_LEN`] letters rather than lost.
+    /// one that does not is kept cut to `MAX_CODE_LEN` letters rather than lost.
     pub fn new(code: &str, index: u32) -> Self {
         let code = Code::new(code).unwrap_or_else(|| {
             debug_assert!(false, "device code `{code}` longer than {MAX_CODE_LEN}");
@@ -255,7 +255,7 @@ fn valid_code(code: &str) -> bool {
 
 /// Whether a profile's device code names `code`: equal, or a pattern in which each `#` stands
 /// for a decimal block number (`DB#.DBB` names `DB1.DBB` and `DB100.DBB`).
-pub fn code_matches(pattern: &str, code: &str) -> bool {
+pub(crate) fn code_matches(pattern: &str, code: &str) -> bool {
     let Some((head, rest)) = pattern.split_once('#') else {
         return pattern == code;
     };

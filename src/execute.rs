@@ -36,7 +36,7 @@ pub enum Progress {
     /// A backend's process was started again after a fault; `restarts` counts them so far.
     Restarted { backend: String, restarts: usize },
     /// A backend is still answering its current chunk: `answered` of its `of` requests so far.
-    /// Sent at most every [`ANSWERING_EVERY`], so that only a slow chunk sends any.
+    /// Sent at most every `ANSWERING_EVERY`, so that only a slow chunk sends any.
     Answering {
         backend: String,
         answered: usize,
@@ -63,7 +63,7 @@ enum Message {
 }
 
 /// How often a chunk still being answered is reported.
-pub const ANSWERING_EVERY: Duration = Duration::from_millis(250);
+pub(crate) const ANSWERING_EVERY: Duration = Duration::from_millis(250);
 
 /// A callback for a backend's batch that reports, at most every [`ANSWERING_EVERY`], how many
 /// of its `of` requests are answered.
@@ -115,7 +115,7 @@ pub fn requests<'a>(trial: &'a Trial, images: &'a [Image]) -> Vec<Request<'a>> {
 }
 
 /// The question a codec-level trial asks.
-pub fn question(trial: &Trial) -> Option<Question<'_>> {
+pub(crate) fn question(trial: &Trial) -> Option<Question<'_>> {
     let Check::Codec { case } = &trial.check else {
         return None;
     };
@@ -129,7 +129,7 @@ pub fn question(trial: &Trial) -> Option<Question<'_>> {
 }
 
 /// Runs one trial under every fill (a codec-level trial once).
-pub fn execute(trial: &Trial) -> Vec<Observation> {
+pub(crate) fn execute(trial: &Trial) -> Vec<Observation> {
     if let Some(q) = question(trial) {
         return pair(trial.backend.convert_batch(&[q], &mut |_| {}));
     }

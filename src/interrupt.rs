@@ -16,7 +16,7 @@ static SIGNAL: AtomicI32 = AtomicI32::new(0);
 
 /// What a signal does once the backends are killed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum OnSignal {
+pub(crate) enum OnSignal {
     /// Set the stop flag and let the run finish with what it has (`run`, `diff`).
     Finish,
     /// Exit at once with the interruption's status (a test harness, which cannot be stopped
@@ -25,12 +25,12 @@ pub enum OnSignal {
 }
 
 /// The stop flag a run is given: set by an interruption.
-pub fn stop_flag() -> &'static AtomicBool {
+pub(crate) fn stop_flag() -> &'static AtomicBool {
     &STOP
 }
 
 /// The signal that interrupted the run, if one did.
-pub fn signal() -> Option<i32> {
+pub(crate) fn signal() -> Option<i32> {
     match SIGNAL.load(Ordering::SeqCst) {
         0 => None,
         s => Some(s),
@@ -38,13 +38,13 @@ pub fn signal() -> Option<i32> {
 }
 
 /// The exit status of an interrupted command: 128 + the signal.
-pub fn exit_status() -> Option<u8> {
+pub(crate) fn exit_status() -> Option<u8> {
     signal().and_then(|s| u8::try_from(128 + s).ok())
 }
 
 /// Interrupts the run as a signal would: records the signal, sets the stop flag and kills every
 /// backend process group.
-pub fn interrupt(signal: i32) {
+pub(crate) fn interrupt(signal: i32) {
     SIGNAL.store(signal, Ordering::SeqCst);
     STOP.store(true, Ordering::SeqCst);
     external::kill_all();
@@ -53,7 +53,7 @@ pub fn interrupt(signal: i32) {
 /// Handles SIGINT and SIGTERM on a thread of their own from now on. With
 /// [`OnSignal::Finish`] (a command, which a panic ends) a panic also kills every backend
 /// process group; a test harness, which turns a panic into one failed test, keeps them.
-pub fn install(on_signal: OnSignal) -> std::io::Result<()> {
+pub(crate) fn install(on_signal: OnSignal) -> std::io::Result<()> {
     if on_signal == OnSignal::Finish {
         let previous = std::panic::take_hook();
         std::panic::set_hook(Box::new(move |info| {

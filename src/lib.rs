@@ -1,41 +1,134 @@
 //! plc-conformance: a differential conformance harness for PLC instructions.
 //!
-//! Data flows one way, one module per stage, none importing from a later one:
+//! The crate root is the interface an emulator or codec author depends on: implement
+//! [`Backend`] for an emulator (one instruction on one memory image) or [`Codec`] for a hex
+//! codec (one cross-vendor question), and run the corpus against it from your own `cargo test`
+//! with [`Harness`] (one libtest trial per case), or plan and judge it yourself with
+//! [`Project`], [`verdicts`] and [`Verdict`]. Everything else is the command-line tool's and
+//! may change between releases; [`testing`] lists what this repository's own tests reach.
 //!
-//! - [`spec`]: the on-disk formats (vector files, cross-vendor files, profiles, the project file,
-//!   known-differences files), shape only;
-//! - [`load`]: turns them into the validated [`model`] (corpus, profiles, project backends,
-//!   known differences), reporting every problem with `file:line` and key;
-//! - [`plan`]: pairs every case with every backend, variant and instruction (or cross-vendor
-//!   lowering) into [`plan::Trial`]s, deciding what is skipped or cannot fail;
-//! - [`execute`]: runs trials on their [`backend`]s under both fills, batched per backend;
-//! - [`judge`]: turns observations into one [`judge::Verdict`] and applies known differences;
-//! - [`report`]: reporters fed by events render text, JSON, JUnit, HTML and matrices.
+//! An emulator answers a [`Request`] — the profile and variant, the instruction, its operands
+//! and flags, the memory before — with the words it wrote and the error it signalled:
 //!
-//! [`runner`] drives the stages for a project, [`sweep`] runs generated inputs through them and
-//! groups and shrinks what the backends disagree on, [`libtest`] maps them onto libtest trials
-//! for `cargo test` (and for emulators written in Rust), and [`cli`] is the command line;
-//! [`interrupt`] makes SIGINT and SIGTERM end a run with what it has and no backend running.
-//! [`device`], [`value`], [`memory`] and [`text`] are shared leaves.
+//! ```
+//! use plc_conformance::{Backend, Fault, Outcome, Request, Response, Unsupported};
+//!
+//! /// Knows MELSEC iQ-R HABIN with SM705 off (a fixed 4 digits) and nothing else.
+//! struct MyEmulator;
+//!
+//! impl Backend for MyEmulator {
+//!     fn name(&self) -> &str { "my-emulator" }
+//!     fn profile(&self) -> &str { "iqr" }
+//!     fn describe(&self) -> String { "my emulator, HABIN only".into() }
+//!     fn claims(&self, instruction: &str, _variant: &str) -> bool { instruction == "HABIN" }
+//!     fn execute(&self, r: &Request<'_>) -> Result<Response, Fault> {
+//!         if r.flag("SM705") {
+//!             return Ok(Unsupported("SM705 on (up to 4 digits ended by 00H)".into()).into());
+//!         }
+//!         let (s, d) = match (r.device("s"), r.device("d")) {
+//!             (Ok(s), Ok(d)) => (s, d),
+//!             (Err(u), _) | (_, Err(u)) => return Ok(Response::from(u)),
+//!         };
+//!         // 4135H 4438H reads "5A8D", low byte first (`iqr-instructions-ja p.478`).
+//!         let mut value = 0u16;
+//!         for i in 0..2 {
+//!             let word = s.offset(i).map_or(0, |device| r.memory.read(&device));
+//!             for byte in [word as u8, (word >> 8) as u8] {
+//!                 let Some(digit) = (byte as char).to_digit(16).filter(|_| !byte.is_ascii_lowercase())
+//!                 else {
+//!                     return Ok(Response::Done(Outcome::error(r.error(0x3401))));
+//!                 };
+//!                 value = value << 4 | digit as u16;
+//!             }
+//!         }
+//!         Ok(Response::Done(Outcome::written([(d.clone(), value)].into())))
+//!     }
+//! }
+//! ```
+//!
+//! A codec answers with a value, a text or an error class:
+//!
+//! ```
+//! use plc_conformance::{Answer, Codec, CodecAbilities, ErrorClass, Operation,
+//!     OperationAbilities, Question, Unsupported};
+//!
+//! struct FromStrRadix;
+//!
+//! impl Codec for FromStrRadix {
+//!     fn name(&self) -> &str { "from-str-radix" }
+//!     fn abilities(&self) -> CodecAbilities {
+//!         CodecAbilities {
+//!             hex_to_value: Some(OperationAbilities { digits: Some(vec![4]), width: 16,
+//!                 ..OperationAbilities::default() }),
+//!             value_to_hex: None,
+//!         }
+//!     }
+//!     fn convert(&self, q: &Question<'_>) -> Result<Answer, Unsupported> {
+//!         match q.operation {
+//!             Operation::HexToValue => Ok(std::str::from_utf8(q.text).ok()
+//!                 .and_then(|t| u16::from_str_radix(t, 16).ok())
+//!                 .map_or(Answer::Error(ErrorClass::InvalidDigit), |v| Answer::Value(v.into()))),
+//!             Operation::ValueToHex => Err(Unsupported("decode only".into())),
+//!         }
+//!     }
+//! }
+//! ```
+//!
+//! Inside, data flows one way, one module per stage, none importing from a later one: `spec`
+//! (the on-disk formats), `load` (the validated model, every problem with `file:line`), `plan`
+//! (trials), `execute` (batched per backend), `judge` (verdicts, known differences), `report`
+//! (reporters fed by events); `session` builds a run, `sweep` runs generated inputs, `libtest`
+//! maps trials onto `cargo test`, and `cli` is the command line (docs/architecture.md).
 
-pub mod backend;
-pub mod cli;
-pub mod device;
-pub mod execute;
-pub mod hil;
-pub mod interrupt;
-pub mod judge;
-pub mod known_draft;
-pub mod libtest;
-pub mod load;
-pub mod memory;
-pub mod model;
-pub mod plan;
-pub mod record;
-pub mod report;
-pub mod runner;
-pub mod session;
-pub mod spec;
-pub mod sweep;
-pub mod text;
-pub mod value;
+#![warn(unreachable_pub)]
+
+mod backend;
+mod cli;
+mod device;
+mod error_chain;
+mod execute;
+mod hil;
+mod interrupt;
+mod judge;
+mod known_draft;
+mod libtest;
+mod load;
+mod memory;
+mod model;
+mod plan;
+mod record;
+mod report;
+mod runner;
+mod session;
+mod spec;
+mod sweep;
+mod text;
+mod value;
+
+pub use backend::{
+    codec_backend, Backend, Codec, Fault, Outcome, Question, Request, Response, Setting,
+    Unsupported,
+};
+pub use device::Device;
+pub use judge::{Difference, Status, Verdict};
+pub use libtest::Harness;
+pub use load::LoadErrors;
+pub use memory::{Fill, Image, Unit};
+pub use model::cross_vendor::CrossVendorCase;
+pub use model::cross_vendor::{Answer, CodecAbilities, ErrorClass, Operation, OperationAbilities};
+pub use model::known::{KnownDifferences, Subject};
+pub use model::profile::{Profile, Variant};
+pub use model::{Basis, Case, Corpus, ErrorSignal, Indirect, Operand};
+pub use plan::Trial;
+pub use runner::{run_one, verdicts, Paths, Project};
+
+/// What this repository's own tests reach inside the crate, with no stability promise: hidden
+/// from the documentation, which shows the interface above.
+#[doc(hidden)]
+pub mod testing;
+
+/// The command line, for the `plc-conformance` binary: not part of the library's interface.
+#[doc(hidden)]
+pub fn main() -> std::process::ExitCode {
+    cli::main()
+}

@@ -44,14 +44,14 @@ pub fn main(root: &Path, binary: &Path, extra: Vec<Arc<dyn Backend>>) -> ExitCod
 }
 
 /// The corpus as libtest trials for a `harness = false` test of your own: an emulator or a
-/// library written in Rust implements [`Backend`] (or [`crate::backend::Codec`], wrapped by
-/// [`crate::backend::codec_backend`]) and gets one trial per case it implements, with diffs and
+/// library written in Rust implements [`Backend`] (or [`crate::Codec`], wrapped by
+/// [`crate::codec_backend`]) and gets one trial per case it implements, with diffs and
 /// known differences, in process.
 ///
 /// ```no_run
 /// # use std::sync::Arc;
-/// # fn my_backend() -> Arc<dyn plc_conformance::backend::Backend> { unimplemented!() }
-/// use plc_conformance::libtest::Harness;
+/// # fn my_backend() -> Arc<dyn plc_conformance::Backend> { unimplemented!() }
+/// use plc_conformance::Harness;
 ///
 /// fn main() -> std::process::ExitCode {
 ///     Harness::new("path/to/plc-conformance")   // its vendors/ and vectors/

@@ -158,31 +158,31 @@ impl Image {
 
 /// A backend's working view: reads see earlier writes; the writes are the result.
 #[derive(Debug)]
-pub struct Scratch<'a> {
+pub(crate) struct Scratch<'a> {
     image: &'a Image,
     writes: BTreeMap<Device, u16>,
 }
 
 impl<'a> Scratch<'a> {
-    pub fn new(image: &'a Image) -> Self {
+    pub(crate) fn new(image: &'a Image) -> Self {
         Scratch {
             image,
             writes: BTreeMap::new(),
         }
     }
 
-    pub fn read(&self, device: &Device) -> u16 {
+    pub(crate) fn read(&self, device: &Device) -> u16 {
         self.writes
             .get(device)
             .copied()
             .unwrap_or_else(|| self.image.read(device))
     }
 
-    pub fn write(&mut self, device: Device, value: u16) {
+    pub(crate) fn write(&mut self, device: Device, value: u16) {
         self.writes.insert(device, value);
     }
 
-    pub fn into_writes(self) -> BTreeMap<Device, u16> {
+    pub(crate) fn into_writes(self) -> BTreeMap<Device, u16> {
         self.writes
     }
 }

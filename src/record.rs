@@ -22,7 +22,7 @@ use crate::runner::Project;
 
 /// What recording did to one case.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Change {
+pub(crate) enum Change {
     /// An `unspecified` case now expects what the backend did.
     Filled { effect: Effect },
     /// An `inferred` or `observed` expectation replaced; `same` when the backend did what it
@@ -42,21 +42,21 @@ pub enum Change {
 
 /// One case and what happened to it.
 #[derive(Debug, Clone)]
-pub struct Entry {
+pub(crate) struct Entry {
     pub case: Arc<Case>,
     pub change: Change,
 }
 
 /// The result of recording: what changed, and the new text of every file that changed.
 #[derive(Debug, Default)]
-pub struct Recording {
+pub(crate) struct Recording {
     pub entries: Vec<Entry>,
     pub files: BTreeMap<PathBuf, String>,
 }
 
 /// Who recorded, when: what goes into each `provenance`.
 #[derive(Debug, Clone)]
-pub struct Provenance {
+pub(crate) struct Provenance {
     pub backend: String,
     pub version: String,
     pub date: String,
@@ -76,7 +76,7 @@ enum NoEffect {
 
 /// Why what a backend did on a case cannot be written into the vector.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Unrecordable(pub String);
+pub(crate) struct Unrecordable(pub String);
 
 impl std::fmt::Display for Unrecordable {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -86,7 +86,7 @@ impl std::fmt::Display for Unrecordable {
 
 /// Why a recording could not be made at all.
 #[derive(Debug)]
-pub enum RecordError {
+pub(crate) enum RecordError {
     /// A vector file to edit could not be read.
     Read {
         file: PathBuf,
@@ -97,18 +97,22 @@ pub enum RecordError {
 impl std::fmt::Display for RecordError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            RecordError::Read { file, source } => {
-                write!(f, "cannot read {}: {source}", file.display())
-            }
+            RecordError::Read { file, .. } => write!(f, "cannot read {}", file.display()),
         }
     }
 }
 
-impl std::error::Error for RecordError {}
+impl std::error::Error for RecordError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            RecordError::Read { source, .. } => Some(source),
+        }
+    }
+}
 
 /// Runs every native case of the corpus that `backend` runs (and whose trial name contains
 /// `filter`) and works out the edits.
-pub fn record(
+pub(crate) fn record(
     project: &Project,
     backend: &Arc<dyn Backend>,
     filter: Option<&str>,
@@ -398,7 +402,7 @@ fn edit(
 }
 
 /// Today's date (UTC) as `YYYY-MM-DD`.
-pub fn today() -> String {
+pub(crate) fn today() -> String {
     let secs = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0, |d| d.as_secs());

@@ -10,6 +10,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use crate::backend::external::{ExternalBackend, ExternalError};
+use crate::backend::slmp::error::LiveError;
 use crate::backend::{reference_backends, Backend};
 use crate::execute::{execute, execute_all, Pace, Progress};
 use crate::judge::{judge, skipped, Verdict};
@@ -87,7 +88,7 @@ pub enum SetupError {
     Duplicate(String),
     /// A live CPU backend whose settings, program manifest or interlocks (type name, RUN, the
     /// program's signature) refused it before anything was written: the backend and why.
-    Live { backend: String, why: String },
+    Live { backend: String, source: LiveError },
 }
 
 impl fmt::Display for SetupError {
@@ -96,14 +97,23 @@ impl fmt::Display for SetupError {
             SetupError::Load(e) => write!(f, "{e}"),
             SetupError::External(e) => write!(f, "{e}"),
             SetupError::Duplicate(name) => write!(f, "there are two backends named `{name}`"),
-            SetupError::Live { backend, why } => {
-                write!(f, "live CPU backend `{backend}` not started: {why}")
+            SetupError::Live { backend, .. } => {
+                write!(f, "live CPU backend `{backend}` not started")
             }
         }
     }
 }
 
-impl std::error::Error for SetupError {}
+impl std::error::Error for SetupError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            SetupError::Load(e) => e.source(),
+            SetupError::External(e) => e.source(),
+            SetupError::Duplicate(_) => None,
+            SetupError::Live { source, .. } => Some(source),
+        }
+    }
+}
 
 impl Project {
     /// Loads profiles and corpus and sets up the built-in reference backends.
@@ -144,6 +154,17 @@ impl Project {
         Ok(backend)
     }
 
+    /// A known-differences file for `backend`, checked against its profile (none for a codec)
+    /// and the whole corpus: an entry for a case the corpus does not have is an error.
+    pub fn known_differences(
+        &self,
+        backend: &dyn Backend,
+        file: &Path,
+    ) -> Result<KnownDifferences, LoadErrors> {
+        let profile = self.profiles.get(backend.profile()).map(|p| p.as_ref());
+        load_known(file, profile, &self.corpus, true)
+    }
+
     /// Every trial of the corpus on these backends, with their known differences.
     pub fn plan(&self, backends: &[Arc<dyn Backend>]) -> Vec<Trial> {
         plan(&self.corpus, &self.profiles, backends, &self.known)
@@ -163,7 +184,7 @@ pub fn run_one(trial: &Trial) -> Verdict {
 /// `stop` is set, no further chunk is started and the run finishes with what it has, reported
 /// as interrupted. Returns the counts, or the reporter's first write error: the run ends
 /// there, since a report that cannot be written would only be truncated.
-pub fn run(
+pub(crate) fn run(
     trials: &[Trial],
     jobs: usize,
     stop: &AtomicBool,

@@ -33,7 +33,7 @@ use crate::report::Summary;
 use crate::runner::{Project, SetupError};
 
 /// Where a backend comes from.
-pub enum BackendSource {
+pub(crate) enum BackendSource {
     /// Every built-in reference model whose profile is loaded.
     References,
     /// A process speaking the protocol, started now (its handshake says what it implements).
@@ -52,7 +52,7 @@ pub enum BackendSource {
 
 /// The backends of a run, in the order of their sources.
 #[derive(Default)]
-pub struct Assembled {
+pub(crate) struct Assembled {
     pub backends: Vec<Arc<dyn Backend>>,
     /// The sources that could not be set up, by backend name.
     pub failed: Vec<(String, SetupError)>,
@@ -63,7 +63,7 @@ pub struct Assembled {
 /// Sets up every source: reference models as they are, processes started (or prepared to start
 /// on first use), known-differences files loaded into `project.known`. `strict_known` makes a
 /// known-differences entry for a case outside the corpus an error (see [`load_known`]).
-pub fn assemble(
+pub(crate) fn assemble(
     project: &mut Project,
     sources: Vec<BackendSource>,
     strict_known: bool,
@@ -110,9 +110,13 @@ pub fn assemble(
                     .and_then(|b| b.connect().map(|()| b));
                 match live {
                     Ok(b) => out.backends.push(Arc::new(b)),
-                    Err(why) => out
-                        .failed
-                        .push((name.clone(), SetupError::Live { backend: name, why })),
+                    Err(source) => out.failed.push((
+                        name.clone(),
+                        SetupError::Live {
+                            backend: name,
+                            source,
+                        },
+                    )),
                 }
             }
             BackendSource::InProcess(backend, known) => {
@@ -141,7 +145,7 @@ pub fn assemble(
 
 impl BackendSource {
     /// The backend's name (empty for the set of reference models).
-    pub fn name(&self) -> String {
+    pub(crate) fn name(&self) -> String {
         match self {
             BackendSource::References => String::new(),
             BackendSource::Process(s) | BackendSource::ProcessOnFirstUse(s) => s.name.clone(),
@@ -152,19 +156,19 @@ impl BackendSource {
 }
 
 /// An external backend started on first use, once per process.
-pub struct LazyStart {
+pub(crate) struct LazyStart {
     settings: ExternalSettings,
     profiles: Profiles,
     started: OnceLock<Result<Arc<dyn Backend>, Arc<ExternalError>>>,
 }
 
 impl LazyStart {
-    pub fn name(&self) -> &str {
+    pub(crate) fn name(&self) -> &str {
         &self.settings.name
     }
 
     /// The started backend, starting it the first time.
-    pub fn get(&self) -> Result<Arc<dyn Backend>, Arc<ExternalError>> {
+    pub(crate) fn get(&self) -> Result<Arc<dyn Backend>, Arc<ExternalError>> {
         self.started
             .get_or_init(|| {
                 ExternalBackend::start(self.settings.clone(), &self.profiles)
@@ -176,7 +180,7 @@ impl LazyStart {
 
     /// Makes a planned trial of the placeholder a trial of the started backend, with the
     /// started backend's own skip decision.
-    pub fn bind(&self, trial: &mut Trial) -> Result<(), Arc<ExternalError>> {
+    pub(crate) fn bind(&self, trial: &mut Trial) -> Result<(), Arc<ExternalError>> {
         let real = self.get()?;
         trial.skip = crate::plan::skip_reason(trial, real.as_ref());
         trial.backend = real;
@@ -243,10 +247,9 @@ impl Backend for Placeholder {
 }
 
 /// What a run ends with.
-pub struct RunOutcome {
+pub(crate) struct RunOutcome {
     pub records: Vec<Record>,
     pub summary: Summary,
-    pub interrupted: bool,
     /// Backends the run was asked for that ran no trial, with why: they passed nothing.
     pub idle: Vec<(String, String)>,
     /// The comparison with a baseline, when one was given.
@@ -254,7 +257,7 @@ pub struct RunOutcome {
 }
 
 /// Counts of a baseline comparison, and one line per changed trial.
-pub struct BaselineChanges {
+pub(crate) struct BaselineChanges {
     pub new: Vec<String>,
     pub fixed: Vec<String>,
     pub changed: Vec<String>,
@@ -263,7 +266,7 @@ pub struct BaselineChanges {
 
 impl RunOutcome {
     /// Compares the run with a saved one.
-    pub fn against(&mut self, before: &SavedRun) {
+    pub(crate) fn against(&mut self, before: &SavedRun) {
         let changes = baseline::compare(&before.records, &self.records);
         self.baseline = Some(BaselineChanges {
             new: changes
@@ -287,7 +290,7 @@ impl RunOutcome {
 
     /// 0 when everything asked of the run conforms, 1 otherwise: with a baseline, a new
     /// failure; without one, any failure; and always a backend that ran nothing.
-    pub fn exit_code(&self) -> u8 {
+    pub(crate) fn exit_code(&self) -> u8 {
         let differs = match &self.baseline {
             Some(b) => !b.new.is_empty(),
             None => self.summary.failed > 0,
@@ -298,7 +301,11 @@ impl RunOutcome {
 
 /// The backends among `asked` that ran no trial, with why: every trial of theirs skipped (the
 /// most frequent reason is given), or, when no filter narrows the run, no trial at all.
-pub fn idle_backends(trials: &[Trial], asked: &[&str], filtered: bool) -> Vec<(String, String)> {
+pub(crate) fn idle_backends(
+    trials: &[Trial],
+    asked: &[&str],
+    filtered: bool,
+) -> Vec<(String, String)> {
     let mut out = Vec::new();
     for name in asked {
         let theirs: Vec<&Trial> = trials
@@ -335,7 +342,7 @@ pub fn idle_backends(trials: &[Trial], asked: &[&str], filtered: bool) -> Vec<(S
 /// faults and reports as a run against the corpus. `Err` is the verdict on the first backend's
 /// trial when it gives nothing to judge against: a fault, an unsupported answer, or an outcome
 /// that depends on the fill.
-pub fn judged_against(
+pub(crate) fn judged_against(
     first: &Trial,
     did: &[Observation],
     second: &Trial,

@@ -15,12 +15,12 @@ pub fn digit_value(ch: u8) -> Option<u8> {
 }
 
 /// The uppercase hex digit character for the low nibble of `value`.
-pub fn digit_char(value: u64) -> u8 {
+pub(crate) fn digit_char(value: u64) -> u8 {
     b"0123456789ABCDEF"[(value & 0xF) as usize]
 }
 
 /// The hex digits a value has (at least 1).
-pub fn significant_digits(v: u64) -> u32 {
+pub(crate) fn significant_digits(v: u64) -> u32 {
     (64 - v.leading_zeros()).div_ceil(4).max(1)
 }
 

@@ -37,7 +37,7 @@ impl std::error::Error for ValueError {}
 
 /// Reads a number in any of the accepted notations, without a width check (a number past 64
 /// bits is too wide for any).
-pub fn parse_number(text: &str) -> Result<i64, ValueError> {
+pub(crate) fn parse_number(text: &str) -> Result<i64, ValueError> {
     parse_wide(text).and_then(|n| {
         i64::try_from(n).map_err(|_| ValueError::TooWide {
             text: text.to_string(),
@@ -48,7 +48,7 @@ pub fn parse_number(text: &str) -> Result<i64, ValueError> {
 
 /// Reads a non-negative number of up to 64 bits (a 64-bit value such as `0EFCDAB8967452301H`,
 /// past the signed range [`parse_number`] keeps to).
-pub fn parse_unsigned(text: &str) -> Result<u64, ValueError> {
+pub(crate) fn parse_unsigned(text: &str) -> Result<u64, ValueError> {
     parse_wide(text).and_then(|n| {
         u64::try_from(n).map_err(|_| ValueError::TooWide {
             text: text.to_string(),
@@ -104,7 +104,7 @@ fn parse_wide(text: &str) -> Result<i128, ValueError> {
 
 /// Narrows a number to a word. Negative numbers down to the signed minimum are stored as two's
 /// complement, as a PLC stores `K-1`.
-pub fn to_bits(text: &str, value: i64, bits: u32) -> Result<u64, ValueError> {
+pub(crate) fn to_bits(text: &str, value: i64, bits: u32) -> Result<u64, ValueError> {
     let min = -(1i64 << (bits - 1));
     let max = (1i64 << bits) - 1;
     if value < min || value > max {
@@ -118,12 +118,12 @@ pub fn to_bits(text: &str, value: i64, bits: u32) -> Result<u64, ValueError> {
 }
 
 /// Reads a 16-bit word.
-pub fn parse_word(text: &str) -> Result<u16, ValueError> {
+pub(crate) fn parse_word(text: &str) -> Result<u16, ValueError> {
     parse_bits(text, 16)
 }
 
 /// Reads a number that must fit `bits` bits (at most 16: a word or a byte).
-pub fn parse_bits(text: &str, bits: u32) -> Result<u16, ValueError> {
+pub(crate) fn parse_bits(text: &str, bits: u32) -> Result<u16, ValueError> {
     let value = parse_number(text).map_err(|e| match e {
         ValueError::TooWide { text, .. } => ValueError::TooWide { text, bits },
         e => e,
@@ -132,7 +132,7 @@ pub fn parse_bits(text: &str, bits: u32) -> Result<u16, ValueError> {
 }
 
 /// Formats a word the way the manuals do: four hex digits and an `H` suffix.
-pub fn hex_word(word: u16) -> String {
+pub(crate) fn hex_word(word: u16) -> String {
     format!("{word:04X}H")
 }
 

@@ -7,9 +7,9 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use plc_conformance::device::Device;
-use plc_conformance::memory::Unit;
-use plc_conformance::runner::{Paths, Project};
+use plc_conformance::testing::device::Device;
+use plc_conformance::testing::memory::Unit;
+use plc_conformance::testing::runner::{Paths, Project};
 
 fn fixture() -> PathBuf {
     common::root().join("tests/fixtures/byte-family")

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use common::root;
 
-use plc_conformance::load::load_profiles;
+use plc_conformance::testing::load::load_profiles;
 
 /// The anchors `<a id="..."></a>` of docs/semantics.md.
 fn anchors() -> BTreeSet<String> {
@@ -353,14 +353,14 @@ fn every_manual_basis_rests_on_a_quote() {
     let mut cases: Vec<(String, String)> = corpus
         .cases
         .iter()
-        .filter(|c| c.basis == plc_conformance::model::Basis::Manual)
+        .filter(|c| c.basis == plc_conformance::testing::model::Basis::Manual)
         .map(|c| (c.id.clone(), cite_of(&c.citation)))
         .collect();
     cases.extend(
         corpus
             .cross_vendor
             .iter()
-            .filter(|c| c.basis == plc_conformance::model::Basis::Manual)
+            .filter(|c| c.basis == plc_conformance::testing::model::Basis::Manual)
             .map(|c| (c.id.clone(), cite_of(&c.citation))),
     );
     assert!(cases.len() > 200, "{} manual cases", cases.len());
@@ -372,7 +372,7 @@ fn every_manual_basis_rests_on_a_quote() {
 }
 
 /// A citation's manual, page and text as one string: `iqr-instructions p.654-658: ...`.
-fn cite_of(c: &plc_conformance::model::Citation) -> String {
+fn cite_of(c: &plc_conformance::testing::model::Citation) -> String {
     if c.page.is_empty() {
         format!("{} {}", c.manual, c.text.as_deref().unwrap_or_default())
     } else {

@@ -293,7 +293,7 @@ fn a_backend_left_out_is_a_note_on_stderr_not_in_the_report() {
         let out = common::bin()
             .current_dir(dir.path())
             // Where backends are required, a missing one is an error, not a note.
-            .env_remove(plc_conformance::load::ENV_REQUIRE)
+            .env_remove(plc_conformance::testing::load::ENV_REQUIRE)
             .args([
                 "run",
                 "--filter",
@@ -311,4 +311,23 @@ fn a_backend_left_out_is_a_note_on_stderr_not_in_the_report() {
             "{format}: {stderr}"
         );
     }
+}
+
+/// An error that wraps another shows every cause once, in order, on the one line the edge
+/// renders: here a baseline that cannot be read, and the operating system's reason under it.
+#[test]
+fn an_error_is_shown_with_its_causes() {
+    let dir = scratch();
+    let missing = dir.path().join("before.json");
+    let os = std::fs::read(&missing).expect_err("absent").to_string();
+    let out = cli(&["run", "--baseline", missing.to_str().expect("utf-8 path")]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = text(&out.stderr);
+    let expected = format!("{}: cannot be read: {os}", missing.display());
+    assert!(
+        stderr
+            .lines()
+            .any(|l| l.ends_with(&expected) && l.contains("error")),
+        "{stderr}"
+    );
 }

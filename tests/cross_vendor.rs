@@ -10,16 +10,16 @@ use std::path::Path;
 use std::sync::Arc;
 
 use common::{reference, session, Mutant};
-use plc_conformance::backend::{Backend, Fault, Outcome, Response};
-use plc_conformance::device::Device;
-use plc_conformance::judge::{Difference, Status, Verdict};
-use plc_conformance::load::CorpusBuilder;
-use plc_conformance::memory::Fill;
-use plc_conformance::model::known::{Entry, KnownDifferences};
-use plc_conformance::model::ErrorSignal;
-use plc_conformance::plan::Trial;
-use plc_conformance::report::text::{render, Palette};
-use plc_conformance::runner::{run_one, Project};
+use plc_conformance::testing::backend::{Backend, Fault, Outcome, Response};
+use plc_conformance::testing::device::Device;
+use plc_conformance::testing::judge::{Difference, Status, Verdict};
+use plc_conformance::testing::load::CorpusBuilder;
+use plc_conformance::testing::memory::Fill;
+use plc_conformance::testing::model::known::{Entry, KnownDifferences};
+use plc_conformance::testing::model::ErrorSignal;
+use plc_conformance::testing::plan::Trial;
+use plc_conformance::testing::report::text::{render, Palette};
+use plc_conformance::testing::runner::{run_one, Project};
 use rstest::rstest;
 
 /// Every cross-vendor trial on one backend.
@@ -66,7 +66,7 @@ fn a_model_ignoring_sm705_fails_the_terminated_lowering() {
     let iqr = reference(&s, "mitsubishi-iqr");
     let mutant = Mutant::new("ignores-sm705", &iqr, |req, base| {
         let flags = req.flags.keys().map(|k| (k.clone(), false)).collect();
-        base.execute(&plc_conformance::backend::Request {
+        base.execute(&plc_conformance::testing::backend::Request {
             flags: &flags,
             ..*req
         })
@@ -153,7 +153,9 @@ fn a_listed_cross_vendor_difference_is_a_known_difference_not_a_failure() {
         KnownDifferences {
             file: "known.yaml".into(),
             entries: vec![Entry {
-                covers: plc_conformance::model::known::Covers::Case(trial.case_id().to_string()),
+                covers: plc_conformance::testing::model::known::Covers::Case(
+                    trial.case_id().to_string(),
+                ),
                 instruction: Some(trial.check_name().to_string()),
                 variant: None,
                 kind: None,
@@ -335,7 +337,7 @@ fn behaviour_table(project: &Project) -> String {
         .into_iter()
         .filter(|t| t.is_cross_vendor())
         .collect();
-    let verdicts = plc_conformance::runner::verdicts(&trials);
+    let verdicts = plc_conformance::testing::runner::verdicts(&trials);
     let mut families: Vec<&str> = Vec::new();
     for t in &trials {
         let name = t.backend.name();
@@ -358,8 +360,8 @@ fn behaviour_table(project: &Project) -> String {
                 if t.backend.name() != *f || t.case_id() != *case || t.variant.is_empty() {
                     continue;
                 }
-                let mut shown = plc_conformance::report::record::Record::of(t, v).shown;
-                if t.basis() == plc_conformance::model::Basis::Unspecified {
+                let mut shown = plc_conformance::testing::report::record::Record::of(t, v).shown;
+                if t.basis() == plc_conformance::testing::model::Basis::Unspecified {
                     shown.push_str(" (unspecified)");
                 }
                 let lowering = t.check_name().to_string();

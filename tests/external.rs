@@ -14,13 +14,13 @@ use std::sync::Arc;
 use common::{interpreter, python};
 use std::time::Duration;
 
-use plc_conformance::backend::external::ExternalErrorKind;
-use plc_conformance::backend::Backend;
-use plc_conformance::judge::Verdict;
-use plc_conformance::load::{load_project, ENV_SELF, FILE_NAME};
-use plc_conformance::model::project::{ExternalSettings, Launch};
-use plc_conformance::plan::Trial;
-use plc_conformance::runner::{run_one, verdicts as run_all, Paths, Project, SetupError};
+use plc_conformance::testing::backend::external::ExternalErrorKind;
+use plc_conformance::testing::backend::Backend;
+use plc_conformance::testing::judge::Verdict;
+use plc_conformance::testing::load::{load_project, ENV_SELF, FILE_NAME};
+use plc_conformance::testing::model::project::{ExternalSettings, Launch};
+use plc_conformance::testing::plan::Trial;
+use plc_conformance::testing::runner::{run_one, verdicts as run_all, Paths, Project, SetupError};
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -606,7 +606,7 @@ fn protocol_schema_is_current() {
     let text = std::fs::read_to_string(&path).expect("schema/protocol.schema.json");
     let checked_in: serde_json::Value = serde_json::from_str(&text).expect("JSON");
     assert!(
-        checked_in == plc_conformance::backend::external::protocol::protocol_schema(),
+        checked_in == plc_conformance::testing::backend::external::protocol::protocol_schema(),
         "schema/protocol.schema.json is stale: run \
          `cargo run -- schema --kind protocol > schema/protocol.schema.json`"
     );
@@ -969,9 +969,9 @@ fn trials_a_backend_declines_are_listed_ignored_and_never_pass_alone() {
 /// first trial is judged, and the live progress line shows it.
 #[test]
 fn a_slow_batch_reports_its_answers_as_they_come() {
-    use plc_conformance::execute::{execute_all, Pace, Progress};
-    use plc_conformance::report::progress::ProgressReporter;
-    use plc_conformance::report::{Event, Reporter};
+    use plc_conformance::testing::execute::{execute_all, Pace, Progress};
+    use plc_conformance::testing::report::progress::ProgressReporter;
+    use plc_conformance::testing::report::{Event, Reporter};
     use std::sync::atomic::AtomicBool;
 
     let mut session = fixture_session();
@@ -1032,8 +1032,8 @@ fn a_slow_batch_reports_its_answers_as_they_come() {
 
 struct Keep;
 
-impl plc_conformance::report::Reporter for Keep {
-    fn event(&mut self, _: &plc_conformance::report::Event<'_>) -> std::io::Result<()> {
+impl plc_conformance::testing::report::Reporter for Keep {
+    fn event(&mut self, _: &plc_conformance::testing::report::Event<'_>) -> std::io::Result<()> {
         Ok(())
     }
 }

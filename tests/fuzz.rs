@@ -10,11 +10,11 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
-use plc_conformance::backend::external::protocol::{BackendMessage, HarnessMessage};
-use plc_conformance::backend::external::serve::serve;
-use plc_conformance::backend::reference_backends;
-use plc_conformance::load::{load_profiles, yaml_files, CorpusBuilder};
-use plc_conformance::model::profile::Profiles;
+use plc_conformance::testing::backend::external::protocol::{BackendMessage, HarnessMessage};
+use plc_conformance::testing::backend::external::serve::serve;
+use plc_conformance::testing::backend::reference_backends;
+use plc_conformance::testing::load::{load_profiles, yaml_files, CorpusBuilder};
+use plc_conformance::testing::model::profile::Profiles;
 use proptest::prelude::*;
 
 /// The longest any one input may take: far above the milliseconds each takes, far below a hang.
@@ -214,7 +214,7 @@ fn decode(line: &[u8]) {
 
 /// Lines into `plc-conformance serve`'s loop: it answers or stops with an error, never panics.
 fn serve_lines(lines: &[Vec<u8>]) {
-    static BACKENDS: OnceLock<Vec<std::sync::Arc<dyn plc_conformance::backend::Backend>>> =
+    static BACKENDS: OnceLock<Vec<std::sync::Arc<dyn plc_conformance::testing::backend::Backend>>> =
         OnceLock::new();
     let backends = BACKENDS.get_or_init(|| reference_backends(profiles()));
     let Some(backend) = backends.iter().find(|b| b.profile() == "mitsubishi-iqr") else {

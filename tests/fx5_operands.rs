@@ -7,7 +7,7 @@
 
 use std::path::Path;
 
-use plc_conformance::load::{load_profiles, CorpusBuilder};
+use plc_conformance::testing::load::{load_profiles, CorpusBuilder};
 use rstest::rstest;
 
 /// An ASCI vector with the given source and destination, loaded against the real profile.

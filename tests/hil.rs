@@ -10,21 +10,24 @@ use std::net::TcpListener;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use plc_conformance::backend::slmp::fence::{parse_ranges, WordRange};
-use plc_conformance::backend::slmp::frame::{command, DeviceForm, FrameKind};
-use plc_conformance::backend::slmp::mailbox;
-use plc_conformance::backend::slmp::manifest::Manifest;
-use plc_conformance::backend::slmp::sim::{FaultAction, FaultRule, SimSettings, Simulator};
-use plc_conformance::backend::slmp::{SlmpBackend, SlmpSettings};
-use plc_conformance::backend::{Backend, Fault};
-use plc_conformance::device::Device;
-use plc_conformance::hil::{dry_run, generate, GenerateOptions};
-use plc_conformance::judge::Verdict;
-use plc_conformance::plan::Trial;
-use plc_conformance::runner::{verdicts, Project};
+use plc_conformance::testing::backend::slmp::fence::{parse_ranges, WordRange};
+use plc_conformance::testing::backend::slmp::frame::{command, DeviceForm, FrameKind};
+use plc_conformance::testing::backend::slmp::mailbox;
+use plc_conformance::testing::backend::slmp::manifest::Manifest;
+use plc_conformance::testing::backend::slmp::sim::{
+    FaultAction, FaultRule, SimSettings, Simulator,
+};
+use plc_conformance::testing::backend::slmp::{SlmpBackend, SlmpSettings};
+use plc_conformance::testing::backend::{Backend, Fault};
+use plc_conformance::testing::device::Device;
+use plc_conformance::testing::error_chain::chain;
+use plc_conformance::testing::hil::{dry_run, generate, GenerateOptions};
+use plc_conformance::testing::judge::Verdict;
+use plc_conformance::testing::plan::Trial;
+use plc_conformance::testing::runner::{verdicts, Project};
 
 use common::{reference, session};
-use plc_conformance::execute::{images, requests};
+use plc_conformance::testing::execute::{images, requests};
 
 fn manifest(project: &Project, profile: &str) -> Manifest {
     generate(
@@ -265,7 +268,7 @@ fn first_trial(project: &Project, backend: &Arc<SlmpBackend>, instruction: &str)
 fn execute_once(
     backend: &SlmpBackend,
     trial: &Trial,
-) -> Result<plc_conformance::backend::Response, Fault> {
+) -> Result<plc_conformance::testing::backend::Response, Fault> {
     let imgs = images(trial);
     let reqs = requests(trial, &imgs);
     backend.execute(&reqs[0])
@@ -363,7 +366,7 @@ fn a_read_past_the_timeout_is_sent_again_and_the_case_completes() {
     let trial = first_trial(&project, &backend, "BINHA");
     let r = execute_once(&backend, &trial).expect("the read is retried on a new connection");
     assert!(
-        matches!(r, plc_conformance::backend::Response::Done(_)),
+        matches!(r, plc_conformance::testing::backend::Response::Done(_)),
         "{r:?}"
     );
     assert_eq!(sim.audit().connections, 2);
@@ -418,10 +421,7 @@ fn no_connection_is_unreachable() {
     );
     s.client.read_retries = 0;
     let backend = Arc::new(SlmpBackend::new(s, &project.profiles).expect("backend"));
-    assert!(backend
-        .connect()
-        .expect_err("refused")
-        .contains("no connection to"));
+    assert!(chain(&backend.connect().expect_err("refused")).contains("no connection to"));
     let trial = first_trial(&project, &backend, "BINHA");
     assert_eq!(
         execute_once(&backend, &trial).expect_err("down").kind(),
@@ -443,7 +443,7 @@ fn an_interlock_refuses_before_any_write(
     let project = session();
     let sim = iqr_sim(&project, change);
     let backend = iqr_backend(&project, &sim, |_| {});
-    let e = backend.connect().expect_err("refused");
+    let e = chain(&backend.connect().expect_err("refused"));
     assert!(e.contains(expected), "{e}");
     let trial = first_trial(&project, &backend, "BINHA");
     assert!(execute_once(&backend, &trial).is_err());
@@ -483,7 +483,7 @@ fn a_write_outside_the_sandbox_is_refused_before_any_byte_is_sent() {
     let backend = Arc::new(SlmpBackend::new(s, &project.profiles).expect("backend"));
     let trial = first_trial(&project, &backend, "BINHA");
     match execute_once(&backend, &trial) {
-        Ok(plc_conformance::backend::Response::Unsupported(why)) => {
+        Ok(plc_conformance::testing::backend::Response::Unsupported(why)) => {
             assert!(
                 why.contains("is refused: it lies outside the words the harness may write"),
                 "{why}"
@@ -500,7 +500,7 @@ fn a_write_outside_the_sandbox_is_refused_before_any_byte_is_sent() {
     backend.connect().expect("interlocks");
     assert!(matches!(
         execute_once(&backend, &trial),
-        Ok(plc_conformance::backend::Response::Unsupported(_))
+        Ok(plc_conformance::testing::backend::Response::Unsupported(_))
     ));
     assert_eq!(writes_sent(&sim), 0);
 }
@@ -526,7 +526,7 @@ fn a_case_setting_words_the_client_cannot_address_is_not_run() {
     let written = writes_sent(&sim);
     assert!(matches!(
         execute_once(&backend, &trial),
-        Ok(plc_conformance::backend::Response::Done(_))
+        Ok(plc_conformance::testing::backend::Response::Done(_))
     ));
     assert!(writes_sent(&sim) > written, "the case as it is runs");
     std::sync::Arc::make_mut(&mut trial.input)
@@ -534,7 +534,7 @@ fn a_case_setting_words_the_client_cannot_address_is_not_run() {
         .insert(Device::new("K4M", 0), 0x1234);
     let written = writes_sent(&sim);
     match execute_once(&backend, &trial) {
-        Ok(plc_conformance::backend::Response::Unsupported(why)) => {
+        Ok(plc_conformance::testing::backend::Response::Unsupported(why)) => {
             assert!(why.contains("K4M words"), "{why}");
         }
         other => panic!("run: {other:?}"),
@@ -613,7 +613,7 @@ fn a_mailbox_in_link_registers_is_numbered_in_hexadecimal() {
     let trial = first_trial(&project, &backend, "ASCI");
     let verdict = verdicts(std::slice::from_ref(&trial)).remove(0);
     assert!(matches!(verdict, Verdict::Conforms), "{verdict:?}");
-    let e = generate(&project, &options("T100")).expect_err("T100 refused");
+    let e = chain(&generate(&project, &options("T100")).expect_err("T100 refused"));
     assert!(
         e.contains("the mailbox cannot be at T100: T has no SLMP device code"),
         "{e}"
@@ -631,9 +631,11 @@ fn a_sandbox_over_the_mailbox_is_refused() {
         "R04CPU",
         vec![WordRange::new("D", 0, 18431)],
     );
-    let e = SlmpBackend::new(s, &project.profiles)
-        .err()
-        .expect("refused");
+    let e = chain(
+        &SlmpBackend::new(s, &project.profiles)
+            .err()
+            .expect("refused"),
+    );
     assert!(e.contains("overlaps the mailbox"), "{e}");
 }
 
@@ -675,7 +677,7 @@ fn a_pulse_rung_fires_on_every_case() {
     assert_eq!(sim.audit().executions, before + 1);
     assert_eq!(first, second);
     assert!(
-        matches!(first, plc_conformance::backend::Response::Done(ref o) if !o.writes.is_empty()),
+        matches!(first, plc_conformance::testing::backend::Response::Done(ref o) if !o.writes.is_empty()),
         "{first:?}"
     );
 }
@@ -927,7 +929,7 @@ fn the_long_device_form_on_an_fx5_is_refused_before_any_write() {
     );
     s.client.form = DeviceForm::Long;
     let backend = SlmpBackend::new(s, &project.profiles).expect("backend");
-    let e = backend.connect().expect_err("C059H");
+    let e = chain(&backend.connect().expect_err("C059H"));
     assert!(e.contains("end code C059H"), "{e}");
     assert_eq!(writes_sent(&sim), 0);
 }
@@ -970,7 +972,7 @@ fn the_pulse_self_test(#[case] rungs_in_case: bool, #[case] passes: bool) {
     let sim = iqr_sim(&project, |s| s.rungs_in_case = rungs_in_case);
     let backend = iqr_backend(&project, &sim, |_| {});
     backend.connect().expect("interlocks");
-    let check = plc_conformance::hil::pulse_self_test(&project, &backend).expect("ran");
+    let check = plc_conformance::testing::hil::pulse_self_test(&project, &backend).expect("ran");
     assert_eq!(check.fired_twice, passes, "{check:?}");
     assert!(check.trial.contains("p::"), "{check:?}");
     assert!(sim.audit().stray_writes.is_empty());
@@ -1363,9 +1365,11 @@ fn special_registers_are_written_only_when_named() {
     let bits = SlmpSettings::parse(&spec("manifest,Y0-Y17"), std::path::Path::new("."))
         .expect("parses")
         .expect("a live backend");
-    let e = SlmpBackend::new(bits, &project.profiles)
-        .err()
-        .expect("refused");
+    let e = chain(
+        &SlmpBackend::new(bits, &project.profiles)
+            .err()
+            .expect("refused"),
+    );
     assert!(e.contains("word devices only"), "{e}");
 }
 
@@ -1373,8 +1377,8 @@ fn special_registers_are_written_only_when_named() {
 /// names only D: a client writes W1F0 and reads it back.
 #[test]
 fn the_simulated_iqr_cpu_serves_link_registers() {
-    use plc_conformance::backend::slmp::client::{Client, ClientSettings};
-    use plc_conformance::backend::slmp::fence::WriteFence;
+    use plc_conformance::testing::backend::slmp::client::{Client, ClientSettings};
+    use plc_conformance::testing::backend::slmp::fence::WriteFence;
     let project = session();
     let sim = iqr_sim(&project, |_| {});
     let mut c = Client::new(ClientSettings::new(sim.address().to_string()));

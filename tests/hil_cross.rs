@@ -12,18 +12,18 @@ use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 
-use plc_conformance::backend::slmp::client::{Client, ClientError, ClientSettings, Code};
-use plc_conformance::backend::slmp::fence::{self, WordRange, WriteFence};
-use plc_conformance::backend::slmp::frame::{DeviceForm, FrameKind};
-use plc_conformance::backend::slmp::limits::{self, Family};
-use plc_conformance::backend::slmp::manifest::Manifest;
-use plc_conformance::backend::slmp::sim::{RemoteProgram, SimSettings, Simulator};
-use plc_conformance::backend::slmp::{fault_of, SlmpBackend, SlmpSettings};
-use plc_conformance::backend::Backend;
-use plc_conformance::device::Device;
-use plc_conformance::hil::{generate, GenerateOptions};
-use plc_conformance::plan::Trial;
-use plc_conformance::runner::verdicts;
+use plc_conformance::testing::backend::slmp::client::{Client, ClientError, ClientSettings, Code};
+use plc_conformance::testing::backend::slmp::fence::{self, WordRange, WriteFence};
+use plc_conformance::testing::backend::slmp::frame::{DeviceForm, FrameKind};
+use plc_conformance::testing::backend::slmp::limits::{self, Family};
+use plc_conformance::testing::backend::slmp::manifest::Manifest;
+use plc_conformance::testing::backend::slmp::sim::{RemoteProgram, SimSettings, Simulator};
+use plc_conformance::testing::backend::slmp::{fault_of, SlmpBackend, SlmpSettings};
+use plc_conformance::testing::backend::Backend;
+use plc_conformance::testing::device::Device;
+use plc_conformance::testing::hil::{generate, GenerateOptions};
+use plc_conformance::testing::plan::Trial;
+use plc_conformance::testing::runner::verdicts;
 use std::sync::Arc;
 
 use common::{reference, root, session};
@@ -96,7 +96,11 @@ impl Drop for VirtualPlc {
 }
 
 /// The manifest of the program generated for one variant of a profile.
-fn generated(project: &plc_conformance::runner::Project, profile: &str, variant: &str) -> Manifest {
+fn generated(
+    project: &plc_conformance::testing::runner::Project,
+    profile: &str,
+    variant: &str,
+) -> Manifest {
     generate(
         project,
         &GenerateOptions {

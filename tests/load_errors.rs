@@ -3,8 +3,9 @@
 
 use std::path::Path;
 
-use plc_conformance::load::{load_profiles, CorpusBuilder, LoadError};
-use plc_conformance::model::profile::Profiles;
+use plc_conformance::testing::error_chain::chain;
+use plc_conformance::testing::load::{load_profiles, CorpusBuilder, LoadError};
+use plc_conformance::testing::model::profile::Profiles;
 use rstest::rstest;
 
 fn profiles() -> Profiles {
@@ -321,18 +322,15 @@ fn bad_case_is_reported(
     );
     let text = format!("{HEADER}{}", GOOD_CASE.replacen(find, replace, 1));
     let errors = load(&text).expect_err("the bad case loaded");
-    let rendered: Vec<String> = errors.iter().map(ToString::to_string).collect();
-    let hit = errors.iter().find(|e| e.to_string().contains(message));
+    let rendered: Vec<String> = errors.iter().map(|e| chain(e)).collect();
+    let hit = errors.iter().find(|e| chain(*e).contains(message));
     let Some(e) = hit else {
         panic!("no error says `{message}`; got {rendered:#?}");
     };
     assert_eq!(e.file, Path::new("bad.yaml"));
     assert_eq!(e.line, Some(line), "wrong line in {e}");
     assert_eq!(e.key.as_deref().unwrap_or(""), key, "wrong key in {e}");
-    assert!(
-        e.to_string().starts_with(&format!("bad.yaml:{line}: ")),
-        "{e}"
-    );
+    assert!(chain(e).starts_with(&format!("bad.yaml:{line}: ")), "{e}");
 }
 
 #[rstest]
@@ -376,7 +374,7 @@ fn bad_header_is_reported(
     let errors = load(&text).expect_err("the bad header loaded");
     let e = errors
         .iter()
-        .find(|e| e.to_string().contains(message))
+        .find(|e| chain(*e).contains(message))
         .unwrap_or_else(|| panic!("no error says `{message}`: {errors:#?}"));
     assert_eq!(e.line, Some(line), "wrong line in {e}");
     assert_eq!(e.key.as_deref().unwrap_or(""), key, "wrong key in {e}");
@@ -394,7 +392,7 @@ fn duplicate_ids_are_reported_within_a_file_and_across_files() {
         &profiles,
     );
     let errors = builder.finish().expect_err("duplicates loaded").0;
-    let rendered: Vec<String> = errors.iter().map(ToString::to_string).collect();
+    let rendered: Vec<String> = errors.iter().map(|e| chain(e)).collect();
     assert_eq!(
         rendered,
         vec![
@@ -455,8 +453,7 @@ cases:
     assert_eq!(e.line, Some(8), "{e}");
     assert_eq!(e.key.as_deref(), Some("cases[0].operands.S2"), "{e}");
     assert!(
-        e.to_string()
-            .contains("K5 cannot be programmed: ATOH operand `S2` takes constants 1-4 only"),
+        chain(e).contains("K5 cannot be programmed: ATOH operand `S2` takes constants 1-4 only"),
         "{e}"
     );
 }
@@ -470,7 +467,7 @@ fn three_shape_errors_are_reported_in_one_pass() {
         .replacen("    cite: example", "    cite: example\n    colour: red", 1)
         .replacen("      after: {D200: 5A8DH}", "      after: [D200]", 1);
     let errors = load(&format!("{HEADER}{case}")).expect_err("loaded");
-    let rendered: Vec<String> = errors.iter().map(ToString::to_string).collect();
+    let rendered: Vec<String> = errors.iter().map(|e| chain(e)).collect();
     assert_eq!(errors.len(), 3, "{rendered:#?}");
     for (line, needle) in [
         (8, "cases[0].colour: unknown field `colour`"),
@@ -482,7 +479,7 @@ fn three_shape_errors_are_reported_in_one_pass() {
     ] {
         let e = errors
             .iter()
-            .find(|e| e.to_string().contains(needle))
+            .find(|e| chain(*e).contains(needle))
             .unwrap_or_else(|| panic!("no error says `{needle}`: {rendered:#?}"));
         assert_eq!(e.line, Some(line), "{e}");
     }
@@ -491,7 +488,7 @@ fn three_shape_errors_are_reported_in_one_pass() {
 #[test]
 fn a_file_without_cases_is_an_error() {
     let errors = load(&format!("{HEADER}  []\n")).expect_err("no case loaded");
-    let rendered: Vec<String> = errors.iter().map(ToString::to_string).collect();
+    let rendered: Vec<String> = errors.iter().map(|e| chain(e)).collect();
     assert_eq!(
         rendered,
         vec!["bad.yaml:4: cases: missing case: a vector file holds at least one"]
@@ -499,9 +496,7 @@ fn a_file_without_cases_is_an_error() {
     let cross_vendor = "operation: hex-to-value\nsource: x\ncases: []\n";
     let errors = load(cross_vendor).expect_err("no cross-vendor case loaded");
     assert!(
-        errors[0]
-            .to_string()
-            .starts_with("bad.yaml:3: cases: missing case"),
+        chain(&errors[0]).starts_with("bad.yaml:3: cases: missing case"),
         "{errors:?}"
     );
 }
@@ -521,9 +516,7 @@ fn deep_nesting_is_refused_in_bounded_time() {
             started.elapsed()
         );
         assert!(
-            errors[0]
-                .to_string()
-                .contains("nested more than 64 levels deep"),
+            chain(&errors[0]).contains("nested more than 64 levels deep"),
             "{errors:?}"
         );
     }
@@ -688,12 +681,10 @@ fn a_manual_case_runs_only_on_the_variants_its_manual_covers() {
     let load_with = |text: &str| {
         let mut builder = CorpusBuilder::default();
         builder.add_file(Path::new("s7.yaml"), text, &profiles);
-        builder.finish().map(|c| c.cases.len()).map_err(|e| {
-            e.0.iter()
-                .map(ToString::to_string)
-                .collect::<Vec<_>>()
-                .join("\n")
-        })
+        builder
+            .finish()
+            .map(|c| c.cases.len())
+            .map_err(|e| e.0.iter().map(|e| chain(e)).collect::<Vec<_>>().join("\n"))
     };
     let e = load_with(&case("")).expect_err("runs on the S7-1500 too");
     assert!(

@@ -11,12 +11,12 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use common::{assert_corpus_kills, failing_trials, map_done, reference, session, Mutant};
-use plc_conformance::backend::{Backend, Fault, Outcome, Request, Response};
-use plc_conformance::device::Device;
-use plc_conformance::memory::Image;
-use plc_conformance::model::profile::{DeviceRange, DeviceRanges};
-use plc_conformance::model::Operand;
-use plc_conformance::text::{digit_value, pack_low_first, packed_char};
+use plc_conformance::testing::backend::{Backend, Fault, Outcome, Request, Response};
+use plc_conformance::testing::device::Device;
+use plc_conformance::testing::memory::Image;
+use plc_conformance::testing::model::profile::{DeviceRange, DeviceRanges};
+use plc_conformance::testing::model::Operand;
+use plc_conformance::testing::text::{digit_value, pack_low_first, packed_char};
 
 const PROFILE: &str = "idec-fc4a";
 
@@ -374,8 +374,8 @@ fn unspecified_upper_byte_is_not_asserted() {
         .into_iter()
         .find(|t| t.case_id() == "atoh-upper-byte-0131h")
         .expect("the 0131H case is in the corpus");
-    match plc_conformance::runner::run_one(&probe) {
-        plc_conformance::judge::Verdict::Recorded { observed, .. } => {
+    match plc_conformance::testing::runner::run_one(&probe) {
+        plc_conformance::testing::judge::Verdict::Recorded { observed, .. } => {
             let observed = observed.to_string();
             assert!(!observed.contains("error"), "recorded {observed}")
         }

@@ -12,12 +12,12 @@ mod common;
 use std::collections::BTreeMap;
 
 use common::{assert_corpus_kills, map_done, reference, session, Mutant};
-use plc_conformance::backend::omron::{Designator, Parity};
-use plc_conformance::backend::{Backend, Fault, Request, Response};
-use plc_conformance::device::Device;
-use plc_conformance::memory::Image;
-use plc_conformance::model::Operand;
-use plc_conformance::spec::profile::DeviceRanges;
+use plc_conformance::testing::backend::omron::{Designator, Parity};
+use plc_conformance::testing::backend::{Backend, Fault, Request, Response};
+use plc_conformance::testing::device::Device;
+use plc_conformance::testing::memory::Image;
+use plc_conformance::testing::model::Operand;
+use plc_conformance::testing::spec::profile::DeviceRanges;
 
 const PROFILE: &str = "omron-cs-cj";
 

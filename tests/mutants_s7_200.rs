@@ -9,10 +9,10 @@ mod common;
 use std::collections::BTreeMap;
 
 use common::{assert_corpus_kills, map_done, reference, session, with_constant, Mutant};
-use plc_conformance::backend::{Backend, Fault, Request, Response};
-use plc_conformance::device::Device;
-use plc_conformance::memory::Image;
-use plc_conformance::model::Operand;
+use plc_conformance::testing::backend::{Backend, Fault, Request, Response};
+use plc_conformance::testing::device::Device;
+use plc_conformance::testing::memory::Image;
+use plc_conformance::testing::model::Operand;
 
 const PROFILE: &str = "siemens-s7-200";
 

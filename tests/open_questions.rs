@@ -6,7 +6,7 @@ mod common;
 use std::collections::BTreeSet;
 
 use common::{cli, root, session};
-use plc_conformance::load::{load_open_questions, OPEN_QUESTIONS};
+use plc_conformance::testing::load::{load_open_questions, OPEN_QUESTIONS};
 
 #[test]
 fn every_open_question_has_probes_in_the_corpus() {
@@ -83,9 +83,9 @@ fn run_probes_runs_the_probes_of_a_question() {
 /// model takes is asserted even where the probe is `unspecified`.
 #[test]
 fn every_question_has_a_probe_that_decides_and_the_model_answers_its_reading() {
-    use plc_conformance::judge::Verdict;
-    use plc_conformance::model::Basis;
-    use plc_conformance::plan::Check;
+    use plc_conformance::testing::judge::Verdict;
+    use plc_conformance::testing::model::Basis;
+    use plc_conformance::testing::plan::Check;
     use std::sync::Arc;
 
     let mut s = session();
@@ -97,7 +97,7 @@ fn every_question_has_a_probe_that_decides_and_the_model_answers_its_reading() {
         .cases
         .iter()
         .map(|c| {
-            Arc::new(plc_conformance::model::Case {
+            Arc::new(plc_conformance::testing::model::Case {
                 basis: Basis::Unspecified,
                 ..(**c).clone()
             })
@@ -108,10 +108,12 @@ fn every_question_has_a_probe_that_decides_and_the_model_answers_its_reading() {
         .cross_vendor
         .iter()
         .map(|c| {
-            Arc::new(plc_conformance::model::cross_vendor::CrossVendorCase {
-                basis: Basis::Unspecified,
-                ..(**c).clone()
-            })
+            Arc::new(
+                plc_conformance::testing::model::cross_vendor::CrossVendorCase {
+                    basis: Basis::Unspecified,
+                    ..(**c).clone()
+                },
+            )
         })
         .collect();
     let mut problems = Vec::new();
@@ -150,7 +152,7 @@ fn every_question_has_a_probe_that_decides_and_the_model_answers_its_reading() {
             problems.push(format!("{}: probe {} runs nowhere", q.id, decides.probe));
         }
         for t in &trials {
-            match plc_conformance::runner::run_one(t) {
+            match plc_conformance::testing::runner::run_one(t) {
                 Verdict::Recorded {
                     observed,
                     fill_dependent: false,

@@ -8,8 +8,8 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use common::{reference, session};
-use plc_conformance::backend::{Backend, Fault, Request, Response};
-use plc_conformance::execute::{execute_all, Pace};
+use plc_conformance::testing::backend::{Backend, Fault, Request, Response};
+use plc_conformance::testing::execute::{execute_all, Pace};
 
 /// The reference model answering each batch after a pause, counting how many backends are
 /// answering at the same moment.
@@ -89,7 +89,7 @@ fn run(jobs: usize) -> (usize, Duration) {
         &AtomicBool::new(false),
         Pace::Ahead,
         |p| {
-            if matches!(p, plc_conformance::execute::Progress::Observed(..)) {
+            if matches!(p, plc_conformance::testing::execute::Progress::Observed(..)) {
                 observed += 1;
             }
             std::ops::ControlFlow::Continue(())
@@ -131,7 +131,7 @@ fn a_judged_pace_starts_no_chunk_after_a_stop_set_while_judging() {
         let stop = AtomicBool::new(false);
         let mut observed = 0;
         execute_all(&trials, &indices, 1, &stop, pace, |p| {
-            if matches!(p, plc_conformance::execute::Progress::Observed(..)) {
+            if matches!(p, plc_conformance::testing::execute::Progress::Observed(..)) {
                 observed += 1;
                 // A slow reporter: the first verdict is a failure, and writing it takes time.
                 if observed == 1 {

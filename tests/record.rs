@@ -6,8 +6,8 @@ mod common;
 use std::path::Path;
 
 use common::{cli, root, scratch};
-use plc_conformance::load::{load_corpus, load_profiles};
-use plc_conformance::model::{Basis, Corpus};
+use plc_conformance::testing::load::{load_corpus, load_profiles};
+use plc_conformance::testing::model::{Basis, Corpus};
 
 /// A copy of the iQ-R vectors in a scratch folder (kept while the first value lives).
 fn iqr_copy() -> (tempfile::TempDir, std::path::PathBuf) {
@@ -233,7 +233,7 @@ fn record_outside_a_project_says_where_to_run_it() {
 /// stale entry).
 #[test]
 fn the_known_draft_loads_and_covers_exactly_the_differences() {
-    use plc_conformance::judge::Status;
+    use plc_conformance::testing::judge::Status;
     let mut project = common::session();
     let iqr = common::reference(&project, "mitsubishi-iqr");
     let mutant = common::Mutant::new("high-bytes-as-zero", &iqr, |req, base| {
@@ -243,7 +243,7 @@ fn the_known_draft_loads_and_covers_exactly_the_differences() {
             u16::from_le_bytes([zero(lo), zero(hi)])
         })
     });
-    let draft = plc_conformance::known_draft::draft(&project, &mutant, None);
+    let draft = plc_conformance::testing::known_draft::draft(&project, &mutant, None);
     assert!(draft.text.contains("input: [above-7fh]"), "{}", draft.text);
     assert!(draft.causes >= 1 && draft.cases >= 1, "{}", draft.text);
     assert!(draft.faults.is_empty());
@@ -255,11 +255,12 @@ fn the_known_draft_loads_and_covers_exactly_the_differences() {
         .get("mitsubishi-iqr")
         .expect("profile")
         .clone();
-    let known = plc_conformance::load::load_known(&file, Some(&profile), &project.corpus, true)
-        .unwrap_or_else(|e| panic!("the draft does not load: {e}\n{}", draft.text));
+    let known =
+        plc_conformance::testing::load::load_known(&file, Some(&profile), &project.corpus, true)
+            .unwrap_or_else(|e| panic!("the draft does not load: {e}\n{}", draft.text));
     project.known.insert("high-bytes-as-zero".into(), known);
     let trials = project.plan(std::slice::from_ref(&mutant));
-    let verdicts = plc_conformance::runner::verdicts(&trials);
+    let verdicts = plc_conformance::testing::runner::verdicts(&trials);
     let failing: Vec<String> = trials
         .iter()
         .zip(&verdicts)
@@ -267,9 +268,10 @@ fn the_known_draft_loads_and_covers_exactly_the_differences() {
         .map(|(t, v)| format!("{}: {v:?}", t.name()))
         .collect();
     assert!(failing.is_empty(), "{failing:#?}\n{}", draft.text);
-    assert!(verdicts
-        .iter()
-        .any(|v| matches!(v, plc_conformance::judge::Verdict::KnownDifference { .. })));
+    assert!(verdicts.iter().any(|v| matches!(
+        v,
+        plc_conformance::testing::judge::Verdict::KnownDifference { .. }
+    )));
 }
 
 /// `record --known` never replaces a file: a known-differences file is edited by hand.

@@ -9,11 +9,11 @@ use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 use common::{interpreter, python, root, scratch};
-use plc_conformance::backend::Backend;
-use plc_conformance::judge::Verdict;
-use plc_conformance::load::ENV_SELF;
-use plc_conformance::model::project::{ExternalSettings, Launch};
-use plc_conformance::runner::{run_one, verdicts as run_all, Paths, Project};
+use plc_conformance::testing::backend::Backend;
+use plc_conformance::testing::judge::Verdict;
+use plc_conformance::testing::load::ENV_SELF;
+use plc_conformance::testing::model::project::{ExternalSettings, Launch};
+use plc_conformance::testing::runner::{run_one, verdicts as run_all, Paths, Project};
 
 const BIN: &str = env!("CARGO_BIN_EXE_plc-conformance");
 
@@ -187,7 +187,7 @@ fn a_fifo_is_refused_in_bounded_time_wherever_a_file_is_read_or_written() {
         ),
         (
             vec!["diff", "--backend", "iqr", "--baseline", path(&fifo)],
-            "fifo: a FIFO (named pipe), not a regular file",
+            "fifo: cannot be read: a FIFO (named pipe), not a regular file",
         ),
         // An output FIFO that no process reads is refused rather than waited for.
         (
@@ -843,7 +843,9 @@ fn hostile_text_never_reaches_a_terminal_or_breaks_xml() {
         let xml = std::fs::read_to_string(&file).expect("report");
         let bad: Vec<char> = xml
             .chars()
-            .filter(|c| plc_conformance::report::sanitize::forbidden_in_xml(*c) || *c == '\u{1b}')
+            .filter(|c| {
+                plc_conformance::testing::report::sanitize::forbidden_in_xml(*c) || *c == '\u{1b}'
+            })
             .collect();
         assert!(bad.is_empty(), "{format}: {bad:?}");
         let mut reader = quick_xml::Reader::from_str(&xml);

@@ -344,7 +344,7 @@ fn the_setting_shows_an_indirect_operand_with_what_it_addresses() {
         .iter()
         .find(|t| t.case_id() == "asci-indirect-source")
         .expect("the indirect case is planned");
-    let text = plc_conformance::report::text::describe_setting(trial);
+    let text = plc_conformance::testing::report::text::describe_setting(trial);
     assert!(
         text.contains("operands:    d=D200 n=K4 s=@D150 (D100)"),
         "{text}"

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use plc_conformance::spec::{schema, SchemaKind};
+use plc_conformance::testing::spec::{schema, SchemaKind};
 use rstest::rstest;
 
 fn checked_in(name: &str) -> serde_json::Value {

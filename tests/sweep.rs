@@ -10,18 +10,18 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use common::{failing_trials, reference, root, scratch, session, Mutant};
-use plc_conformance::backend::{Backend, Request};
-use plc_conformance::load::{load_corpus, load_profiles};
-use plc_conformance::memory::Image;
-use plc_conformance::model::cross_vendor::Operation;
-use plc_conformance::runner::{Paths, Project};
-use plc_conformance::sweep::classes::ByteClasses;
-use plc_conformance::sweep::generate::{Digits, Generator};
-use plc_conformance::sweep::group::{labels, Groups};
-use plc_conformance::sweep::input::{Data, Point};
-use plc_conformance::sweep::shrink::candidates;
-use plc_conformance::sweep::target::Target;
-use plc_conformance::sweep::{emit, exhaustive, render, Results, Settings, Sweep};
+use plc_conformance::testing::backend::{Backend, Request};
+use plc_conformance::testing::load::{load_corpus, load_profiles};
+use plc_conformance::testing::memory::Image;
+use plc_conformance::testing::model::cross_vendor::Operation;
+use plc_conformance::testing::runner::{Paths, Project};
+use plc_conformance::testing::sweep::classes::ByteClasses;
+use plc_conformance::testing::sweep::generate::{Digits, Generator};
+use plc_conformance::testing::sweep::group::{labels, Groups};
+use plc_conformance::testing::sweep::input::{Data, Point};
+use plc_conformance::testing::sweep::shrink::candidates;
+use plc_conformance::testing::sweep::target::Target;
+use plc_conformance::testing::sweep::{emit, exhaustive, render, Results, Settings, Sweep};
 
 fn no_stop() -> AtomicBool {
     AtomicBool::new(false)
@@ -231,7 +231,7 @@ fn a_mutant_shrinks_to_a_minimal_input_that_still_differs_and_emits_a_failing_ve
     assert!(corpus
         .cases
         .iter()
-        .all(|c| c.basis != plc_conformance::model::Basis::Manual));
+        .all(|c| c.basis != plc_conformance::testing::model::Basis::Manual));
     let emitted_project = Project {
         profiles,
         corpus,
@@ -472,7 +472,7 @@ fn a_sweep_finds_every_known_difference_of_pymcprotocol() {
         return;
     }
     let mut project = Project::load(&Paths::under(root())).expect("project loads");
-    let file = plc_conformance::load::load_project(
+    let file = plc_conformance::testing::load::load_project(
         &root().join("plc-conformance.yaml"),
         true,
         std::path::Path::new(env!("CARGO_BIN_EXE_plc-conformance")),
@@ -524,7 +524,7 @@ fn a_sweep_finds_every_known_difference_of_pymcprotocol() {
         .filter(|c| {
             known.entries.iter().any(|e| {
                 e.instruction.is_none()
-                    && e.matches(&plc_conformance::model::known::Subject {
+                    && e.matches(&plc_conformance::testing::model::known::Subject {
                         case: &c.id,
                         text: None,
                         instruction: &c.instructions[0],
@@ -764,7 +764,7 @@ fn a_column_that_reads_one_byte_apart_splits_its_class() {
     let backends = vec![iqr, mutant];
     let sweep = Sweep::new(full_by_class(1 << 12), &project.profiles, &backends).expect("sweep");
     let (classes, asked) =
-        plc_conformance::sweep::classes::derive(&sweep, &no_stop()).expect("not stopped");
+        plc_conformance::testing::sweep::classes::derive(&sweep, &no_stop()).expect("not stopped");
     assert!(asked > 0);
     assert!(
         classes.classes().contains(&vec![b'~']),
@@ -1442,7 +1442,7 @@ fn the_lowerings_rules_are_their_models_answers() {
             exhaustive::rule(key).unwrap_or_else(|| panic!("{key} has no rule"))
         })
         .collect();
-    let alphabet = plc_conformance::sweep::generate::BOUNDARIES;
+    let alphabet = plc_conformance::testing::sweep::generate::BOUNDARIES;
     let mut texts: Vec<[u8; 4]> = Vec::new();
     for a in alphabet {
         for b in alphabet {
@@ -1465,7 +1465,7 @@ fn the_lowerings_rules_are_their_models_answers() {
         .enumerate()
         .map(|(i, t)| (i as u64, Point::text(t, 4)))
         .collect();
-    let mut errors: Vec<Option<plc_conformance::sweep::group::Reply>> =
+    let mut errors: Vec<Option<plc_conformance::testing::sweep::group::Reply>> =
         vec![None; sweep.columns.len()];
     let mut seen_error = vec![false; sweep.columns.len()];
     for (chunk, answers) in points

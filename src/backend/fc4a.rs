@@ -15,7 +15,7 @@ use crate::model::Operand;
 use crate::text::{digit_char, digit_value};
 
 /// The profile this model implements.
-pub const PROFILE: &str = "idec-fc4a";
+pub(crate) const PROFILE: &str = "idec-fc4a";
 
 /// What the model passes as the error code. The FC4A shows a user program execution error as
 /// M8004; what the error-code register holds for ATOH/HTOA is not confirmed, and the profile
@@ -26,7 +26,7 @@ const NO_CONFIRMED_CODE: u16 = 0;
 const MAX_DIGITS: u32 = 4;
 
 /// The FC4A reference model.
-pub struct Fc4a;
+pub(crate) struct Fc4a;
 
 fn modelled(instruction: &str) -> bool {
     matches!(instruction, "ATOH" | "HTOA")

@@ -17,14 +17,14 @@ use crate::model::Operand;
 use crate::text::{digit_char, digit_value};
 
 /// The profile this model implements.
-pub const PROFILE: &str = "panasonic-fp";
+pub(crate) const PROFILE: &str = "panasonic-fp";
 
 /// What the model passes as the error code: the profile signals with the operation error flag
 /// only, so this value never reaches a comparison.
 const OPERATION_ERROR: u16 = 0;
 
 /// The Panasonic FP reference model.
-pub struct Fp;
+pub(crate) struct Fp;
 
 impl Model for Fp {
     const PROFILE: &'static str = PROFILE;

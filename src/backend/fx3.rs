@@ -17,7 +17,7 @@ use super::reference::{Model, Stop};
 use super::{Outcome, Request, Unsupported};
 
 /// What an FX3-style family names its own way.
-pub trait Dialect: Send + Sync + 'static {
+pub(crate) trait Dialect: Send + Sync + 'static {
     /// The profile.
     const PROFILE: &'static str;
     /// The flag that chooses 8-bit mode (M8161, M1161).
@@ -25,7 +25,7 @@ pub trait Dialect: Send + Sync + 'static {
 }
 
 /// Mitsubishi FX3 series.
-pub struct Fx3;
+pub(crate) struct Fx3;
 
 impl Dialect for Fx3 {
     const PROFILE: &'static str = "mitsubishi-fx3";
@@ -33,7 +33,7 @@ impl Dialect for Fx3 {
 }
 
 /// Delta DVP, the FX3 clone.
-pub struct Delta;
+pub(crate) struct Delta;
 
 impl Dialect for Delta {
     const PROFILE: &'static str = "delta-dvp";
@@ -41,7 +41,7 @@ impl Dialect for Delta {
 }
 
 /// The most characters ASCI and HEX convert: n = 1 to 256.
-pub const MAX_CHARS: u32 = 256;
+pub(crate) const MAX_CHARS: u32 = 256;
 
 /// What the model passes as the error code: these families show an operation error as one flag,
 /// so the profile turns any code into it and this value never reaches a comparison. It is the
@@ -49,7 +49,7 @@ pub const MAX_CHARS: u32 = 256;
 const OPERATION_ERROR: u16 = 6706;
 
 /// The ASCI/HEX reference model of an FX3-style family.
-pub struct AsciHex<D>(PhantomData<D>);
+pub(crate) struct AsciHex<D>(PhantomData<D>);
 
 #[derive(Debug, Clone, Copy)]
 enum Op {

@@ -7,7 +7,7 @@
 //! mode) or one (8-bit mode); SM701 decides whether ASCI stores a NULL after the last character.
 //!
 //! HEXA descends from the FX3 HEX (FNC 83), which is not the MELSEC Q/iQ-R instruction named
-//! HEX: that one left-justifies, so nothing here is shared with [`super::iqr`].
+//! HEX: that one left-justifies, so nothing here is shared with `super::iqr`.
 //!
 //! Checks run in this order, and each stops the instruction before anything is written:
 //! n (3405H), because the extent of (s) and (d) depends on it; then the words (s) and (d) occupy

@@ -12,15 +12,15 @@ use crate::model::Operand;
 use crate::text::{digit_char, digit_value, pack_low_first, packed_char};
 
 /// The profile this model implements.
-pub const PROFILE: &str = "mitsubishi-iqr";
+pub(crate) const PROFILE: &str = "mitsubishi-iqr";
 
 /// Data does not convert: a character outside 30H-39H, 41H-46H.
-pub const ERR_INVALID_DATA: u16 = 0x3401;
+pub(crate) const ERR_INVALID_DATA: u16 = 0x3401;
 /// A device past the end of its range.
-pub const ERR_DEVICE_RANGE: u16 = 0x2820;
+pub(crate) const ERR_DEVICE_RANGE: u16 = 0x2820;
 
 /// The iQ-R reference model.
-pub struct Iqr;
+pub(crate) struct Iqr;
 
 /// Result width in words: 1 for the 16-bit forms, 2 for the D-prefixed 32-bit forms.
 fn width(instruction: &str) -> Option<(Op, u32)> {

@@ -16,10 +16,10 @@ use crate::model::Operand;
 use crate::text::{digit_char, digit_value};
 
 /// The profile this model implements.
-pub const PROFILE: &str = "keyence-kv";
+pub(crate) const PROFILE: &str = "keyence-kv";
 
 /// The KEYENCE KV reference model.
-pub struct Kv;
+pub(crate) struct Kv;
 
 impl Model for Kv {
     const PROFILE: &'static str = PROFILE;

@@ -5,18 +5,18 @@
 //! YAML, planning, judging or reporting; everything vendor-specific it needs comes in the
 //! [`Request`] from the profile.
 
-pub mod external;
-pub mod fc4a;
-pub mod fp;
-pub mod fx3;
+pub(crate) mod external;
+pub(crate) mod fc4a;
+pub(crate) mod fp;
+pub(crate) mod fx3;
 pub mod fx5;
-pub mod iqr;
-pub mod kv;
-pub mod omron;
-pub mod reference;
-pub mod s7;
-pub mod s7_200;
-pub mod slmp;
+pub(crate) mod iqr;
+pub(crate) mod kv;
+pub(crate) mod omron;
+pub(crate) mod reference;
+pub(crate) mod s7;
+pub(crate) mod s7_200;
+pub(crate) mod slmp;
 
 use std::collections::BTreeMap;
 use std::fmt;

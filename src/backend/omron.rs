@@ -31,10 +31,10 @@ use crate::model::Operand;
 use crate::text::{digit_char, digit_value};
 
 /// The profile this model implements.
-pub const PROFILE: &str = "omron-cs-cj";
+pub(crate) const PROFILE: &str = "omron-cs-cj";
 
 /// The variant feature that makes HEX take 61H-66H ('a'-'f') as digits.
-pub const LOWERCASE_HEX: &str = "lowercase-hex";
+pub(crate) const LOWERCASE_HEX: &str = "lowercase-hex";
 
 /// What the model passes as the error code. Omron shows an instruction error as the ER flag
 /// only and the profile signals with the flag, so this value never reaches a comparison.
@@ -44,7 +44,7 @@ const NO_CODE: u16 = 0;
 const DIGITS: u32 = 4;
 
 /// The Omron reference model.
-pub struct Omron;
+pub(crate) struct Omron;
 
 impl Model for Omron {
     const PROFILE: &'static str = PROFILE;

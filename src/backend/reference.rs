@@ -10,7 +10,7 @@ use crate::model::ErrorSignal;
 use crate::value::to_bits;
 
 /// One vendor family's reference model.
-pub trait Model: Send + Sync + 'static {
+pub(crate) trait Model: Send + Sync + 'static {
     /// The profile id the model implements.
     const PROFILE: &'static str;
     /// Whether the model covers an instruction.
@@ -21,7 +21,7 @@ pub trait Model: Send + Sync + 'static {
 
 /// A 16-bit constant operand as the CPU holds it (`K-1` is FFFFH); one past 16 bits is not
 /// programmable, so a model declines it.
-pub fn constant_word(name: &str, k: i64) -> Result<u16, Unsupported> {
+pub(crate) fn constant_word(name: &str, k: i64) -> Result<u16, Unsupported> {
     to_bits(&format!("K{k}"), k, 16)
         .map(|w| w as u16)
         .map_err(|e| Unsupported(format!("operand `{name}`: {e}")))
@@ -29,7 +29,7 @@ pub fn constant_word(name: &str, k: i64) -> Result<u16, Unsupported> {
 
 /// Why an instruction stopped short.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Stop {
+pub(crate) enum Stop {
     /// An operation error with the vendor's code: the instruction writes nothing. Profiles that
     /// signal with a flag only see the flag (see [`Request::error`]).
     Error(u16),
@@ -44,21 +44,21 @@ impl From<Unsupported> for Stop {
 }
 
 /// The model's backend, when its profile is loaded: what [`super::reference_backends`] lists.
-pub fn backend<M: Model>(profiles: &Profiles) -> Option<Arc<dyn Backend>> {
+pub(crate) fn backend<M: Model>(profiles: &Profiles) -> Option<Arc<dyn Backend>> {
     profiles
         .get(M::PROFILE)
         .map(|p| Arc::new(Reference::<M>::new(p)) as Arc<dyn Backend>)
 }
 
 /// A reference model as a backend.
-pub struct Reference<M> {
+pub(crate) struct Reference<M> {
     name: String,
     profile: Profile,
     model: PhantomData<fn() -> M>,
 }
 
 impl<M: Model> Reference<M> {
-    pub fn new(profile: &Profile) -> Self {
+    pub(crate) fn new(profile: &Profile) -> Self {
         Reference {
             name: profile.short.clone(),
             profile: profile.clone(),

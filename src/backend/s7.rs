@@ -19,17 +19,17 @@ use crate::model::{ErrorSignal, Operand};
 use crate::text::digit_char;
 
 /// The profile this model implements.
-pub const PROFILE: &str = "siemens-s7-1200";
+pub(crate) const PROFILE: &str = "siemens-s7-1200";
 
 /// RET_VAL: a character that is not a hex digit was converted to 0.
-pub const INVALID_CHARACTER: u16 = 0x0007;
+pub(crate) const INVALID_CHARACTER: u16 = 0x0007;
 /// RET_VAL: the input buffer is too small for N.
-pub const INPUT_TOO_SMALL: u16 = 0x8182;
+pub(crate) const INPUT_TOO_SMALL: u16 = 0x8182;
 /// RET_VAL: the output buffer is too small for N.
-pub const OUTPUT_TOO_SMALL: u16 = 0x8382;
+pub(crate) const OUTPUT_TOO_SMALL: u16 = 0x8382;
 
 /// The S7-1200 reference model.
-pub struct S71200;
+pub(crate) struct S71200;
 
 impl Model for S71200 {
     const PROFILE: &'static str = PROFILE;

@@ -17,14 +17,14 @@ use crate::model::Operand;
 use crate::text::digit_char;
 
 /// The profile this model implements.
-pub const PROFILE: &str = "siemens-s7-200";
+pub(crate) const PROFILE: &str = "siemens-s7-200";
 
 /// What the model passes as the error code: the S7-200 shows an illegal character as SM1.7 only,
 /// so the profile turns any code into that flag and this value never reaches a comparison.
 const ILLEGAL_ASCII: u16 = 0;
 
 /// The S7-200 / S7-200 SMART reference model.
-pub struct S7200;
+pub(crate) struct S7200;
 
 impl Model for S7200 {
     const PROFILE: &'static str = PROFILE;

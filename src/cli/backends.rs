@@ -18,7 +18,7 @@ use crate::session::{assemble, BackendSource};
 /// The project folder of the command: `--root`, else the nearest project folder at or above the
 /// current one (as a relative path, so that messages stay short), else none: the data built into
 /// the binary.
-pub fn project_root(cli: &Cli) -> Result<Option<PathBuf>, CliError> {
+pub(super) fn project_root(cli: &Cli) -> Result<Option<PathBuf>, CliError> {
     if let Some(root) = &cli.root {
         if is_project_root(root) {
             return Ok(Some(root.clone()));
@@ -51,7 +51,7 @@ pub fn project_root(cli: &Cli) -> Result<Option<PathBuf>, CliError> {
 /// Where the command's data is: the project's (or the built-in) `vendors/` and `vectors/`,
 /// `--vendors`, and the given vector paths. A folder or file named but missing is reported
 /// here, with where it was looked for and what to pass instead.
-pub fn paths(cli: &Cli, vectors: &[PathBuf], flag: &str) -> Result<Paths, CliError> {
+pub(super) fn paths(cli: &Cli, vectors: &[PathBuf], flag: &str) -> Result<Paths, CliError> {
     let mut paths = match project_root(cli)? {
         Some(root) => Paths::of_project(&root),
         None => Paths::embedded(),
@@ -94,18 +94,18 @@ fn absolute(path: &Path) -> PathBuf {
     std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf())
 }
 
-pub fn load(paths: &Paths) -> Result<Project, CliError> {
+pub(super) fn load(paths: &Paths) -> Result<Project, CliError> {
     Ok(Project::load(paths)?)
 }
 
 /// The binary that backends see as `$PLC_CONFORMANCE`.
-pub fn this_binary() -> PathBuf {
+pub(super) fn this_binary() -> PathBuf {
     std::env::current_exe().unwrap_or_else(|_| PathBuf::from("plc-conformance"))
 }
 
 /// The project file, and whether it was named (then it must exist): `--config`,
 /// `$PLC_CONFORMANCE_CONFIG`, else the project folder's, else none.
-pub fn project_file_path(cli: &Cli) -> Result<Option<(PathBuf, bool)>, CliError> {
+pub(super) fn project_file_path(cli: &Cli) -> Result<Option<(PathBuf, bool)>, CliError> {
     if let Some(f) = &cli.config {
         return Ok(Some((f.clone(), true)));
     }
@@ -117,7 +117,7 @@ pub fn project_file_path(cli: &Cli) -> Result<Option<(PathBuf, bool)>, CliError>
 }
 
 /// The project file's backends; a bad file is reported here.
-pub fn project_file(cli: &Cli) -> Result<ProjectBackends, CliError> {
+pub(super) fn project_file(cli: &Cli) -> Result<ProjectBackends, CliError> {
     match project_file_path(cli)? {
         Some((file, explicit)) => Ok(load_project(&file, explicit, &this_binary())?),
         None => Ok(ProjectBackends::default()),
@@ -166,7 +166,7 @@ fn command_line_external(
 /// Starts the external backends a command asks for and picks its backends, in the order given.
 /// `own_corpus` is false when the command reads another corpus (`--vectors`), which need not
 /// have every case a known-differences file names.
-pub fn start(
+pub(super) fn start(
     project: &mut Project,
     file: &ProjectBackends,
     args: &BackendArgs,
@@ -189,9 +189,7 @@ pub fn start(
         }
     }
     for name in &args.backends {
-        if let Some(settings) =
-            SlmpSettings::parse(name, Path::new(".")).map_err(CliError::input)?
-        {
+        if let Some(settings) = SlmpSettings::parse(name, Path::new("."))? {
             sources.push(BackendSource::Slmp(Box::new(settings)));
         } else if let Some(mut settings) = command_line_external(name, args)? {
             settings.known_differences = known_files.remove(settings.name.as_str());
@@ -226,13 +224,13 @@ pub fn start(
 
 /// A loaded project with the chosen backends started (every external backend has agreed on
 /// the protocol before a case runs), and the project file they came from.
-pub struct Prepared {
+pub(super) struct Prepared {
     pub project: Project,
     pub file: ProjectBackends,
     pub backends: Vec<Arc<dyn Backend>>,
 }
 
-pub fn prepare(cli: &Cli, args: &BackendArgs) -> Result<Prepared, CliError> {
+pub(super) fn prepare(cli: &Cli, args: &BackendArgs) -> Result<Prepared, CliError> {
     let mut project = load(&paths(cli, &args.vectors, "--vectors")?)?;
     let file = project_file(cli)?;
     let backends = start(&mut project, &file, args)?;

@@ -18,7 +18,7 @@ use crate::backend::slmp::{SlmpBackend, SlmpSettings};
 use crate::hil::{dry_run, generate, pulse_self_test, GenerateOptions};
 
 #[derive(Debug, clap::Subcommand)]
-pub enum HilCommand {
+pub(crate) enum HilCommand {
     /// Write the test program (structured text for GX Works3), its manifest and a setup
     /// checklist for a profile, from the corpus's own operands.
     Generate {
@@ -90,7 +90,7 @@ pub enum HilCommand {
     },
 }
 
-pub fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
+pub(super) fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
     match command {
         HilCommand::Generate {
             profile,
@@ -102,7 +102,7 @@ pub fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
             let mailbox = mailbox
                 .as_deref()
                 .map(|m| {
-                    mailbox::head(m).map_err(|e| CliError::input(format!("--mailbox {m}: {e}")))
+                    mailbox::head(m).map_err(|e| CliError::within(format!("--mailbox {m}"), e))
                 })
                 .transpose()?;
             let project = load(&paths(cli, &[], "--vectors")?)?;
@@ -114,13 +114,10 @@ pub fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
                     mailbox,
                     filter: filter.clone(),
                 },
-            )
-            .map_err(CliError::input)?;
+            )?;
             let manifest = serde_json::to_string_pretty(&generated.manifest)
-                .map_err(|e| CliError::input(format!("the manifest does not serialize: {e}")))?;
-            std::fs::create_dir_all(out).map_err(|e| {
-                CliError::input(format!("{}: cannot be created: {e}", out.display()))
-            })?;
+                .map_err(|e| CliError::within("the manifest does not serialize", e))?;
+            std::fs::create_dir_all(out).map_err(|e| CliError::write(Some(out), e))?;
             let files = [
                 (out.join("executive.st"), generated.program.clone()),
                 (out.join("manifest.json"), manifest + "\n"),
@@ -161,10 +158,8 @@ pub fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
             let mut ok = findings.iter().all(|f| f.result.is_ok());
             if *self_test && ok {
                 let project = load(&paths(cli, &[], "--vectors")?)?;
-                let live = Arc::new(
-                    SlmpBackend::new(settings, &project.profiles).map_err(CliError::input)?,
-                );
-                live.connect().map_err(CliError::input)?;
+                let live = Arc::new(SlmpBackend::new(settings, &project.profiles)?);
+                live.connect()?;
                 let _ = writeln!(text);
                 match pulse_self_test(&project, &live) {
                     Ok(check) => {
@@ -196,8 +191,7 @@ pub fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
         HilCommand::DryRun { backend } => {
             let settings = live_settings(backend)?;
             let project = load(&paths(cli, &[], "--vectors")?)?;
-            let live =
-                Arc::new(SlmpBackend::new(settings, &project.profiles).map_err(CliError::input)?);
+            let live = Arc::new(SlmpBackend::new(settings, &project.profiles)?);
             let found = dry_run(&project, &live);
             let mut text = String::new();
             for (trial, why) in &found.refused {
@@ -233,10 +227,10 @@ pub fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
         } => {
             let faults = faults
                 .iter()
-                .map(|f| FaultRule::parse(f).map_err(|e| CliError::input(format!("--fault {e}"))))
+                .map(|f| FaultRule::parse(f).map_err(|e| CliError::within("--fault", e)))
                 .collect::<Result<Vec<_>, _>>()?;
             let project = load(&paths(cli, &[], "--vectors")?)?;
-            let m = Manifest::load(manifest).map_err(CliError::input)?;
+            let m = Manifest::load(manifest)?;
             let variant = match variant {
                 Some(v) => v.clone(),
                 None if m.variants.len() == 1 => m.variants[0].clone(),
@@ -282,7 +276,7 @@ pub fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
             settings.scan = Duration::from_micros(*scan_us);
             settings.run = !*stop;
             settings.faults = faults;
-            let sim = Simulator::start(settings, profile, model).map_err(CliError::input)?;
+            let sim = Simulator::start(settings, profile, model)?;
             output::write(None, &format!("listening on {}", sim.address()))?;
             loop {
                 std::thread::sleep(Duration::from_secs(3600));
@@ -292,12 +286,10 @@ pub fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
 }
 
 fn live_settings(spec: &str) -> Result<SlmpSettings, CliError> {
-    SlmpSettings::parse(spec, Path::new("."))
-        .map_err(CliError::input)?
-        .ok_or_else(|| {
-            CliError::input(format!(
-                "`{spec}` is not a live backend: give \
+    SlmpSettings::parse(spec, Path::new("."))?.ok_or_else(|| {
+        CliError::input(format!(
+            "`{spec}` is not a live backend: give \
                  slmp:NAME=HOST:PORT?manifest=FILE&confirm=TYPE&sandbox=RANGES"
-            ))
-        })
+        ))
+    })
 }

@@ -14,7 +14,7 @@ use crate::load::{load_corpus, load_open_questions, load_profiles, OPEN_QUESTION
 use crate::report::text::case_line;
 use crate::spec;
 
-pub fn validate(cli: &Cli, given: &[PathBuf]) -> Outcome {
+pub(super) fn validate(cli: &Cli, given: &[PathBuf]) -> Outcome {
     let paths = paths(cli, given, "validate")?;
     let profiles = load_profiles(&paths.vendors)?;
     let corpus = load_corpus(&paths.vectors, &profiles)?;
@@ -52,7 +52,7 @@ fn counted(n: usize, noun: &str) -> String {
     }
 }
 
-pub fn list(cli: &Cli, filter: Option<&str>) -> Outcome {
+pub(super) fn list(cli: &Cli, filter: Option<&str>) -> Outcome {
     let paths = paths(cli, &[], "--vectors")?;
     let project = load(&paths)?;
     let (file, file_path) = (project_file(cli)?, project_file_path(cli)?);
@@ -141,7 +141,7 @@ pub fn list(cli: &Cli, filter: Option<&str>) -> Outcome {
 /// The JSON report's schema, as shipped in `schema/`.
 const RESULTS_SCHEMA: &str = include_str!("../../schema/results.schema.json");
 
-pub fn schema(kind: SchemaKind) -> Outcome {
+pub(super) fn schema(kind: SchemaKind) -> Outcome {
     let schema = match kind {
         SchemaKind::Vectors => spec::schema(spec::SchemaKind::Vectors),
         SchemaKind::Profile => spec::schema(spec::SchemaKind::Profile),
@@ -161,7 +161,7 @@ pub fn schema(kind: SchemaKind) -> Outcome {
 }
 
 /// `serve`: the reference model of a profile, over the protocol on stdin/stdout.
-pub fn serve(cli: &Cli, profile_id: &str) -> Outcome {
+pub(super) fn serve(cli: &Cli, profile_id: &str) -> Outcome {
     let paths = paths(cli, &[], "--vectors")?;
     let profiles = load_profiles(&paths.vendors)?;
     let Some(profile) = profiles.get(profile_id) else {
@@ -178,13 +178,12 @@ pub fn serve(cli: &Cli, profile_id: &str) -> Outcome {
     };
     let stdin = std::io::stdin().lock();
     let stdout = std::io::BufWriter::with_capacity(64 * 1024, std::io::stdout().lock());
-    protocol_serve::serve(backend.as_ref(), profile, stdin, stdout)
-        .map_err(|e| CliError::input(e.to_string()))?;
+    protocol_serve::serve(backend.as_ref(), profile, stdin, stdout)?;
     Ok(EXIT_OK)
 }
 
 /// `completions SHELL`: the completion script of every command and option.
-pub fn completions(shell: clap_complete::Shell) -> Outcome {
+pub(super) fn completions(shell: clap_complete::Shell) -> Outcome {
     let mut command = Cli::command();
     let mut script = Vec::new();
     clap_complete::generate(shell, &mut command, "plc-conformance", &mut script);
@@ -202,7 +201,7 @@ fn manual_command() -> clap::Command {
 
 /// The main page names a page per command (`plc-conformance-run(1)`): `--dir` writes them all,
 /// so that every page named exists.
-pub fn man(dir: Option<&std::path::Path>) -> Outcome {
+pub(super) fn man(dir: Option<&std::path::Path>) -> Outcome {
     if let Some(dir) = dir {
         if !dir.is_dir() {
             return Err(CliError::input(format!(

@@ -19,14 +19,14 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
 
-pub use error::CliError;
+pub(crate) use error::CliError;
 
-pub const EXIT_OK: u8 = 0;
-pub const EXIT_DIFFERENCES: u8 = 1;
-pub const EXIT_BAD_INPUT: u8 = 2;
+pub(crate) const EXIT_OK: u8 = 0;
+pub(crate) const EXIT_DIFFERENCES: u8 = 1;
+pub(crate) const EXIT_BAD_INPUT: u8 = 2;
 
 /// What a command ends with: its exit status (0 or 1), or the error that stopped it (2).
-pub type Outcome = Result<u8, CliError>;
+pub(crate) type Outcome = Result<u8, CliError>;
 
 use crate::report::console;
 
@@ -40,7 +40,7 @@ use crate::report::console;
                   plugged in from outside, and reports every semantic difference as a diff.\n\n\
                   Exit status: 0 conforms / valid, 1 differences found, 2 bad input or usage."
 )]
-pub struct Cli {
+pub(crate) struct Cli {
     /// Project folder holding `plc-conformance.yaml`, or `vendors/` and `vectors/` [default: the
     /// nearest such folder at or above the current one, else the profiles and corpus built into
     /// plc-conformance].
@@ -68,7 +68,7 @@ pub struct Cli {
 const GLOBAL: &str = "Global options";
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Color {
+pub(crate) enum Color {
     /// On a terminal, unless NO_COLOR is set.
     Auto,
     Always,
@@ -76,7 +76,7 @@ pub enum Color {
 }
 
 #[derive(Debug, Subcommand)]
-pub enum Command {
+pub(crate) enum Command {
     /// Run the corpus against backends and report differences.
     Run(RunArgs),
     /// Compare backends: matrices of cases x backends with rows grouped by behaviour.
@@ -133,7 +133,7 @@ pub enum Command {
 }
 
 #[derive(Debug, clap::Args)]
-pub struct RunArgs {
+pub(crate) struct RunArgs {
     #[command(flatten)]
     pub backends: BackendArgs,
     #[command(flatten)]
@@ -151,7 +151,7 @@ pub struct RunArgs {
 }
 
 #[derive(Debug, clap::Args)]
-pub struct DiffArgs {
+pub(crate) struct DiffArgs {
     #[command(flatten)]
     pub backends: BackendArgs,
     #[command(flatten)]
@@ -166,7 +166,7 @@ pub struct DiffArgs {
 
 /// Which backends and trials a command runs, shared by `run` and `diff`.
 #[derive(Debug, Clone, clap::Args)]
-pub struct BackendArgs {
+pub(crate) struct BackendArgs {
     /// Backends to run: a name (see `list`), or `external:NAME=COMMAND` to start a process that
     /// speaks the external-backend protocol (COMMAND is run by `sh -c`); repeat for several
     /// [default: the built-in ones and those of the project file].
@@ -203,7 +203,7 @@ pub struct BackendArgs {
 
 /// Where a report goes and how it is compared, shared by `run` and `diff`.
 #[derive(Debug, Clone, clap::Args)]
-pub struct ReportArgs {
+pub(crate) struct ReportArgs {
     /// Write the report to this file instead of standard output.
     #[arg(long, value_name = "FILE")]
     pub output: Option<PathBuf>,
@@ -217,7 +217,7 @@ pub struct ReportArgs {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Format {
+pub(crate) enum Format {
     /// For `run`: failures as they happen, then counts. For `diff`: the grouped matrices.
     Text,
     /// The grouped matrices as text.
@@ -231,7 +231,7 @@ pub enum Format {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum SchemaKind {
+pub(crate) enum SchemaKind {
     /// Vector files (`vectors/<family>/*.yaml`).
     Vectors,
     /// Vendor profiles (`vendors/*.yaml`).
@@ -251,7 +251,7 @@ pub enum SchemaKind {
 }
 
 /// Parses the arguments, runs the command and returns its exit status.
-pub fn main() -> ExitCode {
+pub(crate) fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.color {
         Color::Always => anstream::ColorChoice::Always.write_global(),
@@ -282,8 +282,8 @@ pub fn main() -> ExitCode {
     };
     // Errors are rendered here and nowhere else.
     let code = outcome.unwrap_or_else(|e| {
-        console::error(&e.to_string());
-        EXIT_BAD_INPUT
+        console::error(&crate::error_chain::chain(&e));
+        e.exit_status()
     });
     // An interrupted run ends as an interruption, whatever it found before.
     ExitCode::from(crate::interrupt::exit_status().unwrap_or(code))

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use super::CliError;
 
 /// An open output: write to it, then [`Sink::finish`] it.
-pub enum Sink {
+pub(super) enum Sink {
     Stdout(anstream::AutoStream<std::io::Stdout>),
     Direct {
         path: PathBuf,
@@ -26,7 +26,7 @@ pub enum Sink {
 
 /// Refuses, before any work, an output that cannot be written: a folder, or a file in a folder
 /// that does not exist.
-pub fn check(path: &Path) -> Result<(), CliError> {
+pub(super) fn check(path: &Path) -> Result<(), CliError> {
     if path.is_dir() {
         return Err(CliError::input(format!(
             "{}: a folder, not a file to write",
@@ -94,7 +94,7 @@ fn open_in_place(path: &Path) -> std::io::Result<File> {
 
 impl Sink {
     /// `None` is stdout.
-    pub fn open(path: Option<&Path>) -> Result<Sink, CliError> {
+    pub(super) fn open(path: Option<&Path>) -> Result<Sink, CliError> {
         let Some(path) = path else {
             return Ok(Sink::Stdout(anstream::stdout()));
         };
@@ -119,7 +119,7 @@ impl Sink {
     }
 
     /// Whether the output is a terminal's stdout (colours, the terminal's width).
-    pub fn is_stdout(&self) -> bool {
+    pub(super) fn is_stdout(&self) -> bool {
         matches!(self, Sink::Stdout(_))
     }
 
@@ -135,7 +135,7 @@ impl Sink {
     }
 
     /// Flushes, and puts a staged file in its place.
-    pub fn finish(mut self) -> Result<(), CliError> {
+    pub(super) fn finish(mut self) -> Result<(), CliError> {
         let path = self.path().map(Path::to_path_buf);
         let failed = |e| CliError::write(path.as_deref(), e);
         self.flush().map_err(failed)?;
@@ -159,7 +159,7 @@ impl Sink {
     }
 
     /// A write error of this output, for the command's error.
-    pub fn error(&self, e: std::io::Error) -> CliError {
+    pub(super) fn error(&self, e: std::io::Error) -> CliError {
         CliError::write(self.path(), e)
     }
 }
@@ -203,7 +203,7 @@ impl Drop for Sink {
 /// Writes several files all or none: each is written whole and synced beside its target before
 /// any replaces its target, so an error on one (a full disk, a missing folder) leaves every
 /// file as it was.
-pub fn write_every<'a>(
+pub(super) fn write_every<'a>(
     files: impl IntoIterator<Item = (&'a Path, &'a str)>,
 ) -> Result<(), CliError> {
     let mut staged = Vec::new();
@@ -217,7 +217,7 @@ pub fn write_every<'a>(
 }
 
 /// Writes a whole report to `path`, or to stdout (`None`) followed by a newline.
-pub fn write(path: Option<&Path>, text: &str) -> Result<(), CliError> {
+pub(super) fn write(path: Option<&Path>, text: &str) -> Result<(), CliError> {
     let mut sink = Sink::open(path)?;
     let written = sink.write_all(text.as_bytes()).and_then(|()| {
         if path.is_none() {

@@ -10,7 +10,7 @@ use crate::record::{record, today, Change, Provenance};
 
 /// What `record` takes.
 #[derive(Debug, clap::Args)]
-pub struct RecordArgs {
+pub(crate) struct RecordArgs {
     /// The backend whose behaviour is recorded: a name (see `list`) or `external:NAME=COMMAND`.
     #[arg(long = "backend", value_name = "NAME")]
     pub backend: String,
@@ -36,7 +36,7 @@ pub struct RecordArgs {
     pub known: Option<PathBuf>,
 }
 
-pub fn record_command(cli: &Cli, args: &RecordArgs) -> Outcome {
+pub(super) fn record_command(cli: &Cli, args: &RecordArgs) -> Outcome {
     let backend_args = BackendArgs {
         backends: vec![args.backend.clone()],
         timeout: args.timeout,
@@ -90,8 +90,7 @@ pub fn record_command(cli: &Cli, args: &RecordArgs) -> Outcome {
         None => Ok(()),
     };
     simulated()?;
-    let recording = record(&project, backend, args.filter.as_deref(), &provenance)
-        .map_err(|e| CliError::input(e.to_string()))?;
+    let recording = record(&project, backend, args.filter.as_deref(), &provenance)?;
     simulated()?;
     let (mut filled, mut replaced, mut kept, mut skipped, mut faulted) = (0, 0, 0, 0, 0);
     let mut out = String::new();

@@ -28,7 +28,7 @@ use crate::report::{All, Event, Reporter};
 use crate::runner::{self, Project};
 use crate::session::{idle_backends, judged_against, RunOutcome};
 
-pub fn run(cli: &Cli, args: &RunArgs) -> Outcome {
+pub(super) fn run(cli: &Cli, args: &RunArgs) -> Outcome {
     execute_command(
         cli,
         &args.backends,
@@ -39,7 +39,7 @@ pub fn run(cli: &Cli, args: &RunArgs) -> Outcome {
     )
 }
 
-pub fn diff(cli: &Cli, args: &DiffArgs) -> Outcome {
+pub(super) fn diff(cli: &Cli, args: &DiffArgs) -> Outcome {
     if let Some(other) = &args.against {
         return against(cli, &args.backends, other);
     }
@@ -64,7 +64,7 @@ fn execute_command(
     // The baseline is read before anything is written, so that `--save F --baseline F`
     // compares with the run saved before, not with this one.
     let before = match &report.baseline {
-        Some(path) => Some(baseline::load(path).map_err(|e| CliError::input(e.to_string()))?),
+        Some(path) => Some(baseline::load(path)?),
         None => None,
     };
     let Prepared {
@@ -219,7 +219,6 @@ fn execute_command(
     let mut outcome = RunOutcome {
         records,
         summary,
-        interrupted,
         idle,
         baseline: None,
     };

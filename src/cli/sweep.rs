@@ -20,7 +20,7 @@ use crate::sweep::{emit, render, Oracle, Settings, Sweep};
 
 /// What `sweep` takes.
 #[derive(Debug, clap::Args)]
-pub struct SweepArgs {
+pub(crate) struct SweepArgs {
     /// Sweep a cross-vendor operation: every lowering of every backend, and codecs.
     #[arg(long, value_enum, conflicts_with = "instruction")]
     pub operation: Option<OperationArg>,
@@ -142,13 +142,13 @@ fn loadable<'e>(path: &Path, emitted: &'e emit::Emitted, profiles: &Profiles) ->
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum OperationArg {
+pub(crate) enum OperationArg {
     HexToValue,
     ValueToHex,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum GeneratorArg {
+pub(crate) enum GeneratorArg {
     /// Every 16-bit value.
     Values,
     /// 32-bit values: the lattice of digits 0, 1, 9, A, F and every boundary.
@@ -162,13 +162,13 @@ pub enum GeneratorArg {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum SweepFormat {
+pub(crate) enum SweepFormat {
     Text,
     Json,
     Html,
 }
 
-pub fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
+pub(super) fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
     let backend_args = BackendArgs {
         backends: args.backends.clone(),
         timeout: args.timeout,
@@ -312,8 +312,7 @@ pub fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
     if let Some(j) = args.jobs {
         settings.jobs = j.max(1);
     }
-    let sweep = Sweep::new(settings, &project.profiles, &chosen)
-        .map_err(|e| CliError::input(e.to_string()))?;
+    let sweep = Sweep::new(settings, &project.profiles, &chosen)?;
     // A space past 2^64 inputs cannot be numbered, let alone swept.
     if sweep.space.total() == u64::MAX {
         return Err(CliError::input(
@@ -482,7 +481,7 @@ fn text_generator(args: &SweepArgs) -> Result<Generator, CliError> {
 }
 
 /// `20H,0,9,a` -> bytes.
-pub fn alphabet(list: &str) -> Result<Vec<u8>, CliError> {
+pub(super) fn alphabet(list: &str) -> Result<Vec<u8>, CliError> {
     let mut out = Vec::new();
     for item in list.split(',').filter(|s| !s.is_empty()) {
         let byte = if item.chars().count() == 1 {
@@ -506,7 +505,7 @@ pub fn alphabet(list: &str) -> Result<Vec<u8>, CliError> {
 }
 
 /// `natural`, or `0-6`, `1,4,8`: counts from 0 to [`MAX_DIGITS`], at least one.
-pub fn digits(spec: &str) -> Result<Digits, CliError> {
+pub(super) fn digits(spec: &str) -> Result<Digits, CliError> {
     if spec == "natural" {
         return Ok(Digits::Natural);
     }
@@ -549,7 +548,7 @@ pub fn digits(spec: &str) -> Result<Digits, CliError> {
 }
 
 /// `K/N`.
-pub fn shard(spec: &str) -> Result<(u64, u64), CliError> {
+pub(super) fn shard(spec: &str) -> Result<(u64, u64), CliError> {
     let bad = || format!("--shard `{spec}`: expected K/N with 1 <= K <= N, like 2/8");
     let (k, n) = spec.split_once('/').ok_or_else(bad)?;
     let (k, n): (u64, u64) = (k.parse().map_err(|_| bad())?, n.parse().map_err(|_| bad())?);

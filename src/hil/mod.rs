@@ -9,6 +9,7 @@
 
 mod program;
 
+use crate::backend::slmp::error::{refused, LiveError};
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
@@ -24,7 +25,7 @@ use crate::model::profile::Profile;
 use crate::model::Operand;
 use crate::runner::Project;
 
-pub use program::{setup_text, structured_text};
+pub(crate) use program::{setup_text, structured_text};
 
 /// What to generate a program for.
 #[derive(Debug, Clone, Default)]
@@ -50,11 +51,11 @@ pub struct Generated {
 }
 
 /// The flag whose rising edge resets a MELSEC CPU's error state (SM50, "error reset").
-pub const ERROR_RESET: &str = "SM50";
+pub(crate) const ERROR_RESET: &str = "SM50";
 
 /// Why a constant cannot be written into the program: it must fit the operand as a signed
 /// decimal constant of its width (16 bits, or 32 for the data operand of a D-prefixed form).
-pub fn unrealisable(instruction: &str, operand: &str, value: i64) -> Option<String> {
+pub(crate) fn unrealisable(instruction: &str, operand: &str, value: i64) -> Option<String> {
     let bits = if instruction.starts_with('D') && operand != "n" {
         32
     } else {
@@ -71,14 +72,14 @@ pub fn unrealisable(instruction: &str, operand: &str, value: i64) -> Option<Stri
 
 /// Why a device operand cannot be part of a live case ([`slmp::unaddressable`]): the case's
 /// memory could be neither set nor read back.
-pub fn unaddressable(operand: &str, device: &Device) -> Option<String> {
+pub(crate) fn unaddressable(operand: &str, device: &Device) -> Option<String> {
     slmp::unaddressable(device).map(|why| {
         format!("operand {operand} = {device}: {why}, so no program can hold it as written")
     })
 }
 
 /// Generates the program for a profile from the project's corpus.
-pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generated, String> {
+pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generated, LiveError> {
     let profile = project
         .profiles
         .get(&options.profile)
@@ -93,7 +94,7 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
     let errors = error_devices(&profile)?;
     for v in &options.variants {
         if profile.variant(v).is_none() {
-            return Err(format!("`{v}` is not a variant of {}", profile.id));
+            return Err(refused!("`{v}` is not a variant of {}", profile.id));
         }
     }
     let variants: Vec<String> = if options.variants.is_empty() {
@@ -106,7 +107,7 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
         .iter()
         .find(|b| b.profile() == profile.id && b.codec().is_none())
         .cloned()
-        .ok_or_else(|| format!("no built-in reference model for {}", profile.id))?;
+        .ok_or_else(|| refused!("no built-in reference model for {}", profile.id))?;
     let trials: Vec<_> = project
         .plan(std::slice::from_ref(&model))
         .into_iter()
@@ -179,7 +180,7 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
         }
     }
     if rungs.len() > usize::from(u16::MAX) {
-        return Err(format!(
+        return Err(refused!(
             "{} rungs do not fit the mailbox's rung word",
             rungs.len()
         ));
@@ -190,11 +191,11 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
         None => choose_mailbox(&profile, &variants, &writes)?,
     };
     if let Some(why) = slmp::unaddressable(&mailbox) {
-        return Err(format!("the mailbox cannot be at {mailbox}: {why}"));
+        return Err(refused!("the mailbox cannot be at {mailbox}: {why}"));
     }
     let whole = mailbox::range(&mailbox);
     if let Some(w) = writes.iter().find(|w| w.overlaps(&whole)) {
-        return Err(format!(
+        return Err(refused!(
             "the mailbox {whole} overlaps the case windows {w}; choose a mailbox clear of every \
              window ({})",
             fence::list(&writes)
@@ -203,9 +204,9 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
     for v in &variants {
         let variant = profile
             .variant(v)
-            .ok_or_else(|| format!("no variant {v}"))?;
+            .ok_or_else(|| refused!("no variant {v}"))?;
         if !profile.words_exist(variant, &mailbox, mailbox::WORDS) {
-            return Err(format!(
+            return Err(refused!(
                 "the mailbox {whole} does not exist on variant {v} of {}",
                 profile.id
             ));
@@ -246,7 +247,7 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
 
 /// Where a MELSEC profile's program finds an error: the error flag and register of the profile,
 /// its first further register, and the error reset flag.
-fn error_devices(profile: &Profile) -> Result<ErrorDevices, String> {
+fn error_devices(profile: &Profile) -> Result<ErrorDevices, LiveError> {
     let errors = &profile.errors;
     let register = errors.register.as_ref().ok_or_else(|| {
         format!(
@@ -259,7 +260,7 @@ fn error_devices(profile: &Profile) -> Result<ErrorDevices, String> {
         match &errors.flag {
             Some(f) if f.code() == "SM" => f,
             other => {
-                return Err(format!(
+                return Err(refused!(
                 "{}'s error flag is {}; the test program is generated for MELSEC CPUs (SM0, SD0)",
                 profile.id,
                 other.as_ref().map_or("none".to_string(), ToString::to_string)
@@ -280,14 +281,14 @@ fn choose_mailbox(
     profile: &Profile,
     variants: &[String],
     writes: &[WordRange],
-) -> Result<Device, String> {
+) -> Result<Device, LiveError> {
     let last = variants
         .iter()
         .filter_map(|v| profile.variant(v))
         .filter_map(|v| profile.ranges(v, "D"))
         .map(|r| r.last)
         .min()
-        .ok_or_else(|| format!("{} has no data registers (D) for a mailbox", profile.id))?;
+        .ok_or_else(|| refused!("{} has no data registers (D) for a mailbox", profile.id))?;
     let mut taken: Vec<(u32, u32)> = writes
         .iter()
         .filter(|w| w.code == "D")
@@ -370,7 +371,9 @@ pub fn dry_run(project: &Project, backend: &Arc<SlmpBackend>) -> DryRun {
                     );
                     writes.extend(mailbox_words.iter().cloned());
                 }
-                Err(why) => out.refused.push((t.name(), why)),
+                Err(why) => out
+                    .refused
+                    .push((t.name(), crate::error_chain::chain(&why))),
             }
         }
     }
@@ -412,12 +415,12 @@ pub struct PulseCheck {
 pub fn pulse_self_test(
     project: &Project,
     backend: &Arc<SlmpBackend>,
-) -> Result<PulseCheck, String> {
+) -> Result<PulseCheck, LiveError> {
     let as_backend: Arc<dyn Backend> = backend.clone();
     let profile = project
         .profiles
         .get(backend.profile())
-        .ok_or_else(|| format!("profile `{}` is not loaded", backend.profile()))?;
+        .ok_or_else(|| refused!("profile `{}` is not loaded", backend.profile()))?;
     let trials = project.plan(&[as_backend]);
     let trial = trials
         .iter()
@@ -434,7 +437,7 @@ pub fn pulse_self_test(
     let reqs = requests(trial, &imgs);
     let req = reqs
         .first()
-        .ok_or_else(|| format!("{}: no request", trial.name()))?;
+        .ok_or_else(|| refused!("{}: no request", trial.name()))?;
     let show = |r: &Result<crate::backend::Response, crate::backend::Fault>| match r {
         Ok(crate::backend::Response::Done(o)) if o.writes.is_empty() && o.error.is_none() => {
             "nothing".to_string()
@@ -455,14 +458,14 @@ pub fn pulse_self_test(
     };
     let first = backend.execute(req);
     if let Err(fault) = &first {
-        return Err(format!("{}: {fault}", trial.name()));
+        return Err(refused!("{}: {fault}", trial.name()));
     }
     let second = backend.execute(req);
     // A second execution the rung's proof shows did not happen is the finding, not a fault of
     // the self-test.
     if let Err(fault) = &second {
         if backend.take_not_executed().is_none() {
-            return Err(format!("{}: {fault}", trial.name()));
+            return Err(refused!("{}: {fault}", trial.name()));
         }
     }
     Ok(PulseCheck {

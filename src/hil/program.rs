@@ -9,6 +9,7 @@
 //! it ran: in the scan it is enabled it writes its number, the trigger and its ENO into the
 //! mailbox. What a bench user must still check in the tool is in the setup checklist.
 
+use crate::backend::slmp::error::{refused, LiveError};
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
@@ -20,7 +21,7 @@ use crate::model::profile::Profile;
 use crate::model::Operand;
 
 /// The label that receives each call's ENO.
-pub const ENO_LABEL: &str = "bEno";
+pub(super) const ENO_LABEL: &str = "bEno";
 
 /// A call statement from the profile's table: `bEno := ASCI(enable, D100, 4, D200);`.
 fn call(
@@ -28,7 +29,7 @@ fn call(
     instruction: &str,
     enable: &str,
     operands: &BTreeMap<String, String>,
-) -> Result<String, String> {
+) -> Result<String, LiveError> {
     let form = profile.calls.get(instruction).ok_or_else(|| {
         format!(
             "{} has no structured-text form for {instruction} (`structured_text` in its \
@@ -37,7 +38,7 @@ fn call(
         )
     })?;
     form.render(ENO_LABEL, enable, operands).ok_or_else(|| {
-        format!(
+        refused!(
             "the structured-text form of {instruction} takes {}, the rung has {}",
             form.operands.join(", "),
             operands.keys().cloned().collect::<Vec<_>>().join(", ")
@@ -55,7 +56,7 @@ fn int(value: u16) -> String {
 }
 
 /// The structured text of the test program; `Err` when an instruction has no call form.
-pub fn structured_text(manifest: &Manifest, profile: &Profile) -> Result<String, String> {
+pub(crate) fn structured_text(manifest: &Manifest, profile: &Profile) -> Result<String, LiveError> {
     let mb = manifest.mailbox_head()?;
     let w = |o| word(&mb, o);
     let e = &manifest.error;
@@ -234,7 +235,7 @@ fn call_text(operands: &BTreeMap<String, String>, addresses: &BTreeMap<String, S
 }
 
 /// The setup checklist (`SETUP.md`).
-pub fn setup_text(manifest: &Manifest, profile: &Profile, trials: usize) -> String {
+pub(crate) fn setup_text(manifest: &Manifest, profile: &Profile, trials: usize) -> String {
     let mb = manifest.mailbox.clone();
     let mut t = String::new();
     let _ = writeln!(t, "# Test program for {} ({})\n", profile.name, profile.id);

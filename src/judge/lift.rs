@@ -8,7 +8,7 @@ use crate::model::profile::Profile;
 use crate::plan::lowering::{units_for, units_value};
 
 /// The answer an outcome gives to a cross-vendor case asked with `digits` digits.
-pub fn lift(
+pub(crate) fn lift(
     profile: &Profile,
     lowering: &Lowering,
     digits: u32,

@@ -6,8 +6,8 @@
 //! [`Answer`] and compares that. The comparer knows nothing of vendors beyond what the profile
 //! says.
 
-pub mod lift;
-pub mod words;
+pub(crate) mod lift;
+pub(crate) mod words;
 
 use serde::{Deserialize, Serialize};
 
@@ -18,7 +18,7 @@ use crate::model::cross_vendor::Answer;
 use crate::model::known::Entry;
 use crate::model::Basis;
 use crate::plan::{Check, Trial};
-pub use words::{Effect, Mismatch, RegisterRow, WordRow};
+pub(crate) use words::{Effect, Mismatch, WordRow};
 
 /// The verdict of one trial.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
@@ -62,7 +62,7 @@ pub enum Verdict {
 
 /// Why a trial is not run when the run is interrupted before it, or its backend is killed by
 /// the interruption while it runs.
-pub const CANCELLED: &str = "not run: the run was interrupted";
+pub(crate) const CANCELLED: &str = "not run: the run was interrupted";
 
 impl Verdict {
     /// A trial the interruption cancelled: skipped, counted apart from failures.
@@ -168,12 +168,12 @@ impl Verdict {
 
 /// Judges a trial from its observations (one per fill, in [`Fill::ALL`] order) and applies the
 /// known-differences entry the plan found for it.
-pub fn judge(trial: &Trial, observations: &[Observation]) -> Verdict {
+pub(crate) fn judge(trial: &Trial, observations: &[Observation]) -> Verdict {
     apply_known(trial.known.as_ref(), judge_unlisted(trial, observations))
 }
 
 /// The verdict of a trial that is not run.
-pub fn skipped(reason: &str) -> Verdict {
+pub(crate) fn skipped(reason: &str) -> Verdict {
     Verdict::Skipped {
         reason: reason.to_string(),
     }
@@ -336,7 +336,7 @@ fn compare_answers(basis: Basis, expected: Option<&Answer>, answers: Vec<Answer>
 
 /// Applies a known-differences entry: a listed difference (or `unsupported` answer) is a known
 /// difference, a listed trial that conforms is a stale entry, and a fault stays a fault.
-pub fn apply_known(entry: Option<&Entry>, verdict: Verdict) -> Verdict {
+pub(crate) fn apply_known(entry: Option<&Entry>, verdict: Verdict) -> Verdict {
     let Some(entry) = entry else {
         return verdict;
     };

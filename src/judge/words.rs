@@ -101,7 +101,7 @@ impl Serialize for RegisterRow {
 /// The error registers against the code the case expects. Only a backend that reports error
 /// registers is held to them (one that models none is judged on the code alone), and only
 /// after an expected error with a code: after a success the manuals say nothing of them.
-pub fn register_rows(
+pub(crate) fn register_rows(
     expect: &Expectation,
     outcome: &Outcome,
     registers: &[Device],
@@ -185,7 +185,7 @@ impl std::fmt::Display for Effect {
 }
 
 /// The rows of a comparison between an expectation and an outcome over the same image.
-pub fn rows(before: &Image, expect: &Expectation, outcome: &Outcome) -> Vec<WordRow> {
+pub(crate) fn rows(before: &Image, expect: &Expectation, outcome: &Outcome) -> Vec<WordRow> {
     let devices: BTreeSet<&Device> = expect.after.keys().chain(outcome.writes.keys()).collect();
     devices
         .into_iter()
@@ -204,7 +204,7 @@ pub fn rows(before: &Image, expect: &Expectation, outcome: &Outcome) -> Vec<Word
 
 /// How an outcome under one fill differs from the expectation, if it does; `registers` are
 /// where the profile says an error code lands.
-pub fn mismatch(
+pub(crate) fn mismatch(
     before: &Image,
     expect: &Expectation,
     outcome: &Outcome,

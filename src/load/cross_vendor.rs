@@ -22,7 +22,7 @@ use crate::value::{parse_number, parse_word, to_bits};
 const MAX_DIGITS: u32 = 16;
 
 /// Whether a vector file is a cross-vendor one (it names an `operation`, not `instructions`).
-pub fn is_cross_vendor(index: &super::LineIndex) -> bool {
+pub(super) fn is_cross_vendor(index: &super::LineIndex) -> bool {
     index.line("operation").is_some() && index.line("instructions").is_none()
 }
 

@@ -49,11 +49,14 @@ impl fmt::Display for LoadError {
         if let Some(line) = self.line {
             write!(f, ":{line}")?;
         }
-        write!(f, ": ")?;
         if let Some(key) = &self.key {
-            write!(f, "{key}: ")?;
+            write!(f, ": {key}")?;
         }
-        write!(f, "{}", self.kind)
+        // A device or value that does not read is the cause, shown after the place.
+        match std::error::Error::source(self) {
+            Some(_) => Ok(()),
+            None => write!(f, ": {}", self.kind),
+        }
     }
 }
 
@@ -85,7 +88,15 @@ impl fmt::Display for LoadErrorKind {
     }
 }
 
-impl std::error::Error for LoadError {}
+impl std::error::Error for LoadError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match &*self.kind {
+            LoadErrorKind::Device(e) => Some(e),
+            LoadErrorKind::Value(e) => Some(e),
+            _ => None,
+        }
+    }
+}
 
 /// All the problems found in a corpus or a set of profiles; loading reports every one rather
 /// than stopping at the first.
@@ -95,7 +106,7 @@ pub struct LoadErrors(pub Vec<LoadError>);
 impl fmt::Display for LoadErrors {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         for e in &self.0 {
-            writeln!(f, "error: {e}")?;
+            writeln!(f, "error: {}", crate::error_chain::chain(e))?;
         }
         write!(
             f,

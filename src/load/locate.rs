@@ -12,13 +12,13 @@ use saphyr_parser::{Event, Parser};
 
 /// The deepest nesting of mappings and sequences a file may have. The formats need five; a
 /// pathological file of 100,000 levels would otherwise hold the deserializer for a minute.
-pub const MAX_DEPTH: usize = 64;
+pub(super) const MAX_DEPTH: usize = 64;
 
 /// Checks what the deserializer must never see, stopping at the first problem: a character
 /// YAML forbids (C0 and C1 controls other than tab and line breaks, DEL, U+FFFE, U+FFFF), a
 /// second document, or nesting deeper than [`MAX_DEPTH`]. Returns the line and the message.
 /// Syntax errors are left to the deserializer, which reports them with its own line.
-pub fn check_text(text: &str) -> Result<(), (usize, String)> {
+pub(super) fn check_text(text: &str) -> Result<(), (usize, String)> {
     for (i, line) in text.split('\n').enumerate() {
         if let Some(c) = line.chars().find(|c| forbidden(*c)) {
             return Err((
@@ -81,7 +81,7 @@ fn forbidden(c: char) -> bool {
 
 /// Lines of key paths in one document.
 #[derive(Debug, Default)]
-pub struct LineIndex {
+pub(crate) struct LineIndex {
     lines: HashMap<String, usize>,
     duplicates: Vec<(String, usize)>,
 }
@@ -94,7 +94,7 @@ enum Frame {
 impl LineIndex {
     /// Indexes a document. A document the parser rejects yields an empty index: its syntax error
     /// is reported by the deserializer, with its own line.
-    pub fn new(text: &str) -> Self {
+    pub(crate) fn new(text: &str) -> Self {
         let mut lines = HashMap::new();
         let mut duplicates = Vec::new();
         let mut stack: Vec<Frame> = Vec::new();
@@ -155,12 +155,12 @@ impl LineIndex {
     /// Keys that appear twice in one mapping, with the line of the repeat. The deserializer
     /// keeps the last value of a repeated map key without a word, which would silently drop a
     /// memory word a vector author wrote.
-    pub fn duplicates(&self) -> &[(String, usize)] {
+    pub(crate) fn duplicates(&self) -> &[(String, usize)] {
         &self.duplicates
     }
 
     /// The line of a key path, or of its nearest indexed ancestor.
-    pub fn line(&self, path: &str) -> Option<usize> {
+    pub(crate) fn line(&self, path: &str) -> Option<usize> {
         let mut p = path;
         loop {
             if let Some(line) = self.lines.get(p) {

@@ -21,16 +21,15 @@ use std::path::{Path, PathBuf};
 
 use serde::de::DeserializeOwned;
 
-pub use error::{LoadError, LoadErrorKind, LoadErrors};
+pub(crate) use error::LoadErrorKind;
+pub use error::{LoadError, LoadErrors};
 pub use known::load_known;
-pub use locate::LineIndex;
+pub(crate) use locate::LineIndex;
 pub use open_questions::{load_open_questions, OPEN_QUESTIONS};
 pub use profiles::{load_profiles, parse_profile};
-pub use project::{
-    load_project, locate_project, requirements_enforced, valid_name, ENV_CONFIG, ENV_REQUIRE,
-    ENV_SELF, FILE_NAME,
-};
-pub use source::{
+pub use project::{load_project, ENV_CONFIG, ENV_REQUIRE, ENV_SELF, FILE_NAME};
+pub(crate) use project::{locate_project, valid_name};
+pub(crate) use source::{
     embedded_files, embedded_text, embedded_vectors, embedded_vendors, find_project_root,
     is_project_root, EMBEDDED,
 };
@@ -128,7 +127,7 @@ pub(crate) struct FileContext<'a> {
 
 impl<'a> FileContext<'a> {
     /// Starts reading a file, reporting keys repeated within a mapping.
-    pub fn new(file: &Path, text: &str, errors: &'a mut Vec<LoadError>) -> Self {
+    pub(crate) fn new(file: &Path, text: &str, errors: &'a mut Vec<LoadError>) -> Self {
         let cx = FileContext {
             file: file.to_path_buf(),
             index: LineIndex::new(text),
@@ -149,7 +148,7 @@ impl<'a> FileContext<'a> {
         cx
     }
 
-    pub fn error(&mut self, key: impl Into<String>, kind: LoadErrorKind) {
+    pub(crate) fn error(&mut self, key: impl Into<String>, kind: LoadErrorKind) {
         let key = key.into();
         self.errors.push(LoadError {
             file: self.file.clone(),
@@ -159,7 +158,7 @@ impl<'a> FileContext<'a> {
         });
     }
 
-    pub fn location(&self, key: &str) -> crate::model::Location {
+    pub(crate) fn location(&self, key: &str) -> crate::model::Location {
         crate::model::Location {
             file: self.file.clone(),
             line: self.index.line(key).unwrap_or(1),
@@ -277,7 +276,7 @@ pub(crate) fn read_file(path: &Path) -> Result<String, LoadError> {
 /// The bytes of a regular file. Anything else — a FIFO, a device, a socket, a folder — is
 /// refused without being opened for long: reading a FIFO blocks until a writer comes, and a
 /// device may never end.
-pub fn read_regular(path: &Path) -> std::io::Result<Vec<u8>> {
+pub(crate) fn read_regular(path: &Path) -> std::io::Result<Vec<u8>> {
     use std::io::Read;
     not_special(&std::fs::metadata(path)?)?;
     let mut options = std::fs::OpenOptions::new();
@@ -293,17 +292,6 @@ pub fn read_regular(path: &Path) -> std::io::Result<Vec<u8>> {
     let mut bytes = Vec::new();
     file.read_to_end(&mut bytes)?;
     Ok(bytes)
-}
-
-/// Refuses a path that exists and is not a regular file, before a report or a saved run is
-/// written there: writing to a FIFO blocks, and replacing a device by renaming over it would
-/// break the system.
-pub fn check_output(path: &Path) -> std::io::Result<()> {
-    match std::fs::metadata(path) {
-        Ok(meta) => not_special(&meta),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
-        Err(e) => Err(e),
-    }
 }
 
 fn not_special(meta: &std::fs::Metadata) -> std::io::Result<()> {

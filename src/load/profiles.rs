@@ -99,7 +99,10 @@ fn read_calls(p: &ProfileSpec, cx: &mut FileContext<'_>) -> BTreeMap<String, Cal
         let form = match CallForm::parse(&spec.form, spec.basis, &spec.source) {
             Ok(form) => form,
             Err(why) => {
-                cx.error(format!("{key}.form"), LoadErrorKind::Invalid(why));
+                cx.error(
+                    format!("{key}.form"),
+                    LoadErrorKind::Invalid(why.to_string()),
+                );
                 continue;
             }
         };

@@ -38,7 +38,7 @@ pub const ENV_SELF: &str = "PLC_CONFORMANCE";
 
 /// Where the project file is: `PLC_CONFORMANCE_CONFIG`, else `ROOT/plc-conformance.yaml`. The
 /// flag says whether it was named explicitly (then it must exist).
-pub fn locate_project(root: &Path) -> (PathBuf, bool) {
+pub(crate) fn locate_project(root: &Path) -> (PathBuf, bool) {
     match std::env::var_os(ENV_CONFIG) {
         Some(p) if !p.is_empty() => (PathBuf::from(p), true),
         _ => (root.join(FILE_NAME), false),
@@ -46,13 +46,13 @@ pub fn locate_project(root: &Path) -> (PathBuf, bool) {
 }
 
 /// Whether missing requirements are errors (`PLC_CONFORMANCE_REQUIRE_BACKENDS` set and not `0`).
-pub fn requirements_enforced() -> bool {
+pub(crate) fn requirements_enforced() -> bool {
     std::env::var(ENV_REQUIRE).is_ok_and(|v| !v.is_empty() && v != "0")
 }
 
-/// Reads the project file at `file` (see [`locate_project`]). A missing file that was not named
+/// Reads the project file at `file` (see `locate_project`). A missing file that was not named
 /// explicitly means no external backends. Backends whose requirements are missing are set aside,
-/// or are an error when [`requirements_enforced`]. `plc_conformance` is the binary backends see
+/// or are an error when `requirements_enforced`. `plc_conformance` is the binary backends see
 /// as `$PLC_CONFORMANCE`.
 pub fn load_project(
     file: &Path,
@@ -206,7 +206,7 @@ fn read_project(file: &Path, plc_conformance: &Path) -> Result<Vec<Configured>, 
 }
 
 /// Backend names end up in trial names and on command lines.
-pub fn valid_name(name: &str) -> bool {
+pub(crate) fn valid_name(name: &str) -> bool {
     !name.is_empty()
         && name
             .chars()

@@ -14,15 +14,15 @@ mod files {
 }
 
 /// The first component of the name of every embedded file.
-pub const EMBEDDED: &str = "<embedded>";
+pub(crate) const EMBEDDED: &str = "<embedded>";
 
 /// The shipped vendor profiles.
-pub fn embedded_vendors() -> PathBuf {
+pub(crate) fn embedded_vendors() -> PathBuf {
     Path::new(EMBEDDED).join("vendors")
 }
 
 /// The shipped corpus.
-pub fn embedded_vectors() -> PathBuf {
+pub(crate) fn embedded_vectors() -> PathBuf {
     Path::new(EMBEDDED).join("vectors")
 }
 
@@ -42,7 +42,7 @@ fn inside(path: &Path) -> Option<String> {
 
 /// The embedded YAML files at or below `path`, in a stable order; `None` when `path` is not
 /// under `<embedded>` (an empty list when nothing is shipped there).
-pub fn embedded_files(path: &Path) -> Option<Vec<PathBuf>> {
+pub(crate) fn embedded_files(path: &Path) -> Option<Vec<PathBuf>> {
     let rest = inside(path)?;
     Some(
         files::FILES
@@ -60,7 +60,7 @@ pub fn embedded_files(path: &Path) -> Option<Vec<PathBuf>> {
 }
 
 /// The text of an embedded file; `None` when `path` names no embedded file.
-pub fn embedded_text(path: &Path) -> Option<&'static str> {
+pub(crate) fn embedded_text(path: &Path) -> Option<&'static str> {
     let rest = inside(path)?;
     files::FILES
         .iter()
@@ -70,12 +70,12 @@ pub fn embedded_text(path: &Path) -> Option<&'static str> {
 
 /// Whether `dir` is a project folder: it holds the project file, or both `vendors/` and
 /// `vectors/`.
-pub fn is_project_root(dir: &Path) -> bool {
+pub(crate) fn is_project_root(dir: &Path) -> bool {
     dir.join(FILE_NAME).is_file() || (dir.join("vendors").is_dir() && dir.join("vectors").is_dir())
 }
 
 /// The nearest project folder at or above `start`.
-pub fn find_project_root(start: &Path) -> Option<PathBuf> {
+pub(crate) fn find_project_root(start: &Path) -> Option<PathBuf> {
     start
         .ancestors()
         .find(|dir| is_project_root(dir))

@@ -15,7 +15,8 @@ use serde::{Deserialize, Serialize};
 
 use super::{Basis, Citation, ErrorSignal, Location, Operand};
 use crate::device::Device;
-pub use crate::spec::cross_vendor::{ErrorClass, Operation, TextLayout, ValueOrder};
+pub use crate::spec::cross_vendor::{ErrorClass, Operation};
+pub(crate) use crate::spec::cross_vendor::{TextLayout, ValueOrder};
 
 /// What a vendor answered to a cross-vendor question.
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]

@@ -11,10 +11,10 @@
 
 use std::path::PathBuf;
 
-pub use crate::spec::known::{InputClass, Kind};
+pub(crate) use crate::spec::known::{InputClass, Kind};
 
 /// Whether `id` matches `pattern`, where `*` stands for any run of characters.
-pub fn id_matches(pattern: &str, id: &str) -> bool {
+pub(crate) fn id_matches(pattern: &str, id: &str) -> bool {
     let mut parts = pattern.split('*');
     let first = parts.next().unwrap_or_default();
     let Some(mut rest) = id.strip_prefix(first) else {

@@ -3,11 +3,11 @@
 //! Unlike [`crate::spec`], nothing here is stringly typed: devices are parsed, values are words,
 //! flags are booleans, and every case knows where it was written so a report can point at it.
 
-pub mod cross_vendor;
-pub mod known;
-pub mod open_questions;
-pub mod profile;
-pub mod project;
+pub(crate) mod cross_vendor;
+pub(crate) mod known;
+pub(crate) mod open_questions;
+pub(crate) mod profile;
+pub(crate) mod project;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt;
@@ -72,7 +72,7 @@ impl fmt::Display for ErrorSignal {
 }
 
 /// Displays an optional error as the vectors write it.
-pub fn error_text(error: Option<&ErrorSignal>) -> String {
+pub(crate) fn error_text(error: Option<&ErrorSignal>) -> String {
     error.map_or_else(|| "none".to_string(), ToString::to_string)
 }
 
@@ -110,10 +110,10 @@ impl fmt::Display for Citation {
 pub type Indirect = BTreeMap<String, Device>;
 
 /// No operand given by indirect specification: for requests that are not a vector's.
-pub const DIRECT: &Indirect = &BTreeMap::new();
+pub(crate) const DIRECT: &Indirect = &BTreeMap::new();
 
 /// The words of these pointers: two from each, holding an address in the CPU's own encoding.
-pub fn pointer_words<'a>(pointers: impl IntoIterator<Item = &'a Device>) -> Vec<Device> {
+pub(crate) fn pointer_words<'a>(pointers: impl IntoIterator<Item = &'a Device>) -> Vec<Device> {
     pointers
         .into_iter()
         .flat_map(|p| [Some(p.clone()), p.offset(1)])

@@ -6,16 +6,17 @@
 //! (device ranges, instruction operand lists, variants) is the same as on disk.
 
 use std::collections::BTreeMap;
+use std::fmt;
 use std::sync::Arc;
 
 use super::cross_vendor::CrossVendorSection;
 use super::ErrorSignal;
 use crate::device::{code_matches, Device, DeviceSyntaxError};
 use crate::memory::Unit;
-pub use crate::spec::profile::{
-    CallBasis, DeviceDef, DeviceRange, DeviceRanges, FlagDef, InstructionDef, Manual, Numbering,
-    OperandDef, SignalKind, Variant,
+pub(crate) use crate::spec::profile::{
+    CallBasis, DeviceDef, FlagDef, InstructionDef, Manual, Numbering, SignalKind,
 };
+pub use crate::spec::profile::{DeviceRange, DeviceRanges, Variant};
 
 #[derive(Debug, Clone)]
 pub struct Profile {
@@ -55,23 +56,24 @@ pub struct CallForm {
 impl CallForm {
     /// Reads `ENO:=NAME(EN,a,b,...);` (blanks allowed between the parts). `Err` says what is
     /// wrong with the form.
-    pub fn parse(form: &str, basis: CallBasis, source: &str) -> Result<CallForm, String> {
+    pub fn parse(form: &str, basis: CallBasis, source: &str) -> Result<CallForm, CallFormError> {
         let compact: String = form.chars().filter(|c| !c.is_whitespace()).collect();
-        let shape = "a form is written `ENO:=NAME(EN,s,d);`";
+        let error = |enable_first| CallFormError {
+            form: form.to_string(),
+            enable_first,
+        };
         let call = compact
             .strip_prefix("ENO:=")
             .and_then(|c| c.strip_suffix(");"))
-            .ok_or_else(|| format!("`{form}`: {shape}"))?;
-        let (instruction, arguments) = call
-            .split_once('(')
-            .ok_or_else(|| format!("`{form}`: {shape}"))?;
+            .ok_or_else(|| error(false))?;
+        let (instruction, arguments) = call.split_once('(').ok_or_else(|| error(false))?;
         let mut names = arguments.split(',');
         if names.next() != Some("EN") {
-            return Err(format!("`{form}`: the enable `EN` comes first; {shape}"));
+            return Err(error(true));
         }
         let operands: Vec<String> = names.map(str::to_string).collect();
         if instruction.is_empty() || operands.iter().any(String::is_empty) {
-            return Err(format!("`{form}`: {shape}"));
+            return Err(error(false));
         }
         Ok(CallForm {
             instruction: instruction.to_string(),
@@ -104,6 +106,26 @@ impl CallForm {
         ))
     }
 }
+
+/// A call form that is not `ENO:=NAME(EN,s,d);`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CallFormError {
+    form: String,
+    /// The enable is missing or not first.
+    enable_first: bool,
+}
+
+impl fmt::Display for CallFormError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let shape = "a form is written `ENO:=NAME(EN,s,d);`";
+        match self.enable_first {
+            true => write!(f, "`{}`: the enable `EN` comes first; {shape}", self.form),
+            false => write!(f, "`{}`: {shape}", self.form),
+        }
+    }
+}
+
+impl std::error::Error for CallFormError {}
 
 /// A profile's device codes, looked up by the code a device has: an entry is a code (`D`) or a
 /// pattern with `#` for a block number (`DB#.DBB`, see [`code_matches`]).
@@ -278,7 +300,12 @@ impl Profile {
 
 /// [`Profile::words_exist`] over a profile's device table, for the loader, which checks a
 /// profile before it is one.
-pub fn words_exist(devices: &DeviceTable, variant: &Variant, head: &Device, count: u32) -> bool {
+pub(crate) fn words_exist(
+    devices: &DeviceTable,
+    variant: &Variant,
+    head: &Device,
+    count: u32,
+) -> bool {
     let Some((key, def)) = devices.entry(head.code()) else {
         return false;
     };

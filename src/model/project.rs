@@ -8,13 +8,13 @@ use std::time::Duration;
 use super::Location;
 
 /// The per-case time limit unless configured.
-pub const DEFAULT_TIMEOUT: Duration = Duration::from_secs(5);
+pub(crate) const DEFAULT_TIMEOUT: Duration = Duration::from_secs(5);
 /// The time a backend has to start and answer `hello` unless configured.
-pub const DEFAULT_STARTUP_TIMEOUT: Duration = Duration::from_secs(20);
+pub(crate) const DEFAULT_STARTUP_TIMEOUT: Duration = Duration::from_secs(20);
 /// Cases per `run` message unless configured.
-pub const DEFAULT_BATCH: usize = 256;
+pub(crate) const DEFAULT_BATCH: usize = 256;
 /// Faults in a row after which a backend's remaining trials are not run, unless configured.
-pub const DEFAULT_MAX_CONSECUTIVE_FAULTS: usize = 5;
+pub(crate) const DEFAULT_MAX_CONSECUTIVE_FAULTS: usize = 5;
 
 /// How to start a backend.
 #[derive(Debug, Clone, PartialEq, Eq)]

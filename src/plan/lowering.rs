@@ -9,7 +9,7 @@ use crate::model::{Indirect, Operand};
 use crate::text::{pack_low_first, significant_digits};
 
 /// Text with its 00H terminator, in memory units as `layout` stores it.
-pub fn text_units(layout: TextLayout, text: &[u8]) -> Vec<u16> {
+pub(crate) fn text_units(layout: TextLayout, text: &[u8]) -> Vec<u16> {
     let mut chars = text.to_vec();
     chars.push(0);
     match layout {
@@ -23,7 +23,7 @@ pub fn text_units(layout: TextLayout, text: &[u8]) -> Vec<u16> {
 }
 
 /// A value spread over `count` units of memory, in `order`.
-pub fn value_units(value: u64, unit: Unit, order: ValueOrder, count: u32) -> Vec<u16> {
+pub(crate) fn value_units(value: u64, unit: Unit, order: ValueOrder, count: u32) -> Vec<u16> {
     let bits = unit.bits();
     let part = |i: u32| (value.checked_shr(bits * i).unwrap_or(0) & u64::from(unit.max())) as u16;
     match order {
@@ -33,7 +33,7 @@ pub fn value_units(value: u64, unit: Unit, order: ValueOrder, count: u32) -> Vec
 }
 
 /// The value `units` hold, read in `order`.
-pub fn units_value(units: impl Iterator<Item = u16>, unit: Unit, order: ValueOrder) -> u64 {
+pub(crate) fn units_value(units: impl Iterator<Item = u16>, unit: Unit, order: ValueOrder) -> u64 {
     let bits = unit.bits();
     match order {
         ValueOrder::LowFirst => units
@@ -47,7 +47,7 @@ pub fn units_value(units: impl Iterator<Item = u16>, unit: Unit, order: ValueOrd
 /// `min_units` units. Low first, as many units as the value needs or the digits read, the upper
 /// ones zero, so that an instruction reading past the value reads zeros, not the fill; high
 /// first, the units the digits read, ending with the least significant.
-pub fn value_memory(
+pub(crate) fn value_memory(
     value: u64,
     digits: u32,
     min_units: u32,
@@ -64,7 +64,7 @@ pub fn value_memory(
 }
 
 /// How many units hold a value of `digits` hex digits, and at least the `needed` ones.
-pub fn units_for(digits: u32, needed: u32, unit: Unit) -> u32 {
+pub(crate) fn units_for(digits: u32, needed: u32, unit: Unit) -> u32 {
     digits
         .div_ceil(unit.digits())
         .max(needed)
@@ -72,7 +72,7 @@ pub fn units_for(digits: u32, needed: u32, unit: Unit) -> u32 {
 }
 
 /// The input that runs `case` through `lowering`.
-pub fn input(lowering: &Lowering, case: &CrossVendorCase) -> Input {
+pub(crate) fn input(lowering: &Lowering, case: &CrossVendorCase) -> Input {
     let mut operands = lowering.operands.clone();
     let mut count_word = None;
     if let Some(count) = &lowering.count {

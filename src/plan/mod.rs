@@ -8,9 +8,9 @@
 //! not claim is skipped with the reason, and a trial whose outcome cannot fail (an `unspecified`
 //! case, a listed known difference) is marked so that a test runner can count it as ignored.
 
-pub mod lowering;
+pub(crate) mod lowering;
 
-pub use lowering::input as lowered_input;
+pub(crate) use lowering::input as lowered_input;
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -174,7 +174,7 @@ impl Trial {
 /// cross-vendor ones. A native case runs on a backend when the backend implements one of the
 /// case's profiles, on every variant the case allows and as every instruction of its file; a
 /// cross-vendor case runs through every lowering of its operation in the backend's profile.
-pub fn plan(
+pub(crate) fn plan(
     corpus: &Corpus,
     profiles: &Profiles,
     backends: &[Arc<dyn Backend>],
@@ -308,7 +308,7 @@ fn trial(
 /// Why a backend does not run an instruction input on a variant: it does not claim the
 /// instruction there, or declines the setting (a flag value, an operand form). The rule every
 /// planner asks: the corpus plan, the sweep's columns and its direct path.
-pub fn declined(
+pub(crate) fn declined(
     backend: &dyn Backend,
     profile: &Profile,
     variant: &str,
@@ -331,7 +331,7 @@ pub fn declined(
 }
 
 /// Why a backend does not answer a cross-vendor case at the codec level.
-pub fn codec_declined(backend: &dyn Backend, case: &CrossVendorCase) -> Option<String> {
+pub(crate) fn codec_declined(backend: &dyn Backend, case: &CrossVendorCase) -> Option<String> {
     match backend.codec() {
         Some(abilities) => abilities
             .declines(case)
@@ -343,7 +343,7 @@ pub fn codec_declined(backend: &dyn Backend, case: &CrossVendorCase) -> Option<S
 /// Why a backend will not run a trial, if it will not: it does not claim the instruction on the
 /// variant, declines the setting (a flag value, an operand form), or does not check device
 /// ranges and the trial expects a device-range error.
-pub fn skip_reason(t: &Trial, backend: &dyn Backend) -> Option<String> {
+pub(crate) fn skip_reason(t: &Trial, backend: &dyn Backend) -> Option<String> {
     if let Check::Codec { case } = &t.check {
         return codec_declined(backend, case);
     }

@@ -16,7 +16,7 @@ use super::record::{Behaviour, Record};
 
 /// The part of a JSON report a baseline needs.
 #[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct SavedRun {
+pub(crate) struct SavedRun {
     pub format: String,
     pub version: u32,
     pub records: Vec<Record>,
@@ -24,9 +24,11 @@ pub struct SavedRun {
 
 /// Why a saved run could not be read.
 #[derive(Debug)]
-pub struct BaselineError {
+pub(crate) struct BaselineError {
     pub path: String,
     pub message: String,
+    /// The read or parse error underneath, when there is one.
+    pub source: Option<Box<dyn std::error::Error + Send + Sync>>,
 }
 
 impl fmt::Display for BaselineError {
@@ -35,25 +37,31 @@ impl fmt::Display for BaselineError {
     }
 }
 
-impl std::error::Error for BaselineError {}
+impl std::error::Error for BaselineError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        self.source.as_deref().map(|e| e as _)
+    }
+}
 
-pub fn load(path: &Path) -> Result<SavedRun, BaselineError> {
+pub(crate) fn load(path: &Path) -> Result<SavedRun, BaselineError> {
     let error = |message: String| BaselineError {
         path: path.display().to_string(),
         message,
+        source: None,
+    };
+    let caused = |message: &str, e: Box<dyn std::error::Error + Send + Sync>| BaselineError {
+        source: Some(e),
+        ..error(message.to_string())
     };
     // A FIFO or a device given as a baseline is refused rather than read (it could block or
     // never end).
-    let bytes = crate::load::read_regular(path).map_err(|e| error(e.to_string()))?;
-    let text = String::from_utf8(bytes).map_err(|e| error(format!("not a saved run: {e}")))?;
+    let bytes = crate::load::read_regular(path).map_err(|e| caused("cannot be read", e.into()))?;
+    let text = String::from_utf8(bytes).map_err(|e| caused("not a saved run", e.into()))?;
     // The format and version are read first, so that a run saved by another version is told
     // apart from a damaged file.
     let head: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
-        error(format!(
-            "not a saved run (line {}, column {}): {e}",
-            e.line(),
-            e.column()
-        ))
+        let at = format!("not a saved run (line {}, column {})", e.line(), e.column());
+        caused(&at, e.into())
     })?;
     let format = head.get("format").and_then(|f| f.as_str()).unwrap_or("");
     let version = head.get("version").and_then(|v| v.as_u64()).unwrap_or(0);
@@ -64,13 +72,13 @@ pub fn load(path: &Path) -> Result<SavedRun, BaselineError> {
         )));
     }
     let run: SavedRun =
-        serde_json::from_value(head).map_err(|e| error(format!("not a saved run: {e}")))?;
+        serde_json::from_value(head).map_err(|e| caused("not a saved run", e.into()))?;
     Ok(run)
 }
 
 /// What changed between two runs.
 #[derive(Debug, Default, Serialize)]
-pub struct Changes<'a> {
+pub(crate) struct Changes<'a> {
     /// Failing now, and passing (or absent) before.
     pub new: Vec<&'a Record>,
     /// Failing before, passing now.
@@ -93,7 +101,7 @@ fn same(a: &Record, b: &Record) -> bool {
     a.status == b.status && a.behaviour == b.behaviour && a.shown == b.shown && a.detail == b.detail
 }
 
-pub fn compare<'a>(before: &'a [Record], now: &'a [Record]) -> Changes<'a> {
+pub(crate) fn compare<'a>(before: &'a [Record], now: &'a [Record]) -> Changes<'a> {
     let old: BTreeMap<&str, &Record> = before.iter().map(|r| (r.trial.as_str(), r)).collect();
     let mut changes = Changes::default();
     for r in now {

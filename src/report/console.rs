@@ -15,21 +15,21 @@ fn line(text: &str) {
 }
 
 /// `note: ...`: something the user may want to know; the command goes on.
-pub fn note(text: &str) {
+pub(crate) fn note(text: &str) {
     line(&format!("note: {text}"));
 }
 
 /// `warning: ...`: something is not as it should be; the command goes on.
-pub fn warning(text: &str) {
+pub(crate) fn warning(text: &str) {
     line(&format!("warning: {text}"));
 }
 
 /// A status line as it is (`wrote 3 vector(s) to x.yaml`, a baseline comparison).
-pub fn status(text: &str) {
+pub(crate) fn status(text: &str) {
     line(text);
 }
 
 /// The error that ended a command, already rendered (`error: ...` lines).
-pub fn error(rendered: &str) {
+pub(crate) fn error(rendered: &str) {
     line(rendered);
 }

@@ -8,7 +8,7 @@ use super::{Event, Reporter, Summary};
 
 /// The document formats.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Format {
+pub(crate) enum Format {
     /// Grouped matrices as text.
     Matrix,
     /// The versioned JSON document (also a saved run for `--baseline`).
@@ -21,7 +21,7 @@ pub enum Format {
 
 /// Collects records as trials finish.
 #[derive(Default)]
-pub struct Collector {
+pub(crate) struct Collector {
     records: Vec<(usize, Record)>,
     summary: Summary,
     interrupted: bool,
@@ -29,7 +29,7 @@ pub struct Collector {
 
 impl Collector {
     /// The records in plan order, the counts, and whether the run was interrupted.
-    pub fn finish(mut self) -> (Vec<Record>, Summary, bool) {
+    pub(crate) fn finish(mut self) -> (Vec<Record>, Summary, bool) {
         self.records.sort_by_key(|(i, _)| *i);
         (
             self.records.into_iter().map(|(_, r)| r).collect(),
@@ -71,7 +71,7 @@ impl Reporter for Collector {
 
 /// Renders records in a document format; `coloured` and `width` (columns of text) apply to the
 /// matrix text only.
-pub fn render(
+pub(crate) fn render(
     format: Format,
     records: &[Record],
     summary: &Summary,

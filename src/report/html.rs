@@ -25,7 +25,7 @@ tr.differs td{background:#fce8e6}";
 
 /// Text as markup: special characters as entities, and characters XML forbids or a terminal
 /// would act on shown as escapes.
-pub fn escape(text: &str) -> String {
+pub(crate) fn escape(text: &str) -> String {
     let mut out = String::with_capacity(text.len());
     for c in text.chars() {
         match c {
@@ -68,7 +68,7 @@ fn class_of(status: Status) -> &'static str {
     }
 }
 
-pub fn render(sections: &[Section<'_>], records: &[Record], run: &RunInfo) -> String {
+pub(crate) fn render(sections: &[Section<'_>], records: &[Record], run: &RunInfo) -> String {
     let failing = records.iter().filter(|r| r.status.is_failure()).count();
     let mut out = String::new();
     out.push_str(&head("plc-conformance report"));
@@ -226,7 +226,7 @@ pub fn render(sections: &[Section<'_>], records: &[Record], run: &RunInfo) -> St
 
 /// The start of a report page, up to its heading: every page of the tool (a run's report, a
 /// sweep's) has the same look and is well-formed XHTML with no scripts and no network access.
-pub fn head(title: &str) -> String {
+pub(crate) fn head(title: &str) -> String {
     format!(
         "<!DOCTYPE html>\n<html xmlns=\"http://www.w3.org/1999/xhtml\" lang=\"en\">\n<head>\n\
          <meta charset=\"utf-8\" />\n<title>{t}</title>\n<style>{STYLE}</style>\n</head>\n\
@@ -236,7 +236,7 @@ pub fn head(title: &str) -> String {
 }
 
 /// The end of a report page.
-pub const FOOT: &str = "</body>\n</html>\n";
+pub(crate) const FOOT: &str = "</body>\n</html>\n";
 
 /// The failing records with their index, which anchors their explanation in the page.
 fn failures(records: &[Record]) -> impl Iterator<Item = (usize, &Record)> {

@@ -12,12 +12,12 @@ use super::matrix::Section;
 use super::record::Record;
 use super::Summary;
 
-pub const FORMAT: &str = "plc-conformance-results";
-pub const VERSION: u32 = 2;
+pub(crate) const FORMAT: &str = "plc-conformance-results";
+pub(crate) const VERSION: u32 = 2;
 
 /// What ran: shown in reports so a saved result says where it came from.
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
-pub struct RunInfo {
+pub(crate) struct RunInfo {
     /// `plc-conformance 0.1.0`.
     pub tool: String,
     /// The project's git commit (`git describe --always --dirty`) when it is in a repository.
@@ -37,7 +37,7 @@ pub struct RunInfo {
 }
 
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
-pub struct BackendInfo {
+pub(crate) struct BackendInfo {
     pub name: String,
     pub description: String,
     /// What the backend is and its version, when it says (`pymcprotocol 0.3.0`).
@@ -55,7 +55,7 @@ struct Document<'a> {
     sections: &'a [Section<'a>],
 }
 
-pub fn render(
+pub(crate) fn render(
     records: &[Record],
     sections: &[Section<'_>],
     summary: &Summary,

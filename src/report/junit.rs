@@ -48,7 +48,7 @@ type Named<'a> = (&'a Record, String, String);
 
 /// `meta.seconds`, the run's wall time, is the report's time: the trials' own times are their
 /// batches' shares, and the built-in models answer in microseconds.
-pub fn render(records: &[Record], meta: &super::json::RunInfo) -> String {
+pub(crate) fn render(records: &[Record], meta: &super::json::RunInfo) -> String {
     // Suites keep the order in which their backends first appear.
     let mut suites: Vec<(String, Vec<Named<'_>>)> = Vec::new();
     for r in records {

@@ -11,7 +11,7 @@ use crate::judge::Status;
 
 /// Rows that behave alike: one representative, and how many rows share its behaviour.
 #[derive(Debug, Clone, Serialize)]
-pub struct Group<'a> {
+pub(crate) struct Group<'a> {
     /// The behaviour in each column (`None` where the row has no cell).
     pub behaviour: Vec<Option<&'a Behaviour>>,
     /// The status in each column: rows that behave alike but of which one fails and another
@@ -25,7 +25,7 @@ pub struct Group<'a> {
 
 /// One matrix.
 #[derive(Debug, Clone, Serialize)]
-pub struct Section<'a> {
+pub(crate) struct Section<'a> {
     pub name: &'a str,
     pub columns: Vec<&'a str>,
     pub groups: Vec<Group<'a>>,
@@ -34,7 +34,7 @@ pub struct Section<'a> {
 
 /// Arranges records into matrices, grouping rows by identical behaviour. Sections, columns and
 /// groups keep the order in which they first appear.
-pub fn sections(records: &[Record]) -> Vec<Section<'_>> {
+pub(crate) fn sections(records: &[Record]) -> Vec<Section<'_>> {
     let mut names: Vec<&str> = Vec::new();
     for r in records {
         if !names.contains(&r.section.as_str()) {

@@ -19,7 +19,7 @@ use crate::judge::{Status, Verdict};
 const LISTED_ROWS: usize = 4;
 
 /// The width used when none is known (output to a pipe or a file, `COLUMNS` unset).
-pub const DEFAULT_WIDTH: usize = 100;
+pub(crate) const DEFAULT_WIDTH: usize = 100;
 
 /// What a skipped cell shows.
 const SKIPPED: &str = "-";
@@ -28,7 +28,7 @@ const KNOWN: &str = "*";
 /// What a cell shows where the row has no trial in that column.
 const ABSENT: &str = "n/a";
 
-pub fn render(sections: &[Section<'_>], coloured: bool, width: usize) -> String {
+pub(crate) fn render(sections: &[Section<'_>], coloured: bool, width: usize) -> String {
     let mut out = String::new();
     for section in sections {
         render_section(&mut out, section, coloured, width);

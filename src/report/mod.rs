@@ -5,19 +5,19 @@
 //! document for tools, JUnit XML for CI dashboards, an HTML page or a matrix. Reporters do all
 //! the printing; nothing before this stage writes to the terminal.
 
-pub mod baseline;
-pub mod console;
-pub mod document;
-pub mod html;
-pub mod json;
-pub mod junit;
-pub mod matrix;
-pub mod matrix_text;
-pub mod progress;
-pub mod record;
-pub mod sanitize;
-pub mod text;
-pub mod text_reporter;
+pub(crate) mod baseline;
+pub(crate) mod console;
+pub(crate) mod document;
+pub(crate) mod html;
+pub(crate) mod json;
+pub(crate) mod junit;
+pub(crate) mod matrix;
+pub(crate) mod matrix_text;
+pub(crate) mod progress;
+pub(crate) mod record;
+pub(crate) mod sanitize;
+pub(crate) mod text;
+pub(crate) mod text_reporter;
 
 use std::time::Duration;
 
@@ -58,19 +58,8 @@ pub trait Reporter {
     fn event(&mut self, event: &Event<'_>) -> std::io::Result<()>;
 }
 
-/// Two reporters fed the same events (for example the text report and the collector of a
-/// saved run).
-pub struct Tee<'a>(pub &'a mut dyn Reporter, pub &'a mut dyn Reporter);
-
-impl Reporter for Tee<'_> {
-    fn event(&mut self, event: &Event<'_>) -> std::io::Result<()> {
-        self.0.event(event)?;
-        self.1.event(event)
-    }
-}
-
 /// Any number of reporters fed the same events, in order.
-pub struct All<'a>(pub Vec<&'a mut dyn Reporter>);
+pub(crate) struct All<'a>(pub Vec<&'a mut dyn Reporter>);
 
 impl Reporter for All<'_> {
     fn event(&mut self, event: &Event<'_>) -> std::io::Result<()> {

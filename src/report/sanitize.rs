@@ -9,14 +9,14 @@ use std::fmt::Write;
 
 /// For a terminal or a log: every control character but newline and tab — ESC and the other
 /// C0 controls, DEL, the C1 controls (CSI among them) — as a visible escape.
-pub fn terminal(text: &str) -> Cow<'_, str> {
+pub(crate) fn terminal(text: &str) -> Cow<'_, str> {
     replace(text, unsafe_on_a_terminal)
 }
 
 /// For XML 1.0 text and attribute values: the characters XML forbids (C0 controls but tab,
 /// newline and carriage return; U+FFFE and U+FFFF) and those a terminal must not see either, as
 /// visible escapes. Markup characters are left to the XML writer.
-pub fn xml(text: &str) -> Cow<'_, str> {
+pub(crate) fn xml(text: &str) -> Cow<'_, str> {
     replace(text, |c| unsafe_on_a_terminal(c) || forbidden_in_xml(c))
 }
 
@@ -30,7 +30,7 @@ fn unsafe_on_a_terminal(c: char) -> bool {
 }
 
 /// The visible escape of a character: `\xNN` up to FFH, `\u{NNNN}` above.
-pub fn escaped(c: char) -> String {
+pub(crate) fn escaped(c: char) -> String {
     let code = u32::from(c);
     if code <= 0xFF {
         format!("\\x{code:02X}")

@@ -40,7 +40,7 @@ impl Palette {
 
 /// A unit as a report line shows it: device, hex value, and its bytes as characters in memory
 /// order (a word's low byte first).
-pub fn word_line(device: &impl std::fmt::Display, value: u16, unit: Unit) -> String {
+pub(crate) fn word_line(device: &impl std::fmt::Display, value: u16, unit: Unit) -> String {
     let [lo, hi] = value.to_le_bytes();
     let chars = match unit {
         Unit::Byte => show_byte(lo),
@@ -326,7 +326,7 @@ fn render_mismatch(m: &Mismatch, palette: Palette) -> String {
 }
 
 /// A unified diff of expected against actual words, one word per line.
-pub fn memory_diff(rows: &[WordRow], palette: Palette) -> String {
+pub(crate) fn memory_diff(rows: &[WordRow], palette: Palette) -> String {
     let expected: String = rows
         .iter()
         .map(|r| word_line(&r.device, r.expected, r.unit) + "\n")
@@ -353,7 +353,7 @@ pub fn memory_diff(rows: &[WordRow], palette: Palette) -> String {
 }
 
 /// One line for a case in `list`.
-pub fn case_line(case: &Case) -> String {
+pub(crate) fn case_line(case: &Case) -> String {
     format!(
         "{:<44} {:<11} {}  [{}]",
         case.id,
@@ -366,7 +366,7 @@ pub fn case_line(case: &Case) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::judge::RegisterRow;
+    use crate::judge::words::RegisterRow;
     use crate::memory::Fill;
     use crate::model::ErrorSignal;
 

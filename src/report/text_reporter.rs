@@ -16,7 +16,7 @@ struct KnownGroup {
     trials: Vec<(usize, String)>,
 }
 
-pub struct TextReporter<W: Write> {
+pub(crate) struct TextReporter<W: Write> {
     out: W,
     palette: Palette,
     show_recorded: bool,
@@ -31,7 +31,7 @@ pub struct TextReporter<W: Write> {
 }
 
 impl<W: Write> TextReporter<W> {
-    pub fn new(out: W, palette: Palette, show_recorded: bool) -> Self {
+    pub(crate) fn new(out: W, palette: Palette, show_recorded: bool) -> Self {
         TextReporter {
             out,
             palette,
@@ -46,13 +46,13 @@ impl<W: Write> TextReporter<W> {
     }
 
     /// The writer, for a caller that must finish it (a staged file put in place).
-    pub fn into_inner(self) -> W {
+    pub(crate) fn into_inner(self) -> W {
         self.out
     }
 
     /// Prints only failures and the closing counts (no known differences, skips or
     /// per-backend counts).
-    pub fn quiet(mut self, quiet: bool) -> Self {
+    pub(crate) fn quiet(mut self, quiet: bool) -> Self {
         self.quiet = quiet;
         self
     }

@@ -84,7 +84,7 @@ pub enum ValueOrder {
 /// A profile's `cross_vendor` section: how its instructions answer the cross-vendor operations.
 #[derive(Debug, Clone, Default, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct CrossVendorSectionSpec {
+pub(crate) struct CrossVendorSectionSpec {
     /// How the profile's error signals read as cross-vendor classes, e.g. `3401H: invalid-digit`
     /// for a code, `M8004: error` for a flag.
     #[serde(default)]
@@ -101,7 +101,7 @@ pub struct CrossVendorSectionSpec {
 /// One way of answering a cross-vendor operation with one of the profile's instructions.
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct LoweringSpec {
+pub(crate) struct LoweringSpec {
     /// The column name, unique within the profile, e.g. `habin-fixed`. Cross-vendor cases refer
     /// to it as `<profile short>/<name>` (`iqr/habin-fixed`).
     pub name: String,
@@ -142,7 +142,10 @@ pub struct LoweringSpec {
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 #[schemars(title = "plc-conformance cross-vendor vector file")]
-pub struct CrossVendorFileSpec {
+// Some fields are there for the file's readers and its schema (descriptions, evidence,
+// provenance); the run reads none of them, and the loader still refuses a file without them.
+#[allow(dead_code)]
+pub(crate) struct CrossVendorFileSpec {
     pub operation: Operation,
     /// Where the cases' expectations come from, in words (they span several manuals).
     pub source: String,
@@ -157,7 +160,7 @@ pub struct CrossVendorFileSpec {
 
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct CrossVendorCaseSpec {
+pub(crate) struct CrossVendorCaseSpec {
     /// Unique in the whole corpus.
     pub id: String,
     pub basis: Basis,
@@ -184,7 +187,7 @@ pub struct CrossVendorCaseSpec {
 /// One of `value`, `text` or `error`.
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct CrossVendorExpectSpec {
+pub(crate) struct CrossVendorExpectSpec {
     #[serde(default)]
     pub value: Option<ScalarSpec>,
     #[serde(default)]
@@ -196,7 +199,7 @@ pub struct CrossVendorExpectSpec {
 /// A lowering's own answer, and why it differs.
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct CrossVendorExceptSpec {
+pub(crate) struct CrossVendorExceptSpec {
     #[serde(default)]
     pub value: Option<ScalarSpec>,
     #[serde(default)]

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 /// A known-differences file as written.
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct KnownFileSpec {
+pub(crate) struct KnownFileSpec {
     pub differences: Vec<EntrySpec>,
 }
 
@@ -14,7 +14,7 @@ pub struct KnownFileSpec {
 /// (`cause`, `kind`, and the cases it covers by id pattern and/or by the class of their input).
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct EntrySpec {
+pub(crate) struct EntrySpec {
     /// A case id of the corpus (a cross-vendor case id too).
     #[serde(default)]
     pub case: Option<String>,

@@ -6,14 +6,15 @@
 //! for editors are generated from these types by one function, so schema and loader cannot
 //! drift.
 
-pub mod cross_vendor;
-pub mod known;
-pub mod open_questions;
-pub mod profile;
-pub mod project;
-pub mod vectors;
+pub(crate) mod cross_vendor;
+pub(crate) mod known;
+pub(crate) mod open_questions;
+pub(crate) mod profile;
+pub(crate) mod project;
+pub(crate) mod vectors;
 
-pub use vectors::{Basis, ScalarSpec};
+pub use vectors::Basis;
+pub(crate) use vectors::ScalarSpec;
 
 /// The on-disk formats that have a JSON Schema.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -46,7 +47,7 @@ pub fn schema(kind: SchemaKind) -> serde_json::Value {
 
 /// The JSON Schema (draft-07) of any type: the one helper every schema comes from (the
 /// external-backend protocol's too).
-pub fn schema_of<T: schemars::JsonSchema>() -> serde_json::Value {
+pub(crate) fn schema_of<T: schemars::JsonSchema>() -> serde_json::Value {
     let generator = schemars::generate::SchemaSettings::draft07().into_generator();
     serde_json::to_value(generator.into_root_schema_for::<T>()).unwrap_or_default()
 }

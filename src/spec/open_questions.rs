@@ -10,13 +10,16 @@ use serde::Deserialize;
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 #[schemars(title = "plc-conformance open questions")]
-pub struct OpenQuestionsSpec {
+pub(crate) struct OpenQuestionsSpec {
     pub questions: Vec<QuestionSpec>,
 }
 
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct QuestionSpec {
+// Some fields are there for the file's readers and its schema (descriptions, evidence,
+// provenance); the run reads none of them, and the loader still refuses a file without them.
+#[allow(dead_code)]
+pub(crate) struct QuestionSpec {
     /// Stable id: lowercase letters, digits and `-`.
     #[schemars(regex(pattern = r"^[a-z0-9]+(-[a-z0-9]+)*$"))]
     pub id: String,
@@ -49,7 +52,10 @@ pub struct QuestionSpec {
 
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct ReadingSpec {
+// Some fields are there for the file's readers and its schema (descriptions, evidence,
+// provenance); the run reads none of them, and the loader still refuses a file without them.
+#[allow(dead_code)]
+pub(crate) struct ReadingSpec {
     #[schemars(regex(pattern = r"^[a-z0-9]+(-[a-z0-9]+)*$"))]
     pub id: String,
     pub text: String,
@@ -61,7 +67,7 @@ pub struct ReadingSpec {
 /// single outcome (`an error other than 3401H`).
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct DecidesSpec {
+pub(crate) struct DecidesSpec {
     /// One of the question's probes.
     pub probe: String,
     /// By reading id: every reading, each outcome different.
@@ -71,7 +77,10 @@ pub struct DecidesSpec {
 /// One CPU's answer to a question.
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct ObservationSpec {
+// Some fields are there for the file's readers and its schema (descriptions, evidence,
+// provenance); the run reads none of them, and the loader still refuses a file without them.
+#[allow(dead_code)]
+pub(crate) struct ObservationSpec {
     /// The reading the CPU's outcome matched.
     pub reading: String,
     pub variant: String,

@@ -16,7 +16,7 @@ use super::cross_vendor::CrossVendorSectionSpec;
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 #[schemars(title = "plc-conformance vendor profile")]
-pub struct ProfileSpec {
+pub(crate) struct ProfileSpec {
     /// The id vectors name in `profiles:`, e.g. `mitsubishi-iqr`.
     pub id: String,
     /// The vendor's name for the family.
@@ -59,7 +59,7 @@ pub struct ProfileSpec {
 /// One instruction's structured-text call and the evidence for its operand order.
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct CallFormSpec {
+pub(crate) struct CallFormSpec {
     /// The call as the manual prints it, e.g. `ENO:=ASCI(EN,s,n,d);`: `ENO:=`, the
     /// instruction, `EN` first, then the operands by the names the instruction's operands have.
     pub form: String,
@@ -97,7 +97,7 @@ pub struct Manual {
 /// How an operation error becomes visible to a program.
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct ErrorSignallingSpec {
+pub(crate) struct ErrorSignallingSpec {
     /// Whether a program sees an error code or only a flag.
     pub signal: SignalKind,
     /// The flag an error turns on (MELSEC SM0, IDEC M8004); required when `signal: flag`.

@@ -8,7 +8,7 @@ use serde::Deserialize;
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 #[schemars(title = "plc-conformance project file")]
-pub struct ProjectFileSpec {
+pub(crate) struct ProjectFileSpec {
     /// External backends, run as extra trials.
     #[serde(default)]
     pub backends: Vec<BackendSpec>,
@@ -16,7 +16,7 @@ pub struct ProjectFileSpec {
 
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct BackendSpec {
+pub(crate) struct BackendSpec {
     /// The name in trial names: lowercase letters, digits, `-` and `_`.
     pub name: String,
     /// A command line run by `sh -c`, or a list of program and arguments run directly.
@@ -59,7 +59,7 @@ pub struct BackendSpec {
 
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(untagged)]
-pub enum CommandSpec {
+pub(crate) enum CommandSpec {
     Shell(String),
     Exec(Vec<String>),
 }

@@ -16,7 +16,10 @@ use serde::Deserialize;
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 #[schemars(title = "plc-conformance vector file")]
-pub struct VectorFileSpec {
+// Some fields are there for the file's readers and its schema (descriptions, evidence,
+// provenance); the run reads none of them, and the loader still refuses a file without them.
+#[allow(dead_code)]
+pub(crate) struct VectorFileSpec {
     /// The instructions every case runs as, e.g. `[HABIN, HABINP]`: the pulse form of an
     /// instruction converts the same way, so it shares the vectors.
     pub instructions: Vec<String>,
@@ -33,7 +36,7 @@ pub struct VectorFileSpec {
 /// A manual page (or page range) from the profile's list of manuals.
 #[derive(Debug, Clone, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct SourceSpec {
+pub(crate) struct SourceSpec {
     /// A manual id from the profile's `manuals`.
     pub manual: String,
     /// The page, e.g. `478` or `"654-658"`.
@@ -42,7 +45,7 @@ pub struct SourceSpec {
 
 #[derive(Debug, Clone, Deserialize, JsonSchema)]
 #[serde(untagged)]
-pub enum PageSpec {
+pub(crate) enum PageSpec {
     Number(u32),
     Text(String),
 }
@@ -85,7 +88,7 @@ impl fmt::Display for Basis {
 /// One test vector.
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct CaseSpec {
+pub(crate) struct CaseSpec {
     /// Stable id, unique in the whole corpus: lowercase letters, digits and `-`.
     pub id: String,
     pub basis: Basis,
@@ -133,7 +136,10 @@ pub struct CaseSpec {
 /// an adapter, an emulator), when, and on which model or firmware.
 #[derive(Debug, Clone, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct ProvenanceSpec {
+// Some fields are there for the file's readers and its schema (descriptions, evidence,
+// provenance); the run reads none of them, and the loader still refuses a file without them.
+#[allow(dead_code)]
+pub(crate) struct ProvenanceSpec {
     /// The backend's name, as `plc-conformance list` shows it.
     pub backend: String,
     /// What the backend says of itself, with its version.
@@ -152,7 +158,7 @@ pub struct ProvenanceSpec {
 /// The expected outcome: the words that change and the error signalled.
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct ExpectSpec {
+pub(crate) struct ExpectSpec {
     /// The words that change, by device, with their new values. Any other change is a
     /// difference.
     #[serde(default)]
@@ -179,7 +185,7 @@ fn given_error<'de, D: Deserializer<'de>>(d: D) -> Result<Option<ScalarSpec>, D:
 /// A flag setting: `on`/`off`, `true`/`false` or `1`/`0`.
 #[derive(Debug, Clone, Deserialize, JsonSchema)]
 #[serde(untagged)]
-pub enum FlagSpec {
+pub(crate) enum FlagSpec {
     Bool(bool),
     Number(i64),
     Text(String),
@@ -187,7 +193,7 @@ pub enum FlagSpec {
 
 /// A scalar: a number as the manuals write it, or a name.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum ScalarSpec {
+pub(crate) enum ScalarSpec {
     Number(i64),
     Text(String),
 }
@@ -203,7 +209,7 @@ impl fmt::Display for ScalarSpec {
 
 /// Memory contents starting at a device: one word, consecutive words, or ASCII text.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum ValueSpec {
+pub(crate) enum ValueSpec {
     Word(ScalarSpec),
     Words(Vec<ScalarSpec>),
     /// Two characters per word, first character in the low byte (MELSEC string storage). An odd
@@ -327,7 +333,7 @@ mod schema_shapes {
     #[derive(JsonSchema)]
     #[serde(untagged)]
     #[allow(dead_code)]
-    pub enum Scalar {
+    pub(super) enum Scalar {
         Number(i64),
         Text(
             #[schemars(regex(
@@ -341,7 +347,7 @@ mod schema_shapes {
     #[derive(JsonSchema)]
     #[serde(deny_unknown_fields)]
     #[allow(dead_code)]
-    pub struct Ascii {
+    pub(super) struct Ascii {
         ascii: String,
     }
 
@@ -349,7 +355,7 @@ mod schema_shapes {
     #[derive(JsonSchema)]
     #[serde(deny_unknown_fields)]
     #[allow(dead_code)]
-    pub struct AsciiWords {
+    pub(super) struct AsciiWords {
         ascii_words: String,
     }
 
@@ -357,7 +363,7 @@ mod schema_shapes {
     #[derive(JsonSchema)]
     #[serde(untagged)]
     #[allow(dead_code)]
-    pub enum Value {
+    pub(super) enum Value {
         Word(super::ScalarSpec),
         Words(Vec<super::ScalarSpec>),
         Ascii(Ascii),

@@ -34,7 +34,7 @@ use crate::text::digit_value;
 
 /// The bytes the other three places take while a class is split: a digit at each end of the
 /// digit range, the terminator 00H, a letter that is not a digit, lowercase, a blank.
-pub const CONTEXT: [u8; 6] = [b'0', b'F', 0x00, b'G', b'a', b' '];
+pub(crate) const CONTEXT: [u8; 6] = [b'0', b'F', 0x00, b'G', b'a', b' '];
 
 /// Text numbers for the splitting and checking texts, apart from the generator's.
 const PROBE_BASE: u64 = 1 << 62;
@@ -257,7 +257,7 @@ pub fn derive(sweep: &Sweep, stop: &AtomicBool) -> Option<(ByteClasses, u64)> {
 }
 
 /// A digest of one text's replies, to compare a checked text with its representative.
-pub fn digest(replies: &[Reply]) -> u64 {
+pub(crate) fn digest(replies: &[Reply]) -> u64 {
     let mut h = DefaultHasher::new();
     replies.hash(&mut h);
     h.finish()
@@ -266,7 +266,7 @@ pub fn digest(replies: &[Reply]) -> u64 {
 /// Step 3: `count` random texts of the tuples in this shard, each with a random setting (drawn
 /// from the seed), asked as they are and compared with the digest of their representative's
 /// replies (`digests`, by point of the space, for the points swept). Returns how many were checked and the first that differed.
-pub fn check(
+pub(crate) fn check(
     sweep: &Sweep,
     classes: &ByteClasses,
     digests: &std::collections::HashMap<u64, u64>,

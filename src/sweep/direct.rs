@@ -14,10 +14,10 @@ use crate::memory::{Fill, Image, Unit};
 use crate::plan::{declined, lowered_input, Input};
 
 /// The memory of one input under both fills.
-pub struct Images([Image; 2]);
+pub(crate) struct Images([Image; 2]);
 
 impl Images {
-    pub fn of(input: &Input, unit: Unit) -> Images {
+    pub(crate) fn of(input: &Input, unit: Unit) -> Images {
         Images::from_words(input.before.clone(), unit)
     }
 
@@ -34,7 +34,11 @@ impl Images {
 
 /// One column's reply to one input. `native` is the instruction input and its images for an
 /// instruction sweep; a lowering makes its own.
-pub fn reply(column: &Column, cases: &Cases, native: Option<&(Input, Images)>) -> Option<Reply> {
+pub(crate) fn reply(
+    column: &Column,
+    cases: &Cases,
+    native: Option<&(Input, Images)>,
+) -> Option<Reply> {
     let profile = column.profile.as_ref()?;
     let variant = profile.variant(&column.variant)?;
     let lowered;

@@ -10,14 +10,14 @@
 //!
 //! The results are exactly those of asking every text through the models, and are checked to be:
 //!
-//! 1. The texts are tallied by tuple of byte classes ([`super::classes`], found as for the sweep
+//! 1. The texts are tallied by tuple of byte classes (`super::classes`, found as for the sweep
 //!    by class). Each text's answers under the rules are compared with those of its tuple's
 //!    representative; a text that answers alike is counted with its tuple (with the lowest
 //!    number of such a text in the space, its first), and one that does not is kept apart and
 //!    asked through the models on its own. So the classes need not hold for the counts to be
 //!    exact: they only make the tally small.
 //! 2. The first text of every tuple, and every text kept apart, is then asked through the models
-//!    (the direct path, [`super::direct`]) and grouped as any sweep groups, with its tuple's
+//!    (the direct path, `super::direct`) and grouped as any sweep groups, with its tuple's
 //!    count as its weight. Each of those texts' replies must be what the rules said; one that is
 //!    not stops the sweep with the text ([`Report::disagreement`]), the counts not trusted.
 //! 3. `tests/sweep.rs` proves the rules equal to the models on many random texts, on every
@@ -200,7 +200,7 @@ fn same_error(seen: &mut Option<Reply>, reply: &Reply) -> bool {
     class(first) == class(reply)
 }
 
-/// The inverse of [`super::generate::scramble`]: a text's number in the full generator's space.
+/// The inverse of `super::generate::scramble`: a text's number in the full generator's space.
 pub fn unscramble(x: u32) -> u32 {
     /// The inverse of an odd number modulo 2^32 (Newton's iteration).
     const fn inverse(a: u32) -> u32 {

@@ -36,12 +36,12 @@ pub const BOUNDARIES: [u8; 17] = [
 
 /// What number parsers commonly read as part of a number besides its digits: prefixes, signs,
 /// separators, blanks, suffixes. The random generator writes them over valid text.
-pub const TOKENS: [&[u8]; 14] = [
+pub(crate) const TOKENS: [&[u8]; 14] = [
     b"0x", b"0X", b"+", b"-", b" ", b"\t", b"_", b".", b",", b"h", b"H", b"#", b"$", b"&H",
 ];
 
 /// The largest digit count a generated input gives (the cross-vendor format's limit).
-pub const MAX_DIGITS: u32 = 16;
+pub(crate) const MAX_DIGITS: u32 = 16;
 
 /// Which generator.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
@@ -339,7 +339,7 @@ fn nth_text(alphabet: &[u8], mut n: u64) -> Vec<u8> {
 }
 
 /// A bijection of the 32-bit numbers that spreads any contiguous block over the whole space.
-pub fn scramble(x: u32) -> u32 {
+pub(crate) fn scramble(x: u32) -> u32 {
     let mut x = x.wrapping_mul(0x9E37_79B1);
     x ^= x >> 15;
     x = x.wrapping_mul(0x85EB_CA77);
@@ -417,7 +417,7 @@ fn random_value(r: &mut Rng, bits: u32) -> u64 {
 /// The 32-bit values of the values generator: every value whose hex digits are each 0, 1, 9,
 /// A or F, their neighbours ±1, every 2^k-1, 2^k, 2^k+1, and each single digit at each position;
 /// sorted.
-pub fn lattice32() -> Vec<u64> {
+pub(crate) fn lattice32() -> Vec<u64> {
     let digits = [0u64, 1, 9, 0xA, 0xF];
     let mut out = Vec::with_capacity(400_000 * 3);
     for n in 0..5u64.pow(8) {
@@ -449,7 +449,7 @@ pub fn lattice32() -> Vec<u64> {
 
 /// Which indices shard `k` of `n` (1-based) runs: every `n`-th, from `k - 1`. The shards of a
 /// sweep are disjoint and together are the whole sweep.
-pub fn shard_indices(total: u64, shard: (u64, u64)) -> impl Iterator<Item = u64> {
+pub(crate) fn shard_indices(total: u64, shard: (u64, u64)) -> impl Iterator<Item = u64> {
     let (k, n) = shard;
     (k.saturating_sub(1)..total).step_by(n.max(1) as usize)
 }

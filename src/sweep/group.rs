@@ -164,7 +164,7 @@ pub fn labels(replies: &[Reply]) -> Vec<String> {
 }
 
 /// The columns that differ from their oracle on this input (neither side skipped).
-pub fn differing(columns: &[Column], replies: &[Reply]) -> Vec<usize> {
+pub(crate) fn differing(columns: &[Column], replies: &[Reply]) -> Vec<usize> {
     columns
         .iter()
         .enumerate()
@@ -177,7 +177,7 @@ pub fn differing(columns: &[Column], replies: &[Reply]) -> Vec<usize> {
 }
 
 /// Whether the columns that ran do not all answer alike.
-pub fn disagree(replies: &[Reply]) -> bool {
+pub(crate) fn disagree(replies: &[Reply]) -> bool {
     let mut ran = replies.iter().filter(|r| !r.is_skipped());
     match ran.next() {
         Some(first) => ran.any(|r| r != first),

@@ -185,7 +185,7 @@ impl fmt::Display for Point {
     }
 }
 
-pub use crate::text::significant_digits;
+pub(crate) use crate::text::significant_digits;
 
 fn count_relation(count: u32, size: u32, what: &str) -> String {
     match count.cmp(&size) {
@@ -198,7 +198,7 @@ fn count_relation(count: u32, size: u32, what: &str) -> String {
 
 /// How number parsers commonly see a byte: the taxonomy the grouping uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub enum Kind {
+pub(crate) enum Kind {
     /// 30H-39H, 41H-46H.
     Digit,
     Nul,
@@ -216,7 +216,7 @@ pub enum Kind {
     High,
 }
 
-pub fn kind(b: u8) -> Kind {
+pub(crate) fn kind(b: u8) -> Kind {
     match b {
         b'0'..=b'9' | b'A'..=b'F' => Kind::Digit,
         0 => Kind::Nul,

@@ -20,7 +20,7 @@ use crate::model::known::{Entry, KnownDifferences, Subject};
 /// class, so only an entry for every case (`cases: ['*']`) covers it; the answer is whether a
 /// value group still differs on a backend that has a known-differences file, which the caller
 /// says, so that no entry seems to be ignored silently.
-pub fn apply(results: &mut Results, known: &BTreeMap<String, KnownDifferences>) -> bool {
+pub(crate) fn apply(results: &mut Results, known: &BTreeMap<String, KnownDifferences>) -> bool {
     let mut values_uncovered = false;
     if known.is_empty() {
         return values_uncovered;

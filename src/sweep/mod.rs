@@ -23,18 +23,18 @@
 //! - [`emit`]: a shrunk input written as a vector in the corpus format;
 //! - [`render`]: the results as text, JSON and HTML.
 
-pub mod classes;
-pub mod direct;
+pub(crate) mod classes;
+pub(crate) mod direct;
 pub mod emit;
 pub mod exhaustive;
-pub mod generate;
-pub mod group;
-pub mod input;
-pub mod known;
+pub(crate) mod generate;
+pub(crate) mod group;
+pub(crate) mod input;
+pub(crate) mod known;
 pub mod render;
-pub mod rng;
-pub mod shrink;
-pub mod target;
+pub(crate) mod rng;
+pub(crate) mod shrink;
+pub(crate) mod target;
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -48,11 +48,11 @@ use crate::report::{Event, Reporter};
 use generate::{shard_indices, Digits, Generator, Space};
 use group::{Found, Groups, Reply};
 use input::Point;
-pub use target::Oracle;
+pub(crate) use target::Oracle;
 use target::{columns, Ask, Cases, Column, Shape, Target};
 
 /// Random texts that check the byte classes of a full sweep by class.
-pub const DEFAULT_CLASS_CHECK: u64 = 1 << 20;
+pub(crate) const DEFAULT_CLASS_CHECK: u64 = 1 << 20;
 
 /// What to sweep and how.
 #[derive(Debug, Clone, Serialize)]
@@ -72,7 +72,7 @@ pub struct Settings {
     /// Classes shrunk and written as vectors per group (the largest first); 0 shrinks none.
     #[serde(skip)]
     pub shrink: usize,
-    /// Ask the built-in models directly ([`direct`]) rather than through a trial per input;
+    /// Ask the built-in models directly (`direct`) rather than through a trial per input;
     /// the replies are the same.
     #[serde(skip)]
     pub direct: bool,

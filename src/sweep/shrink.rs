@@ -20,7 +20,7 @@ const CANDIDATE_BASE: u64 = 1 << 63;
 
 /// Shrinks the largest classes of every group that differs from an oracle, or, when no column
 /// has an oracle, of every group whose columns disagree.
-pub fn shrink_groups(sweep: &Sweep, results: &Results, stop: &AtomicBool) -> Vec<Shrunk> {
+pub(crate) fn shrink_groups(sweep: &Sweep, results: &Results, stop: &AtomicBool) -> Vec<Shrunk> {
     let any_oracle = sweep.columns.iter().any(|c| c.oracle.is_some());
     let mut out = Vec::new();
     if sweep.settings.shrink == 0 {
@@ -52,7 +52,7 @@ pub fn shrink_groups(sweep: &Sweep, results: &Results, stop: &AtomicBool) -> Vec
 }
 
 /// The simplest input reachable from `found` by single steps that keep its behaviour.
-pub fn shrink(sweep: &Sweep, found: &Found, stop: &AtomicBool) -> Found {
+pub(crate) fn shrink(sweep: &Sweep, found: &Found, stop: &AtomicBool) -> Found {
     let counted = sweep.counted();
     let key = Key {
         signature: labels(&found.replies),

@@ -313,7 +313,7 @@ fn codec_oracles(
 /// of every backend's profile, and codecs directly. Each column that is not the profile's
 /// reference model is judged against the reference model asked the same way, when that is among
 /// the backends.
-pub fn columns(
+pub(crate) fn columns(
     target: &Target,
     profiles: &Profiles,
     backends: &[Arc<dyn Backend>],
@@ -463,7 +463,7 @@ fn location() -> Location {
 }
 
 /// The id of the point at `index` of a sweep.
-pub fn case_id(index: u64) -> String {
+pub(crate) fn case_id(index: u64) -> String {
     format!("sweep-{index}")
 }
 

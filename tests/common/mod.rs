@@ -6,8 +6,8 @@ use std::path::Path;
 use std::process::{Command, Output};
 use std::sync::{Arc, OnceLock};
 
-use plc_conformance::backend::{Backend, Fault, Request, Response};
-use plc_conformance::runner::{Paths, Project};
+use plc_conformance::testing::backend::{Backend, Fault, Request, Response};
+use plc_conformance::testing::runner::{Paths, Project};
 
 /// The project root: its `vendors/`, `vectors/` and project file.
 pub fn root() -> &'static Path {
@@ -19,7 +19,7 @@ pub fn bin() -> assert_cmd::Command {
     let mut command = assert_cmd::cargo::cargo_bin_cmd!("plc-conformance");
     command
         .env("NO_COLOR", "1")
-        .env_remove(plc_conformance::load::ENV_CONFIG);
+        .env_remove(plc_conformance::testing::load::ENV_CONFIG);
     command
 }
 
@@ -103,7 +103,9 @@ impl Backend for Mutant {
 /// Changes a finished outcome (a mutant's one change to what the reference did).
 pub fn map_done(
     result: Result<Response, Fault>,
-    f: impl FnOnce(plc_conformance::backend::Outcome) -> plc_conformance::backend::Outcome,
+    f: impl FnOnce(
+        plc_conformance::testing::backend::Outcome,
+    ) -> plc_conformance::testing::backend::Outcome,
 ) -> Result<Response, Fault> {
     result.map(|r| match r {
         Response::Done(o) => Response::Done(f(o)),
@@ -117,14 +119,17 @@ pub fn with_memory(
     base: &dyn Backend,
     f: impl Fn(u16) -> u16,
 ) -> Result<Response, Fault> {
-    let units: std::collections::BTreeMap<plc_conformance::device::Device, u16> = req
+    let units: std::collections::BTreeMap<plc_conformance::testing::device::Device, u16> = req
         .memory
         .explicit()
         .iter()
         .map(|(d, v)| (d.clone(), f(*v)))
         .collect();
-    let memory =
-        plc_conformance::memory::Image::of_units(units, req.memory.fill(), req.memory.unit());
+    let memory = plc_conformance::testing::memory::Image::of_units(
+        units,
+        req.memory.fill(),
+        req.memory.unit(),
+    );
     base.execute(&Request {
         memory: &memory,
         ..*req
@@ -139,13 +144,13 @@ pub fn with_constant(
     name: &str,
     f: impl Fn(i64) -> i64,
 ) -> Result<Response, Fault> {
-    let Some(plc_conformance::model::Operand::Constant(k)) = req.operands.get(name) else {
+    let Some(plc_conformance::testing::model::Operand::Constant(k)) = req.operands.get(name) else {
         return base.execute(req);
     };
     let mut operands = req.operands.clone();
     operands.insert(
         name.into(),
-        plc_conformance::model::Operand::Constant(f(*k)),
+        plc_conformance::testing::model::Operand::Constant(f(*k)),
     );
     base.execute(&Request {
         operands: &operands,
@@ -159,7 +164,7 @@ pub fn failing_trials(session: &Project, backend: &Arc<dyn Backend>) -> Vec<Stri
         .plan(std::slice::from_ref(backend))
         .into_iter()
         .filter(|t| t.skip.is_none())
-        .filter(|t| plc_conformance::runner::run_one(t).is_failure())
+        .filter(|t| plc_conformance::testing::runner::run_one(t).is_failure())
         .map(|t| t.name())
         .collect()
 }
@@ -273,10 +278,10 @@ cases:
 
 /// Whether a trial's case expects an operation error with a code, and is judged on it (not
 /// `unspecified`).
-pub fn expects_a_code(t: &plc_conformance::plan::Trial) -> bool {
-    use plc_conformance::model::{Basis, ErrorSignal};
+pub fn expects_a_code(t: &plc_conformance::testing::plan::Trial) -> bool {
+    use plc_conformance::testing::model::{Basis, ErrorSignal};
     match &t.check {
-        plc_conformance::plan::Check::Native { case, .. } => {
+        plc_conformance::testing::plan::Check::Native { case, .. } => {
             case.basis != Basis::Unspecified
                 && case
                     .expect
@@ -289,8 +294,10 @@ pub fn expects_a_code(t: &plc_conformance::plan::Trial) -> bool {
 
 /// The error registers that do not hold the code, with what they held, when a verdict differs
 /// on them alone (the words and the error signal as expected); `None` for any other verdict.
-pub fn registers_alone(v: &plc_conformance::judge::Verdict) -> Option<Vec<(String, Option<u16>)>> {
-    use plc_conformance::judge::{Difference, Verdict};
+pub fn registers_alone(
+    v: &plc_conformance::testing::judge::Verdict,
+) -> Option<Vec<(String, Option<u16>)>> {
+    use plc_conformance::testing::judge::{Difference, Verdict};
     let Verdict::Differs {
         difference: Difference::Words { mismatches },
     } = v

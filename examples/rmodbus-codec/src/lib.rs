@@ -6,10 +6,8 @@
 //! rmodbus's `parse_ascii_frame` and `generate_ascii_frame` answer the cross-vendor questions
 //! with 2 digits (a byte) or 4 (a register).
 
-use plc_conformance::backend::{Codec, Question, Unsupported};
-use plc_conformance::model::cross_vendor::{
-    Answer, CodecAbilities, ErrorClass, Operation, OperationAbilities,
-};
+use plc_conformance::{Answer, CodecAbilities, ErrorClass, Operation, OperationAbilities};
+use plc_conformance::{Codec, Question, Unsupported};
 
 /// rmodbus 0.13 as a codec: the library calls and nothing else.
 pub struct Rmodbus;

@@ -4,8 +4,8 @@
 use std::path::Path;
 use std::process::ExitCode;
 
-use plc_conformance::backend::codec_backend;
-use plc_conformance::libtest::Harness;
+use plc_conformance::codec_backend;
+use plc_conformance::Harness;
 use rmodbus_codec::Rmodbus;
 
 fn main() -> ExitCode {

@@ -3,9 +3,7 @@
 
 use std::path::Path;
 
-use plc_conformance::backend::codec_backend;
-use plc_conformance::load::load_known;
-use plc_conformance::runner::{verdicts, Paths, Project};
+use plc_conformance::{codec_backend, verdicts, Paths, Project, Subject};
 use rmodbus_codec::Rmodbus;
 
 #[test]
@@ -13,7 +11,8 @@ fn rmodbus_fails_exactly_its_known_differences() {
     let here = Path::new(env!("CARGO_MANIFEST_DIR"));
     let project =
         Project::load(&Paths::under(&here.join("../.."))).unwrap_or_else(|e| panic!("{e}"));
-    let trials = project.plan(&[codec_backend(Rmodbus)]);
+    let backend = codec_backend(Rmodbus);
+    let trials = project.plan(std::slice::from_ref(&backend));
     assert!(trials.iter().any(|t| t.skip.is_none()), "no trial runs");
     let failing: Vec<String> = trials
         .iter()
@@ -21,13 +20,9 @@ fn rmodbus_fails_exactly_its_known_differences() {
         .filter(|(_, v)| v.is_failure())
         .map(|(t, _)| t.case_id().to_string())
         .collect();
-    let known = load_known(
-        &here.join("rmodbus.known.yaml"),
-        None,
-        &project.corpus,
-        true,
-    )
-    .unwrap_or_else(|e| panic!("{e}"));
+    let known = project
+        .known_differences(backend.as_ref(), &here.join("rmodbus.known.yaml"))
+        .unwrap_or_else(|e| panic!("{e}"));
     // The cases the entries cover, each listed or covered by a cause.
     let mut listed: Vec<String> = project
         .corpus
@@ -35,7 +30,7 @@ fn rmodbus_fails_exactly_its_known_differences() {
         .iter()
         .filter(|c| {
             known.entries.iter().any(|e| {
-                e.matches(&plc_conformance::model::known::Subject {
+                e.matches(&Subject {
                     case: &c.id,
                     text: Some(&c.text),
                     instruction: "codec",

@@ -9,9 +9,9 @@
 //! runs.
 
 mod process;
-pub mod protocol;
-pub mod serve;
-pub mod window;
+pub(crate) mod protocol;
+pub(crate) mod serve;
+pub(crate) mod window;
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -20,7 +20,7 @@ use std::time::{Duration, Instant};
 
 use serde::Serialize;
 
-pub use process::{adopt_orphans, closing, kill_all, shell_line, MAX_LINE};
+pub(crate) use process::{adopt_orphans, closing, kill_all, MAX_LINE};
 use process::{describe_exit, Next, Process};
 use protocol::{
     BackendInfo, BackendMessage, Capabilities, CaseRequest, CodecRequest, ErrorReport, FillName,
@@ -866,7 +866,7 @@ fn check_capabilities(
 }
 
 /// The request for one case: everything the backend needs, fill included.
-pub fn case_request(req: &Request<'_>, id: u64) -> CaseRequest {
+pub(crate) fn case_request(req: &Request<'_>, id: u64) -> CaseRequest {
     let ignored_flags = req
         .variant
         .ignores_flags

@@ -26,7 +26,7 @@ use std::time::{Duration, Instant};
 use crate::model::project::Launch;
 
 /// The longest line read from a backend: 1 MiB.
-pub const MAX_LINE: usize = 1 << 20;
+pub(crate) const MAX_LINE: usize = 1 << 20;
 /// How much of a backend's stderr is kept.
 const STDERR_TAIL: usize = 16 * 1024;
 /// How long a backend has to exit after `shutdown` before it is killed.
@@ -49,7 +49,7 @@ fn groups() -> MutexGuard<'static, BTreeSet<i32>> {
 
 /// Kills every backend process group and refuses to start another: what an interruption does.
 /// The processes are reaped by their owners, which see their backends' stdout close.
-pub fn kill_all() {
+pub(crate) fn kill_all() {
     CLOSING.store(true, Ordering::SeqCst);
     let registry = groups();
     for &pgid in registry.iter() {
@@ -65,7 +65,7 @@ static ADOPTING: AtomicBool = AtomicBool::new(false);
 /// leaves the backend's process group and session (`setsid`) and outlives the backend becomes a
 /// child of this process, which ends it with the backend. For the command line only: in a test
 /// binary, other children are not the harness's to end.
-pub fn adopt_orphans() {
+pub(crate) fn adopt_orphans() {
     #[cfg(target_os = "linux")]
     {
         // SAFETY: prctl(2) with PR_SET_CHILD_SUBREAPER takes integer arguments only.
@@ -110,7 +110,7 @@ fn kill_orphans(leaders: &BTreeSet<i32>) {
 }
 
 /// Whether [`kill_all`] has been called.
-pub fn closing() -> bool {
+pub(crate) fn closing() -> bool {
     CLOSING.load(Ordering::SeqCst)
 }
 
@@ -130,7 +130,7 @@ fn signal_group(pgid: i32) {
 /// after the backend closes it; `exec` makes the backend the process itself. A command line
 /// with operators (`a && b`, `a | b`, `a; b`), an assignment or a reserved word first is left as
 /// it is.
-pub fn shell_line(line: &str) -> String {
+pub(crate) fn shell_line(line: &str) -> String {
     const RESERVED: [&str; 13] = [
         "if", "then", "else", "elif", "fi", "do", "done", "case", "esac", "while", "until", "for",
         "exec",
@@ -164,7 +164,7 @@ pub fn shell_line(line: &str) -> String {
 
 /// What came out of a backend's stdout.
 #[derive(Debug)]
-pub enum Next {
+pub(super) enum Next {
     Line(Vec<u8>),
     /// A line longer than [`MAX_LINE`]: its first bytes and its full length.
     Oversized {
@@ -177,7 +177,7 @@ pub enum Next {
     Closed(Option<String>),
 }
 
-pub struct Process {
+pub(super) struct Process {
     child: Child,
     /// The process group the child leads, while it is registered in `GROUPS`.
     group: Option<i32>,
@@ -200,7 +200,7 @@ struct StderrTail {
 }
 
 impl Process {
-    pub fn spawn(
+    pub(super) fn spawn(
         launch: &Launch,
         cwd: Option<&PathBuf>,
         env: &[(String, String)],
@@ -276,7 +276,7 @@ impl Process {
 
     /// Queues one message line (the newline is added). A process that has stopped reading
     /// shows up as a closed stdout or a timeout when its answer is awaited.
-    pub fn send(&mut self, mut message: Vec<u8>) {
+    pub(super) fn send(&mut self, mut message: Vec<u8>) {
         message.push(b'\n');
         if let Some(tx) = &self.to_stdin {
             let _ = tx.send(message);
@@ -286,7 +286,7 @@ impl Process {
     /// The next line, waiting until `deadline`. A process that has exited while a process it
     /// started still holds its stdout open is seen as closed, not waited for until the
     /// deadline.
-    pub fn next_line(&mut self, deadline: Instant) -> Next {
+    pub(super) fn next_line(&mut self, deadline: Instant) -> Next {
         if let Some(next) = self.pending.pop_front() {
             return next;
         }
@@ -317,13 +317,13 @@ impl Process {
     }
 
     /// How many bytes the process has written to stderr so far.
-    pub fn stderr_mark(&self) -> u64 {
+    pub(super) fn stderr_mark(&self) -> u64 {
         self.stderr.lock().map(|t| t.total).unwrap_or(0)
     }
 
     /// What the process wrote to stderr since `mark` (as much as is kept), after giving the
     /// reader a moment to catch up with a process that has just exited.
-    pub fn stderr_since(&self, mark: u64, settle: Duration) -> String {
+    pub(super) fn stderr_since(&self, mark: u64, settle: Duration) -> String {
         let until = Instant::now() + settle;
         let mut last = self.stderr_mark();
         while Instant::now() < until {
@@ -350,7 +350,7 @@ impl Process {
 
     /// The exit status, waiting up to `wait` for the process to end. Once it has ended, its
     /// process group is killed before it is reaped: helpers it started do not outlive it.
-    pub fn exit_status(&mut self, wait: Duration) -> Option<ExitStatus> {
+    pub(super) fn exit_status(&mut self, wait: Duration) -> Option<ExitStatus> {
         let until = Instant::now() + wait;
         loop {
             match self.has_exited() {
@@ -412,7 +412,7 @@ impl Process {
     }
 
     /// Kills the process with its process group and reaps it.
-    pub fn kill(&mut self) {
+    pub(super) fn kill(&mut self) {
         self.to_stdin = None;
         if self.reaped {
             return;
@@ -425,7 +425,7 @@ impl Process {
 
     /// Sends `shutdown`, closes stdin and waits a moment for the process to exit; kills it if it
     /// does not.
-    pub fn shutdown(mut self, message: Vec<u8>) {
+    pub(super) fn shutdown(mut self, message: Vec<u8>) {
         self.send(message);
         self.to_stdin = None;
         if self.exit_status(GRACE).is_none() {
@@ -441,7 +441,7 @@ impl Drop for Process {
 }
 
 /// Describes how a process ended, for a crash report.
-pub fn describe_exit(status: Option<ExitStatus>) -> String {
+pub(super) fn describe_exit(status: Option<ExitStatus>) -> String {
     let Some(status) = status else {
         return "closed its stdout but did not exit".into();
     };

@@ -6,6 +6,7 @@
 //! (unknown fields are errors): a misspelt `writes` must not read as "wrote nothing".
 
 use std::collections::BTreeMap;
+use std::fmt;
 
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -15,13 +16,13 @@ use crate::memory::Unit;
 use crate::model::cross_vendor::{ErrorClass, Operation};
 
 /// The newest protocol version this harness speaks: it says so in its `hello`.
-pub const PROTOCOL_VERSION: u32 = 3;
+pub(crate) const PROTOCOL_VERSION: u32 = 3;
 /// The versions a backend may answer with: 1 (instruction level only), 2 (instruction or
 /// codec level) and 3 (also byte-addressed families, whose memory ranges carry `bytes`). Any
 /// other is refused before a case runs.
-pub const SUPPORTED_VERSIONS: [u32; 3] = [1, 2, 3];
+pub(crate) const SUPPORTED_VERSIONS: [u32; 3] = [1, 2, 3];
 /// The first version that can describe byte-addressed memory.
-pub const BYTES_VERSION: u32 = 3;
+pub(crate) const BYTES_VERSION: u32 = 3;
 
 /// A device name as the protocol carries it: a code and a decimal number (`D100`, `MB20`,
 /// `DB1.DBB10`).
@@ -105,25 +106,26 @@ impl CaseRequest {
 
     /// A device operand as the instruction reaches it: `D100` itself, or for `@D10` the device
     /// `addresses` gives for D10, with the pointer.
-    pub fn operand_device(&self, text: &str) -> Result<(Device, Option<Device>), String> {
+    pub fn operand_device(&self, text: &str) -> Result<(Device, Option<Device>), OperandError> {
         let Some(pointer) = text.strip_prefix('@') else {
-            return self
-                .device(text)
-                .map(|d| (d, None))
-                .map_err(|e| e.to_string());
+            return Ok((self.device(text)?, None));
         };
-        let pointer = self.device(pointer).map_err(|e| e.to_string())?;
+        let pointer = self.device(pointer)?;
         for (name, target) in &self.addresses {
             if self.device(name).as_ref() == Ok(&pointer) {
                 let target = self
                     .device(target)
-                    .map_err(|e| format!("`addresses.{name}`: {e}"))?;
+                    .map_err(|source| OperandError::Address {
+                        name: name.clone(),
+                        source,
+                    })?;
                 return Ok((target, Some(pointer)));
             }
         }
-        Err(format!(
-            "`{text}` is indirect, and `addresses` says nothing of {pointer}"
-        ))
+        Err(OperandError::NoAddress {
+            text: text.to_string(),
+            pointer,
+        })
     }
 
     /// The words of the pointers in `addresses`: two from each, which hold an address in the
@@ -652,7 +654,7 @@ impl BackendMessage {
 )]
 // The root of the schema only: no message is kept in this type, so its size does not matter.
 #[allow(clippy::large_enum_variant)]
-pub enum ProtocolMessage {
+pub(crate) enum ProtocolMessage {
     Harness(HarnessMessage),
     Backend(BackendMessage),
 }
@@ -661,6 +663,49 @@ pub enum ProtocolMessage {
 /// protocol` prints it.
 pub fn protocol_schema() -> serde_json::Value {
     crate::spec::schema_of::<ProtocolMessage>()
+}
+
+/// Why an operand of a case does not name a device the backend can reach.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum OperandError {
+    /// Not a device.
+    Device(DeviceSyntaxError),
+    /// The device `addresses` gives for a pointer is not a device.
+    Address {
+        name: String,
+        source: DeviceSyntaxError,
+    },
+    /// An indirect operand whose pointer `addresses` does not name.
+    NoAddress { text: String, pointer: Device },
+}
+
+impl From<DeviceSyntaxError> for OperandError {
+    fn from(e: DeviceSyntaxError) -> Self {
+        OperandError::Device(e)
+    }
+}
+
+impl fmt::Display for OperandError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            OperandError::Device(e) => write!(f, "{e}"),
+            OperandError::Address { name, .. } => write!(f, "`addresses.{name}`"),
+            OperandError::NoAddress { text, pointer } => write!(
+                f,
+                "`{text}` is indirect, and `addresses` says nothing of {pointer}"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for OperandError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            OperandError::Device(e) => e.source(),
+            OperandError::Address { source, .. } => Some(source),
+            OperandError::NoAddress { .. } => None,
+        }
+    }
 }
 
 #[cfg(test)]

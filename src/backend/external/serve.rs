@@ -32,8 +32,8 @@ pub enum ServeError {
 impl std::fmt::Display for ServeError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            ServeError::Read(e) => write!(f, "stdin could not be read: {e}"),
-            ServeError::Write(e) => write!(f, "stdout could not be written: {e}"),
+            ServeError::Read(_) => write!(f, "stdin could not be read"),
+            ServeError::Write(_) => write!(f, "stdout could not be written"),
             ServeError::NotHarness { error, line } => {
                 write!(f, "not a harness message ({error}): {line}")
             }
@@ -41,7 +41,14 @@ impl std::fmt::Display for ServeError {
     }
 }
 
-impl std::error::Error for ServeError {}
+impl std::error::Error for ServeError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            ServeError::Read(e) | ServeError::Write(e) => Some(e),
+            ServeError::NotHarness { .. } => None,
+        }
+    }
+}
 
 /// Serves one backend until `shutdown` or the end of input. Errors are I/O errors and messages
 /// that are not the harness's; both end the session.
@@ -145,7 +152,7 @@ fn answer(backend: &dyn Backend, profile: &Profile, case: &CaseRequest) -> Backe
                     }
                     Operand::Device(d)
                 }
-                Err(e) => return unsupported(e),
+                Err(e) => return unsupported(crate::error_chain::chain(&e)),
             },
             OperandValue::Constant(k) => Operand::Constant(*k),
         };

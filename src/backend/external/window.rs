@@ -16,9 +16,9 @@ use crate::device::Device;
 use crate::model::Operand;
 
 /// Words sent from each device operand on.
-pub const OPERAND_SPAN: u32 = 64;
+pub(crate) const OPERAND_SPAN: u32 = 64;
 /// Words sent from each word the case sets on.
-pub const SET_SPAN: u32 = 16;
+pub(crate) const SET_SPAN: u32 = 16;
 /// The most words a constant operand can add to a span.
 const CONSTANT_LIMIT: u32 = 4096;
 /// Ranges closer than this are sent as one.
@@ -30,7 +30,7 @@ type Spans<'a> = (&'a Device, Vec<(u32, u32)>);
 /// The ranges of a request's window, per device code in ascending order: `(head, last)`, the
 /// units from `head` to the number `last` a unit apart ([`Device::points`]: every number for a
 /// plain device, every 16th for `K4M`). The head is numbered as the case's devices are.
-pub fn ranges(req: &Request<'_>) -> Vec<(Device, u32)> {
+pub(crate) fn ranges(req: &Request<'_>) -> Vec<(Device, u32)> {
     let longest_constant = req
         .operands
         .values()
@@ -94,7 +94,7 @@ pub fn ranges(req: &Request<'_>) -> Vec<(Device, u32)> {
 }
 
 /// The window with its values before execution: explicit words and fill alike.
-pub fn memory(req: &Request<'_>) -> Vec<MemoryRange> {
+pub(crate) fn memory(req: &Request<'_>) -> Vec<MemoryRange> {
     let (fill, unit) = (req.memory.fill(), req.memory.unit());
     ranges(req)
         .into_iter()

@@ -19,7 +19,7 @@ use super::frame::{
 
 /// Characters before the end of the length field: subheader, (serial and reserved area), route
 /// and length.
-pub fn header_len(frame: FrameKind) -> usize {
+pub(crate) fn header_len(frame: FrameKind) -> usize {
     match frame {
         FrameKind::E3 => 18,
         FrameKind::E4 => 26,
@@ -97,7 +97,7 @@ fn device(out: &mut Vec<u8>, form: DeviceForm, data: &[u8]) -> Result<usize, Fra
 }
 
 /// The ASCII rendering of a request built for binary code (0101, 0401, 0403 or 1401).
-pub fn encode_request(request: &Request) -> Result<Vec<u8>, FrameError> {
+pub(crate) fn encode_request(request: &Request) -> Result<Vec<u8>, FrameError> {
     let data = &request.data;
     let form = match request.subcommand {
         0x0000 => DeviceForm::Short,
@@ -169,7 +169,7 @@ fn route(out: &mut Vec<u8>, r: Route) {
 }
 
 /// The whole length of an ASCII response, once its header is in.
-pub fn message_len(frame: FrameKind, header: &[u8]) -> Result<usize, FrameError> {
+pub(crate) fn message_len(frame: FrameKind, header: &[u8]) -> Result<usize, FrameError> {
     let need = header_len(frame);
     if header.len() < need {
         return Err(FrameError::Short {
@@ -187,7 +187,7 @@ pub fn message_len(frame: FrameKind, header: &[u8]) -> Result<usize, FrameError>
 /// Reads an ASCII response to a request with `command` into the binary model: the data of a
 /// normal completion in binary layout (words little-endian, a type name as its 16 characters
 /// and the model code); error information is dropped.
-pub fn decode_response(
+pub(crate) fn decode_response(
     frame: FrameKind,
     command_code: u16,
     bytes: &[u8],

@@ -131,7 +131,7 @@ impl std::error::Error for ClientError {}
 /// What the common end codes mean, in a few words, for messages. The SLMP manuals list them;
 /// these few are the ones a misconfigured bench meets. C059H blames the long device form only
 /// when the request used it.
-pub fn end_code_meaning(code: u16, form: DeviceForm) -> Option<&'static str> {
+pub(crate) fn end_code_meaning(code: u16, form: DeviceForm) -> Option<&'static str> {
     Some(match code {
         0xC051..=0xC054 => "too many points for one request",
         0xC056 => "a device past the end of its range",
@@ -146,10 +146,12 @@ pub fn end_code_meaning(code: u16, form: DeviceForm) -> Option<&'static str> {
     })
 }
 
-/// A device as a command names it.
-pub fn device_ref(device: &Device) -> Result<DeviceRef, String> {
-    let code = frame::device_code(device.code())
-        .ok_or_else(|| format!("{} has no SLMP device code", device.code()))?;
+/// A device as a command names it, for the request `what`.
+pub(crate) fn device_ref(device: &Device, what: &str) -> Result<DeviceRef, ClientError> {
+    let code = frame::device_code(device.code()).ok_or_else(|| ClientError::Request {
+        what: what.to_string(),
+        detail: format!("{} has no SLMP device code", device.code()),
+    })?;
     Ok(DeviceRef {
         code,
         number: device.index,
@@ -334,10 +336,7 @@ impl Client {
     /// 0401: `count` words from `head`, in batches of at most the port's limit.
     pub fn read_words(&mut self, head: &Device, count: u32) -> Result<Vec<u16>, ClientError> {
         let mut out = Vec::with_capacity(count as usize);
-        let first = device_ref(head).map_err(|detail| ClientError::Request {
-            what: format!("reading {head}"),
-            detail,
-        })?;
+        let first = device_ref(head, &format!("reading {head}"))?;
         while out.len() < count as usize {
             let n = (count as usize - out.len()).min(self.settings.limits.batch_words.max(1));
             let at = DeviceRef {
@@ -365,12 +364,8 @@ impl Client {
         let what = format!("0403 (read {})", names.join(" "));
         let refs = devices
             .iter()
-            .map(device_ref)
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(|detail| ClientError::Request {
-                what: what.clone(),
-                detail,
-            })?;
+            .map(|d| device_ref(d, &what))
+            .collect::<Result<Vec<_>, _>>()?;
         let most = self.settings.limits.random_points;
         if refs.len() > most {
             return Err(ClientError::Request {

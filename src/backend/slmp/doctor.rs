@@ -1,6 +1,7 @@
 //! A read-only look at a bench: what `plc-conformance hil doctor` prints. It sends only 0101,
 //! 0401 and 0403, so it can be pointed at a CPU before anything is trusted.
 
+use crate::backend::slmp::error::{refused, LiveError};
 use std::time::{Duration, Instant};
 
 use super::client::Client;
@@ -10,15 +11,15 @@ use super::{is_run, status_text};
 use crate::device::Device;
 
 /// One finding: what was looked at, and what was found (`Err` when it stops a run).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Finding {
+#[derive(Debug)]
+pub(crate) struct Finding {
     pub what: &'static str,
-    pub result: Result<String, String>,
+    pub result: Result<String, LiveError>,
 }
 
 /// Looks at the bench in the order the backend's interlocks do, and stops at the first thing
 /// that makes the rest meaningless (no connection). Returns the findings and the requests sent.
-pub fn doctor(settings: &SlmpSettings) -> (Vec<Finding>, u64) {
+pub(crate) fn doctor(settings: &SlmpSettings) -> (Vec<Finding>, u64) {
     let mut client = Client::new(settings.client.clone());
     let mut out = Vec::new();
     let mut push = |what, result| out.push(Finding { what, result });
@@ -26,10 +27,10 @@ pub fn doctor(settings: &SlmpSettings) -> (Vec<Finding>, u64) {
         Ok(t) if t.name == settings.confirm => push("type name", Ok(format!("{t}, as confirmed"))),
         Ok(t) => push(
             "type name",
-            Err(format!("{t}, but `confirm` says `{}`", settings.confirm)),
+            Err(refused!("{t}, but `confirm` says `{}`", settings.confirm)),
         ),
         Err(e) => {
-            push("connection", Err(e.to_string()));
+            push("connection", Err(e.into()));
             return (out, client.requests);
         }
     }
@@ -39,10 +40,14 @@ pub fn doctor(settings: &SlmpSettings) -> (Vec<Finding>, u64) {
             let text = status_text(v);
             push(
                 "operating status",
-                if is_run(v) { Ok(text) } else { Err(text) },
+                if is_run(v) {
+                    Ok(text)
+                } else {
+                    Err(LiveError::Refused(text))
+                },
             );
         }
-        Err(e) => push("operating status", Err(e.to_string())),
+        Err(e) => push("operating status", Err(e.into())),
     }
     let Ok(head) = settings.manifest.mailbox_head() else {
         push(
@@ -62,7 +67,7 @@ pub fn doctor(settings: &SlmpSettings) -> (Vec<Finding>, u64) {
                         "program {} (layout {}, {} rungs) at {}",
                         settings.manifest.hash, expected.layout, expected.rungs, head
                     )),
-                    Some(why) => Err(why),
+                    Some(why) => Err(LiveError::Refused(why)),
                 },
             );
             let get = |o: u32| words.get(o as usize).copied().unwrap_or(0);
@@ -81,7 +86,7 @@ pub fn doctor(settings: &SlmpSettings) -> (Vec<Finding>, u64) {
                 if trigger == ack {
                     Ok(format!("idle (trigger {trigger}, ack {ack})"))
                 } else {
-                    Err(format!(
+                    Err(refused!(
                         "busy with case {trigger} (ack {ack}, state {st}); it finishes or the \
                          backend waits for it"
                     ))
@@ -105,10 +110,10 @@ pub fn doctor(settings: &SlmpSettings) -> (Vec<Finding>, u64) {
                 match client.read_words(&counter, 1) {
                     Ok(w) if w.first().copied() != Some(first) => break Ok(()),
                     Ok(_) if since.elapsed() > Duration::from_secs(1) => {
-                        break Err(format!("{counter} did not move in 1 s"))
+                        break Err(refused!("{counter} did not move in 1 s"))
                     }
                     Ok(_) => std::thread::sleep(Duration::from_millis(5)),
-                    Err(e) => break Err(e.to_string()),
+                    Err(e) => break Err(e.into()),
                 }
             };
             push(
@@ -116,7 +121,7 @@ pub fn doctor(settings: &SlmpSettings) -> (Vec<Finding>, u64) {
                 moved.map(|()| format!("{counter} moves: the program runs")),
             );
         }
-        Err(e) => push("mailbox", Err(e.to_string())),
+        Err(e) => push("mailbox", Err(e.into())),
     }
     (out, client.requests)
 }

@@ -11,7 +11,7 @@ use std::fmt;
 use std::str::FromStr;
 
 use super::frame::{self, Body, DeviceForm, DeviceRef};
-use crate::device::Device;
+use crate::device::{Device, DeviceSyntaxError};
 
 /// A run of words of one device code, both ends included: `D0-D11999`, or `D12000` alone.
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -69,29 +69,71 @@ impl fmt::Display for WordRange {
     }
 }
 
+/// A range of words that does not read: its text, and what is wrong.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RangeError {
+    text: String,
+    problem: RangeProblem,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum RangeProblem {
+    /// An end that is not a device.
+    Device(DeviceSyntaxError),
+    /// Ends of two different devices.
+    Mixed(String, String),
+    /// The first word after the last.
+    Reversed,
+}
+
+impl fmt::Display for RangeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let s = &self.text;
+        match &self.problem {
+            RangeProblem::Device(_) => write!(
+                f,
+                "`{s}`: a range is written `D0-D11999`, `W0-W1FF` or `D12000`"
+            ),
+            RangeProblem::Mixed(a, b) => {
+                write!(f, "`{s}`: both ends must be the same device ({a} and {b})")
+            }
+            RangeProblem::Reversed => write!(f, "`{s}`: the first word is after the last"),
+        }
+    }
+}
+
+impl std::error::Error for RangeError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match &self.problem {
+            RangeProblem::Device(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
 impl FromStr for WordRange {
-    type Err = String;
+    type Err = RangeError;
 
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         let s = s.trim();
+        let error = |problem| RangeError {
+            text: s.to_string(),
+            problem,
+        };
         let parse = |t: &str| {
-            Device::parse_numbered(t, frame::hex_numbered).map_err(|e| {
-                format!("`{s}`: {e}; a range is written `D0-D11999`, `W0-W1FF` or `D12000`")
-            })
+            Device::parse_numbered(t, frame::hex_numbered)
+                .map_err(|e| error(RangeProblem::Device(e)))
         };
         let (first, last) = match s.split_once('-') {
             Some((a, b)) => (parse(a)?, parse(b)?),
             None => (parse(s)?, parse(s)?),
         };
         if first.code() != last.code() {
-            return Err(format!(
-                "`{s}`: both ends must be the same device ({} and {})",
-                first.code(),
-                last.code()
-            ));
+            let (a, b) = (first.code().to_string(), last.code().to_string());
+            return Err(error(RangeProblem::Mixed(a, b)));
         }
         if first.index > last.index {
-            return Err(format!("`{s}`: the first word is after the last"));
+            return Err(error(RangeProblem::Reversed));
         }
         Ok(WordRange::new(first.code(), first.index, last.index))
     }
@@ -131,7 +173,7 @@ pub fn sandbox_refuses(range: &WordRange) -> Option<String> {
 }
 
 /// Reads a comma-separated list of ranges.
-pub fn parse_ranges(text: &str) -> Result<Vec<WordRange>, String> {
+pub fn parse_ranges(text: &str) -> Result<Vec<WordRange>, RangeError> {
     text.split(',')
         .filter(|t| !t.trim().is_empty())
         .map(str::parse)
@@ -373,7 +415,7 @@ mod tests {
     #[case("D0-R5", "same device")]
     #[case("d0", "not a device name")]
     fn bad_ranges(#[case] text: &str, #[case] message: &str) {
-        let e = parse_ranges(text).expect_err("bad");
+        let e = crate::error_chain::chain(&parse_ranges(text).expect_err("bad"));
         assert!(e.contains(message), "{e}");
     }
 

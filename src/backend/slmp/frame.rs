@@ -132,7 +132,7 @@ pub mod command {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Code {
     Binary,
-    /// Every field as hexadecimal text ([`super::ascii`]).
+    /// Every field as hexadecimal text (`super::ascii`).
     Ascii,
 }
 
@@ -147,15 +147,15 @@ impl fmt::Display for Code {
 
 /// Most words one batch read or write may carry (the SLMP limit for word units; one FX5U
 /// measured the same: 960 accepted, 961 refused).
-pub const MAX_BATCH_WORDS: usize = 960;
+pub(crate) const MAX_BATCH_WORDS: usize = 960;
 /// Most word points one random read may name.
-pub const MAX_RANDOM_WORDS: usize = 192;
+pub(crate) const MAX_RANDOM_WORDS: usize = 192;
 /// The longest message either side accepts: a batch of 960 words is under 2 KiB.
-pub const MAX_MESSAGE: usize = 8192;
+pub(crate) const MAX_MESSAGE: usize = 8192;
 
 /// Device codes in binary code, by the letters the manuals write (the codes the common SLMP
 /// libraries and servers use; `docs/live-cpu.md` lists them).
-pub fn device_code(letters: &str) -> Option<u16> {
+pub(crate) fn device_code(letters: &str) -> Option<u16> {
     Some(match letters {
         "SM" => 0x91,
         "SD" => 0xA9,
@@ -177,18 +177,18 @@ pub fn device_code(letters: &str) -> Option<u16> {
 }
 
 /// Every device [`device_code`] knows, by its letters.
-pub const DEVICE_LETTERS: [&str; 15] = [
+pub(crate) const DEVICE_LETTERS: [&str; 15] = [
     "SM", "SD", "X", "Y", "M", "L", "F", "V", "B", "SB", "D", "W", "SW", "R", "ZR",
 ];
 
 /// Whether MELSEC numbers a device in hexadecimal (`W1A`, `SW0F`): how ASCII code carries its
 /// number, and how a manifest, a sandbox and a rung write it.
-pub fn hex_numbered(letters: &str) -> bool {
+pub(crate) fn hex_numbered(letters: &str) -> bool {
     matches!(letters, "X" | "Y" | "B" | "SB" | "W" | "SW")
 }
 
 /// The letters of a device code (the inverse of [`device_code`]).
-pub fn device_letters(code: u16) -> Option<&'static str> {
+pub(crate) fn device_letters(code: u16) -> Option<&'static str> {
     DEVICE_LETTERS
         .into_iter()
         .find(|l| device_code(l) == Some(code))
@@ -196,7 +196,7 @@ pub fn device_letters(code: u16) -> Option<&'static str> {
 
 /// One device as a command names it: code and number.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct DeviceRef {
+pub(crate) struct DeviceRef {
     pub code: u16,
     pub number: u32,
 }
@@ -212,7 +212,7 @@ impl fmt::Display for DeviceRef {
 
 /// A message that does not decode.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum FrameError {
+pub(crate) enum FrameError {
     /// Fewer bytes than the header or the declared length needs.
     Short { need: usize, got: usize },
     /// A subheader that is not the expected one.
@@ -247,7 +247,7 @@ impl fmt::Display for FrameError {
 impl std::error::Error for FrameError {}
 
 /// Bytes as the manuals print them: `50 00 00 FF`.
-pub fn hex(bytes: &[u8]) -> String {
+pub(crate) fn hex(bytes: &[u8]) -> String {
     bytes
         .iter()
         .map(|b| format!("{b:02X}"))
@@ -257,7 +257,7 @@ pub fn hex(bytes: &[u8]) -> String {
 
 /// A request message.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Request {
+pub(crate) struct Request {
     pub frame: FrameKind,
     /// The serial number (4E only; 0 on 3E).
     pub serial: u16,
@@ -271,7 +271,7 @@ pub struct Request {
 
 /// A response message.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Response {
+pub(crate) struct Response {
     pub frame: FrameKind,
     pub serial: u16,
     pub route: Route,
@@ -343,7 +343,7 @@ fn take_head(
 
 /// The whole length of a message, once its header is in: what a reader waits for, since a
 /// reply may arrive in several TCP segments.
-pub fn message_len(frame: FrameKind, header: &[u8]) -> Result<usize, FrameError> {
+pub(crate) fn message_len(frame: FrameKind, header: &[u8]) -> Result<usize, FrameError> {
     let need = frame.header_len();
     if header.len() < need {
         return Err(FrameError::Short {
@@ -359,7 +359,7 @@ pub fn message_len(frame: FrameKind, header: &[u8]) -> Result<usize, FrameError>
 }
 
 impl Request {
-    pub fn encode(&self) -> Vec<u8> {
+    pub(crate) fn encode(&self) -> Vec<u8> {
         let mut out = Vec::with_capacity(self.frame.header_len() + 6 + self.data.len());
         put_head(
             &mut out,
@@ -378,7 +378,7 @@ impl Request {
     }
 
     /// Decodes one whole request; the frame is read from its subheader.
-    pub fn decode(bytes: &[u8]) -> Result<Request, FrameError> {
+    pub(crate) fn decode(bytes: &[u8]) -> Result<Request, FrameError> {
         let first = bytes
             .first()
             .copied()
@@ -408,7 +408,7 @@ impl Request {
 }
 
 impl Response {
-    pub fn encode(&self) -> Vec<u8> {
+    pub(crate) fn encode(&self) -> Vec<u8> {
         let mut out = Vec::with_capacity(self.frame.header_len() + 2 + self.data.len());
         put_head(
             &mut out,
@@ -425,7 +425,7 @@ impl Response {
     }
 
     /// Decodes one whole response of the expected frame.
-    pub fn decode(frame: FrameKind, bytes: &[u8]) -> Result<Response, FrameError> {
+    pub(crate) fn decode(frame: FrameKind, bytes: &[u8]) -> Result<Response, FrameError> {
         let (serial, route, length) = take_head(bytes, frame, frame.response_subheader())?;
         if length < 2 {
             return Err(FrameError::Body(format!(
@@ -498,7 +498,11 @@ fn points(count: usize, limit: usize, what: &str) -> Result<u16, FrameError> {
 }
 
 /// 0401: read `count` words from `head`.
-pub fn read_words(form: DeviceForm, head: DeviceRef, count: usize) -> Result<Body, FrameError> {
+pub(crate) fn read_words(
+    form: DeviceForm,
+    head: DeviceRef,
+    count: usize,
+) -> Result<Body, FrameError> {
     let mut data = Vec::with_capacity(8);
     put_device(&mut data, form, head)?;
     data.extend_from_slice(&points(count, MAX_BATCH_WORDS, "batch read")?.to_le_bytes());
@@ -529,7 +533,7 @@ pub(super) fn write_words(
 }
 
 /// 0403: read single words from several places in one request.
-pub fn random_read(form: DeviceForm, devices: &[DeviceRef]) -> Result<Body, FrameError> {
+pub(crate) fn random_read(form: DeviceForm, devices: &[DeviceRef]) -> Result<Body, FrameError> {
     let n = points(devices.len(), MAX_RANDOM_WORDS, "random read")?;
     let mut data = Vec::with_capacity(2 + form.spec_len() * devices.len());
     data.push(n as u8);
@@ -545,7 +549,7 @@ pub fn random_read(form: DeviceForm, devices: &[DeviceRef]) -> Result<Body, Fram
 }
 
 /// 0101: read the CPU's type name.
-pub fn read_type_name() -> Body {
+pub(crate) fn read_type_name() -> Body {
     Body {
         command: command::READ_TYPE_NAME,
         subcommand: 0x0000,
@@ -554,7 +558,7 @@ pub fn read_type_name() -> Body {
 }
 
 /// Words from the data of a read's response.
-pub fn words_of(data: &[u8], count: usize) -> Result<Vec<u16>, FrameError> {
+pub(crate) fn words_of(data: &[u8], count: usize) -> Result<Vec<u16>, FrameError> {
     if data.len() != 2 * count {
         return Err(FrameError::Body(format!(
             "{} bytes of data where {count} words ({} bytes) were asked for",
@@ -581,7 +585,7 @@ impl fmt::Display for TypeName {
 }
 
 /// Reads a 0101 response: 16 characters of model name, space-padded, then the model code.
-pub fn type_name_of(data: &[u8]) -> Result<TypeName, FrameError> {
+pub(crate) fn type_name_of(data: &[u8]) -> Result<TypeName, FrameError> {
     if data.len() != 18 {
         return Err(FrameError::Body(format!(
             "a type name answer of {} bytes where 18 (16 characters and a code) were expected",
@@ -605,7 +609,7 @@ pub fn type_name_of(data: &[u8]) -> Result<TypeName, FrameError> {
 }
 
 /// The data of a 0101 response (the simulator's side).
-pub fn type_name_data(name: &str, code: u16) -> Vec<u8> {
+pub(crate) fn type_name_data(name: &str, code: u16) -> Vec<u8> {
     let mut out: Vec<u8> = name.bytes().take(16).collect();
     out.resize(16, b' ');
     out.extend_from_slice(&code.to_le_bytes());
@@ -614,7 +618,7 @@ pub fn type_name_data(name: &str, code: u16) -> Vec<u8> {
 
 /// A request's body as the server reads it.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Decoded {
+pub(crate) enum Decoded {
     TypeName,
     Read {
         head: DeviceRef,
@@ -636,7 +640,7 @@ pub enum Decoded {
 
 /// Reads a request's command (the simulator's side). A body that does not fit its command is an
 /// error; a command outside this client's set is [`Decoded::Other`].
-pub fn decode_body(request: &Request) -> Result<Decoded, FrameError> {
+pub(crate) fn decode_body(request: &Request) -> Result<Decoded, FrameError> {
     let bad = |what: &str| {
         FrameError::Body(format!(
             "command {:04X}H subcommand {:04X}H: {what}",

@@ -6,6 +6,7 @@
 //! program text. A manifest whose hash does not match its content (edited by hand) is refused:
 //! the program on the CPU would then say one thing and the table another.
 
+use crate::backend::slmp::error::{refused, LiveError};
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
@@ -17,7 +18,7 @@ use crate::device::Device;
 use crate::model::{Indirect, Operand};
 
 /// The manifest format this harness reads and writes.
-pub const FORMAT: u32 = 1;
+pub(crate) const FORMAT: u32 = 1;
 
 /// One rung: an instruction on fixed operands, selected by its id.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -100,11 +101,11 @@ struct Program<'a> {
 }
 
 /// The largest manifest read: a corpus's program is tens of kilobytes.
-pub const MAX_BYTES: u64 = 16 << 20;
+pub(crate) const MAX_BYTES: u64 = 16 << 20;
 
 /// The highest device number the Q-compatible device form can carry (three bytes): no
 /// mailbox word or write may lie past it.
-pub const MAX_NUMBER: u32 = 0x00FF_FFFF;
+pub(crate) const MAX_NUMBER: u32 = 0x00FF_FFFF;
 
 fn fnv1a64(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, b| {
@@ -116,13 +117,13 @@ fn fnv1a64(bytes: &[u8]) -> u64 {
 /// given by indirect specification, so that such a call never shares the rung of the device it
 /// addresses), and each pointer with the device whose address the rung stores in it first.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct Call {
+pub(crate) struct Call {
     pub operands: BTreeMap<String, String>,
     pub addresses: BTreeMap<String, String>,
 }
 
 impl Call {
-    pub fn new(operands: &BTreeMap<String, Operand>, indirect: &Indirect) -> Call {
+    pub(crate) fn new(operands: &BTreeMap<String, Operand>, indirect: &Indirect) -> Call {
         let mut call = Call::default();
         for (name, value) in operands {
             let text = match (indirect.get(name), value) {
@@ -140,7 +141,7 @@ impl Call {
 
     /// The key a request and a rung share: the instruction and the call in one canonical
     /// text (`ASCI d=D200 n=K4 s=@D10 @D10=D100`).
-    pub fn key(&self, instruction: &str) -> String {
+    pub(crate) fn key(&self, instruction: &str) -> String {
         rung_key(instruction, &self.operands, &self.addresses)
     }
 }
@@ -175,7 +176,10 @@ impl Unrealisable {
 /// Reads an operand as the manifest writes it; `hexadecimal` says which codes are numbered in
 /// hexadecimal (a rung's devices as MELSEC numbers them, an unrealisable one's as the profile
 /// does).
-pub fn parse_operand(text: &str, hexadecimal: &dyn Fn(&str) -> bool) -> Result<Operand, String> {
+pub(crate) fn parse_operand(
+    text: &str,
+    hexadecimal: &dyn Fn(&str) -> bool,
+) -> Result<Operand, LiveError> {
     // An indirect operand (`@D10`) is read as its pointer: only an unrealisable rung names one.
     let text = text.strip_prefix('@').unwrap_or(text);
     // Constants are written `K<decimal>`, as [`Operand`]'s display does; a device that starts
@@ -184,9 +188,9 @@ pub fn parse_operand(text: &str, hexadecimal: &dyn Fn(&str) -> bool) -> Result<O
     if text.starts_with('K') {
         return crate::value::parse_number(text)
             .map(Operand::Constant)
-            .or_else(|number| device().map_err(|_| number.to_string()));
+            .or_else(|number| device().map_err(|_| LiveError::within(text, number)));
     }
-    device().map_err(|e| e.to_string())
+    device().map_err(|e| LiveError::within(text, e))
 }
 
 impl Manifest {
@@ -212,17 +216,17 @@ impl Manifest {
 
     /// The mailbox head, where a mailbox may be: in a data or link register (where a sandbox
     /// may be, never a special, bit or timer device), all 32 words within the device numbers.
-    pub fn mailbox_head(&self) -> Result<Device, String> {
-        let head = mailbox::head(&self.mailbox).map_err(|e| format!("`mailbox`: {e}"))?;
+    pub fn mailbox_head(&self) -> Result<Device, LiveError> {
+        let head = mailbox::head(&self.mailbox).map_err(|e| LiveError::within("`mailbox`", e))?;
         if Kind::of(head.code()) != Kind::Data || super::frame::device_code(head.code()).is_none() {
-            return Err(format!(
+            return Err(refused!(
                 "`mailbox`: {head} is not a data or link register (D, R, ZR, W): the mailbox \
                  lies where a sandbox may be"
             ));
         }
         let fits = (head.index.checked_add(mailbox::WORDS - 1)).is_some_and(|l| l <= MAX_NUMBER);
         if !fits {
-            return Err(format!(
+            return Err(refused!(
                 "`mailbox`: {head} leaves no room for its {} words below {}{MAX_NUMBER}",
                 mailbox::WORDS,
                 head.code()
@@ -237,17 +241,17 @@ impl Manifest {
     }
 
     /// The rungs by [`rung_key`].
-    pub fn rung_index(&self) -> Result<HashMap<String, u16>, String> {
+    pub fn rung_index(&self) -> Result<HashMap<String, u16>, LiveError> {
         let mut index = HashMap::new();
         for rung in &self.rungs {
             let texts = (rung.operands.iter())
                 .chain(rung.addresses.iter().flat_map(|(p, t)| [(p, p), (p, t)]));
             for (k, v) in texts {
                 parse_operand(v, &super::frame::hex_numbered)
-                    .map_err(|e| format!("rung {} operand `{k}`: {e}", rung.id))?;
+                    .map_err(|e| LiveError::within(format!("rung {} operand `{k}`", rung.id), e))?;
             }
             if index.insert(rung.key(), rung.id).is_some() {
-                return Err(format!(
+                return Err(refused!(
                     "rung {} repeats an earlier rung's instruction and operands",
                     rung.id
                 ));
@@ -257,15 +261,15 @@ impl Manifest {
     }
 
     /// Checks what the file cannot: the format, the hash, the mailbox, rung ids 1..n in order.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), LiveError> {
         if self.format != FORMAT {
-            return Err(format!(
+            return Err(refused!(
                 "`format` is {}; this harness reads format {FORMAT}",
                 self.format
             ));
         }
         if self.layout != mailbox::LAYOUT {
-            return Err(format!(
+            return Err(refused!(
                 "`layout` is {}; this harness speaks mailbox layout {}",
                 self.layout,
                 mailbox::LAYOUT
@@ -274,7 +278,7 @@ impl Manifest {
         self.mailbox_head()?;
         for (i, rung) in self.rungs.iter().enumerate() {
             if usize::from(rung.id) != i + 1 {
-                return Err(format!(
+                return Err(refused!(
                     "rung {} is at position {}; rungs are numbered 1, 2, ... in order",
                     rung.id,
                     i + 1
@@ -284,21 +288,23 @@ impl Manifest {
         if self.flags.len() > 16 {
             return Err("more than 16 flags do not fit the mailbox flag word".into());
         }
-        for range in parse_ranges(&self.writes.join(",")).map_err(|e| format!("`writes`: {e}"))? {
+        for range in
+            parse_ranges(&self.writes.join(",")).map_err(|e| LiveError::within("`writes`", e))?
+        {
             if range.last > MAX_NUMBER {
-                return Err(format!(
+                return Err(refused!(
                     "`writes`: {range} runs past {}{MAX_NUMBER}",
                     range.code
                 ));
             }
             if let Some(why) = super::fence::sandbox_refuses(&range) {
-                return Err(format!("`writes`: {why}"));
+                return Err(refused!("`writes`: {why}"));
             }
         }
         self.rung_index()?;
         let computed = self.compute_hash();
         if computed != self.hash {
-            return Err(format!(
+            return Err(refused!(
                 "`hash` is {} but the content hashes to {computed}: the manifest was changed \
                  after it was generated; generate it again (and the program with it)",
                 self.hash
@@ -310,28 +316,31 @@ impl Manifest {
     /// Reads and validates a manifest file; errors name the file. Read as the YAML files are:
     /// a regular file only (a FIFO would block, a device never end), and at most
     /// [`MAX_BYTES`].
-    pub fn load(path: &Path) -> Result<Manifest, String> {
-        let unreadable =
-            |e: &dyn std::fmt::Display| format!("{}: cannot be read: {e}", path.display());
-        let size = std::fs::metadata(path).map_err(|e| unreadable(&e))?.len();
+    pub fn load(path: &Path) -> Result<Manifest, LiveError> {
+        let unreadable = |e| LiveError::within(format!("{}: cannot be read", path.display()), e);
+        let size = std::fs::metadata(path).map_err(unreadable)?.len();
         if size > MAX_BYTES {
-            return Err(format!(
+            return Err(refused!(
                 "{}: {size} bytes; a manifest is at most {MAX_BYTES}",
                 path.display()
             ));
         }
-        let bytes = crate::load::read_regular(path).map_err(|e| unreadable(&e))?;
-        let text = String::from_utf8(bytes).map_err(|e| unreadable(&e))?;
+        let bytes = crate::load::read_regular(path).map_err(unreadable)?;
+        let text = String::from_utf8(bytes)
+            .map_err(|e| LiveError::within(format!("{}: cannot be read", path.display()), e))?;
         let manifest: Manifest = serde_json::from_str(&text).map_err(|e| {
-            format!(
-                "{}:{}: not a plc-conformance manifest: {e}",
-                path.display(),
-                e.line()
+            LiveError::within(
+                format!(
+                    "{}:{}: not a plc-conformance manifest",
+                    path.display(),
+                    e.line()
+                ),
+                e,
             )
         })?;
         manifest
             .validate()
-            .map_err(|e| format!("{}: {e}", path.display()))?;
+            .map_err(|e| LiveError::within(path.display().to_string(), e))?;
         Ok(manifest)
     }
 }
@@ -340,7 +349,7 @@ impl Manifest {
 mod tests {
     use super::*;
 
-    pub fn sample() -> Manifest {
+    pub(super) fn sample() -> Manifest {
         let mut m = Manifest {
             format: FORMAT,
             generator: "test".into(),
@@ -407,13 +416,13 @@ mod tests {
     fn an_edited_manifest_is_refused() {
         let mut m = sample();
         m.rungs[0].operands.insert("s".into(), "D101".into());
-        let e = m.validate().expect_err("stale hash");
+        let e = crate::error_chain::chain(&m.validate().expect_err("stale hash"));
         assert!(e.contains("changed after it was generated"), "{e}");
         // The words the cases write are under the hash too: a sandbox taken from them cannot
         // be widened by hand.
         let mut m = sample();
         m.writes.push("D0".into());
-        let e = m.validate().expect_err("writes are hashed");
+        let e = crate::error_chain::chain(&m.validate().expect_err("writes are hashed"));
         assert!(e.contains("changed after it was generated"), "{e}");
         // The generator's name is not.
         let mut m = sample();
@@ -437,7 +446,7 @@ mod tests {
             let mut m = sample();
             m.mailbox = mailbox.into();
             m.hash = m.compute_hash();
-            let e = m.validate().expect_err(mailbox);
+            let e = crate::error_chain::chain(&m.validate().expect_err(mailbox));
             assert!(e.contains(says), "{mailbox}: {e}");
         }
         let mut m = sample();
@@ -451,25 +460,28 @@ mod tests {
         let mut m = sample();
         m.writes.push("Y0-Y17".into());
         m.hash = m.compute_hash();
-        let e = m.validate().expect_err("a bit device");
+        let e = crate::error_chain::chain(&m.validate().expect_err("a bit device"));
         assert!(e.contains("word devices only"), "{e}");
     }
 
     #[test]
     fn operands_read_back() {
-        assert_eq!(parse_operand("K-1", &|_| false), Ok(Operand::Constant(-1)));
         assert_eq!(
-            parse_operand("D100", &|_| false),
-            Ok(Operand::Device(Device::new("D", 100)))
+            parse_operand("K-1", &|_| false).ok(),
+            Some(Operand::Constant(-1))
+        );
+        assert_eq!(
+            parse_operand("D100", &|_| false).ok(),
+            Some(Operand::Device(Device::new("D", 100)))
         );
         assert!(parse_operand("x", &|_| false).is_err());
         assert_eq!(
-            parse_operand("K4M0", &|_| false),
-            Ok(Operand::Device(Device::new("K4M", 0)))
+            parse_operand("K4M0", &|_| false).ok(),
+            Some(Operand::Device(Device::new("K4M", 0)))
         );
         assert_eq!(
-            parse_operand("SWF", &|code| code == "SW"),
-            Ok(Operand::Device(Device::hexadecimal("SW", 15)))
+            parse_operand("SWF", &|code| code == "SW").ok(),
+            Some(Operand::Device(Device::hexadecimal("SW", 15)))
         );
     }
 }

@@ -22,17 +22,20 @@
 //! inconsistent capture a protocol error, and a CPU that cannot be reached or leaves RUN is
 //! unreachable. After `max_consecutive_faults` faults in a row the remaining trials are not run.
 
-pub mod ascii;
-pub mod client;
-pub mod doctor;
+pub(crate) mod ascii;
+pub(crate) mod client;
+pub(crate) mod doctor;
+pub(crate) mod error;
 pub mod fence;
-pub mod frame;
+pub(crate) mod frame;
 pub mod limits;
 pub mod mailbox;
-pub mod manifest;
-pub mod settings;
-pub mod sim;
+pub(crate) mod manifest;
+pub(crate) mod settings;
+pub(crate) mod sim;
 
+use crate::backend::slmp::error::{refused, LiveError};
+use crate::error_chain::chain;
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
@@ -50,18 +53,15 @@ use crate::model::pointer_words;
 use crate::model::profile::{Profile, Profiles, Variant};
 use manifest::Call;
 
-/// The special register with the CPU's operating status.
-pub const STATUS_REGISTER: &str = "SD203";
-
 /// Whether an SD203 value says RUN: its low four bits hold the operating status, 0 for RUN (the
 /// Q-series special register list says so for SD203; the iQ-R list codes the per-CPU status
 /// SD230 the same way; for iQ-R and FX5 SD203 itself this is inferred).
-pub fn is_run(sd203: u16) -> bool {
+pub(crate) fn is_run(sd203: u16) -> bool {
     sd203 & 0x000F == 0
 }
 
 /// What an SD203 value says, for messages.
-pub fn status_text(sd203: u16) -> String {
+pub(crate) fn status_text(sd203: u16) -> String {
     let name = match sd203 & 0x000F {
         0 => "RUN",
         1 => "STEP-RUN",
@@ -163,7 +163,7 @@ pub struct Plan {
 /// the profile numbers it otherwise than MELSEC does (the program, the manifest and a sandbox
 /// write `W1A` in hexadecimal, `D100` in decimal). The one rule for a case's operands
 /// (`hil generate`), its sandbox and its window.
-pub fn unaddressable(device: &Device) -> Option<String> {
+pub(crate) fn unaddressable(device: &Device) -> Option<String> {
     let code = device.code();
     if frame::device_code(code).is_none() {
         return Some(format!(
@@ -182,7 +182,7 @@ pub fn unaddressable(device: &Device) -> Option<String> {
 
 impl SlmpBackend {
     /// The backend, checked against the profiles, without any connection.
-    pub fn new(settings: SlmpSettings, profiles: &Profiles) -> Result<SlmpBackend, String> {
+    pub fn new(settings: SlmpSettings, profiles: &Profiles) -> Result<SlmpBackend, LiveError> {
         let manifest = &settings.manifest;
         let profile = profiles.get(&manifest.profile).cloned().ok_or_else(|| {
             format!(
@@ -192,7 +192,7 @@ impl SlmpBackend {
             )
         })?;
         let Some(variant) = profile.variant(&settings.variant) else {
-            return Err(format!(
+            return Err(refused!(
                 "variant `{}` is not a variant of {}; it has: {}",
                 settings.variant,
                 profile.id,
@@ -205,7 +205,7 @@ impl SlmpBackend {
             ));
         };
         if !manifest.variants.contains(&settings.variant) {
-            return Err(format!(
+            return Err(refused!(
                 "the manifest's program was generated for variants {}, not `{}`",
                 manifest.variants.join(", "),
                 settings.variant
@@ -214,16 +214,17 @@ impl SlmpBackend {
         let mailbox = manifest.mailbox_head()?;
         let whole = mailbox::range(&mailbox);
         if let Some(why) = settings.sandbox.iter().find_map(fence::sandbox_refuses) {
-            return Err(format!("`sandbox`: {why}"));
+            return Err(refused!("`sandbox`: {why}"));
         }
         if !profile.words_exist(variant, &mailbox, mailbox::WORDS) {
-            return Err(format!(
+            return Err(refused!(
                 "the mailbox {whole} does not exist on variant {} of {}",
-                settings.variant, profile.id
+                settings.variant,
+                profile.id
             ));
         }
         if let Some(r) = settings.sandbox.iter().find(|r| r.overlaps(&whole)) {
-            return Err(format!(
+            return Err(refused!(
                 "the sandbox range {r} overlaps the mailbox {whole}: the program's own words \
                  must not be writable"
             ));
@@ -240,7 +241,7 @@ impl SlmpBackend {
                 }
                 Ok((u.key(), u.reason.clone()))
             })
-            .collect::<Result<HashMap<_, _>, String>>()?;
+            .collect::<Result<HashMap<_, _>, LiveError>>()?;
         let mut instructions: Vec<String> = manifest
             .rungs
             .iter()
@@ -288,12 +289,12 @@ impl SlmpBackend {
 
     /// Connects and runs the interlocks now, so that a bench that is not ready is an error
     /// before the first case. Writes nothing.
-    pub fn connect(&self) -> Result<(), String> {
+    pub fn connect(&self) -> Result<(), LiveError> {
         let mut live = self.lock();
         self.verify(&mut live).map_err(|e| match e {
-            CaseError::Client(c) => c.to_string(),
-            CaseError::Fault(f) => f.to_string(),
-            CaseError::Stopped(s) => s,
+            CaseError::Client(c) => LiveError::Client(c),
+            CaseError::Fault(f) => LiveError::Refused(f.to_string()),
+            CaseError::Stopped(s) => LiveError::Refused(s),
         })
     }
 
@@ -322,10 +323,10 @@ impl SlmpBackend {
 
     /// The rung, flags and window a request would run with, each window range checked against
     /// the fence; no socket is involved. `Err` is why the case cannot run on this program.
-    pub fn plan(&self, req: &Request<'_>) -> Result<Plan, String> {
+    pub fn plan(&self, req: &Request<'_>) -> Result<Plan, LiveError> {
         let key = Call::new(req.operands, req.indirect).key(req.instruction);
         let Some(&rung) = self.rungs.get(&key) else {
-            return Err(self.no_rung(&key));
+            return Err(LiveError::Refused(self.no_rung(&key)));
         };
         let all = req.all_flags();
         let flags = self
@@ -340,7 +341,7 @@ impl SlmpBackend {
         for (head, last) in window::ranges(req) {
             let (code, first) = (head.code(), head.index);
             if let Some(why) = unaddressable(&head) {
-                return Err(format!("not run: the case sets {code} words: {why}"));
+                return Err(refused!("not run: the case sets {code} words: {why}"));
             }
             let range = WordRange::new(code, first, last);
             self.fence
@@ -724,7 +725,7 @@ impl Backend for SlmpBackend {
     fn execute(&self, req: &Request<'_>) -> Result<Response, Fault> {
         let plan = match self.plan(req) {
             Ok(p) => p,
-            Err(why) => return Ok(Response::Unsupported(why)),
+            Err(why) => return Ok(Response::Unsupported(chain(&why))),
         };
         let mut live = self.lock();
         if let Some(why) = &live.down {

@@ -1,6 +1,7 @@
 //! How to run one live CPU backend, and its command-line form
 //! `slmp:NAME=HOST:PORT?manifest=PATH&confirm=TYPE&sandbox=RANGES[&...]`.
 
+use crate::backend::slmp::error::{refused, LiveError};
 use std::path::Path;
 use std::time::Duration;
 
@@ -11,9 +12,9 @@ use super::limits::{self, Family};
 use super::manifest::Manifest;
 
 /// The case time limit unless configured: the program needs three or four scans.
-pub const DEFAULT_CASE_TIMEOUT: Duration = Duration::from_secs(2);
+pub(crate) const DEFAULT_CASE_TIMEOUT: Duration = Duration::from_secs(2);
 /// Faults in a row after which the remaining trials are not run, unless configured.
-pub const DEFAULT_MAX_FAULTS: usize = 3;
+pub(crate) const DEFAULT_MAX_FAULTS: usize = 3;
 
 /// One live CPU backend's settings.
 #[derive(Debug, Clone)]
@@ -86,34 +87,34 @@ impl SlmpSettings {
     /// manifest's `writes`: `manifest,SD100-SD167` adds special registers), and optionally
     /// `variant`, `frame` (3e, 4e), `code` (binary, ascii), `form` (short, long), `timeout` (case seconds), `monitor`
     /// (monitoring timer, units of 250 ms), `max_faults`, `poll_ms`.
-    pub fn parse(text: &str, base: &Path) -> Result<Option<SlmpSettings>, String> {
+    pub fn parse(text: &str, base: &Path) -> Result<Option<SlmpSettings>, LiveError> {
         let Some(rest) = text.strip_prefix("slmp:") else {
             return Ok(None);
         };
         let usage = "expected `slmp:NAME=HOST:PORT?manifest=PATH&confirm=TYPE&sandbox=RANGES`";
         let (name, rest) = rest
             .split_once('=')
-            .ok_or_else(|| format!("`{text}`: {usage}"))?;
+            .ok_or_else(|| refused!("`{text}`: {usage}"))?;
         if name.is_empty()
             || !name
                 .chars()
                 .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-' || c == '_')
         {
-            return Err(format!(
+            return Err(refused!(
                 "`{name}` is not a backend name: use lowercase letters, digits, `-` and `_`"
             ));
         }
         let (address, query) = rest.split_once('?').unwrap_or((rest, ""));
         if !address.contains(':') {
-            return Err(format!("`{text}`: `{address}` has no port; {usage}"));
+            return Err(refused!("`{text}`: `{address}` has no port; {usage}"));
         }
         let mut keys: Vec<(&str, &str)> = Vec::new();
         for pair in query.split('&').filter(|p| !p.is_empty()) {
             let (k, v) = pair
                 .split_once('=')
-                .ok_or_else(|| format!("`{pair}` in `{text}`: expected key=value"))?;
+                .ok_or_else(|| refused!("`{pair}` in `{text}`: expected key=value"))?;
             if keys.iter().any(|(seen, _)| *seen == k) {
-                return Err(format!("`{k}` is given twice in `{text}`"));
+                return Err(refused!("`{k}` is given twice in `{text}`"));
             }
             keys.push((k, v));
         }
@@ -132,19 +133,19 @@ impl SlmpSettings {
             "poll_ms",
         ];
         if let Some((k, _)) = keys.iter().find(|(k, _)| !known.contains(k)) {
-            return Err(format!(
+            return Err(refused!(
                 "unknown key `{k}` in `{text}`; known keys: {}",
                 known.join(", ")
             ));
         }
-        let need = |k: &str| get(k).ok_or_else(|| format!("`{text}` has no `{k}=`; {usage}"));
+        let need = |k: &str| get(k).ok_or_else(|| refused!("`{text}` has no `{k}=`; {usage}"));
         let manifest_path = base.join(need("manifest")?);
         let manifest = Manifest::load(&manifest_path)?;
         let variant = match get("variant") {
             Some(v) => v.to_string(),
             None if manifest.variants.len() == 1 => manifest.variants[0].clone(),
             None => {
-                return Err(format!(
+                return Err(refused!(
                     "`{text}` has no `variant=`, and the manifest has several: {}",
                     manifest.variants.join(", ")
                 ))
@@ -158,14 +159,16 @@ impl SlmpSettings {
                 "" => {}
                 "manifest" => sandbox.extend(
                     parse_ranges(&manifest.writes.join(","))
-                        .map_err(|e| format!("{}: `writes`: {e}", manifest_path.display()))?
+                        .map_err(|e| {
+                            LiveError::within(format!("{}: `writes`", manifest_path.display()), e)
+                        })?
                         .into_iter()
                         .filter(|r| Kind::of(&r.code) == Kind::Data),
                 ),
                 range => sandbox.push(
                     range
                         .parse::<WordRange>()
-                        .map_err(|e| format!("`sandbox`: {e}"))?,
+                        .map_err(|e| LiveError::within("`sandbox`", e))?,
                 ),
             }
         }
@@ -175,14 +178,14 @@ impl SlmpSettings {
             s.client.frame = match f {
                 "3e" | "3E" => FrameKind::E3,
                 "4e" | "4E" => FrameKind::E4,
-                _ => return Err(format!("`frame={f}`: give 3e or 4e")),
+                _ => return Err(refused!("`frame={f}`: give 3e or 4e")),
             };
         }
         if let Some(c) = get("code") {
             s.client.code = match c {
                 "binary" => Code::Binary,
                 "ascii" => Code::Ascii,
-                _ => return Err(format!("`code={c}`: give binary or ascii")),
+                _ => return Err(refused!("`code={c}`: give binary or ascii")),
             };
         }
         if let Some(f) = get("form") {
@@ -190,7 +193,7 @@ impl SlmpSettings {
                 "short" => DeviceForm::Short,
                 "long" => DeviceForm::Long,
                 _ => {
-                    return Err(format!(
+                    return Err(refused!(
                         "`form={f}`: give short (subcommand 0000) or long (0002)"
                     ))
                 }
@@ -200,7 +203,7 @@ impl SlmpSettings {
             v.parse::<f64>()
                 .ok()
                 .filter(|n| n.is_finite() && *n > 0.0 && *n <= 3600.0)
-                .ok_or_else(|| format!("`{k}={v}`: give a number above 0 and at most 3600"))
+                .ok_or_else(|| refused!("`{k}={v}`: give a number above 0 and at most 3600"))
         };
         if let Some(v) = get("timeout") {
             s.case_timeout = Duration::from_secs_f64(number("timeout", v)?);
@@ -222,7 +225,7 @@ impl SlmpSettings {
                 .parse::<usize>()
                 .ok()
                 .filter(|n| *n > 0)
-                .ok_or_else(|| format!("`max_faults={v}`: give at least 1"))?;
+                .ok_or_else(|| refused!("`max_faults={v}`: give at least 1"))?;
         }
         if let Some(v) = get("poll_ms") {
             s.first_poll = Duration::from_secs_f64(number("poll_ms", v)? / 1000.0);

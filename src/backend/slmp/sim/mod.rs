@@ -19,6 +19,7 @@ mod remote;
 
 pub use remote::RemoteProgram;
 
+use crate::backend::slmp::error::{refused, LiveError};
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
@@ -72,14 +73,14 @@ impl FaultRule {
     /// Reads `COMMAND:NTH:ACTION` as `hil sim --fault` takes it: `1401:3:drop` closes the
     /// connection on the third write; actions `drop`, `delay=MS`, `end=C051` (an end code in
     /// hexadecimal), `garbage`, `serial` (another 4E serial), `stop` (go to STOP).
-    pub fn parse(text: &str) -> Result<FaultRule, String> {
+    pub fn parse(text: &str) -> Result<FaultRule, LiveError> {
         let usage = "a fault is COMMAND:NTH:ACTION, e.g. 1401:3:drop, 0403:2:delay=3000, \
                      0401:1:end=C051; actions: drop, delay=MS, end=CODE, garbage, serial, stop";
         let mut parts = text.split(':');
         let (Some(command), Some(nth), Some(action), None) =
             (parts.next(), parts.next(), parts.next(), parts.next())
         else {
-            return Err(format!("`{text}`: {usage}"));
+            return Err(refused!("`{text}`: {usage}"));
         };
         let command = u16::from_str_radix(command, 16)
             .ok()
@@ -92,28 +93,29 @@ impl FaultRule {
                 ]
                 .contains(c)
             })
-            .ok_or_else(|| format!("`{text}`: the command is 0101, 0401, 0403 or 1401"))?;
+            .ok_or_else(|| refused!("`{text}`: the command is 0101, 0401, 0403 or 1401"))?;
         let nth = nth
             .parse::<usize>()
             .ok()
             .filter(|n| *n > 0)
-            .ok_or_else(|| format!("`{text}`: NTH counts requests from 1"))?;
+            .ok_or_else(|| refused!("`{text}`: NTH counts requests from 1"))?;
         let action = match action.split_once('=') {
             None if action == "drop" => FaultAction::Drop,
             None if action == "garbage" => FaultAction::Garbage,
             None if action == "serial" => FaultAction::WrongSerial,
             None if action == "stop" => FaultAction::Stop,
-            Some(("delay", ms)) => FaultAction::Delay(Duration::from_millis(
-                ms.parse()
-                    .map_err(|_| format!("`{text}`: delay=MS takes milliseconds"))?,
-            )),
+            Some(("delay", ms)) => {
+                FaultAction::Delay(Duration::from_millis(ms.parse().map_err(|e| {
+                    LiveError::within(format!("`{text}`: delay=MS takes milliseconds"), e)
+                })?))
+            }
             Some(("end", code)) => FaultAction::EndCode(
                 u16::from_str_radix(code.trim_end_matches('H'), 16)
                     .ok()
                     .filter(|c| *c != 0)
-                    .ok_or_else(|| format!("`{text}`: end=CODE takes a non-zero hex code"))?,
+                    .ok_or_else(|| refused!("`{text}`: end=CODE takes a non-zero hex code"))?,
             ),
-            _ => return Err(format!("`{text}`: {usage}")),
+            _ => return Err(refused!("`{text}`: {usage}")),
         };
         Ok(FaultRule {
             command,
@@ -200,7 +202,7 @@ impl SimSettings {
 /// to R120CPU 4804H), which an independent client library's table repeats. FX5: the FX5 SLMP
 /// manual's processor type table (FX5U-32MR/ES 4A21H ... FX5UC-32MT/DSS 4A99H); FX5U-32MT/DS
 /// 4A49H is on a later revision's table and was read off an FX5U-32MT/DS by the aslmp project.
-pub fn model_code(type_name: &str) -> Option<u16> {
+pub(crate) fn model_code(type_name: &str) -> Option<u16> {
     Some(match type_name {
         "R04CPU" => 0x4800,
         "R08CPU" => 0x4801,
@@ -314,17 +316,17 @@ impl Simulator {
         settings: SimSettings,
         profile: Arc<Profile>,
         model: Arc<dyn Backend>,
-    ) -> Result<Simulator, String> {
+    ) -> Result<Simulator, LiveError> {
         let shared = Shared::new(settings, profile, model)?;
         let port = shared.settings.port;
         let listener = TcpListener::bind(("127.0.0.1", port))
-            .map_err(|e| format!("cannot listen on 127.0.0.1:{port}: {e}"))?;
+            .map_err(|e| LiveError::within(format!("cannot listen on 127.0.0.1:{port}"), e))?;
         let address = listener
             .local_addr()
-            .map_err(|e| format!("no local address: {e}"))?;
+            .map_err(|e| LiveError::within("no local address", e))?;
         listener
             .set_nonblocking(true)
-            .map_err(|e| format!("cannot poll the listener: {e}"))?;
+            .map_err(|e| LiveError::within("cannot poll the listener", e))?;
         {
             // A CPU in RUN has scanned before anyone can connect to it.
             let mut cpu = shared.lock();
@@ -397,12 +399,13 @@ impl Shared {
         settings: SimSettings,
         profile: Arc<Profile>,
         model: Arc<dyn Backend>,
-    ) -> Result<Arc<Shared>, String> {
+    ) -> Result<Arc<Shared>, LiveError> {
         settings.manifest.validate()?;
         if profile.variant(&settings.variant).is_none() {
-            return Err(format!(
+            return Err(refused!(
                 "`{}` is not a variant of {}",
-                settings.variant, profile.id
+                settings.variant,
+                profile.id
             ));
         }
         let mailbox = settings.manifest.mailbox_head()?;
@@ -421,7 +424,7 @@ impl Shared {
                 let addresses = (r.addresses.iter())
                     .map(|(p, t)| Ok((device(p)?, device(t)?)))
                     .collect::<Result<Vec<_>, crate::device::DeviceSyntaxError>>()
-                    .map_err(|e| format!("rung {}: {e}", r.id))?;
+                    .map_err(|e| LiveError::within(format!("rung {}", r.id), e))?;
                 Ok(SimRung {
                     id: r.id,
                     instruction: r.instruction.clone(),
@@ -434,8 +437,9 @@ impl Shared {
                     pulse: is_pulse(&profile, &r.instruction),
                 })
             })
-            .collect::<Result<Vec<_>, String>>()?;
-        let mut allowed = parse_ranges(&settings.manifest.writes.join(","))?;
+            .collect::<Result<Vec<_>, LiveError>>()?;
+        let mut allowed = parse_ranges(&settings.manifest.writes.join(","))
+            .map_err(|e| LiveError::within("the manifest's `writes`", e))?;
         allowed.extend(mailbox::pc_words(&mailbox));
         let cpu = Cpu {
             words: word_devices(&profile, &settings.variant),
@@ -487,7 +491,7 @@ impl Cpu {
 
     /// A rung's operands with each indirect one read through its pointer, as the CPU does when
     /// the instruction runs.
-    fn resolve(&self, rung: &SimRung) -> Result<BTreeMap<String, Operand>, String> {
+    fn resolve(&self, rung: &SimRung) -> Result<BTreeMap<String, Operand>, LiveError> {
         let mut operands = rung.operands.clone();
         for name in &rung.indirect {
             let Some(Operand::Device(pointer)) = rung.operands.get(name) else {
@@ -500,7 +504,7 @@ impl Cpu {
                 _ => None,
             };
             let Some(target) = target else {
-                return Err(format!(
+                return Err(refused!(
                     "{}: @{pointer} holds no address ADRSET stored",
                     rung.instruction
                 ));
@@ -666,7 +670,7 @@ fn scan(shared: &Shared, cpu: &mut Cpu) {
                     // ENO FALSE on an operation error, as IEC 61131-3 has it.
                     eno = flag_before || !cpu.bit(&m.error.flag);
                 }
-                Err(why) => cpu.audit.anomalies.push(why),
+                Err(why) => cpu.audit.anomalies.push(crate::error_chain::chain(&why)),
             }
         }
         // The rung's proof of execution, in the scan it is enabled.
@@ -1089,7 +1093,7 @@ mod tests {
             pulse: false,
         };
         let mut cpu = cpu();
-        let e = cpu.resolve(&rung).expect_err("no address stored yet");
+        let e = crate::error_chain::chain(&cpu.resolve(&rung).expect_err("no address stored yet"));
         assert!(e.contains("@D10"), "{e}");
         cpu.adrset(&d(300), &d(20));
         cpu.adrset(&d(100), &d(10));

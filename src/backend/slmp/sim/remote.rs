@@ -5,6 +5,8 @@
 //! words the scan changed. The live backend then talks to the third-party server, in its code
 //! and with its limits, exactly as to a CPU; only the program is this harness's.
 
+use crate::backend::slmp::error::LiveError;
+use crate::error_chain::chain;
 use std::collections::BTreeMap;
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
@@ -32,9 +34,10 @@ impl RemoteProgram {
         profile: Arc<Profile>,
         model: Arc<dyn Backend>,
         client: ClientSettings,
-    ) -> Result<RemoteProgram, String> {
+    ) -> Result<RemoteProgram, LiveError> {
         let shared = Shared::new(settings, profile, model)?;
-        let writes = parse_ranges(&shared.settings.manifest.writes.join(","))?;
+        let writes = parse_ranges(&shared.settings.manifest.writes.join(","))
+            .map_err(|e| LiveError::within("the manifest's `writes`", e))?;
         // Every word of the copy is the program's to write, as a CPU's own memory is.
         let fence = WriteFence::new(
             (shared.lock().words.iter())
@@ -48,7 +51,7 @@ impl RemoteProgram {
         let thread = std::thread::spawn(move || {
             while !s.stop.load(Ordering::SeqCst) {
                 if let Err(why) = remote_scan(&s, &mut client, &writes, &fence) {
-                    s.lock().audit.anomalies.push(why);
+                    s.lock().audit.anomalies.push(chain(&why));
                 }
                 std::thread::sleep(s.settings.scan);
             }
@@ -79,13 +82,11 @@ fn remote_scan(
     client: &mut Client,
     writes: &[WordRange],
     fence: &WriteFence,
-) -> Result<(), String> {
+) -> Result<(), LiveError> {
     let mut cpu = shared.lock();
     let mb = &shared.mailbox;
     let mut reads = vec![mailbox::range(mb)];
-    let words = client
-        .read_words(mb, mailbox::WORDS)
-        .map_err(|e| e.to_string())?;
+    let words = client.read_words(mb, mailbox::WORDS)?;
     let word = |o: u32| words.get(o as usize).copied().unwrap_or(0);
     // The scan that runs the selected rung reads what the PC set for the case.
     if word(off::TRIGGER) != word(off::ACK) && word(off::STATE) == state::EXECUTING {
@@ -93,9 +94,7 @@ fn remote_scan(
     }
     for range in &reads {
         let head = Device::new(&range.code, range.first);
-        let read = client
-            .read_words(&head, range.len())
-            .map_err(|e| e.to_string())?;
+        let read = client.read_words(&head, range.len())?;
         for (i, w) in read.into_iter().enumerate() {
             cpu.set_word(&Device::new(&range.code, range.first + i as u32), w);
         }
@@ -119,11 +118,9 @@ fn remote_scan(
         .into_iter()
         .partition(|(d, _)| ack.is(d.code(), d.index));
     for (head, words) in first.iter().chain(&last) {
-        let built = fence
-            .writes(client.settings().form, limits.batch_words, head, words)
-            .map_err(|e| e.to_string())?;
+        let built = fence.writes(client.settings().form, limits.batch_words, head, words)?;
         for w in built {
-            client.write(&w).map_err(|e| e.to_string())?;
+            client.write(&w)?;
         }
     }
     Ok(())

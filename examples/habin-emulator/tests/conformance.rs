@@ -1,0 +1,18 @@
+//! The emulator against the corpus, in this crate's own `cargo test`: one libtest trial per
+//! HABIN case and per cross-vendor case lowered onto HABIN, with diffs; the instructions it
+//! does not claim are listed as skipped with the reason.
+
+use std::path::Path;
+use std::process::ExitCode;
+use std::sync::Arc;
+
+use habin_emulator::HabinEmulator;
+use plc_conformance::Harness;
+
+fn main() -> ExitCode {
+    let here = Path::new(env!("CARGO_MANIFEST_DIR"));
+    Harness::new(here.join("../.."))
+        .without_builtin()
+        .backend(Arc::new(HabinEmulator), None)
+        .run()
+}

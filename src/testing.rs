@@ -1,0 +1,146 @@
+//! The crate's internals as its own integration tests and benchmarks reach them.
+//!
+//! Nothing here is part of the supported interface: an emulator or codec author depends on the
+//! items at the crate root, which keep their names and meaning across releases; these paths
+//! follow the modules inside and may move with them. The tests of this repository use them to
+//! hold the simulated CPU, the SLMP client, the sweep's internals and the loaders to what
+//! the manuals say, which the public interface has no reason to expose.
+
+pub mod backend {
+    pub use crate::backend::{
+        codec_backend, fx5, reference_backends, Backend, Codec, Fault, Outcome, Question, Request,
+        Response, Unsupported,
+    };
+    pub mod external {
+        pub use crate::backend::external::{ExternalBackend, ExternalErrorKind};
+        pub mod protocol {
+            pub use crate::backend::external::protocol::{
+                protocol_schema, BackendMessage, HarnessMessage,
+            };
+        }
+        pub mod serve {
+            pub use crate::backend::external::serve::serve;
+        }
+    }
+    pub mod omron {
+        pub use crate::backend::omron::{Designator, Parity};
+    }
+    pub mod slmp {
+        pub use crate::backend::slmp::{
+            fault_of, fence, limits, mailbox, SlmpBackend, SlmpSettings,
+        };
+        pub mod client {
+            pub use crate::backend::slmp::client::{Client, ClientError, ClientSettings, Code};
+        }
+        pub mod frame {
+            pub use crate::backend::slmp::frame::{command, DeviceForm, FrameKind};
+        }
+        pub mod manifest {
+            pub use crate::backend::slmp::manifest::Manifest;
+        }
+        pub mod sim {
+            pub use crate::backend::slmp::sim::{
+                FaultAction, FaultRule, RemoteProgram, SimSettings, Simulator,
+            };
+        }
+    }
+}
+pub mod device {
+    pub use crate::device::Device;
+}
+pub mod error_chain {
+    pub use crate::error_chain::chain;
+}
+pub mod execute {
+    pub use crate::execute::{execute_all, images, requests, Pace, Progress};
+}
+pub mod hil {
+    pub use crate::hil::{dry_run, generate, pulse_self_test, GenerateOptions};
+}
+pub mod judge {
+    pub use crate::judge::{Difference, Status, Verdict};
+}
+pub mod known_draft {
+    pub use crate::known_draft::draft;
+}
+pub mod libtest {
+    pub use crate::libtest::{main, Harness};
+}
+pub mod load {
+    pub use crate::load::{
+        load_corpus, load_known, load_open_questions, load_profiles, load_project, parse_profile,
+        yaml_files, CorpusBuilder, LoadError, ENV_CONFIG, ENV_REQUIRE, ENV_SELF, FILE_NAME,
+        OPEN_QUESTIONS,
+    };
+}
+pub mod memory {
+    pub use crate::memory::{Fill, Image, Unit};
+}
+pub mod model {
+    pub use crate::model::{Basis, Case, Citation, Corpus, ErrorSignal, Operand};
+    pub mod cross_vendor {
+        pub use crate::model::cross_vendor::{
+            Answer, CodecAbilities, CrossVendorCase, ErrorClass, Operation, OperationAbilities,
+        };
+    }
+    pub mod known {
+        pub use crate::model::known::{Covers, Entry, KnownDifferences, Subject};
+    }
+    pub mod profile {
+        pub use crate::model::profile::{DeviceRange, DeviceRanges, Profiles, Variant};
+    }
+    pub mod project {
+        pub use crate::model::project::{ExternalSettings, Launch};
+    }
+}
+pub mod plan {
+    pub use crate::plan::{Check, Input, Trial};
+}
+pub mod report {
+    pub use crate::report::{Event, Reporter};
+    pub mod progress {
+        pub use crate::report::progress::ProgressReporter;
+    }
+    pub mod record {
+        pub use crate::report::record::Record;
+    }
+    pub mod sanitize {
+        pub use crate::report::sanitize::forbidden_in_xml;
+    }
+    pub mod text {
+        pub use crate::report::text::{describe_setting, render, Palette};
+    }
+}
+pub mod runner {
+    pub use crate::runner::{run_one, verdicts, Paths, Project, SetupError};
+}
+pub mod spec {
+    pub use crate::spec::{schema, SchemaKind};
+    pub mod profile {
+        pub use crate::spec::profile::DeviceRanges;
+    }
+}
+pub mod sweep {
+    pub use crate::sweep::{emit, exhaustive, render, Results, Settings, Sweep};
+    pub mod classes {
+        pub use crate::sweep::classes::{derive, ByteClasses};
+    }
+    pub mod generate {
+        pub use crate::sweep::generate::{Digits, Generator, BOUNDARIES};
+    }
+    pub mod group {
+        pub use crate::sweep::group::{labels, Groups, Reply};
+    }
+    pub mod input {
+        pub use crate::sweep::input::{Data, Point};
+    }
+    pub mod shrink {
+        pub use crate::sweep::shrink::candidates;
+    }
+    pub mod target {
+        pub use crate::sweep::target::{Cases, Target};
+    }
+}
+pub mod text {
+    pub use crate::text::{digit_value, pack_low_first, packed_char};
+}
