@@ -11,7 +11,7 @@
 //! and flags, the memory before — with the words it wrote and the error it signalled:
 //!
 //! ```
-//! use plc_conformance::{Backend, Fault, Outcome, Request, Response, Unsupported};
+//! use plc_conformance::{Backend, Fault, Outcome, Request, Response, Unsupported, Value};
 //!
 //! /// Knows MELSEC iQ-R HABIN with SM705 off (a fixed 4 digits) and nothing else.
 //! struct MyEmulator;
@@ -30,7 +30,7 @@
 //!             (Err(u), _) | (_, Err(u)) => return Ok(Response::from(u)),
 //!         };
 //!         // 4135H 4438H reads "5A8D", low byte first (`iqr-instructions-ja p.478`).
-//!         let mut value = 0u16;
+//!         let mut value: Value = 0;
 //!         for i in 0..2 {
 //!             let word = s.offset(i).map_or(0, |device| r.memory.read(&device));
 //!             for byte in [word as u8, (word >> 8) as u8] {
@@ -38,7 +38,7 @@
 //!                 else {
 //!                     return Ok(Response::Done(Outcome::error(r.error(0x3401))));
 //!                 };
-//!                 value = value << 4 | digit as u16;
+//!                 value = value << 4 | digit;
 //!             }
 //!         }
 //!         Ok(Response::Done(Outcome::written([(d.clone(), value)].into())))
@@ -113,7 +113,7 @@ pub use device::Device;
 pub use judge::{Difference, Status, Verdict};
 pub use libtest::Harness;
 pub use load::LoadErrors;
-pub use memory::{Fill, Image, Unit};
+pub use memory::{Fill, Image, Unit, Value};
 pub use model::cross_vendor::CrossVendorCase;
 pub use model::cross_vendor::{Answer, CodecAbilities, ErrorClass, Operation, OperationAbilities};
 pub use model::known::{KnownDifferences, Subject};

@@ -36,22 +36,43 @@ pub enum Unit {
     /// One 16-bit word: word-addressed memory, where a character pair shares one device.
     #[default]
     Word,
+    /// One 32-bit word: memory whose every device holds 32 bits, four characters of packed text.
+    Dword,
 }
+
+/// What one unit of memory holds: a byte, a 16-bit or a 32-bit word, by the family's
+/// `memory_unit`. Wide enough for the widest unit, so that nothing past the leaves assumes a
+/// 16-bit word.
+pub type Value = u32;
 
 impl Unit {
     pub fn bits(self) -> u32 {
         match self {
             Unit::Byte => 8,
             Unit::Word => 16,
+            Unit::Dword => 32,
         }
     }
 
     /// The largest value a unit holds.
-    pub fn max(self) -> u16 {
+    pub fn max(self) -> Value {
         match self {
             Unit::Byte => 0xFF,
             Unit::Word => 0xFFFF,
+            Unit::Dword => 0xFFFF_FFFF,
         }
+    }
+
+    /// Characters packed into units as the family stores a string: as many to a unit as it has
+    /// bytes, the first in the lowest byte; a short last unit is filled with 00H.
+    pub fn pack(self, chars: &[u8]) -> Vec<Value> {
+        let width = (self.bits() / 8) as usize;
+        chars
+            .chunks(width)
+            .map(|unit| {
+                (unit.iter().enumerate()).fold(0, |v, (i, c)| v | Value::from(*c) << (8 * i))
+            })
+            .collect()
     }
 
     /// Hex digits in one unit.
@@ -59,18 +80,17 @@ impl Unit {
         self.bits() / 4
     }
 
-    /// A unit's value the way the manuals write it: `5A8DH` for a word, `5AH` for a byte.
-    pub fn hex(self, value: u16) -> String {
-        match self {
-            Unit::Byte => format!("{value:02X}H"),
-            Unit::Word => format!("{value:04X}H"),
-        }
+    /// A unit's value the way the manuals write it: `5A8DH` for a word, `5AH` for a byte,
+    /// `89ABCDEFH` for a 32-bit word.
+    pub fn hex(self, value: Value) -> String {
+        format!("{value:0width$X}H", width = self.digits() as usize)
     }
 
     pub fn name(self) -> &'static str {
         match self {
             Unit::Byte => "byte",
             Unit::Word => "word",
+            Unit::Dword => "dword",
         }
     }
 }
@@ -92,21 +112,29 @@ impl Fill {
     /// so a byte-addressed family sees the same kinds of bytes as a word-addressed one. It
     /// varies with the unit's position ([`Device::unit_number`]), so neighbouring units differ
     /// for a digit designation too (`K4M0`, `K4M16`).
-    pub fn value(self, device: &Device, unit: Unit) -> u16 {
+    ///
+    /// A 32-bit unit holds the word fill of its position low and that of the position eight on
+    /// high, so its four bytes are of the fill's kind and its halves differ.
+    pub fn value(self, device: &Device, unit: Unit) -> Value {
         let i = (device.unit_number() % 16) as usize;
-        let word = match self {
-            Fill::A => 0xA5A5 ^ ((i % 6) as u16 * 0x0101),
-            Fill::B => {
-                const DIGITS: &[u8; 16] = b"0123456789ABCDEF";
-                u16::from(DIGITS[i]) | (u16::from(DIGITS[15 - i]) << 8)
+        let word = |i: usize| -> Value {
+            match self {
+                Fill::A => 0xA5A5 ^ ((i % 6) as Value * 0x0101),
+                Fill::B => {
+                    const DIGITS: &[u8; 16] = b"0123456789ABCDEF";
+                    Value::from(DIGITS[i]) | (Value::from(DIGITS[15 - i]) << 8)
+                }
             }
         };
-        word & unit.max()
+        match unit {
+            Unit::Byte | Unit::Word => word(i) & unit.max(),
+            Unit::Dword => word(i) | word((i + 8) % 16) << 16,
+        }
     }
 
-    /// The fill's value of a word.
+    /// The fill's value of a 16-bit word.
     pub fn word(self, device: &Device) -> u16 {
-        self.value(device, Unit::Word)
+        self.value(device, Unit::Word) as u16
     }
 
     pub fn name(self) -> &'static str {
@@ -120,26 +148,32 @@ impl Fill {
 /// Memory before execution: the vector's units over a fill.
 #[derive(Debug, Clone)]
 pub struct Image {
-    words: BTreeMap<Device, u16>,
+    words: BTreeMap<Device, Value>,
     fill: Fill,
     unit: Unit,
 }
 
 impl Image {
     /// Word-addressed memory.
-    pub fn new(words: BTreeMap<Device, u16>, fill: Fill) -> Self {
+    pub fn new(words: BTreeMap<Device, Value>, fill: Fill) -> Self {
         Image::of_units(words, fill, Unit::Word)
     }
 
-    pub fn of_units(words: BTreeMap<Device, u16>, fill: Fill, unit: Unit) -> Self {
+    pub fn of_units(words: BTreeMap<Device, Value>, fill: Fill, unit: Unit) -> Self {
         Image { words, fill, unit }
     }
 
-    pub fn read(&self, device: &Device) -> u16 {
+    pub fn read(&self, device: &Device) -> Value {
         self.words
             .get(device)
             .copied()
             .unwrap_or_else(|| self.fill.value(device, self.unit))
+    }
+
+    /// A unit of a 16-bit family as the word it is (the low 16 bits of any unit): what the
+    /// reference models of word- and byte-addressed families compute with.
+    pub fn word(&self, device: &Device) -> u16 {
+        self.read(device) as u16
     }
 
     pub fn fill(&self) -> Fill {
@@ -151,7 +185,7 @@ impl Image {
     }
 
     /// The words the vector set explicitly.
-    pub fn explicit(&self) -> &BTreeMap<Device, u16> {
+    pub fn explicit(&self) -> &BTreeMap<Device, Value> {
         &self.words
     }
 }
@@ -160,7 +194,7 @@ impl Image {
 #[derive(Debug)]
 pub(crate) struct Scratch<'a> {
     image: &'a Image,
-    writes: BTreeMap<Device, u16>,
+    writes: BTreeMap<Device, Value>,
 }
 
 impl<'a> Scratch<'a> {
@@ -171,18 +205,23 @@ impl<'a> Scratch<'a> {
         }
     }
 
-    pub(crate) fn read(&self, device: &Device) -> u16 {
+    pub(crate) fn read(&self, device: &Device) -> Value {
         self.writes
             .get(device)
             .copied()
             .unwrap_or_else(|| self.image.read(device))
     }
 
-    pub(crate) fn write(&mut self, device: Device, value: u16) {
-        self.writes.insert(device, value);
+    /// A unit as [`Image::word`] reads it.
+    pub(crate) fn word(&self, device: &Device) -> u16 {
+        self.read(device) as u16
     }
 
-    pub(crate) fn into_writes(self) -> BTreeMap<Device, u16> {
+    pub(crate) fn write(&mut self, device: Device, value: impl Into<Value>) {
+        self.writes.insert(device, value.into());
+    }
+
+    pub(crate) fn into_writes(self) -> BTreeMap<Device, Value> {
         self.writes
     }
 }
@@ -211,7 +250,10 @@ mod tests {
         for index in 0..64 {
             let d = Device::new("MB", index);
             for fill in Fill::ALL {
-                assert_eq!(fill.value(&d, Unit::Byte), fill.word(&d) & 0xFF);
+                assert_eq!(
+                    fill.value(&d, Unit::Byte),
+                    Value::from(fill.word(&d) & 0xFF)
+                );
             }
             assert_ne!(Fill::A.value(&d, Unit::Byte), Fill::B.value(&d, Unit::Byte));
         }
@@ -235,12 +277,33 @@ mod tests {
     }
 
     #[test]
+    fn a_32_bit_unit_holds_two_word_fills_and_four_characters() {
+        for index in 0..16 {
+            let d = Device::new("DW", index);
+            let eight_on = Device::new("DW", (index + 8) % 16);
+            for fill in Fill::ALL {
+                let (low, high) = (fill.word(&d), fill.word(&eight_on));
+                assert_eq!(
+                    fill.value(&d, Unit::Dword),
+                    Value::from(low) | Value::from(high) << 16
+                );
+            }
+        }
+        assert_eq!(Unit::Dword.pack(b"12345"), vec![0x3433_3231, 0x35]);
+        assert_eq!(Unit::Word.pack(b"123"), vec![0x3231, 0x33]);
+        assert_eq!(Unit::Byte.pack(b"12"), vec![0x31, 0x32]);
+        assert_eq!(Unit::Dword.hex(0x89AB_CDEF), "89ABCDEFH");
+        assert_eq!(Unit::Word.hex(0x5A8D), "5A8DH");
+        assert_eq!(Unit::Byte.hex(0x5A), "5AH");
+    }
+
+    #[test]
     fn scratch_reads_its_own_writes() {
         let d = Device::new("D", 1);
         let image = Image::new(BTreeMap::from([(d.clone(), 7)]), Fill::A);
         let mut s = Scratch::new(&image);
         assert_eq!(s.read(&d), 7);
-        s.write(d.clone(), 9);
+        s.write(d.clone(), 9u32);
         assert_eq!(s.read(&d), 9);
         assert_eq!(s.into_writes(), BTreeMap::from([(d, 9)]));
     }

@@ -74,7 +74,7 @@ pub mod load {
     };
 }
 pub mod memory {
-    pub use crate::memory::{Fill, Image, Unit};
+    pub use crate::memory::{Fill, Image, Unit, Value};
 }
 pub mod model {
     pub use crate::model::{Basis, Case, Citation, Corpus, ErrorSignal, Operand};

@@ -1,7 +1,7 @@
 //! Hex digits and character storage shared by the reference models.
 
 use crate::device::Device;
-use crate::memory::Image;
+use crate::memory::{Image, Unit, Value};
 
 /// The value of a hex digit character. Only 30H-39H and 41H-46H are digits: lowercase is
 /// invalid in the manuals this project covers, except where a family's model says otherwise
@@ -27,7 +27,7 @@ pub(crate) fn significant_digits(v: u64) -> u32 {
 /// The `k`-th character of text stored two characters per word, first character in the low
 /// byte (MELSEC string storage).
 pub fn packed_char(memory: &Image, head: &Device, k: u32) -> Option<u8> {
-    let word = memory.read(&head.offset(k / 2)?);
+    let word = memory.word(&head.offset(k / 2)?);
     Some(if k % 2 == 0 {
         word as u8
     } else {
@@ -36,11 +36,8 @@ pub fn packed_char(memory: &Image, head: &Device, k: u32) -> Option<u8> {
 }
 
 /// Packs characters two per word, first in the low byte; an odd count leaves 00H high.
-pub fn pack_low_first(chars: &[u8]) -> Vec<u16> {
-    chars
-        .chunks(2)
-        .map(|pair| u16::from(pair[0]) | (u16::from(pair.get(1).copied().unwrap_or(0)) << 8))
-        .collect()
+pub fn pack_low_first(chars: &[u8]) -> Vec<Value> {
+    Unit::Word.pack(chars)
 }
 
 #[cfg(test)]

@@ -119,20 +119,21 @@ pub(crate) fn to_bits(text: &str, value: i64, bits: u32) -> Result<u64, ValueErr
 
 /// Reads a 16-bit word.
 pub(crate) fn parse_word(text: &str) -> Result<u16, ValueError> {
-    parse_bits(text, 16)
+    parse_bits(text, 16).map(|w| w as u16)
 }
 
-/// Reads a number that must fit `bits` bits (at most 16: a word or a byte).
-pub(crate) fn parse_bits(text: &str, bits: u32) -> Result<u16, ValueError> {
+/// Reads a number that must fit `bits` bits (at most 32: a memory unit).
+pub(crate) fn parse_bits(text: &str, bits: u32) -> Result<u32, ValueError> {
     let value = parse_number(text).map_err(|e| match e {
         ValueError::TooWide { text, .. } => ValueError::TooWide { text, bits },
         e => e,
     })?;
-    Ok(to_bits(text, value, bits)? as u16)
+    Ok(to_bits(text, value, bits)? as u32)
 }
 
 /// Formats a word the way the manuals do: four hex digits and an `H` suffix.
-pub(crate) fn hex_word(word: u16) -> String {
+pub(crate) fn hex_word(word: impl Into<u32>) -> String {
+    let word = word.into();
     format!("{word:04X}H")
 }
 

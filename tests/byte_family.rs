@@ -62,7 +62,7 @@ fn the_toy_family_loads_in_bytes() {
         .find(|c| c.id == "ath-odd-count")
         .expect("the odd-count case");
     // `ascii` is one character per byte in byte memory, not two per word.
-    let before: Vec<(String, u16)> = odd
+    let before: Vec<(String, u32)> = odd
         .before
         .iter()
         .map(|(d, v)| (d.to_string(), *v))
@@ -162,7 +162,7 @@ fn a_backend_of_protocol_2_is_refused_for_byte_memory() {
     let (code, stdout, stderr) = run(&[("TOY_PROTOCOL", "2")], &[]);
     assert_eq!(code, 2, "{stdout}\n{stderr}");
     assert!(
-        stderr.contains("profile `toy-bytes` is byte-addressed")
+        stderr.contains("profile `toy-bytes`'s memory unit is a byte")
             && stderr.contains("needs version 3"),
         "{stderr}"
     );

@@ -24,7 +24,7 @@ const PROFILE: &str = "idec-fc4a";
 fn word_of(req: &Request<'_>, name: &str) -> Option<u16> {
     match req.operands.get(name)? {
         Operand::Constant(k) => u16::try_from(*k).ok(),
-        Operand::Device(d) => Some(req.memory.read(d)),
+        Operand::Device(d) => Some(req.memory.word(d)),
     }
 }
 
@@ -55,7 +55,7 @@ fn with_operands(
 fn with_memory(
     req: &Request<'_>,
     base: &dyn Backend,
-    words: BTreeMap<Device, u16>,
+    words: BTreeMap<Device, u32>,
 ) -> Result<Response, Fault> {
     let memory = Image::new(words, req.memory.fill());
     base.execute(&Request {
@@ -109,7 +109,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
             for k in 0..u32::from(n.min(4)) {
                 let ch = packed_char(req.memory, &s1, k).unwrap_or(0);
                 if let Some(dev) = s1.offset(k) {
-                    words.insert(dev, u16::from(ch));
+                    words.insert(dev, u32::from(ch));
                 }
             }
             with_memory(req, base, words)
@@ -228,7 +228,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
             map_done(base.execute(req), |mut o| {
                 if req.instruction == "HTOA" {
                     let devs: Vec<Device> = o.writes.keys().cloned().collect();
-                    let vals: Vec<u16> = o.writes.values().copied().collect();
+                    let vals: Vec<u32> = o.writes.values().copied().collect();
                     o.writes = devs.into_iter().zip(vals.into_iter().rev()).collect();
                 }
                 o
@@ -267,7 +267,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
             let d1 = device_of(req, "D1");
             map_done(base.execute(req), |mut o| {
                 if let (true, Some(d1)) = (req.instruction == "HTOA", d1) {
-                    let mut chars: Vec<u16> = o.writes.values().copied().collect();
+                    let mut chars: Vec<u32> = o.writes.values().copied().collect();
                     while chars.len() > 1 && chars[0] == 0x30 {
                         chars.remove(0);
                     }

@@ -16,7 +16,7 @@ use plc_conformance::testing::model::Operand;
 fn count(req: &Request<'_>) -> u32 {
     match req.operands.get("n") {
         Some(Operand::Constant(k)) => u32::try_from(*k).unwrap_or(0),
-        Some(Operand::Device(d)) => u32::from(req.memory.read(d)),
+        Some(Operand::Device(d)) => req.memory.read(d),
         None => 0,
     }
 }
@@ -108,7 +108,7 @@ fn mutants(
             let old = last.as_ref().map(|l| req.memory.read(l));
             map_done(base.execute(req), |mut o| {
                 if let (true, Some(l), Some(old), 1..=3) = (hex, last, old, n % 4) {
-                    let mask = 0xFFFFu16 << (4 * (n % 4));
+                    let mask = (0xFFFFu32 << (4 * (n % 4))) & 0xFFFF;
                     if let Some(v) = o.writes.get_mut(&l) {
                         *v |= old & mask;
                     }

@@ -38,7 +38,7 @@ fn device(req: &Request<'_>, name: &str) -> Option<Device> {
 fn n_of(req: &Request<'_>) -> Option<u32> {
     match req.operands.get("n")? {
         Operand::Constant(k) => Some((*k as u16).into()),
-        Operand::Device(d) => Some(req.memory.read(d).into()),
+        Operand::Device(d) => Some(req.memory.read(d)),
     }
 }
 
@@ -151,7 +151,7 @@ fn map_chars(
     }
     let eight = eight_bit(req);
     let mut writes = outcome.writes.clone();
-    let read = |writes: &BTreeMap<Device, u16>, dev: &Device| {
+    let read = |writes: &BTreeMap<Device, u32>, dev: &Device| {
         writes
             .get(dev)
             .copied()
@@ -172,9 +172,9 @@ fn map_chars(
         if let Some((dev, high)) = slot(&d, i as u32, eight) {
             let w = read(&writes, &dev);
             let new = if high {
-                (w & 0x00FF) | u16::from(ch) << 8
+                (w & 0x00FF) | u32::from(ch) << 8
             } else {
-                (w & 0xFF00) | u16::from(ch)
+                (w & 0xFF00) | u32::from(ch)
             };
             writes.insert(dev, new);
         }
@@ -188,7 +188,7 @@ fn asci_source(req: &Request<'_>, n: u32) -> Vec<u16> {
         Some(Operand::Constant(k)) => vec![*k as u16],
         Some(Operand::Device(s)) => (0..fx5::asci_source_words(n))
             .filter_map(|i| s.offset(i))
-            .map(|dev| req.memory.read(&dev))
+            .map(|dev| req.memory.word(&dev))
             .collect(),
         None => Vec::new(),
     }
@@ -370,7 +370,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                     let mut padded = group.to_vec();
                     padded.resize(4, b'0');
                     if let (Ok(w), Some(dev)) = (fx5::hex_words(&padded), d.offset(i as u32)) {
-                        writes.insert(dev, w[0]);
+                        writes.insert(dev, u32::from(w[0]));
                     }
                 }
                 Outcome { writes, ..o }
@@ -385,8 +385,11 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                 .explicit()
                 .iter()
                 .map(|(dev, w)| {
-                    let [lo, hi] = w.to_le_bytes();
-                    let up = u16::from_le_bytes([lo.to_ascii_uppercase(), hi.to_ascii_uppercase()]);
+                    let [lo, hi, ..] = w.to_le_bytes();
+                    let up = u32::from(u16::from_le_bytes([
+                        lo.to_ascii_uppercase(),
+                        hi.to_ascii_uppercase(),
+                    ]));
                     (dev.clone(), up)
                 })
                 .collect();
@@ -402,7 +405,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                 if is_asci(req) || o.error.is_some() || n % 4 == 0 {
                     return o;
                 }
-                let mask: u16 = (1 << (4 * (n % 4))) - 1;
+                let mask: u32 = (1 << (4 * (n % 4))) - 1;
                 if let Some((dev, w)) = o.writes.iter_mut().next_back() {
                     *w = (req.memory.read(dev) & !mask) | (*w & mask);
                 }

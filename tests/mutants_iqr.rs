@@ -29,9 +29,9 @@ fn double(req: &Request<'_>) -> bool {
     req.instruction.starts_with('D')
 }
 
-fn map_bytes(word: u16, f: &impl Fn(u8) -> u8) -> u16 {
-    let [lo, hi] = word.to_le_bytes();
-    u16::from_le_bytes([f(lo), f(hi)])
+fn map_bytes(word: u32, f: &impl Fn(u8) -> u8) -> u32 {
+    let [lo, hi, ..] = word.to_le_bytes();
+    u32::from(u16::from_le_bytes([f(lo), f(hi)]))
 }
 
 /// Runs the base on the vector's words with every byte rewritten: how a backend that
@@ -150,7 +150,8 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                         acc | ((value >> (4 * i)) & 0xF) << (4 * (nibbles - 1 - i))
                     });
                     for (i, dev) in devices.into_iter().enumerate() {
-                        o.writes.insert(dev, (reversed >> (16 * i)) as u16);
+                        o.writes
+                            .insert(dev, u32::from((reversed >> (16 * i)) as u16));
                     }
                 }
                 o
@@ -163,8 +164,9 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
             }
             map_done(answer, |mut o| {
                 if let Some((devices, value)) = result_words(req, &o) {
-                    o.writes.insert(devices[0].clone(), (value >> 16) as u16);
-                    o.writes.insert(devices[1].clone(), value as u16);
+                    o.writes
+                        .insert(devices[0].clone(), u32::from((value >> 16) as u16));
+                    o.writes.insert(devices[1].clone(), u32::from(value as u16));
                 }
                 o
             })
@@ -219,7 +221,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
             let (Some(high), true) = (s.offset(1), to_ascii(req) && double(req)) else {
                 return base.execute(req);
             };
-            let mut words: BTreeMap<Device, u16> = req.memory.explicit().clone();
+            let mut words: BTreeMap<Device, u32> = req.memory.explicit().clone();
             words.insert(s.clone(), req.memory.read(&high));
             words.insert(high.clone(), req.memory.read(s));
             let image = Image::new(words, req.memory.fill());

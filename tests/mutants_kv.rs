@@ -15,7 +15,7 @@ const PROFILE: &str = "keyence-kv";
 /// The word LDA loads.
 fn loaded(req: &Request<'_>) -> Option<u16> {
     match req.operands.get("s")? {
-        Operand::Device(d) => Some(req.memory.read(d)),
+        Operand::Device(d) => Some(req.memory.word(d)),
         Operand::Constant(k) => Some(*k as u16),
     }
 }

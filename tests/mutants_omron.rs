@@ -32,7 +32,7 @@ fn device(req: &Request<'_>, name: &str) -> Option<Device> {
 fn di_word(req: &Request<'_>) -> Option<u16> {
     match req.operands.get("Di")? {
         Operand::Constant(k) => u16::try_from(*k).ok(),
-        Operand::Device(d) => Some(req.memory.read(d)),
+        Operand::Device(d) => Some(req.memory.word(d)),
     }
 }
 
@@ -52,8 +52,12 @@ fn with_memory(
     base: &dyn Backend,
     f: impl FnOnce(&mut BTreeMap<Device, u16>),
 ) -> Result<Response, Fault> {
-    let mut words: BTreeMap<Device, u16> = req.memory.explicit().clone();
+    // Omron's channels are 16-bit words.
+    let mut words: BTreeMap<Device, u16> = (req.memory.explicit().iter())
+        .map(|(d, v)| (d.clone(), *v as u16))
+        .collect();
     f(&mut words);
+    let words = words.into_iter().map(|(d, v)| (d, u32::from(v))).collect();
     let memory = Image::of_units(words, req.memory.fill(), req.memory.unit());
     base.execute(&Request {
         memory: &memory,
@@ -71,7 +75,7 @@ fn get_byte(words: &BTreeMap<Device, u16>, memory: &Image, at: &(Device, bool)) 
     let w = words
         .get(&at.0)
         .copied()
-        .unwrap_or_else(|| memory.read(&at.0));
+        .unwrap_or_else(|| memory.word(&at.0));
     if at.1 {
         (w >> 8) as u8
     } else {
@@ -83,7 +87,7 @@ fn set_byte(words: &mut BTreeMap<Device, u16>, memory: &Image, at: &(Device, boo
     let w = words
         .get(&at.0)
         .copied()
-        .unwrap_or_else(|| memory.read(&at.0));
+        .unwrap_or_else(|| memory.word(&at.0));
     let w = if at.1 {
         (w & 0x00FF) | (u16::from(b) << 8)
     } else {
@@ -158,7 +162,7 @@ fn the_omron_corpus_kills_every_mutant() {
                         let w = words
                             .get(&d)
                             .copied()
-                            .unwrap_or_else(|| req.memory.read(&d));
+                            .unwrap_or_else(|| req.memory.word(&d));
                         words.insert(d, w.rotate_left(8));
                     }
                 }
@@ -183,7 +187,7 @@ fn the_omron_corpus_kills_every_mutant() {
                 if let (true, Some(di)) = (is_hex, di) {
                     let mask: u16 = (0..di.count).fold(0, |m, k| m | 0xF << (4 * di.digit_at(k)));
                     for v in o.writes.values_mut() {
-                        *v &= mask;
+                        *v &= u32::from(mask);
                     }
                 }
                 o
@@ -321,7 +325,7 @@ fn the_omron_corpus_kills_every_mutant() {
                 let v = words
                     .get(&s)
                     .copied()
-                    .unwrap_or_else(|| req.memory.read(&s));
+                    .unwrap_or_else(|| req.memory.word(&s));
                 let mut out = v;
                 for k in 0..di.count {
                     let from = di.digit_at(di.count - 1 - k);
@@ -347,7 +351,7 @@ fn the_omron_corpus_kills_every_mutant() {
             map_done(base.execute(req), |mut o| {
                 if is_asc {
                     for v in o.writes.values_mut() {
-                        let [lo, hi] = v.to_le_bytes();
+                        let [lo, hi] = (*v as u16).to_le_bytes();
                         let low = |b: u8| {
                             if (0x41..=0x46).contains(&(b & 0x7F)) {
                                 b + 0x20
@@ -355,7 +359,7 @@ fn the_omron_corpus_kills_every_mutant() {
                                 b
                             }
                         };
-                        *v = u16::from_le_bytes([low(lo), low(hi)]);
+                        *v = u32::from(u16::from_le_bytes([low(lo), low(hi)]));
                     }
                 }
                 o

@@ -27,7 +27,7 @@ fn device(req: &Request<'_>, name: &str) -> Option<Device> {
 fn count(req: &Request<'_>) -> u32 {
     match req.operands.get("N") {
         Some(Operand::Constant(k)) => u32::try_from(*k).unwrap_or(0),
-        Some(Operand::Device(d)) => u32::from(req.memory.read(d)),
+        Some(Operand::Device(d)) => req.memory.read(d),
         None => 0,
     }
 }
@@ -38,12 +38,12 @@ fn with_input(
     base: &dyn Backend,
     f: impl Fn(u32, u16) -> u16,
 ) -> Result<Response, Fault> {
-    let mut bytes: BTreeMap<Device, u16> = req.memory.explicit().clone();
+    let mut bytes: BTreeMap<Device, u32> = req.memory.explicit().clone();
     if let Some(input) = device(req, "IN") {
         for k in 0..count(req) {
             if let Some(d) = input.offset(k) {
-                let b = req.memory.read(&d);
-                bytes.insert(d, f(k, b));
+                let b = req.memory.word(&d);
+                bytes.insert(d, u32::from(f(k, b)));
             }
         }
     }

@@ -26,7 +26,7 @@ fn device(req: &Request<'_>, name: &str) -> Option<Device> {
 fn len(req: &Request<'_>) -> u32 {
     match req.operands.get("LEN") {
         Some(Operand::Constant(k)) => u32::try_from(*k).unwrap_or(0),
-        Some(Operand::Device(d)) => u32::from(req.memory.read(d)),
+        Some(Operand::Device(d)) => req.memory.read(d),
         None => 0,
     }
 }
@@ -38,11 +38,11 @@ fn with_input(
     n: u32,
     f: impl Fn(u16) -> u16,
 ) -> Result<Response, Fault> {
-    let mut bytes: BTreeMap<Device, u16> = req.memory.explicit().clone();
+    let mut bytes: BTreeMap<Device, u32> = req.memory.explicit().clone();
     if let Some(input) = device(req, "IN") {
         for d in (0..n).filter_map(|k| input.offset(k)) {
-            let b = req.memory.read(&d);
-            bytes.insert(d, f(b));
+            let b = req.memory.word(&d);
+            bytes.insert(d, u32::from(f(b)));
         }
     }
     let memory = Image::of_units(bytes, req.memory.fill(), req.memory.unit());

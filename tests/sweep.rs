@@ -90,7 +90,7 @@ fn reads_byte_as(
             .memory
             .explicit()
             .iter()
-            .map(|(d, w)| (d.clone(), rewrite(*w)))
+            .map(|(d, w)| (d.clone(), u32::from(rewrite(*w as u16))))
             .collect();
         let image = Image::new(words, req.memory.fill());
         base.execute(&Request {
@@ -140,7 +140,7 @@ fn a_mutant_shrinks_to_a_minimal_input_that_still_differs_and_emits_a_failing_ve
             .explicit()
             .iter()
             .map(|(d, w)| {
-                let [lo, hi] = w.to_le_bytes();
+                let [lo, hi] = (*w as u16).to_le_bytes();
                 let up = |b: u8| {
                     if (b'a'..=b'f').contains(&b) {
                         b - 0x20
@@ -148,7 +148,7 @@ fn a_mutant_shrinks_to_a_minimal_input_that_still_differs_and_emits_a_failing_ve
                         b
                     }
                 };
-                (d.clone(), u16::from_le_bytes([up(lo), up(hi)]))
+                (d.clone(), u32::from(u16::from_le_bytes([up(lo), up(hi)])))
             })
             .collect();
         let image = Image::new(words, req.memory.fill());
@@ -543,7 +543,7 @@ fn a_sweep_finds_every_known_difference_of_pymcprotocol() {
         let text: Vec<u8> = case
             .before
             .values()
-            .flat_map(|w| w.to_le_bytes())
+            .flat_map(|w| (*w as u16).to_le_bytes())
             .take_while(|b| *b != 0)
             .collect();
         let hand = Point::text(&text, 0);

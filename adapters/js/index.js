@@ -24,7 +24,7 @@ const readline = require('node:readline');
 
 const VERSION = '0.2.0';
 /** The protocol versions this module speaks: 1 (instruction level) and 2 (adds codec level). */
-const PROTOCOL_VERSIONS = Object.freeze([1, 2, 3]);
+const PROTOCOL_VERSIONS = Object.freeze([1, 2, 3, 4]);
 const PROTOCOL_VERSION = 2;
 /** The error classes a codec answers with. */
 const ERROR_CLASSES = Object.freeze(['invalid-digit', 'invalid-count', 'device-range', 'error']);
@@ -117,13 +117,21 @@ const DIGITS = '0123456789ABCDEF';
  * @param {'A'|'B'} fill
  * @param {Device|string|number} device a device, a device name or a device number
  */
-function fillWord(fill, device) {
+function fillWord(fill, device, unit = 'word') {
   const d = typeof device === 'number' ? null : asDevice(device);
   const index = d === null ? device : Math.floor(d.index / d.points());
+  const word = (i) => (fill === 'A'
+    ? 0xa5a5 ^ ((i % 6) * 0x0101)
+    : DIGITS.charCodeAt(i) | (DIGITS.charCodeAt(15 - i) << 8));
   const i = index % 16;
-  if (fill === 'A') return 0xa5a5 ^ ((i % 6) * 0x0101);
-  return DIGITS.charCodeAt(i) | (DIGITS.charCodeAt(15 - i) << 8);
+  if (unit === 'byte') return word(i) & 0xff;
+  // A 32-bit unit: the word of its position low, that of the position eight on high.
+  if (unit === 'dword') return word(i) + word((i + 8) % 16) * 0x10000;
+  return word(i);
 }
+
+/** The unit a range field carries, and the largest value it holds. */
+const UNITS = Object.freeze({ words: ['word', 0xffff], bytes: ['byte', 0xff], dwords: ['dword', 0xffffffff] });
 
 /** One case to execute: its setting, the memory before, and what it did. */
 class Case {
@@ -143,13 +151,14 @@ class Case {
     this.addresses = new Map(Object.entries(message.addresses || {}).map(([pointer, target]) =>
       [Device.parse(pointer, this.hexadecimal).key, Device.parse(target, this.hexadecimal)]));
     this.memory = new Map();
-    // A byte-addressed family's ranges carry bytes (protocol version 3).
+    // A byte-addressed family's ranges carry bytes (protocol version 3), a family whose unit is
+    // a 32-bit word dwords (version 4).
     this.unit = 'word';
     for (const block of message.memory || []) {
       const start = Device.parse(block.start, this.hexadecimal);
-      if (block.bytes) this.unit = 'byte';
-      (block.words || block.bytes || []).forEach((value, i) =>
-        this.memory.set(start.offset(i).key, value));
+      const field = Object.keys(UNITS).find((f) => block[f]) || 'words';
+      [this.unit] = UNITS[field];
+      (block[field] || []).forEach((value, i) => this.memory.set(start.offset(i).key, value));
     }
     this.writes = new Map();
     this.error = null;
@@ -207,8 +216,7 @@ class Case {
     const d = this.asDevice(device);
     if (this.writes.has(d.key)) return this.writes.get(d.key);
     if (this.memory.has(d.key)) return this.memory.get(d.key);
-    const word = fillWord(this.fill, d);
-    return this.unit === 'byte' ? word & 0xff : word;
+    return fillWord(this.fill, d, this.unit);
   }
 
   /**
@@ -219,11 +227,12 @@ class Case {
     return this.memory.has(this.asDevice(device).key);
   }
 
-  /** A 16-bit write. */
+  /** A write of one unit (a word, a byte or a 32-bit word, as the case's memory is). */
   write(device, value) {
     const d = this.asDevice(device);
-    if (!Number.isInteger(value) || value < 0 || value > 0xffff) {
-      throw new RangeError(`${d}: ${value} is not a 16-bit word`);
+    const most = Object.values(UNITS).find(([unit]) => unit === this.unit)[1];
+    if (!Number.isInteger(value) || value < 0 || value > most) {
+      throw new RangeError(`${d}: ${value} does not fit a ${this.unit}`);
     }
     this.writes.set(d.key, value);
   }
@@ -244,6 +253,8 @@ class Case {
 function negotiate(message, log) {
   const asked = message.protocol === undefined ? 1 : message.protocol;
   if (PROTOCOL_VERSIONS.includes(asked)) return asked;
+  // A newer harness accepts the versions before its own: answer the newest this module speaks.
+  if (asked > Math.max(...PROTOCOL_VERSIONS)) return Math.max(...PROTOCOL_VERSIONS);
   log(`plc-conformance-adapter: the harness speaks protocol ${asked}; this adapter speaks ${PROTOCOL_VERSIONS.join(' or ')}\n`);
   return PROTOCOL_VERSION;
 }

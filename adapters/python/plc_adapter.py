@@ -44,8 +44,9 @@ from collections import namedtuple
 
 __version__ = "0.2.0"
 
-# The protocol versions this module speaks: 1 (instruction level) and 2 (adds codec level).
-PROTOCOL_VERSIONS = (1, 2, 3)
+# The protocol versions this module speaks: 1 (instruction level), 2 (adds codec level), 3
+# (byte-addressed families) and 4 (families whose unit is a 32-bit word).
+PROTOCOL_VERSIONS = (1, 2, 3, 4)
 PROTOCOL_VERSION = 2
 
 # The error classes a codec answers with (docs/protocol.md, "Version 2").
@@ -132,16 +133,30 @@ class Device(namedtuple("Device", "code index hexadecimal", defaults=(False,))):
 _DIGITS = b"0123456789ABCDEF"
 
 
-def fill_word(fill, index):
-    """The word a device holds when the case does not set it (docs/protocol.md, "Fill").
+def fill_word(fill, index, unit="word"):
+    """The unit a device holds when the case does not set it (docs/protocol.md, "Fill").
 
-    index: the device number, or a Device (whose word number counts: K4M32 is word 2)."""
+    index: the device number, or a Device (whose word number counts: K4M32 is word 2).
+    unit: "word", "byte" (the word's low byte) or "dword" (the word of the position low, that of
+    the position eight on high)."""
     if isinstance(index, Device):
         index = index.index // index.points()
     i = index % 16
-    if fill == "A":
-        return 0xA5A5 ^ ((i % 6) * 0x0101)
-    return _DIGITS[i] | (_DIGITS[15 - i] << 8)
+
+    def word(i):
+        if fill == "A":
+            return 0xA5A5 ^ ((i % 6) * 0x0101)
+        return _DIGITS[i] | (_DIGITS[15 - i] << 8)
+
+    if unit == "byte":
+        return word(i) & 0xFF
+    if unit == "dword":
+        return word(i) | word((i + 8) % 16) << 16
+    return word(i)
+
+
+# What a unit holds at most, by the field its ranges are given in.
+_UNITS = {"words": ("word", 0xFFFF), "bytes": ("byte", 0xFF), "dwords": ("dword", 0xFFFFFFFF)}
 
 
 class Case:
@@ -165,13 +180,14 @@ class Case:
             for pointer, target in message.get("addresses", {}).items()
         }
         memory = {}
-        # A byte-addressed family's ranges carry bytes (protocol version 3).
+        # A byte-addressed family's ranges carry bytes (protocol version 3), a family whose
+        # unit is a 32-bit word dwords (version 4).
         self.unit = "word"
         for block in message.get("memory", []):
             start = Device.parse(block["start"], self.hexadecimal)
-            if "bytes" in block:
-                self.unit = "byte"
-            for i, value in enumerate(block.get("words", block.get("bytes", []))):
+            field = next((f for f in _UNITS if f in block), "words")
+            self.unit = _UNITS[field][0]
+            for i, value in enumerate(block.get(field, [])):
                 unit = start.offset(i)
                 memory[(unit.code, unit.index)] = value
         self.memory = memory
@@ -224,8 +240,7 @@ class Case:
             return self.writes[key]
         if key in self.memory:
             return self.memory[key]
-        word = fill_word(self.fill, Device(*key))
-        return word & 0xFF if self.unit == "byte" else word
+        return fill_word(self.fill, Device(*key), self.unit)
 
     def exists(self, device):
         """Whether the word exists on the case's variant, for words within 64 of a device
@@ -234,8 +249,9 @@ class Case:
         return (device[0], device[1]) in self.memory
 
     def write(self, device, value):
-        if not 0 <= value <= 0xFFFF:
-            raise ValueError("%s: %r is not a 16-bit word" % (device, value))
+        most = {"byte": 0xFF, "word": 0xFFFF, "dword": 0xFFFFFFFF}[self.unit]
+        if not 0 <= value <= most:
+            raise ValueError("%s: %r does not fit a %s" % (device, value, self.unit))
         self.writes[(device[0], device[1])] = value
 
     def fail(self, code=None, flag=None):

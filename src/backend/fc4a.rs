@@ -57,7 +57,7 @@ fn read_word(req: &Request<'_>, name: &str) -> Result<u16, Stop> {
                 "operand `{name}` K{k} is not a 16-bit constant"
             )))
         }),
-        Operand::Device(d) if req.words_exist(d, 1) => Ok(req.memory.read(d)),
+        Operand::Device(d) if req.words_exist(d, 1) => Ok(req.memory.word(d)),
         Operand::Device(_) => Err(Stop::Error(NO_CONFIRMED_CODE)),
     }
 }
@@ -84,7 +84,7 @@ fn atoh(req: &Request<'_>) -> Result<Outcome, Stop> {
     for k in 0..n {
         let word = s1
             .offset(k)
-            .map(|dev| req.memory.read(&dev))
+            .map(|dev| req.memory.word(&dev))
             .ok_or(Stop::Error(NO_CONFIRMED_CODE))?;
         // The whole word is the character: 0131H is not '1'.
         let digit = u8::try_from(word)

@@ -50,7 +50,7 @@ fn word(req: &Request<'_>, name: &str) -> Result<u16, Stop> {
             if !req.words_exist(d, 1) {
                 return Err(Stop::Error(OPERATION_ERROR));
             }
-            Ok(req.memory.read(d))
+            Ok(req.memory.word(d))
         }
     }
 }
@@ -82,7 +82,7 @@ fn ahex(req: &Request<'_>) -> Result<Outcome, Stop> {
     if !req.words_exist(s, n.div_ceil(2)) || !req.words_exist(d, bytes.div_ceil(2)) {
         return Err(Stop::Error(OPERATION_ERROR));
     }
-    let read = |i: u32| s.offset(i).map_or(0, |dev| req.memory.read(&dev));
+    let read = |i: u32| s.offset(i).map_or(0, |dev| req.memory.word(&dev));
     let mut digits = Vec::with_capacity(n as usize + 1);
     for k in 0..n {
         digits.push(digit_value(byte_of(read, k)).ok_or(Stop::Error(OPERATION_ERROR))?);
@@ -94,7 +94,7 @@ fn ahex(req: &Request<'_>) -> Result<Outcome, Stop> {
     for (k, pair) in digits.chunks(2).enumerate() {
         let byte = u16::from(pair[0] << 4 | pair[1]);
         if let Some(dev) = d.offset(k as u32 / 2) {
-            let old = out.read(&dev);
+            let old = out.word(&dev);
             let new = if k % 2 == 0 {
                 (old & 0xFF00) | byte
             } else {
@@ -117,7 +117,7 @@ fn hexa(req: &Request<'_>) -> Result<Outcome, Stop> {
                 return Err(Stop::Error(OPERATION_ERROR));
             }
             (0..n.div_ceil(2))
-                .map(|i| s.offset(i).map_or(0, |dev| req.memory.read(&dev)))
+                .map(|i| s.offset(i).map_or(0, |dev| req.memory.word(&dev)))
                 .collect()
         }
     };

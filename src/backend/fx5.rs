@@ -142,7 +142,7 @@ pub fn hex_chars(memory: &Image, s: &Device, n: u32, packing: Packing) -> Vec<u8
     (0..n)
         .map(|k| match packing {
             Packing::TwoPerWord => packed_char(memory, s, k).unwrap_or(0),
-            Packing::OnePerWord => s.offset(k).map_or(0, |dev| memory.read(&dev) as u8),
+            Packing::OnePerWord => s.offset(k).map_or(0, |dev| memory.word(&dev) as u8),
         })
         .collect()
 }
@@ -230,7 +230,7 @@ fn count(req: &Request<'_>, rules: &Rules) -> Result<u32, Stop> {
             if !req.words_exist(dev, 1) {
                 return Err(Stop::Error(rules.range));
             }
-            req.memory.read(dev)
+            req.memory.word(dev)
         }
     };
     let n = u32::from(n);
@@ -267,7 +267,7 @@ pub(super) fn asci_with(
             }
             (0..words)
                 .filter_map(|i| s.offset(i))
-                .map(|dev| req.memory.read(&dev))
+                .map(|dev| req.memory.word(&dev))
                 .collect()
         }
     };
@@ -279,7 +279,7 @@ pub(super) fn asci_with(
     let mut out = Scratch::new(req.memory);
     for (i, store) in stores.into_iter().enumerate() {
         if let Some(dev) = d.offset(i as u32) {
-            let old = out.read(&dev);
+            let old = out.word(&dev);
             out.write(dev, store.apply(old));
         }
     }
@@ -328,7 +328,7 @@ mod tests {
     use crate::backend::reference::Reference;
     use crate::backend::{Backend, Response};
     use crate::load::load_profiles;
-    use crate::memory::Fill;
+    use crate::memory::{Fill, Value};
     use crate::model::profile::Profile;
     use crate::model::ErrorSignal;
 
@@ -394,7 +394,12 @@ mod tests {
     }
 
     fn image(words: impl IntoIterator<Item = (u32, u16)>, fill: Fill) -> Image {
-        Image::new(words.into_iter().map(|(i, w)| (d(i), w)).collect(), fill)
+        Image::new(
+            (words.into_iter())
+                .map(|(i, w)| (d(i), Value::from(w)))
+                .collect(),
+            fill,
+        )
     }
 
     #[test]
@@ -409,13 +414,13 @@ mod tests {
                 let text = asci
                     .writes
                     .iter()
-                    .map(|(dev, w)| (dev.index - 100, *w))
+                    .map(|(dev, w)| (dev.index - 100, *w as u16))
                     .collect::<Vec<_>>();
                 let back = rig.run("HEXA", &flags, 4, &image(text, Fill::A));
                 assert_eq!(back.error, None, "HEXA of ASCI {x:04X}H");
                 assert_eq!(
                     back.writes,
-                    BTreeMap::from([(d(200), x)]),
+                    BTreeMap::from([(d(200), Value::from(x))]),
                     "HEXA(ASCI({x:04X}H)) with SM8161 {sm8161}"
                 );
             }

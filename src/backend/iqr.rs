@@ -111,7 +111,7 @@ fn binha(req: &Request<'_>, words: u32) -> Result<Outcome, Unsupported> {
                 .filter_map(|w| s.offset(w))
                 .enumerate()
                 .fold(0, |acc, (i, dev)| {
-                    acc | u64::from(req.memory.read(&dev)) << (16 * i)
+                    acc | u64::from(req.memory.word(&dev)) << (16 * i)
                 })
         }
     };

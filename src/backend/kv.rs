@@ -54,7 +54,7 @@ impl Model for Kv {
 fn loaded(req: &Request<'_>) -> Result<u16, Stop> {
     Ok(match req.operand("s")? {
         Operand::Constant(k) => constant_word("s", *k)?,
-        Operand::Device(d) => req.memory.read(d),
+        Operand::Device(d) => req.memory.word(d),
     })
 }
 

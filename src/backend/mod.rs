@@ -25,7 +25,7 @@ use std::sync::Arc;
 use serde::Serialize;
 
 use crate::device::Device;
-use crate::memory::Image;
+use crate::memory::{Image, Value};
 use crate::model::cross_vendor::{Answer, CodecAbilities, Operation};
 use crate::model::profile::{Profile, Profiles, Variant};
 use crate::model::{ErrorSignal, Indirect, Operand};
@@ -105,14 +105,14 @@ pub struct Setting<'a> {
 pub struct Outcome {
     /// Every word written, with the value written (a word rewritten with its old value is
     /// still listed; the comparer decides what changed).
-    pub writes: BTreeMap<Device, u16>,
+    pub writes: BTreeMap<Device, Value>,
     pub error: Option<ErrorSignal>,
     /// The registers where the profile says an error code lands (MELSEC SD0, FX5 SD8067 too),
     /// as the backend holds them after an error: kept apart from `writes` because they are
     /// judged against the code, not against the case's memory. Empty for a backend that models
     /// no such register, which is then judged on the code alone.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
-    pub registers: BTreeMap<Device, u16>,
+    pub registers: BTreeMap<Device, Value>,
 }
 
 impl Outcome {
@@ -124,7 +124,7 @@ impl Outcome {
     }
 
     /// The words an instruction wrote, without an error.
-    pub fn written(writes: BTreeMap<Device, u16>) -> Self {
+    pub fn written(writes: BTreeMap<Device, Value>) -> Self {
         Outcome {
             writes,
             ..Outcome::default()

@@ -155,7 +155,7 @@ fn designator(req: &Request<'_>) -> Result<Designator, Stop> {
                 "operand `Di` {k} is not a 16-bit constant"
             )))
         })?,
-        Operand::Device(d) if req.words_exist(d, 1) => req.memory.read(d),
+        Operand::Device(d) if req.words_exist(d, 1) => req.memory.word(d),
         Operand::Device(_) => return Err(Stop::Error(NO_CODE)),
     };
     Designator::decode(di).ok_or(Stop::Error(NO_CODE))
@@ -197,10 +197,10 @@ fn hex(req: &Request<'_>) -> Result<Outcome, Stop> {
         return Err(Stop::Error(NO_CODE));
     }
     let lowercase = req.variant.has_feature(LOWERCASE_HEX);
-    let mut value = req.memory.read(d);
+    let mut value = req.memory.word(d);
     for k in 0..di.count {
         let (offset, leftmost) = di.byte_at(k);
-        let byte = byte_of(req.memory.read(&word_after(s, offset)?), leftmost);
+        let byte = byte_of(req.memory.word(&word_after(s, offset)?), leftmost);
         let digit = hex_digit(byte, di.parity, lowercase).ok_or(Stop::Error(NO_CODE))?;
         let shift = 4 * di.digit_at(k);
         value = (value & !(0xF << shift)) | (u16::from(digit) << shift);
@@ -220,14 +220,14 @@ fn asc(req: &Request<'_>) -> Result<Outcome, Stop> {
     if !req.words_exist(s, 1) || !req.words_exist(d, di.byte_words()) {
         return Err(Stop::Error(NO_CODE));
     }
-    let source = req.memory.read(s);
+    let source = req.memory.word(s);
     let mut out = Scratch::new(req.memory);
     for k in 0..di.count {
         let digit = source >> (4 * di.digit_at(k));
         let byte = u16::from(di.parity.apply(digit_char(u64::from(digit))));
         let (offset, leftmost) = di.byte_at(k);
         let word = word_after(d, offset)?;
-        let old = out.read(&word);
+        let old = out.word(&word);
         let new = if leftmost {
             (old & 0x00FF) | (byte << 8)
         } else {

@@ -5,6 +5,7 @@ use std::marker::PhantomData;
 use std::sync::Arc;
 
 use super::{Backend, Fault, Outcome, Request, Response, Unsupported};
+use crate::memory::Value;
 use crate::model::profile::{Profile, Profiles};
 use crate::model::ErrorSignal;
 use crate::value::to_bits;
@@ -106,7 +107,7 @@ impl<M: Model> Backend for Reference<M> {
         // those registers as the CPU does, so a backend that reports them is judged on them.
         if let Some(ErrorSignal::Code(code)) = outcome.error {
             outcome.registers = (self.profile.errors.code_registers().into_iter())
-                .map(|r| (r, code))
+                .map(|r| (r, Value::from(code)))
                 .collect();
         }
         Ok(Response::Done(outcome))

@@ -64,7 +64,7 @@ fn count(req: &Request<'_>) -> Result<u32, Stop> {
     match req.operand("N")? {
         Operand::Constant(k) => u32::try_from(*k)
             .map_err(|_| Stop::Unsupported(Unsupported(format!("N = K{k} is not a UInt")))),
-        Operand::Device(d) => Ok(u32::from(req.memory.read(d))),
+        Operand::Device(d) => Ok(u32::from(req.memory.word(d))),
     }
 }
 
@@ -92,7 +92,7 @@ fn ath(req: &Request<'_>) -> Result<Outcome, Stop> {
     let mut invalid = false;
     let mut nibbles = Vec::with_capacity(n as usize + 1);
     for k in 0..n {
-        let ch = input.offset(k).map_or(0, |d| req.memory.read(&d));
+        let ch = input.offset(k).map_or(0, |d| req.memory.word(&d));
         nibbles.push(digit(ch).unwrap_or_else(|| {
             invalid = true;
             0
@@ -118,7 +118,7 @@ fn hta(req: &Request<'_>) -> Result<Outcome, Stop> {
     let (input, n, output) = arrays(req, |n| 2 * n)?;
     let mut scratch = Scratch::new(req.memory);
     for k in 0..n {
-        let byte = input.offset(k).map_or(0, |d| req.memory.read(&d));
+        let byte = input.offset(k).map_or(0, |d| req.memory.word(&d));
         for (i, nibble) in [byte >> 4, byte & 0xF].into_iter().enumerate() {
             if let Some(d) = output.offset(2 * k + i as u32) {
                 scratch.write(d, u16::from(digit_char(u64::from(nibble))));

@@ -56,7 +56,7 @@ fn arrays<'r>(
         Operand::Constant(k) => {
             u32::try_from(*k).map_err(|_| Unsupported(format!("LEN = K{k} is not a BYTE")))?
         }
-        Operand::Device(d) => u32::from(req.memory.read(d)),
+        Operand::Device(d) => u32::from(req.memory.word(d)),
     };
     for (array, units) in [(input, n_in(len)), (output, n_out(len))] {
         if !req.words_exist(array, units) {
@@ -75,7 +75,7 @@ fn ath(req: &Request<'_>) -> Result<Outcome, Stop> {
     let (input, len, output) = arrays(req, |n| n, |n| n.div_ceil(2))?;
     let mut nibbles = Vec::with_capacity(len as usize);
     for k in 0..len {
-        let ch = input.offset(k).map_or(0, |d| req.memory.read(&d));
+        let ch = input.offset(k).map_or(0, |d| req.memory.word(&d));
         // 30H-39H and 41H-46H only: S7-200 ATH's legal characters, unlike the S7-1200's.
         match u8::try_from(ch).ok().and_then(crate::text::digit_value) {
             Some(v) => nibbles.push(v),
@@ -87,7 +87,7 @@ fn ath(req: &Request<'_>) -> Result<Outcome, Stop> {
         if let Some(d) = output.offset(j as u32) {
             let low = match pair {
                 [_, low] => *low,
-                _ => (req.memory.read(&d) & 0x0F) as u8,
+                _ => (req.memory.word(&d) & 0x0F) as u8,
             };
             scratch.write(d, u16::from(pair[0] << 4 | low));
         }
@@ -101,7 +101,7 @@ fn hta(req: &Request<'_>) -> Result<Outcome, Stop> {
     let (input, len, output) = arrays(req, |n| n.div_ceil(2), |n| n)?;
     let mut scratch = Scratch::new(req.memory);
     for k in 0..len {
-        let byte = input.offset(k / 2).map_or(0, |d| req.memory.read(&d));
+        let byte = input.offset(k / 2).map_or(0, |d| req.memory.word(&d));
         let nibble = if k % 2 == 0 { byte >> 4 } else { byte & 0xF };
         if let Some(d) = output.offset(k) {
             scratch.write(d, u16::from(digit_char(u64::from(nibble))));

@@ -363,6 +363,7 @@ mod tests {
     use super::*;
     use crate::backend::{Backend, Outcome, Request};
     use crate::device::Device;
+    use crate::memory::Value;
     use crate::model::{Case, Citation, ErrorSignal, Expectation, Location};
     use crate::plan::Input;
 
@@ -452,7 +453,10 @@ mod tests {
             .map(|&fill| Observation {
                 fill,
                 result: Ok(Response::Done(Outcome {
-                    writes: writes.iter().map(|(i, v)| (d(*i), *v)).collect(),
+                    writes: writes
+                        .iter()
+                        .map(|(i, v)| (d(*i), Value::from(*v)))
+                        .collect(),
                     error: error.clone(),
                     registers: BTreeMap::new(),
                 })),
@@ -462,7 +466,10 @@ mod tests {
 
     fn expect(after: &[(u32, u16)], error: Option<ErrorSignal>) -> Option<Expectation> {
         Some(Expectation {
-            after: after.iter().map(|(i, v)| (d(*i), *v)).collect(),
+            after: after
+                .iter()
+                .map(|(i, v)| (d(*i), Value::from(*v)))
+                .collect(),
             error,
         })
     }
@@ -516,7 +523,7 @@ mod tests {
             if let Ok(Response::Done(outcome)) = &mut o.result {
                 outcome.registers = registers
                     .iter()
-                    .map(|(r, v)| (r.parse().expect("device"), *v))
+                    .map(|(r, v)| (r.parse().expect("device"), Value::from(*v)))
                     .collect();
             }
         }

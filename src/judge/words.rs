@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::backend::Outcome;
 use crate::device::Device;
-use crate::memory::{Fill, Image, Unit};
+use crate::memory::{Fill, Image, Unit, Value};
 use crate::model::{ErrorSignal, Expectation};
 
 /// One unit in a comparison: its value before, as expected after, and as found after.
@@ -19,9 +19,9 @@ use crate::model::{ErrorSignal, Expectation};
 pub struct WordRow {
     pub device: Device,
     pub unit: Unit,
-    pub before: u16,
-    pub expected: u16,
-    pub actual: u16,
+    pub before: Value,
+    pub expected: Value,
+    pub actual: Value,
 }
 
 /// Values appear in reports as the manuals write them (`5A8DH`, `5AH`), not as decimal numbers.
@@ -76,9 +76,9 @@ impl Mismatch {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct RegisterRow {
     pub device: Device,
-    pub expected: u16,
+    pub expected: Value,
     /// `None`: the backend reported other error registers but not this one.
-    pub actual: Option<u16>,
+    pub actual: Option<Value>,
 }
 
 impl RegisterRow {
@@ -116,7 +116,7 @@ pub(crate) fn register_rows(
         .iter()
         .map(|d| RegisterRow {
             device: d.clone(),
-            expected: *code,
+            expected: Value::from(*code),
             actual: outcome.registers.get(d).copied(),
         })
         .collect();
@@ -130,7 +130,7 @@ pub(crate) fn register_rows(
 /// What an outcome did to memory: the units it changed (written with a new value) and its error.
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 pub struct Effect {
-    pub changed: BTreeMap<Device, u16>,
+    pub changed: BTreeMap<Device, Value>,
     pub error: Option<ErrorSignal>,
     /// What the changed devices hold (absent in baselines of word-addressed families).
     #[serde(default, skip_serializing_if = "is_word")]

@@ -7,13 +7,12 @@ use std::sync::Arc;
 use super::checks::{check_cite, check_expect_optional, check_id, text_bytes, unknown};
 use super::{read_file, yaml_files, FileContext, LoadError, LoadErrorKind, LoadErrors};
 use crate::device::{code_matches, Device};
-use crate::memory::Unit;
+use crate::memory::{Unit, Value};
 use crate::model::profile::{Profile, Profiles, SignalKind};
 use crate::model::{Case, Citation, Corpus, ErrorSignal, Expectation, Indirect, Location, Operand};
 use crate::spec::vectors::{
     CaseSpec, ExpectSpec, FlagSpec, ScalarSpec, SourceSpec, ValueSpec, VectorFileSpec,
 };
-use crate::text::pack_low_first;
 use crate::value::{parse_bits, parse_number, parse_word, to_bits};
 
 /// Loads every vector file under the given paths (files or folders).
@@ -620,7 +619,7 @@ fn read_pointer(
 fn check_pointer_words(
     key: &str,
     indirect: &Indirect,
-    before: &BTreeMap<Device, u16>,
+    before: &BTreeMap<Device, Value>,
     expect: Option<&Expectation>,
     cx: &mut FileContext<'_>,
 ) {
@@ -706,8 +705,8 @@ fn read_memory(
     spec: &BTreeMap<String, ValueSpec>,
     h: &Header<'_>,
     cx: &mut FileContext<'_>,
-) -> BTreeMap<Device, u16> {
-    let mut out: BTreeMap<Device, u16> = BTreeMap::new();
+) -> BTreeMap<Device, Value> {
+    let mut out: BTreeMap<Device, Value> = BTreeMap::new();
     let mut set_by: BTreeMap<Device, String> = BTreeMap::new();
     for (name, value) in spec {
         let mkey = format!("{key}.{name}");
@@ -783,10 +782,15 @@ fn missing_word(p: &Profile, d: &Device) -> LoadErrorKind {
 
 /// The units a value spec stands for. Text is stored as the family stores a string: two
 /// characters per word, first in the low byte, in word memory; one per byte in byte memory.
-fn expand(key: &str, value: &ValueSpec, unit: Unit, cx: &mut FileContext<'_>) -> Option<Vec<u16>> {
+fn expand(
+    key: &str,
+    value: &ValueSpec,
+    unit: Unit,
+    cx: &mut FileContext<'_>,
+) -> Option<Vec<Value>> {
     let bits = unit.bits();
     let word = |s: &ScalarSpec| match s {
-        ScalarSpec::Number(n) => to_bits(&n.to_string(), *n, bits).map(|w| w as u16),
+        ScalarSpec::Number(n) => to_bits(&n.to_string(), *n, bits).map(|w| w as Value),
         ScalarSpec::Text(t) => parse_bits(t, bits),
     };
     let words = match value {
@@ -806,14 +810,10 @@ fn expand(key: &str, value: &ValueSpec, unit: Unit, cx: &mut FileContext<'_>) ->
             }
             out
         }
-        ValueSpec::Ascii(text) if unit == Unit::Byte => text_bytes(key, text, cx)?
-            .into_iter()
-            .map(u16::from)
-            .collect(),
-        ValueSpec::Ascii(text) => pack_low_first(&text_bytes(key, text, cx)?),
+        ValueSpec::Ascii(text) => unit.pack(&text_bytes(key, text, cx)?),
         ValueSpec::AsciiWords(text) => text_bytes(key, text, cx)?
             .into_iter()
-            .map(u16::from)
+            .map(Value::from)
             .collect(),
     };
     if words.is_empty() {

@@ -17,6 +17,7 @@ use std::sync::Arc;
 use serde::Serialize;
 
 use crate::device::Device;
+use crate::memory::Value;
 use crate::value::hex_word;
 
 pub use crate::spec::Basis;
@@ -79,7 +80,7 @@ pub(crate) fn error_text(error: Option<&ErrorSignal>) -> String {
 /// What a case expects: the words that change and the error signalled.
 #[derive(Debug, Clone, PartialEq, Eq, Default, Serialize)]
 pub struct Expectation {
-    pub after: BTreeMap<Device, u16>,
+    pub after: BTreeMap<Device, Value>,
     pub error: Option<ErrorSignal>,
 }
 
@@ -143,7 +144,7 @@ pub struct Case {
     /// emulator over the protocol is given the pointer and the address to store in it.
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub indirect: Indirect,
-    pub before: BTreeMap<Device, u16>,
+    pub before: BTreeMap<Device, Value>,
     /// `None` only for `unspecified` cases that record without a guess.
     pub expect: Option<Expectation>,
     pub note: Option<String>,

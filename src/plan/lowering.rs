@@ -3,29 +3,29 @@
 //! judge's part.)
 
 use super::Input;
-use crate::memory::Unit;
+use crate::memory::{Unit, Value};
 use crate::model::cross_vendor::{CrossVendorCase, Lowering, Operation, TextLayout, ValueOrder};
 use crate::model::{Indirect, Operand};
-use crate::text::{pack_low_first, significant_digits};
+use crate::text::significant_digits;
 
 /// Text with its 00H terminator, in memory units as `layout` stores it.
-pub(crate) fn text_units(layout: TextLayout, text: &[u8]) -> Vec<u16> {
+pub(crate) fn text_units(layout: TextLayout, unit: Unit, text: &[u8]) -> Vec<Value> {
     let mut chars = text.to_vec();
     chars.push(0);
     match layout {
-        TextLayout::Packed => pack_low_first(&chars),
-        TextLayout::PackedHighFirst => pack_low_first(&chars)
-            .into_iter()
-            .map(u16::swap_bytes)
+        TextLayout::Packed => unit.pack(&chars),
+        // The first character in the unit's highest byte.
+        TextLayout::PackedHighFirst => (unit.pack(&chars).into_iter())
+            .map(|v| v.swap_bytes() >> (Value::BITS - unit.bits()))
             .collect(),
-        TextLayout::Words => chars.iter().map(|c| u16::from(*c)).collect(),
+        TextLayout::Words => chars.iter().map(|c| Value::from(*c)).collect(),
     }
 }
 
 /// A value spread over `count` units of memory, in `order`.
-pub(crate) fn value_units(value: u64, unit: Unit, order: ValueOrder, count: u32) -> Vec<u16> {
+pub(crate) fn value_units(value: u64, unit: Unit, order: ValueOrder, count: u32) -> Vec<Value> {
     let bits = unit.bits();
-    let part = |i: u32| (value.checked_shr(bits * i).unwrap_or(0) & u64::from(unit.max())) as u16;
+    let part = |i: u32| (value.checked_shr(bits * i).unwrap_or(0) & u64::from(unit.max())) as Value;
     match order {
         ValueOrder::LowFirst => (0..count).map(part).collect(),
         ValueOrder::HighFirst => (0..count).rev().map(part).collect(),
@@ -33,7 +33,11 @@ pub(crate) fn value_units(value: u64, unit: Unit, order: ValueOrder, count: u32)
 }
 
 /// The value `units` hold, read in `order`.
-pub(crate) fn units_value(units: impl Iterator<Item = u16>, unit: Unit, order: ValueOrder) -> u64 {
+pub(crate) fn units_value(
+    units: impl Iterator<Item = Value>,
+    unit: Unit,
+    order: ValueOrder,
+) -> u64 {
     let bits = unit.bits();
     match order {
         ValueOrder::LowFirst => units
@@ -53,7 +57,7 @@ pub(crate) fn value_memory(
     min_units: u32,
     unit: Unit,
     order: ValueOrder,
-) -> Vec<u16> {
+) -> Vec<Value> {
     let needed = match order {
         ValueOrder::LowFirst => significant_digits(value)
             .div_ceil(unit.digits())
@@ -82,15 +86,15 @@ pub(crate) fn input(lowering: &Lowering, case: &CrossVendorCase) -> Input {
         match (&lowering.count_register, lowering.count_constants) {
             (Some(register), Some(range)) if !range.contains(digits) => {
                 operands.insert(count.clone(), Operand::Device(register.clone()));
-                count_word = Some((register.clone(), case.digits as u16));
+                count_word = Some((register.clone(), case.digits as Value));
             }
             _ => {
                 operands.insert(count.clone(), Operand::Constant(digits));
             }
         }
     }
-    let words: Vec<u16> = match lowering.operation {
-        Operation::HexToValue => text_units(lowering.text, &case.text),
+    let words: Vec<Value> = match lowering.operation {
+        Operation::HexToValue => text_units(lowering.text, lowering.unit, &case.text),
         Operation::ValueToHex => {
             let digits = lowering.width.unwrap_or(case.digits);
             value_memory(case.value, digits, 1, lowering.unit, lowering.order)

@@ -17,7 +17,7 @@ use std::sync::Arc;
 
 use crate::backend::{Backend, Setting};
 use crate::device::Device;
-use crate::memory::{Fill, Image, Unit};
+use crate::memory::{Fill, Image, Unit, Value};
 use crate::model::cross_vendor::{Answer, CrossVendorCase, ErrorClass, Lowering};
 use crate::model::known::{Entry, KnownDifferences, Subject};
 use crate::model::profile::{Profile, Profiles};
@@ -50,7 +50,7 @@ pub struct Input {
     /// The operands given by indirect specification, with their pointers.
     pub indirect: Indirect,
     /// The memory set before execution; every other word holds the fill.
-    pub before: BTreeMap<Device, u16>,
+    pub before: BTreeMap<Device, Value>,
 }
 
 /// One check on one backend and variant.

@@ -8,7 +8,7 @@ use similar::{ChangeTag, TextDiff};
 
 use super::sanitize::terminal;
 use crate::judge::{Difference, Mismatch, Verdict, WordRow};
-use crate::memory::Unit;
+use crate::memory::{Unit, Value};
 use crate::model::cross_vendor::Operation;
 use crate::model::{error_text, Case};
 use crate::plan::{Check, Trial};
@@ -40,12 +40,12 @@ impl Palette {
 
 /// A unit as a report line shows it: device, hex value, and its bytes as characters in memory
 /// order (a word's low byte first).
-pub(crate) fn word_line(device: &impl std::fmt::Display, value: u16, unit: Unit) -> String {
-    let [lo, hi] = value.to_le_bytes();
-    let chars = match unit {
-        Unit::Byte => show_byte(lo),
-        Unit::Word => show_byte(lo) + &show_byte(hi),
-    };
+pub(crate) fn word_line(device: &impl std::fmt::Display, value: Value, unit: Unit) -> String {
+    let bytes = (unit.bits() / 8) as usize;
+    let chars: String = value.to_le_bytes()[..bytes]
+        .iter()
+        .map(|b| show_byte(*b))
+        .collect();
     format!("{:<8} {}  \"{chars}\"", device.to_string(), unit.hex(value))
 }
 

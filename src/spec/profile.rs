@@ -33,9 +33,9 @@ pub(crate) struct ProfileSpec {
     /// Mode flags the instructions read.
     #[serde(default)]
     pub flags: BTreeMap<String, FlagDef>,
-    /// What one device holds: `word` (16 bits, MELSEC, IDEC, Panasonic, Omron, KEYENCE) or
+    /// What one device holds: `word` (16 bits, MELSEC, IDEC, Panasonic, Omron, KEYENCE),
     /// `byte` (Siemens markers and data blocks, where `MB20` and `MB21` are neighbouring
-    /// bytes). Values, fills, text and diffs follow it.
+    /// bytes) or `dword` (32 bits). Values, fills, text and diffs follow it.
     #[serde(default)]
     pub memory_unit: crate::memory::Unit,
     /// Device codes and their ranges, for every variant unless a variant overrides them. A

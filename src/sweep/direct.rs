@@ -22,7 +22,7 @@ impl Images {
     }
 
     fn from_words(
-        words: std::collections::BTreeMap<crate::device::Device, u16>,
+        words: std::collections::BTreeMap<crate::device::Device, crate::memory::Value>,
         unit: Unit,
     ) -> Images {
         Images([

@@ -227,8 +227,8 @@ impl Shape {
             operands.insert(count.clone(), Operand::Constant(i64::from(point.digits)));
         }
         let unit = self.profile.unit;
-        let words: Vec<u16> = match &point.data {
-            Data::Text(t) => text_units(self.layout(&point.flags), t),
+        let words: Vec<crate::memory::Value> = match &point.data {
+            Data::Text(t) => text_units(self.layout(&point.flags), unit, t),
             Data::Value(v) => value_memory(
                 *v,
                 point.digits,

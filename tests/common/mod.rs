@@ -7,6 +7,7 @@ use std::process::{Command, Output};
 use std::sync::{Arc, OnceLock};
 
 use plc_conformance::testing::backend::{Backend, Fault, Request, Response};
+use plc_conformance::testing::memory::Value;
 use plc_conformance::testing::runner::{Paths, Project};
 
 /// The project root: its `vendors/`, `vectors/` and project file.
@@ -113,17 +114,18 @@ pub fn map_done(
     })
 }
 
-/// Runs the base with every word (or byte) the case sets rewritten by `f`.
+/// Runs the base with every word (or byte) the case sets rewritten by `f` (the families the
+/// mutants break are 16-bit or byte families).
 pub fn with_memory(
     req: &Request<'_>,
     base: &dyn Backend,
     f: impl Fn(u16) -> u16,
 ) -> Result<Response, Fault> {
-    let units: std::collections::BTreeMap<plc_conformance::testing::device::Device, u16> = req
+    let units: std::collections::BTreeMap<plc_conformance::testing::device::Device, Value> = req
         .memory
         .explicit()
         .iter()
-        .map(|(d, v)| (d.clone(), f(*v)))
+        .map(|(d, v)| (d.clone(), Value::from(f(*v as u16))))
         .collect();
     let memory = plc_conformance::testing::memory::Image::of_units(
         units,
@@ -296,7 +298,7 @@ pub fn expects_a_code(t: &plc_conformance::testing::plan::Trial) -> bool {
 /// on them alone (the words and the error signal as expected); `None` for any other verdict.
 pub fn registers_alone(
     v: &plc_conformance::testing::judge::Verdict,
-) -> Option<Vec<(String, Option<u16>)>> {
+) -> Option<Vec<(String, Option<Value>)>> {
     use plc_conformance::testing::judge::{Difference, Verdict};
     let Verdict::Differs {
         difference: Difference::Words { mismatches },

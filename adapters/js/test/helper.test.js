@@ -146,7 +146,9 @@ function habinCase(id, overrides = {}) {
 }
 
 test('an instruction-level backend answers hello with the version the harness speaks', async () => {
-  for (const [hello, version] of [[HELLO_1, 1], [HELLO_2, 2], [HELLO_3, 3], [{ type: 'hello' }, 1]]) {
+  const hello4 = { ...HELLO_3, protocol: 4 };
+  const hello9 = { ...HELLO_3, protocol: 9 };
+  for (const [hello, version] of [[HELLO_1, 1], [HELLO_2, 2], [HELLO_3, 3], [hello4, 4], [hello9, 4], [{ type: 'hello' }, 1]]) {
     const { answers } = await drive('habin.js', [], [hello, SHUTDOWN]);
     assert.deepEqual(answers[0], {
       type: 'hello',
@@ -193,6 +195,18 @@ test('a byte-addressed case reads bytes', () => {
   });
   assert.equal(c.read('MB21'), 0x41);
   assert.equal(c.read('MB30'), helper.fillWord('B', 30) & 0xff);
+});
+
+test('a case of 32-bit units reads and writes dwords', () => {
+  const c = new helper.Case({
+    id: 1, case: 'x', instruction: 'HEX8', profile: 'p', variant: 'v', flags: {}, operands: {},
+    fill: 'B', memory: [{ start: 'DW10', dwords: [0x89abcdef, 0x31] }],
+  });
+  assert.equal(c.read('DW10'), 0x89abcdef);
+  assert.equal(c.read('DW3'), helper.fillWord('B', 3) + helper.fillWord('B', 11) * 0x10000);
+  assert.equal(c.read('DW3'), helper.fillWord('B', 3, 'dword'));
+  c.write('DW30', 0xffffffff);
+  assert.throws(() => c.write('DW31', 0x100000000), RangeError);
 });
 
 test('fillWord gives the two fill patterns of docs/protocol.md', () => {

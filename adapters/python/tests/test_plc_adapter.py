@@ -295,6 +295,18 @@ class InProcess(unittest.TestCase):
         self.assertEqual(case.read(plc_adapter.Device.parse("MB30")),
                          plc_adapter.fill_word("B", 30) & 0xFF)
 
+    def test_a_case_of_32_bit_units_reads_dwords(self):
+        message = habin_case(1, fill="B")
+        message["memory"] = [{"start": "DW10", "dwords": [0x89ABCDEF, 0x31]}]
+        case = plc_adapter.Case(message)
+        self.assertEqual(case.read(plc_adapter.Device.parse("DW10")), 0x89ABCDEF)
+        # A unit the case does not set: the word fill of its position low, eight on high.
+        self.assertEqual(case.read(plc_adapter.Device.parse("DW3")),
+                         plc_adapter.fill_word("B", 3) | plc_adapter.fill_word("B", 11) << 16)
+        case.write(plc_adapter.Device.parse("DW30"), 0xFFFFFFFF)
+        with self.assertRaises(ValueError):
+            case.write(plc_adapter.Device.parse("DW31"), 0x100000000)
+
     def test_a_digit_designated_range_steps_sixteen_points(self):
         message = habin_case(1, fill="B")
         message["memory"] = [{"start": "K4M100", "words": [0x1234, 0x5678]}]

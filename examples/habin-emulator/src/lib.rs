@@ -6,7 +6,7 @@
 //! characters, with SM705 on up to four ended by 00H. A character outside 0-9/A-F is error
 //! 3401H; an operand past its device range is 2820H.
 
-use plc_conformance::{Backend, Device, Fault, Outcome, Request, Response, Unsupported};
+use plc_conformance::{Backend, Device, Fault, Outcome, Request, Response, Unsupported, Value};
 
 /// Data that does not convert.
 const INVALID_DATA: u16 = 0x3401;
@@ -48,7 +48,7 @@ fn habin(r: &Request<'_>) -> Result<Outcome, Unsupported> {
     if !r.words_exist(d, 1) || (!terminated && !r.words_exist(s, 2)) {
         return Ok(Outcome::error(r.error(DEVICE_RANGE)));
     }
-    let mut value = 0u16;
+    let mut value: Value = 0;
     let mut digits = 0;
     for k in 0..4 {
         // With SM705 on only the words the text reaches must exist.
@@ -64,7 +64,7 @@ fn habin(r: &Request<'_>) -> Result<Outcome, Unsupported> {
             b'A'..=b'F' => ch - b'A' + 10,
             _ => return Ok(Outcome::error(r.error(INVALID_DATA))),
         };
-        value = value << 4 | u16::from(digit);
+        value = value << 4 | Value::from(digit);
         digits += 1;
     }
     if digits == 0 {

@@ -23,14 +23,14 @@ use serde::Serialize;
 pub(crate) use process::{adopt_orphans, closing, kill_all, MAX_LINE};
 use process::{describe_exit, Next, Process};
 use protocol::{
-    BackendInfo, BackendMessage, Capabilities, CaseRequest, CodecRequest, ErrorReport, FillName,
-    HarnessMessage, MemoryRange, OperandValue, ProtocolViolation, RunCase, SignalReport,
-    BYTES_VERSION, PROTOCOL_VERSION, SUPPORTED_VERSIONS,
+    first_version_for, BackendInfo, BackendMessage, Capabilities, CaseRequest, CodecRequest,
+    ErrorReport, FillName, HarnessMessage, MemoryRange, OperandValue, ProtocolViolation, RunCase,
+    SignalReport, PROTOCOL_VERSION, SUPPORTED_VERSIONS,
 };
 
 use super::{Backend, Fault, Outcome, Question, Request, Response, Setting};
 use crate::device::Device;
-use crate::memory::{Fill, Unit};
+use crate::memory::{Fill, Unit, Value};
 use crate::model::cross_vendor::{Answer, CodecAbilities, FieldShape, OperationAbilities};
 use crate::model::profile::{Profile, Profiles};
 use crate::model::project::ExternalSettings;
@@ -794,11 +794,14 @@ fn check_capabilities(
             profiles.ids().join(", ")
         ))
     })?;
-    if profile.unit == Unit::Byte && version < BYTES_VERSION {
+    let needs = first_version_for(profile.unit);
+    if version < needs {
         return Err(ExternalErrorKind::Capabilities(format!(
-            "answers hello with protocol version {version}, but profile `{}` is byte-addressed: \
-             its memory ranges carry `bytes`, which needs version {BYTES_VERSION}",
-            profile.id
+            "answers hello with protocol version {version}, but profile `{}`'s memory unit is a \
+             {}: its memory ranges carry `{}`, which needs version {needs}",
+            profile.id,
+            profile.unit.name(),
+            MemoryRange::field(profile.unit)
         )));
     }
     let unknown = |what: &str, name: &str, known: Vec<String>| {
@@ -918,7 +921,7 @@ fn outcome(
     case: &CaseRequest,
     unit: Unit,
     memory: Vec<MemoryRange>,
-    writes: BTreeMap<String, u16>,
+    writes: BTreeMap<String, Value>,
     error: Option<ErrorReport>,
 ) -> Result<Outcome, ProtocolViolation> {
     let device = |name: &str| {
@@ -926,7 +929,7 @@ fn outcome(
             .map_err(|e| ProtocolViolation(format!("bad device in the answer: {e}")))
     };
     // Only an echoed window needs the words before; a list of writes is taken as it is.
-    let before: BTreeMap<Device, u16> = if memory.is_empty() {
+    let before: BTreeMap<Device, Value> = if memory.is_empty() {
         BTreeMap::new()
     } else {
         case.memory
@@ -1003,7 +1006,7 @@ fn outcome(
 /// instruction level.
 fn codec_answer(
     memory: Vec<MemoryRange>,
-    writes: BTreeMap<String, u16>,
+    writes: BTreeMap<String, Value>,
     error: Option<ErrorReport>,
     value: Option<i64>,
     text: Option<Vec<u8>>,
@@ -1163,7 +1166,7 @@ mod tests {
     #[test]
     fn one_word_given_two_values_is_no_answer() {
         let range =
-            |start: &str, words: Vec<u16>| MemoryRange::new(start.into(), Unit::Word, words);
+            |start: &str, words: Vec<Value>| MemoryRange::new(start.into(), Unit::Word, words);
         let e = outcome(
             &request(),
             Unit::Word,
@@ -1191,5 +1194,30 @@ mod tests {
         )
         .expect("ok");
         assert_eq!(o.writes.values().copied().collect::<Vec<_>>(), vec![7]);
+    }
+
+    /// A value past what the family's unit holds is no answer, and a range in another unit's
+    /// field is refused with the field to use.
+    #[test]
+    fn a_value_wider_than_the_unit_is_no_answer() {
+        let writes = BTreeMap::from([("D200".to_string(), 0x1_0000)]);
+        let e = outcome(&request(), Unit::Word, Vec::new(), writes, None).expect_err("17 bits");
+        assert!(
+            e.0.contains("`D200` in `writes` is 65536, past a word"),
+            "{e}"
+        );
+        let writes = BTreeMap::from([("D200".to_string(), 0x1_0000)]);
+        outcome(&request(), Unit::Dword, Vec::new(), writes, None).expect("a 32-bit unit");
+        let dwords = MemoryRange::new("D200".into(), Unit::Dword, vec![0x8000_0000]);
+        let e = dwords
+            .values(Unit::Word)
+            .expect_err("dwords in word memory");
+        assert!(e
+            .0
+            .contains("gives `dwords`, but the family's unit is a word: give `words`"));
+        assert_eq!(
+            dwords.values(Unit::Dword).expect("dwords"),
+            vec![0x8000_0000]
+        );
     }
 }

@@ -12,17 +12,25 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::device::{code_matches, Device, DeviceSyntaxError};
-use crate::memory::Unit;
+use crate::memory::{Unit, Value};
 use crate::model::cross_vendor::{ErrorClass, Operation};
 
 /// The newest protocol version this harness speaks: it says so in its `hello`.
-pub(crate) const PROTOCOL_VERSION: u32 = 3;
+pub(crate) const PROTOCOL_VERSION: u32 = 4;
 /// The versions a backend may answer with: 1 (instruction level only), 2 (instruction or
-/// codec level) and 3 (also byte-addressed families, whose memory ranges carry `bytes`). Any
-/// other is refused before a case runs.
-pub(crate) const SUPPORTED_VERSIONS: [u32; 3] = [1, 2, 3];
-/// The first version that can describe byte-addressed memory.
-pub(crate) const BYTES_VERSION: u32 = 3;
+/// codec level), 3 (also byte-addressed families, whose memory ranges carry `bytes`) and 4
+/// (also families whose unit is a 32-bit word, `dwords`). Any other is refused before a case
+/// runs.
+pub(crate) const SUPPORTED_VERSIONS: [u32; 4] = [1, 2, 3, 4];
+
+/// The first version that can carry memory of `unit`s.
+pub(crate) fn first_version_for(unit: Unit) -> u32 {
+    match unit {
+        Unit::Word => 1,
+        Unit::Byte => 3,
+        Unit::Dword => 4,
+    }
+}
 
 /// A device name as the protocol carries it: a code and a decimal number (`D100`, `MB20`,
 /// `DB1.DBB10`).
@@ -199,8 +207,9 @@ pub enum FillName {
     B,
 }
 
-/// Consecutive devices from a start device: words of a word-addressed family, or (version 3)
-/// bytes of a byte-addressed one; exactly one of `words` and `bytes`.
+/// Consecutive devices from a start device: words of a word-addressed family, (version 3)
+/// bytes of a byte-addressed one, or (version 4) 32-bit words of a family whose unit is one;
+/// exactly one of `words`, `bytes` and `dwords`.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MemoryRange {
@@ -215,38 +224,65 @@ pub struct MemoryRange {
     /// version 3).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub bytes: Vec<u8>,
+    /// The 32-bit words from `start` on, as unsigned 32-bit integers (families whose unit is a
+    /// 32-bit word, version 4).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub dwords: Vec<u32>,
 }
 
 impl MemoryRange {
     /// A range of units of memory.
-    pub fn new(start: String, unit: Unit, values: Vec<u16>) -> Self {
+    pub fn new(start: String, unit: Unit, values: Vec<Value>) -> Self {
+        let mut range = MemoryRange {
+            start,
+            words: Vec::new(),
+            bytes: Vec::new(),
+            dwords: Vec::new(),
+        };
         match unit {
-            Unit::Word => MemoryRange {
-                start,
-                words: values,
-                bytes: Vec::new(),
-            },
-            Unit::Byte => MemoryRange {
-                start,
-                words: Vec::new(),
-                bytes: values.into_iter().map(|v| v as u8).collect(),
-            },
+            Unit::Word => range.words = values.into_iter().map(|v| v as u16).collect(),
+            Unit::Byte => range.bytes = values.into_iter().map(|v| v as u8).collect(),
+            Unit::Dword => range.dwords = values,
+        }
+        range
+    }
+
+    /// The field a range of `unit`s is given in.
+    pub(crate) fn field(unit: Unit) -> &'static str {
+        match unit {
+            Unit::Byte => "bytes",
+            Unit::Word => "words",
+            Unit::Dword => "dwords",
         }
     }
 
     /// The range's values in `unit`s; an error names what does not fit.
-    pub fn values(&self, unit: Unit) -> Result<Vec<u16>, ProtocolViolation> {
+    pub fn values(&self, unit: Unit) -> Result<Vec<Value>, ProtocolViolation> {
         let refuse =
-            |what: &str| ProtocolViolation(format!("the range from {} {what}", self.start));
-        match (unit, self.words.is_empty(), self.bytes.is_empty()) {
-            (_, false, false) => Err(refuse("gives both `words` and `bytes`")),
-            (Unit::Word, _, true) => Ok(self.words.clone()),
-            (Unit::Byte, true, _) => Ok(self.bytes.iter().map(|b| u16::from(*b)).collect()),
-            (Unit::Word, true, false) => Err(refuse(
-                "gives `bytes`, but the family is word-addressed: give `words`",
-            )),
-            (Unit::Byte, false, true) => Err(refuse(
-                "gives `words`, but the family is byte-addressed: give `bytes`",
+            |what: String| ProtocolViolation(format!("the range from {} {what}", self.start));
+        let given: Vec<Unit> = [Unit::Byte, Unit::Word, Unit::Dword]
+            .into_iter()
+            .filter(|u| match u {
+                Unit::Byte => !self.bytes.is_empty(),
+                Unit::Word => !self.words.is_empty(),
+                Unit::Dword => !self.dwords.is_empty(),
+            })
+            .collect();
+        match given.as_slice() {
+            [] => Ok(Vec::new()),
+            [u] if *u == unit => Ok(match unit {
+                Unit::Byte => self.bytes.iter().map(|b| Value::from(*b)).collect(),
+                Unit::Word => self.words.iter().map(|w| Value::from(*w)).collect(),
+                Unit::Dword => self.dwords.clone(),
+            }),
+            [u] => Err(refuse(format!(
+                "gives `{}`, but the family's unit is a {}: give `{}`",
+                Self::field(*u),
+                unit.name(),
+                Self::field(unit)
+            ))),
+            _ => Err(refuse(
+                "gives more than one of `words`, `bytes` and `dwords`".to_string(),
             )),
         }
     }
@@ -292,7 +328,7 @@ pub enum BackendMessage {
             skip_serializing_if = "BTreeMap::is_empty",
             deserialize_with = "unique_writes"
         )]
-        writes: BTreeMap<String, u16>,
+        writes: BTreeMap<String, Value>,
         /// The operation error signalled, or null for none.
         #[serde(default)]
         error: Option<ErrorReport>,
@@ -458,19 +494,19 @@ pub enum SignalReport {
 /// without a word.
 fn unique_writes<'de, D: serde::Deserializer<'de>>(
     deserializer: D,
-) -> Result<BTreeMap<String, u16>, D::Error> {
+) -> Result<BTreeMap<String, Value>, D::Error> {
     struct Unique;
     impl<'de> serde::de::Visitor<'de> for Unique {
-        type Value = BTreeMap<String, u16>;
+        type Value = BTreeMap<String, Value>;
         fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-            f.write_str("a map of device names to values (16-bit words, or bytes)")
+            f.write_str("a map of device names to values (words, bytes or 32-bit words)")
         }
         fn visit_map<A: serde::de::MapAccess<'de>>(
             self,
             mut map: A,
         ) -> Result<Self::Value, A::Error> {
             let mut out = BTreeMap::new();
-            while let Some((name, word)) = map.next_entry::<String, u16>()? {
+            while let Some((name, word)) = map.next_entry::<String, Value>()? {
                 if out.contains_key(&name) {
                     return Err(serde::de::Error::custom(format!(
                         "`{name}` is given twice in `writes`"
@@ -486,7 +522,7 @@ fn unique_writes<'de, D: serde::Deserializer<'de>>(
 
 fn some_unique_writes<'de, D: serde::Deserializer<'de>>(
     deserializer: D,
-) -> Result<Option<BTreeMap<String, u16>>, D::Error> {
+) -> Result<Option<BTreeMap<String, Value>>, D::Error> {
     unique_writes(deserializer).map(Some)
 }
 
@@ -583,7 +619,7 @@ impl BackendMessage {
             id: Option<u64>,
             memory: Option<Vec<MemoryRange>>,
             #[serde(default, deserialize_with = "some_unique_writes")]
-            writes: Option<BTreeMap<String, u16>>,
+            writes: Option<BTreeMap<String, Value>>,
             // Present-and-null and absent both mean "no error".
             #[serde(default)]
             error: Option<ErrorReport>,
@@ -841,8 +877,8 @@ mod tests {
         let e = serde_json::from_str::<BackendMessage>(r#"{"type":"result","id":3,"write":{}}"#);
         assert!(e.is_err());
         let e = serde_json::from_str::<BackendMessage>(
-            r#"{"type":"result","id":3,"writes":{"D200":65536}}"#,
+            r#"{"type":"result","id":3,"writes":{"D200":4294967296}}"#,
         );
-        assert!(e.is_err(), "a word wider than 16 bits");
+        assert!(e.is_err(), "a value wider than any unit");
     }
 }

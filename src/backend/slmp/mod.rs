@@ -49,6 +49,7 @@ pub use settings::SlmpSettings;
 use super::external::{closing, window};
 use super::{Backend, Fault, Outcome, Request, Response, Setting};
 use crate::device::Device;
+use crate::memory::Value;
 use crate::model::pointer_words;
 use crate::model::profile::{Profile, Profiles, Variant};
 use manifest::Call;
@@ -357,7 +358,7 @@ impl SlmpBackend {
                 })?;
             let words = (first..=last)
                 .step_by(head.points() as usize)
-                .map(|i| req.memory.read(&head.with_index(i)))
+                .map(|i| req.memory.word(&head.with_index(i)))
                 .collect();
             window.push((head, words));
         }
@@ -608,7 +609,7 @@ impl SlmpBackend {
             for (i, (b, a)) in before.iter().zip(&after).enumerate() {
                 let device = head.with_index(head.index + i as u32);
                 if a != b && !pointers.contains(&device) {
-                    outcome.writes.insert(device, *a);
+                    outcome.writes.insert(device, Value::from(*a));
                 }
             }
         }
@@ -630,7 +631,7 @@ impl SlmpBackend {
             ];
             for (name, value) in read {
                 if let Some(device) = name.and_then(|n| n.parse::<Device>().ok()) {
-                    outcome.registers.insert(device, value);
+                    outcome.registers.insert(device, Value::from(value));
                 }
             }
         }

@@ -38,7 +38,7 @@ use super::mailbox::{self, off, state};
 use super::manifest::{parse_operand, Manifest};
 use crate::backend::{Backend, Request as ModelRequest, Response as ModelResponse};
 use crate::device::Device;
-use crate::memory::{Fill, Image};
+use crate::memory::{Fill, Image, Value};
 use crate::model::profile::Profile;
 use crate::model::{ErrorSignal, Operand};
 
@@ -730,7 +730,7 @@ fn execute(
     // The whole of every word device, so that the model reads what the CPU holds, each named
     // as the profile numbers it (`W1A`).
     let devices = &shared.profile.devices;
-    let image: BTreeMap<Device, u16> = cpu
+    let image: BTreeMap<Device, Value> = cpu
         .words
         .iter()
         .flat_map(|(code, words)| {
@@ -740,7 +740,7 @@ fn execute(
                     true => Device::hexadecimal(code, i as u32),
                     false => Device::new(code, i as u32),
                 };
-                (device, *w)
+                (device, Value::from(*w))
             })
         })
         .collect();
@@ -757,8 +757,9 @@ fn execute(
     };
     match shared.model.execute(&request) {
         Ok(ModelResponse::Done(outcome)) => {
+            // A MELSEC device is a 16-bit word: the model of a word family writes no more.
             for (d, v) in &outcome.writes {
-                cpu.set_word(d, *v);
+                cpu.set_word(d, *v as u16);
             }
             let errors = &shared.settings.manifest.error;
             match outcome.error {
@@ -766,7 +767,7 @@ fn execute(
                     cpu.set_bit(&errors.flag, true);
                     for (register, code) in &outcome.registers {
                         if !shared.settings.untouched_registers.contains(register) {
-                            cpu.set_word(register, *code);
+                            cpu.set_word(register, *code as u16);
                         }
                     }
                 }
