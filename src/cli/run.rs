@@ -157,16 +157,10 @@ fn execute_command(
         seconds: started.elapsed().as_secs_f64(),
     };
     if format != Format::Text {
-        let doc_format = match format {
-            Format::Json => document::Format::Json,
-            Format::Junit => document::Format::Junit,
-            Format::Html => document::Format::Html,
-            Format::Matrix | Format::Text => document::Format::Matrix,
-        };
         let coloured = report.output.is_none()
             && anstream::AutoStream::choice(&std::io::stdout()) != anstream::ColorChoice::Never;
         let rendered = document::render(
-            doc_format,
+            format,
             &records,
             &summary,
             &info,
@@ -192,7 +186,7 @@ fn execute_command(
         ));
     } else if let Some(path) = &report.save {
         let saved = document::render(
-            document::Format::Json,
+            Format::Json,
             &records,
             &summary,
             &info,

@@ -3,7 +3,7 @@
 
 use crate::backend::Outcome;
 use crate::memory::Image;
-use crate::model::cross_vendor::{Answer, Lowering, Operation, TextLayout};
+use crate::model::cross_vendor::{Answer, Lowering, Operation};
 use crate::model::profile::Profile;
 use crate::plan::lowering::{units_for, units_value};
 
@@ -51,20 +51,9 @@ pub(crate) fn lift(
         Operation::ValueToHex => {
             let mut text = Vec::new();
             for k in 0..digits {
-                let ch = match lowering.text {
-                    TextLayout::Packed | TextLayout::PackedHighFirst => {
-                        let high_first = lowering.text == TextLayout::PackedHighFirst;
-                        destination.offset(k / 2).map(|d| {
-                            let w = read(&d);
-                            if (k % 2 == 0) != high_first {
-                                w as u8
-                            } else {
-                                (w >> 8) as u8
-                            }
-                        })
-                    }
-                    TextLayout::Words => destination.offset(k).map(|d| read(&d) as u8),
-                };
+                let ch = (lowering.text).char_at(lowering.unit, k, |i| {
+                    destination.offset(i).map(|d| read(&d))
+                });
                 match ch {
                     Some(0) | None => break,
                     Some(c) => text.push(c),

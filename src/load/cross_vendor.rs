@@ -7,9 +7,8 @@ use std::sync::Arc;
 use super::checks::{check_cite, check_expect_optional, check_id, text_bytes, unknown};
 use super::{FileContext, LoadErrorKind};
 use crate::device::{code_matches, Device};
-use crate::memory::Unit;
 use crate::model::cross_vendor::{
-    Answer, CrossVendorCase, CrossVendorSection, ErrorClass, Lowering, Operation, TextLayout,
+    Answer, CrossVendorCase, CrossVendorSection, ErrorClass, Lowering, Operation,
 };
 use crate::model::profile::{DeviceTable, Profiles, SignalKind};
 use crate::model::{Citation, ErrorSignal, Operand};
@@ -428,9 +427,7 @@ pub(crate) fn read_section(
                 ),
             );
         }
-        if p.memory_unit == Unit::Byte
-            && matches!(l.text, TextLayout::Packed | TextLayout::PackedHighFirst)
-        {
+        if !l.text.fits(p.memory_unit) {
             cx.error(
                 format!("{key}.text"),
                 LoadErrorKind::Invalid(

@@ -15,8 +15,65 @@ use serde::{Deserialize, Serialize};
 
 use super::{Basis, Citation, ErrorSignal, Location, Operand};
 use crate::device::Device;
+use crate::memory::{Unit, Value};
 pub use crate::spec::cross_vendor::{ErrorClass, Operation};
 pub(crate) use crate::spec::cross_vendor::{TextLayout, ValueOrder};
+
+/// How a family stores text (a lowering's `text`), in one place: packing a text into units,
+/// reading a character back, the vector notation that writes it, and which units can hold it.
+impl TextLayout {
+    /// Characters to a unit: as many as it has bytes when packed, one otherwise.
+    fn per_unit(self, unit: Unit) -> u32 {
+        match self {
+            TextLayout::Packed | TextLayout::PackedHighFirst => unit.bits() / 8,
+            TextLayout::Words => 1,
+        }
+    }
+
+    /// Text with its 00H terminator, in memory units.
+    pub(crate) fn units(self, unit: Unit, text: &[u8]) -> Vec<Value> {
+        let mut chars = text.to_vec();
+        chars.push(0);
+        match self {
+            TextLayout::Packed => unit.pack(&chars),
+            // The first character in the unit's highest byte.
+            TextLayout::PackedHighFirst => (unit.pack(&chars).into_iter())
+                .map(|v| v.swap_bytes() >> (Value::BITS - unit.bits()))
+                .collect(),
+            TextLayout::Words => chars.iter().map(|c| Value::from(*c)).collect(),
+        }
+    }
+
+    /// The `k`th character of a text stored this way, `read(i)` giving its `i`th unit.
+    pub(crate) fn char_at(
+        self,
+        unit: Unit,
+        k: u32,
+        read: impl Fn(u32) -> Option<Value>,
+    ) -> Option<u8> {
+        let per = self.per_unit(unit);
+        let (value, i) = (read(k / per)?, k % per);
+        let shift = match self {
+            TextLayout::Packed | TextLayout::Words => 8 * i,
+            TextLayout::PackedHighFirst => unit.bits() - 8 * (i + 1),
+        };
+        Some((value >> shift) as u8)
+    }
+
+    /// The vector notation that stores a text this way (`ascii`, `ascii_words`), if one does.
+    pub(crate) fn notation(self) -> Option<&'static str> {
+        match self {
+            TextLayout::Packed => Some("ascii"),
+            TextLayout::Words => Some("ascii_words"),
+            TextLayout::PackedHighFirst => None,
+        }
+    }
+
+    /// Whether units of `unit` can hold text this way: packing needs more than a byte a unit.
+    pub(crate) fn fits(self, unit: Unit) -> bool {
+        self == TextLayout::Words || unit != Unit::Byte
+    }
+}
 
 /// What a vendor answered to a cross-vendor question.
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
@@ -337,6 +394,40 @@ impl CodecAbilities {
 
 #[cfg(test)]
 mod shape_tests {
+
+    /// Every layout a unit can hold reads back the text it stored, and the words of a 16-bit
+    /// family are the manuals' (`5A` packed is 4135H; KEYENCE's `A5`, high byte first, too).
+    #[test]
+    fn a_text_reads_back_as_stored_in_every_layout_and_unit() {
+        use crate::memory::Unit;
+        for unit in [Unit::Byte, Unit::Word, Unit::Dword] {
+            for layout in [
+                TextLayout::Packed,
+                TextLayout::PackedHighFirst,
+                TextLayout::Words,
+            ] {
+                if !layout.fits(unit) {
+                    continue;
+                }
+                let units = layout.units(unit, b"5A8DC");
+                let back: Vec<u8> = (0..)
+                    .map_while(|k| layout.char_at(unit, k, |i| units.get(i as usize).copied()))
+                    .take_while(|c| *c != 0)
+                    .collect();
+                assert_eq!(back, b"5A8DC", "{layout:?} in {unit:?}");
+            }
+        }
+        assert_eq!(TextLayout::Packed.units(Unit::Word, b"5A"), vec![0x4135, 0]);
+        assert_eq!(
+            TextLayout::PackedHighFirst.units(Unit::Word, b"A5"),
+            vec![0x4135, 0]
+        );
+        assert_eq!(
+            TextLayout::Packed.units(Unit::Dword, b"5A8D"),
+            vec![0x4438_4135, 0]
+        );
+        assert!(!TextLayout::Packed.fits(Unit::Byte));
+    }
     use std::path::PathBuf;
 
     use super::*;

@@ -4,23 +4,9 @@
 
 use super::Input;
 use crate::memory::{Unit, Value};
-use crate::model::cross_vendor::{CrossVendorCase, Lowering, Operation, TextLayout, ValueOrder};
+use crate::model::cross_vendor::{CrossVendorCase, Lowering, Operation, ValueOrder};
 use crate::model::{Indirect, Operand};
 use crate::text::significant_digits;
-
-/// Text with its 00H terminator, in memory units as `layout` stores it.
-pub(crate) fn text_units(layout: TextLayout, unit: Unit, text: &[u8]) -> Vec<Value> {
-    let mut chars = text.to_vec();
-    chars.push(0);
-    match layout {
-        TextLayout::Packed => unit.pack(&chars),
-        // The first character in the unit's highest byte.
-        TextLayout::PackedHighFirst => (unit.pack(&chars).into_iter())
-            .map(|v| v.swap_bytes() >> (Value::BITS - unit.bits()))
-            .collect(),
-        TextLayout::Words => chars.iter().map(|c| Value::from(*c)).collect(),
-    }
-}
 
 /// A value spread over `count` units of memory, in `order`.
 pub(crate) fn value_units(value: u64, unit: Unit, order: ValueOrder, count: u32) -> Vec<Value> {
@@ -94,7 +80,7 @@ pub(crate) fn input(lowering: &Lowering, case: &CrossVendorCase) -> Input {
         }
     }
     let words: Vec<Value> = match lowering.operation {
-        Operation::HexToValue => text_units(lowering.text, lowering.unit, &case.text),
+        Operation::HexToValue => lowering.text.units(lowering.unit, &case.text),
         Operation::ValueToHex => {
             let digits = lowering.width.unwrap_or(case.digits);
             value_memory(case.value, digits, 1, lowering.unit, lowering.order)

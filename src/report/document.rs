@@ -6,14 +6,17 @@ use super::matrix::sections;
 use super::record::Record;
 use super::{Event, Reporter, Summary};
 
-/// The document formats.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// The report formats, as `--format` names them: text is written as the run goes, the others
+/// as one document at its end.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub(crate) enum Format {
-    /// Grouped matrices as text.
+    /// For `run`: failures as they happen, then counts. For `diff`: the grouped matrices.
+    Text,
+    /// The grouped matrices as text.
     Matrix,
-    /// The versioned JSON document (also a saved run for `--baseline`).
+    /// The versioned JSON report (usable as a `--baseline`).
     Json,
-    /// JUnit XML.
+    /// JUnit XML, one test case per trial.
     Junit,
     /// One self-contained HTML file.
     Html,
@@ -81,7 +84,8 @@ pub(crate) fn render(
 ) -> String {
     let matrices = sections(records);
     match format {
-        Format::Matrix => super::matrix_text::render(&matrices, coloured, width),
+        // As a document, text is the matrices (what `diff` shows).
+        Format::Matrix | Format::Text => super::matrix_text::render(&matrices, coloured, width),
         Format::Json => super::json::render(records, &matrices, summary, meta),
         Format::Junit => super::junit::render(records, meta),
         Format::Html => super::html::render(&matrices, records, meta),

@@ -339,11 +339,7 @@ fn native_case(
     }
     // The notations `ascii` and `ascii_words` read two characters a word low byte first, or one
     // a word; a text stored high byte first is written as its words.
-    let key = match shape.layout(&to.point.flags) {
-        crate::model::cross_vendor::TextLayout::Packed => Some("ascii"),
-        crate::model::cross_vendor::TextLayout::Words => Some("ascii_words"),
-        crate::model::cross_vendor::TextLayout::PackedHighFirst => None,
-    };
+    let key = shape.layout(&to.point.flags).notation();
     match &to.point.data {
         Data::Text(t) if whole && key.is_some() => {
             let mut text = t.clone();

@@ -19,7 +19,7 @@ use crate::device::Device;
 use crate::model::cross_vendor::{CrossVendorCase, Lowering, Operation, TextLayout, ValueOrder};
 use crate::model::profile::{Profile, Profiles};
 use crate::model::{Basis, Case, Citation, Indirect, Location, Operand};
-use crate::plan::lowering::{text_units, value_memory};
+use crate::plan::lowering::value_memory;
 use crate::plan::{codec_declined, declined, lowered_input, Check, Input, Trial};
 
 /// What a sweep generates inputs for.
@@ -228,7 +228,7 @@ impl Shape {
         }
         let unit = self.profile.unit;
         let words: Vec<crate::memory::Value> = match &point.data {
-            Data::Text(t) => text_units(self.layout(&point.flags), unit, t),
+            Data::Text(t) => self.layout(&point.flags).units(unit, t),
             Data::Value(v) => value_memory(
                 *v,
                 point.digits,
