@@ -13,7 +13,7 @@ use super::{
     EXIT_OK,
 };
 use crate::backend::Backend;
-use crate::execute::{execute, Pace};
+use crate::execute::{execute_all, Observation, Pace, Progress};
 use crate::judge::Verdict;
 use crate::plan::Trial;
 use crate::report::baseline;
@@ -405,30 +405,48 @@ fn against(cli: &Cli, args: &BackendArgs, other: &str) -> Outcome {
     };
     let same_family = a.profile() == b.profile();
     let stop = crate::interrupt::stop_flag();
-    // B's trials judged against what A did on the same question; where A gives nothing to
-    // judge against, A's trial is reported with why.
+    // The questions both answer: A's trial and B's.
+    let pairs: Vec<(&Trial, &Trial)> = (trials_a.iter().filter(|t| t.skip.is_none()))
+        .filter_map(|ta| {
+            let tb = if same_family {
+                (trials_b.iter()).find(|t| t.skip.is_none() && key(t) == key(ta))
+            } else {
+                // Different families meet on the cross-vendor cases, through their own
+                // lowerings.
+                trials_b.iter().find(|t| {
+                    t.skip.is_none()
+                        && t.is_cross_vendor()
+                        && ta.is_cross_vendor()
+                        && t.case_id() == ta.case_id()
+                })
+            };
+            tb.map(|tb| (ta, tb))
+        })
+        .collect();
+    // A's side runs as any run does, batched per backend; B's trials are then judged against
+    // what A did, and where A gives nothing to judge against, A's trial is reported with why.
+    let asked: Vec<Trial> = pairs.iter().map(|(ta, _)| (*ta).clone()).collect();
+    let indices: Vec<usize> = (0..asked.len()).collect();
+    let jobs = args.jobs.unwrap_or_else(|| {
+        std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
+    });
+    let mut observed: Vec<Option<Vec<Observation>>> = (0..asked.len()).map(|_| None).collect();
+    execute_all(&asked, &indices, jobs, stop, Pace::Ahead, |p| {
+        if let Progress::Observed(i, observations, _) = p {
+            observed[i] = Some(observations);
+        }
+        std::ops::ControlFlow::Continue(())
+    });
     let mut paired: Vec<Trial> = Vec::new();
     let mut unpaired: Vec<(Trial, Verdict)> = Vec::new();
-    for ta in trials_a.iter().filter(|t| t.skip.is_none()) {
-        if stop.load(std::sync::atomic::Ordering::SeqCst) {
-            break;
-        }
-        let tb = if same_family {
-            trials_b
-                .iter()
-                .find(|t| t.skip.is_none() && key(t) == key(ta))
-        } else {
-            // Different families meet on the cross-vendor cases, through their own lowerings.
-            trials_b.iter().find(|t| {
-                t.skip.is_none() && t.is_cross_vendor() && ta.is_cross_vendor() && {
-                    t.case_id() == ta.case_id()
-                }
-            })
+    // An interrupted run compares what it observed.
+    for ((ta, tb), observations) in pairs.iter().zip(observed) {
+        let Some(observations) = observations else {
+            continue;
         };
-        let Some(tb) = tb else { continue };
-        match judged_against(ta, &execute(ta), tb) {
+        match judged_against(ta, &observations, tb) {
             Ok(t) => paired.push(t),
-            Err(verdict) => unpaired.push((ta.clone(), verdict)),
+            Err(verdict) => unpaired.push(((*ta).clone(), verdict)),
         }
     }
     let compared = paired.len() + unpaired.len();
