@@ -5,7 +5,7 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use plc_conformance::testing::device::Device;
 use plc_conformance::testing::memory::Unit;
@@ -80,7 +80,7 @@ fn the_toy_family_loads_in_bytes() {
 #[test]
 fn a_value_wider_than_a_byte_is_a_load_error() {
     let dir = common::scratch();
-    copy_dir(&fixture().join("vendors"), &dir.path().join("vendors"));
+    common::copy_dir(&fixture().join("vendors"), &dir.path().join("vendors"));
     let vectors = dir.path().join("vectors/toy-bytes");
     std::fs::create_dir_all(&vectors).expect("mkdir");
     let text = std::fs::read_to_string(fixture().join("vectors/toy-bytes/ath.yaml"))
@@ -92,14 +92,6 @@ fn a_value_wider_than_a_byte_is_a_load_error() {
         Err(e) => e.to_string(),
     };
     assert!(err.contains("`141H` is too wide for 8 bits"), "{err}");
-}
-
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).expect("mkdir");
-    for entry in std::fs::read_dir(from).expect("read_dir") {
-        let entry = entry.expect("entry");
-        std::fs::copy(entry.path(), to.join(entry.file_name())).expect("copy");
-    }
 }
 
 #[test]

@@ -35,19 +35,6 @@ fn cli(root: &Path, args: &[&str]) -> (i32, String, String) {
     )
 }
 
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).expect("mkdir");
-    for entry in std::fs::read_dir(from).expect("read_dir") {
-        let entry = entry.expect("entry");
-        let target = to.join(entry.file_name());
-        if entry.path().is_dir() {
-            copy_dir(&entry.path(), &target);
-        } else {
-            std::fs::copy(entry.path(), target).expect("copy");
-        }
-    }
-}
-
 #[test]
 fn the_toy_family_loads_in_32_bit_units() {
     let project = match Project::load(&Paths::under(&fixture())) {
@@ -68,7 +55,7 @@ fn the_toy_family_loads_in_32_bit_units() {
 #[test]
 fn a_value_wider_than_32_bits_is_a_load_error() {
     let dir = common::scratch();
-    copy_dir(&fixture(), dir.path());
+    common::copy_dir(&fixture(), dir.path());
     let file = dir.path().join("vectors/toy-dwords/hex8.yaml");
     let text = std::fs::read_to_string(&file)
         .expect("the fixture vectors")
@@ -172,7 +159,7 @@ fn record_writes_a_32_bit_outcome_that_loads_and_passes() {
         return;
     }
     let dir = common::scratch();
-    copy_dir(&fixture(), dir.path());
+    common::copy_dir(&fixture(), dir.path());
     let file = dir.path().join("vectors/toy-dwords/hex8.yaml");
     let mut text = std::fs::read_to_string(&file).expect("the fixture vectors");
     text.push_str(

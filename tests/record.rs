@@ -13,21 +13,8 @@ use plc_conformance::testing::model::{Basis, Corpus};
 fn iqr_copy() -> (tempfile::TempDir, std::path::PathBuf) {
     let scratch_dir = scratch();
     let dir = scratch_dir.path().join("vectors");
-    copy_dir(&root().join("vectors/mitsubishi-iqr"), &dir);
+    common::copy_dir(&root().join("vectors/mitsubishi-iqr"), &dir);
     (scratch_dir, dir)
-}
-
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).expect("mkdir");
-    for entry in std::fs::read_dir(from).expect("read dir") {
-        let entry = entry.expect("entry");
-        let target = to.join(entry.file_name());
-        if entry.path().is_dir() {
-            copy_dir(&entry.path(), &target);
-        } else {
-            std::fs::copy(entry.path(), target).expect("copy");
-        }
-    }
 }
 
 fn corpus(dir: &Path) -> Corpus {
@@ -184,7 +171,7 @@ fn a_backend_that_faults_records_nothing_and_fails() {
     let scratch_dir = scratch();
     let dir = scratch_dir.path().join("vectors");
     let fixtures = root().join("tests/fixtures/external");
-    copy_dir(&fixtures.join("vectors"), &dir);
+    common::copy_dir(&fixtures.join("vectors"), &dir);
     let before: Vec<String> = std::fs::read_dir(&dir)
         .expect("dir")
         .map(|e| std::fs::read_to_string(e.expect("entry").path()).expect("read"))

@@ -9,11 +9,11 @@
 
 mod program;
 
-use crate::backend::slmp::error::{refused, LiveError};
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use crate::backend::external::window;
+use crate::backend::slmp::error::{refused, LiveError};
 use crate::backend::slmp::fence::{self, WordRange};
 use crate::backend::slmp::mailbox;
 use crate::backend::slmp::manifest::{self, Call, ErrorDevices, Manifest, Rung, Unrealisable};

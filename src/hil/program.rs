@@ -9,10 +9,10 @@
 //! it ran: in the scan it is enabled it writes its number, the trigger and its ENO into the
 //! mailbox. What a bench user must still check in the tool is in the setup checklist.
 
-use crate::backend::slmp::error::{refused, LiveError};
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
+use crate::backend::slmp::error::{refused, LiveError};
 use crate::backend::slmp::fence;
 use crate::backend::slmp::mailbox::{self, off, state};
 use crate::backend::slmp::manifest::{parse_operand, Manifest};

@@ -1,13 +1,13 @@
 //! A read-only look at a bench: what `plc-conformance hil doctor` prints. It sends only 0101,
 //! 0401 and 0403, so it can be pointed at a CPU before anything is trusted.
 
-use crate::backend::slmp::error::{refused, LiveError};
 use std::time::{Duration, Instant};
 
 use super::client::Client;
 use super::mailbox::{self, off, Signature};
 use super::settings::SlmpSettings;
 use super::{is_run, status_text};
+use crate::backend::slmp::error::{refused, LiveError};
 use crate::device::Device;
 
 /// One finding: what was looked at, and what was found (`Err` when it stops a run).

@@ -6,7 +6,6 @@
 //! program text. A manifest whose hash does not match its content (edited by hand) is refused:
 //! the program on the CPU would then say one thing and the table another.
 
-use crate::backend::slmp::error::{refused, LiveError};
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
@@ -14,6 +13,7 @@ use serde::{Deserialize, Serialize};
 
 use super::fence::{parse_ranges, Kind};
 use super::mailbox;
+use crate::backend::slmp::error::{refused, LiveError};
 use crate::device::Device;
 use crate::model::{Indirect, Operand};
 

@@ -34,8 +34,6 @@ pub(crate) mod manifest;
 pub(crate) mod settings;
 pub(crate) mod sim;
 
-use crate::backend::slmp::error::{refused, LiveError};
-use crate::error_chain::chain;
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
@@ -48,7 +46,9 @@ pub use settings::SlmpSettings;
 
 use super::external::{closing, window};
 use super::{Backend, Fault, Outcome, Request, Response, Setting};
+use crate::backend::slmp::error::{refused, LiveError};
 use crate::device::Device;
+use crate::error_chain::chain;
 use crate::memory::Value;
 use crate::model::pointer_words;
 use crate::model::profile::{Profile, Profiles, Variant};

@@ -1,7 +1,6 @@
 //! How to run one live CPU backend, and its command-line form
 //! `slmp:NAME=HOST:PORT?manifest=PATH&confirm=TYPE&sandbox=RANGES[&...]`.
 
-use crate::backend::slmp::error::{refused, LiveError};
 use std::path::Path;
 use std::time::Duration;
 
@@ -10,6 +9,7 @@ use super::fence::{parse_ranges, Kind, WordRange};
 use super::frame::{DeviceForm, FrameKind};
 use super::limits::{self, Family};
 use super::manifest::Manifest;
+use crate::backend::slmp::error::{refused, LiveError};
 
 /// The case time limit unless configured: the program needs three or four scans.
 pub(crate) const DEFAULT_CASE_TIMEOUT: Duration = Duration::from_secs(2);

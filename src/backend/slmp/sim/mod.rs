@@ -19,7 +19,6 @@ mod remote;
 
 pub use remote::RemoteProgram;
 
-use crate::backend::slmp::error::{refused, LiveError};
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
@@ -36,6 +35,7 @@ use super::frame::{
 use super::limits::{Family, Limits};
 use super::mailbox::{self, off, state};
 use super::manifest::{parse_operand, Manifest};
+use crate::backend::slmp::error::{refused, LiveError};
 use crate::backend::{Backend, Request as ModelRequest, Response as ModelResponse};
 use crate::device::Device;
 use crate::memory::{Fill, Image, Value};

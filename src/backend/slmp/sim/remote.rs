@@ -5,8 +5,6 @@
 //! words the scan changed. The live backend then talks to the third-party server, in its code
 //! and with its limits, exactly as to a CPU; only the program is this harness's.
 
-use crate::backend::slmp::error::LiveError;
-use crate::error_chain::chain;
 use std::collections::BTreeMap;
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
@@ -14,10 +12,12 @@ use std::thread::JoinHandle;
 
 use super::{scan, Audit, Shared, SimSettings};
 use crate::backend::slmp::client::{Client, ClientSettings};
+use crate::backend::slmp::error::LiveError;
 use crate::backend::slmp::fence::{parse_ranges, WordRange, WriteFence};
 use crate::backend::slmp::mailbox::{self, off, state};
 use crate::backend::Backend;
 use crate::device::Device;
+use crate::error_chain::chain;
 use crate::model::profile::Profile;
 
 /// The program running on a remote server's memory; dropping it stops it.
