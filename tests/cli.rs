@@ -348,3 +348,62 @@ fn two_backends_of_one_name_are_refused_before_anything_starts() {
     );
     assert!(!marker.exists(), "the second backend was started");
 }
+
+/// `list --backend` shows each trial a backend would run, and for the others why not: skipped
+/// (what the backend does not implement) or ignored (recorded only, a known difference).
+#[test]
+fn list_shows_which_trials_a_backend_runs_and_why_not_the_others() {
+    let out = cli(&[
+        "list",
+        "--backend",
+        "iqr",
+        "--filter",
+        "habin-fixed-4-digits-example",
+    ]);
+    assert_eq!(out.status.code(), Some(0));
+    let stdout = text(&out.stdout);
+    assert!(
+        stdout.starts_with("iqr: 4 trials, 4 run, 0 skipped or ignored\n"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("\n  run     iqr::habin::habin-fixed-4-digits-example::rcpu\n"),
+        "{stdout}"
+    );
+    let out = cli(&[
+        "list",
+        "--backend",
+        "iqr",
+        "--filter",
+        "binha-destination-range-end-sm701-on::rcpu-no",
+    ]);
+    let stdout = text(&out.stdout);
+    assert!(
+        stdout.contains(
+            "  ignore  iqr::binha::binha-destination-range-end-sm701-on::rcpu-no-sm705: \
+             unspecified: what the backend does is recorded, never judged"
+        ),
+        "{stdout}"
+    );
+    if !common::python() {
+        return;
+    }
+    let script = common::root().join("tests/fixtures/external/habin_adapter.py");
+    let backend = format!("external:py=python3 {}", script.display());
+    let out = cli(&[
+        "list",
+        "--backend",
+        &backend,
+        "--filter",
+        "binha-fixed-0abc",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    assert!(
+        stdout.contains(
+            "  skip    py::binha::binha-fixed-0abc-example::rcpu: py does not implement BINHA on rcpu\n"
+        ),
+        "{stdout}"
+    );
+    assert!(!stdout.contains("  run "), "{stdout}");
+}

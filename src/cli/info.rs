@@ -5,10 +5,10 @@ use std::path::PathBuf;
 
 use std::fmt::Write as _;
 
-use clap::CommandFactory;
+use clap::{CommandFactory, Parser};
 
-use super::backends::{load, paths, project_file, project_file_path};
-use super::{output, Cli, CliError, Outcome, SchemaKind, EXIT_OK};
+use super::backends::{load, paths, prepare, project_file, project_file_path, Prepared};
+use super::{output, BackendArgs, Cli, CliError, Outcome, SchemaKind, EXIT_OK};
 use crate::backend::external::{protocol, serve as protocol_serve};
 use crate::load::{load_corpus, load_open_questions, load_profiles, OPEN_QUESTIONS};
 use crate::report::text::case_line;
@@ -50,6 +50,57 @@ fn counted(n: usize, noun: &str) -> String {
     } else {
         format!("{n} {noun}s")
     }
+}
+
+/// The trials the named backends would run, and why each of the others would not run: skipped
+/// (not claimed, declined, a variant or device the backend lacks) or ignored (recorded only,
+/// a listed known difference), as `run` and `cargo test` would treat them.
+pub(super) fn trials(cli: &Cli, filter: Option<&str>, names: &[String]) -> Outcome {
+    // The backends as `run --backend` takes them, with its defaults for everything else.
+    let argv = ["list"]
+        .into_iter()
+        .chain(names.iter().flat_map(|n| ["--backend", n.as_str()]));
+    let args = BackendOnly::try_parse_from(argv)
+        .map_err(|e| CliError::input(e.to_string()))?
+        .args;
+    let Prepared {
+        project, backends, ..
+    } = prepare(cli, &args)?;
+    let trials = project.plan(&backends);
+    let mut out = String::new();
+    for backend in &backends {
+        let mine: Vec<_> = (trials.iter())
+            .filter(|t| t.backend.name() == backend.name())
+            .filter(|t| filter.is_none_or(|f| t.name().contains(f)))
+            .collect();
+        let run = mine
+            .iter()
+            .filter(|t| t.ignored_because().is_none())
+            .count();
+        let _ = writeln!(
+            out,
+            "{}: {} trials, {run} run, {} skipped or ignored",
+            backend.name(),
+            mine.len(),
+            mine.len() - run
+        );
+        for t in mine {
+            let _ = match (&t.skip, t.ignored_because()) {
+                (Some(why), _) => writeln!(out, "  skip    {}: {why}", t.name()),
+                (None, Some(why)) => writeln!(out, "  ignore  {}: {why}", t.name()),
+                (None, None) => writeln!(out, "  run     {}", t.name()),
+            };
+        }
+    }
+    output::write(None, &out)?;
+    Ok(EXIT_OK)
+}
+
+/// `run`'s backend arguments alone, parsed for `list --backend`.
+#[derive(clap::Parser)]
+struct BackendOnly {
+    #[command(flatten)]
+    args: BackendArgs,
 }
 
 pub(super) fn list(cli: &Cli, filter: Option<&str>) -> Outcome {

@@ -87,11 +87,17 @@ pub(crate) enum Command {
         /// Vector files or folders [default: ROOT/vectors].
         paths: Vec<PathBuf>,
     },
-    /// List backends, profiles with their variants, and cases.
+    /// List backends, profiles with their variants, and cases; with `--backend`, the trials a
+    /// backend would run and why it would not run the others.
     List {
-        /// Only cases whose id, instruction or file contains this text.
+        /// Only cases whose id, instruction or file contains this text (with `--backend`: only
+        /// trials whose name contains it).
         #[arg(long)]
         filter: Option<String>,
+        /// Show this backend's trials instead: a name (see `list`) or `external:NAME=COMMAND`
+        /// (started, to hear what it implements); repeat for several.
+        #[arg(long = "backend", value_name = "NAME")]
+        backends: Vec<String>,
     },
     /// Print the JSON Schema (draft-07) of vector files, vendor profiles, cross-vendor files,
     /// the external-backend protocol's messages, the project file or a known-differences file.
@@ -258,7 +264,10 @@ pub(crate) fn main() -> ExitCode {
         Command::Run(args) => run::run(&cli, args),
         Command::Diff(args) => run::diff(&cli, args),
         Command::Validate { paths } => info::validate(&cli, paths),
-        Command::List { filter } => info::list(&cli, filter.as_deref()),
+        Command::List { filter, backends } if !backends.is_empty() => {
+            info::trials(&cli, filter.as_deref(), backends)
+        }
+        Command::List { filter, .. } => info::list(&cli, filter.as_deref()),
         Command::Schema { kind } => info::schema(*kind),
         Command::Serve { profile } => info::serve(&cli, profile),
         Command::Completions { shell } => info::completions(*shell),
