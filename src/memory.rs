@@ -291,6 +291,9 @@ mod tests {
         }
         assert_eq!(Unit::Dword.pack(b"12345"), vec![0x3433_3231, 0x35]);
         assert_eq!(Unit::Word.pack(b"123"), vec![0x3231, 0x33]);
+        // Two characters a word, first in the low byte; an odd count leaves 00H high.
+        assert_eq!(Unit::Word.pack(b"5A8D"), vec![0x4135, 0x4438]);
+        assert_eq!(Unit::Word.pack(b"5A8"), vec![0x4135, 0x0038]);
         assert_eq!(Unit::Byte.pack(b"12"), vec![0x31, 0x32]);
         assert_eq!(Unit::Dword.hex(0x89AB_CDEF), "89ABCDEFH");
         assert_eq!(Unit::Word.hex(0x5A8D), "5A8DH");

@@ -142,5 +142,5 @@ pub mod sweep {
     }
 }
 pub mod text {
-    pub use crate::text::{digit_value, pack_low_first, packed_char};
+    pub use crate::text::{digit_value, packed_char};
 }

@@ -1,7 +1,7 @@
 //! Hex digits and character storage shared by the reference models.
 
 use crate::device::Device;
-use crate::memory::{Image, Unit, Value};
+use crate::memory::Image;
 
 /// The value of a hex digit character. Only 30H-39H and 41H-46H are digits: lowercase is
 /// invalid in the manuals this project covers, except where a family's model says otherwise
@@ -35,11 +35,6 @@ pub fn packed_char(memory: &Image, head: &Device, k: u32) -> Option<u8> {
     })
 }
 
-/// Packs characters two per word, first in the low byte; an odd count leaves 00H high.
-pub fn pack_low_first(chars: &[u8]) -> Vec<Value> {
-    Unit::Word.pack(chars)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -51,11 +46,5 @@ mod tests {
         for n in 0..16 {
             assert_eq!(digit_value(digit_char(n)), Some(n as u8));
         }
-    }
-
-    #[test]
-    fn packs_low_byte_first() {
-        assert_eq!(pack_low_first(b"5A8D"), vec![0x4135, 0x4438]);
-        assert_eq!(pack_low_first(b"5A8"), vec![0x4135, 0x0038]);
     }
 }

@@ -13,10 +13,10 @@ use std::sync::Arc;
 use common::{assert_corpus_kills, failing_trials, map_done, reference, session, Mutant};
 use plc_conformance::testing::backend::{Backend, Fault, Outcome, Request, Response};
 use plc_conformance::testing::device::Device;
-use plc_conformance::testing::memory::Image;
+use plc_conformance::testing::memory::{Image, Unit};
 use plc_conformance::testing::model::profile::{DeviceRange, DeviceRanges};
 use plc_conformance::testing::model::Operand;
-use plc_conformance::testing::text::{digit_value, pack_low_first, packed_char};
+use plc_conformance::testing::text::{digit_value, packed_char};
 
 const PROFILE: &str = "idec-fc4a";
 
@@ -253,7 +253,8 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
             map_done(base.execute(req), |mut o| {
                 if let (true, Some(d1)) = (req.instruction == "HTOA", d1) {
                     let chars: Vec<u8> = o.writes.values().map(|w| *w as u8).collect();
-                    o.writes = pack_low_first(&chars)
+                    o.writes = Unit::Word
+                        .pack(&chars)
                         .into_iter()
                         .enumerate()
                         .filter_map(|(i, w)| Some((d1.offset(i as u32)?, w)))

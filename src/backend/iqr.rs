@@ -7,9 +7,9 @@
 
 use super::reference::{Model, Stop};
 use super::{Outcome, Request, Unsupported};
-use crate::memory::Scratch;
+use crate::memory::{Scratch, Unit};
 use crate::model::Operand;
-use crate::text::{digit_char, digit_value, pack_low_first, packed_char};
+use crate::text::{digit_char, digit_value, packed_char};
 
 /// The profile this model implements.
 pub(crate) const PROFILE: &str = "mitsubishi-iqr";
@@ -134,7 +134,7 @@ fn binha(req: &Request<'_>, words: u32) -> Result<Outcome, Unsupported> {
     if chars.len() < max_digits || !req.flag("SM701") {
         chars.push(0);
     }
-    let packed = pack_low_first(&chars);
+    let packed = Unit::Word.pack(&chars);
     if !req.words_exist(d, packed.len() as u32) {
         return Ok(Outcome::error(req.error(ERR_DEVICE_RANGE)));
     }

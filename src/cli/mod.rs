@@ -208,6 +208,15 @@ pub(crate) struct BackendArgs {
     pub fail_fast: bool,
 }
 
+impl BackendArgs {
+    /// Backends run side by side: `--jobs`, or one per CPU.
+    pub(crate) fn jobs(&self) -> usize {
+        self.jobs.unwrap_or_else(|| {
+            std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
+        })
+    }
+}
+
 /// Where a report goes and how it is compared, shared by `run` and `diff`.
 #[derive(Debug, Clone, clap::Args)]
 pub(crate) struct ReportArgs {

@@ -83,9 +83,7 @@ fn execute_command(
              what exists)",
         ));
     }
-    let jobs = backend_args.jobs.unwrap_or_else(|| {
-        std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
-    });
+    let jobs = backend_args.jobs();
     let date = utc_now();
     let stop = crate::interrupt::stop_flag();
     let mut collector = Collector::default();
@@ -427,9 +425,7 @@ fn against(cli: &Cli, args: &BackendArgs, other: &str) -> Outcome {
     // what A did, and where A gives nothing to judge against, A's trial is reported with why.
     let asked: Vec<Trial> = pairs.iter().map(|(ta, _)| (*ta).clone()).collect();
     let indices: Vec<usize> = (0..asked.len()).collect();
-    let jobs = args.jobs.unwrap_or_else(|| {
-        std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
-    });
+    let jobs = args.jobs();
     let mut observed: Vec<Option<Vec<Observation>>> = (0..asked.len()).map(|_| None).collect();
     execute_all(&asked, &indices, jobs, stop, Pace::Ahead, |p| {
         if let Progress::Observed(i, observations, _) = p {

@@ -85,7 +85,7 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
         .get(&options.profile)
         .cloned()
         .ok_or_else(|| {
-            format!(
+            refused!(
                 "profile `{}` is not loaded; known profiles: {}",
                 options.profile,
                 project.profiles.ids().join(", ")
@@ -120,7 +120,9 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
         })
         .collect();
     if trials.is_empty() {
-        return Err("no trial of the corpus matches: nothing to generate".into());
+        return Err(refused!(
+            "no trial of the corpus matches: nothing to generate"
+        ));
     }
     // Whether each instruction and operand tuple can be a rung.
     let mut seen: BTreeMap<String, bool> = BTreeMap::new();
@@ -250,7 +252,7 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
 fn error_devices(profile: &Profile) -> Result<ErrorDevices, LiveError> {
     let errors = &profile.errors;
     let register = errors.register.as_ref().ok_or_else(|| {
-        format!(
+        refused!(
             "{} signals errors with a flag only; the test program is generated for CPUs that \
              store an error code (MELSEC)",
             profile.id
@@ -310,7 +312,9 @@ fn choose_mailbox(
         .into_iter()
         .filter(|(lo, hi)| hi - lo + 1 >= mailbox::WORDS)
         .max_by_key(|(lo, hi)| hi - lo)
-        .ok_or("no 32 free data registers outside the case windows for the mailbox")?;
+        .ok_or_else(|| {
+            refused!("no 32 free data registers outside the case windows for the mailbox")
+        })?;
     let middle = lo + (hi - lo) / 2;
     let fits = |at: u32| at >= lo && at + mailbox::WORDS - 1 <= hi;
     let at = [1000, 100, 1]
@@ -432,7 +436,9 @@ pub fn pulse_self_test(
                 .is_some_and(|base| profile.instructions.contains_key(base))
                 && expects_writes(t)
         })
-        .ok_or("the program has no pulse-form rung whose case writes something to compare")?;
+        .ok_or_else(|| {
+            refused!("the program has no pulse-form rung whose case writes something to compare")
+        })?;
     let imgs = images(trial);
     let reqs = requests(trial, &imgs);
     let req = reqs

@@ -31,7 +31,7 @@ fn call(
     operands: &BTreeMap<String, String>,
 ) -> Result<String, LiveError> {
     let form = profile.calls.get(instruction).ok_or_else(|| {
-        format!(
+        refused!(
             "{} has no structured-text form for {instruction} (`structured_text` in its \
              profile): the program cannot call it",
             profile.id

@@ -52,7 +52,7 @@ pub(crate) fn doctor(settings: &SlmpSettings) -> (Vec<Finding>, u64) {
     let Ok(head) = settings.manifest.mailbox_head() else {
         push(
             "mailbox",
-            Err("the manifest's mailbox is not a device".into()),
+            Err(refused!("the manifest's mailbox is not a device")),
         );
         return (out, client.requests);
     };

@@ -31,18 +31,6 @@ impl From<Refused> for LiveError {
     }
 }
 
-impl From<String> for LiveError {
-    fn from(why: String) -> Self {
-        LiveError::Refused(why)
-    }
-}
-
-impl From<&str> for LiveError {
-    fn from(why: &str) -> Self {
-        LiveError::Refused(why.to_string())
-    }
-}
-
 impl From<ClientError> for LiveError {
     fn from(e: ClientError) -> Self {
         LiveError::Client(e)

@@ -286,7 +286,9 @@ impl Manifest {
             }
         }
         if self.flags.len() > 16 {
-            return Err("more than 16 flags do not fit the mailbox flag word".into());
+            return Err(refused!(
+                "more than 16 flags do not fit the mailbox flag word"
+            ));
         }
         for range in
             parse_ranges(&self.writes.join(",")).map_err(|e| LiveError::within("`writes`", e))?

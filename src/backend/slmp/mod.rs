@@ -186,7 +186,7 @@ impl SlmpBackend {
     pub fn new(settings: SlmpSettings, profiles: &Profiles) -> Result<SlmpBackend, LiveError> {
         let manifest = &settings.manifest;
         let profile = profiles.get(&manifest.profile).cloned().ok_or_else(|| {
-            format!(
+            refused!(
                 "the manifest is for profile `{}`, which is not loaded; known profiles: {}",
                 manifest.profile,
                 profiles.ids().join(", ")
@@ -348,11 +348,11 @@ impl SlmpBackend {
             self.fence
                 .check(&range)
                 .map_err(|e| match fence::Kind::of(code) {
-                    fence::Kind::Special => format!(
+                    fence::Kind::Special => refused!(
                         "not run: {e}; {code} is a special register, which `sandbox=manifest` \
                      leaves out: name it to let the harness write it (sandbox=manifest,{range})"
                     ),
-                    _ => format!(
+                    _ => refused!(
                         "not run: {e}; declare a sandbox that covers the manifest's `writes`"
                     ),
                 })?;

@@ -211,7 +211,7 @@ impl SlmpSettings {
         s.fit_limits();
         if let Some(v) = get("monitor") {
             let units = v.parse::<u16>().ok().filter(|n| *n <= 240).ok_or_else(|| {
-                format!("`monitor={v}`: give 0 (the FX5 value) to 240 (units of 250 ms)")
+                refused!("`monitor={v}`: give 0 (the FX5 value) to 240 (units of 250 ms)")
             })?;
             s.client.timer = units;
             // With 0 the CPU does not time itself, and the client's default reply time holds.
