@@ -21,7 +21,8 @@ use plc_conformance::testing::backend::{Backend, Request};
 use plc_conformance::testing::execute::{images, requests};
 use plc_conformance::testing::memory::Image;
 use plc_conformance::testing::model::project::{ExternalSettings, Launch};
-use plc_conformance::testing::runner::{Paths, Project};
+use plc_conformance::testing::session::Session;
+use plc_conformance::{Paths, Project};
 
 struct Setup {
     name: &'static str,
@@ -38,7 +39,7 @@ fn main() {
     let filter: Option<String> = std::env::args().skip(1).find(|a| !a.starts_with("--"));
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let session = match Project::load(&Paths::under(root)) {
-        Ok(s) => s,
+        Ok(s) => Session::with_references(s),
         Err(e) => {
             eprintln!("the corpus does not load:\n{e}");
             std::process::exit(2);

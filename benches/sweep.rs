@@ -19,20 +19,20 @@ static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
-use std::sync::Arc;
 use std::time::Instant;
 
-use plc_conformance::testing::backend::{Backend, Request};
+use plc_conformance::testing::backend::Request;
 use plc_conformance::testing::memory::{Fill, Image};
 use plc_conformance::testing::model::cross_vendor::Operation;
 use plc_conformance::testing::model::project::{ExternalSettings, Launch};
 use plc_conformance::testing::plan::Input;
-use plc_conformance::testing::runner::{Paths, Project};
+use plc_conformance::testing::session::{BackendSource, Session};
 use plc_conformance::testing::sweep::generate::Generator;
 use plc_conformance::testing::sweep::group::Groups;
 use plc_conformance::testing::sweep::input::Point;
 use plc_conformance::testing::sweep::target::{Cases, Target};
 use plc_conformance::testing::sweep::{Settings, Sweep};
+use plc_conformance::{Paths, Project};
 
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
@@ -40,7 +40,7 @@ fn main() {
     let wanted = |name: &str| filter.as_deref().is_none_or(|f| name.contains(f));
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut project = match Project::load(&Paths::under(root)) {
-        Ok(p) => p,
+        Ok(p) => Session::with_references(p),
         Err(e) => {
             eprintln!("the corpus does not load:\n{e}");
             std::process::exit(2);
@@ -76,7 +76,7 @@ fn best<T>(rounds: usize, mut f: impl FnMut() -> T) -> (f64, T) {
 }
 
 /// The sweep against the bare model loop, one thread each.
-fn overhead(project: &Project, count: u64) {
+fn overhead(project: &Session, count: u64) {
     let mut settings = Settings::new(
         Target::Operation {
             operation: Operation::HexToValue,
@@ -146,7 +146,7 @@ fn overhead(project: &Project, count: u64) {
 }
 
 /// Every 16-bit value through each value-to-hex instruction on every variant.
-fn values(project: &Project, cores: usize) {
+fn values(project: &Session, cores: usize) {
     let mut total = 0.0;
     let mut all_flags = 0.0;
     for (profile, instruction) in [
@@ -191,7 +191,7 @@ fn values(project: &Project, cores: usize) {
 }
 
 /// Generated inputs through the native adapter, batched.
-fn protocol(project: &mut Project, root: &Path, count: u64) {
+fn protocol(project: &mut Session, root: &Path, count: u64) {
     let mut settings = ExternalSettings::new(
         "native",
         Launch::Exec(vec![
@@ -204,7 +204,10 @@ fn protocol(project: &mut Project, root: &Path, count: u64) {
         ]),
     );
     settings.timeout = std::time::Duration::from_secs(30);
-    let native = project.add_external(settings, false).expect("serve starts") as Arc<dyn Backend>;
+    let native = project
+        .add(BackendSource::Process(settings), false)
+        .expect("serve starts")[0]
+        .clone();
     let mut s = Settings::new(
         Target::Instruction {
             profile: "mitsubishi-iqr".into(),
@@ -229,7 +232,7 @@ fn protocol(project: &mut Project, root: &Path, count: u64) {
 /// All 2^32 four-byte texts through every built-in hex-to-value lowering, by byte class (with
 /// the classes found and checked as in any such sweep); then a shard asked text by text, and the
 /// whole space at that rate.
-fn full(project: &Project, cores: usize, texts: u64) {
+fn full(project: &Session, cores: usize, texts: u64) {
     let mut settings = Settings::new(
         Target::Operation {
             operation: Operation::HexToValue,

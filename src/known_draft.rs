@@ -16,7 +16,8 @@ use crate::backend::Backend;
 use crate::judge::{Difference, Verdict};
 use crate::model::known::InputClass;
 use crate::plan::{Check, Trial};
-use crate::runner::{verdicts, Project};
+use crate::project::Project;
+use crate::session::verdicts;
 use crate::value::hex_word;
 
 /// Every input class, in the order the draft tries them.

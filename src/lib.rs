@@ -96,9 +96,9 @@ mod load;
 mod memory;
 mod model;
 mod plan;
+mod project;
 mod record;
 mod report;
-mod runner;
 mod session;
 mod spec;
 mod sweep;
@@ -120,7 +120,8 @@ pub use model::known::{KnownDifferences, Subject};
 pub use model::profile::{Profile, Variant};
 pub use model::{Basis, Case, Corpus, ErrorSignal, Indirect, Operand};
 pub use plan::Trial;
-pub use runner::{run_one, verdicts, Paths, Project};
+pub use project::{Paths, Project};
+pub use session::{run_one, verdicts};
 
 /// What this repository's own tests reach inside the crate, with no stability promise: hidden
 /// from the documentation, which shows the interface above.

@@ -26,10 +26,10 @@ use crate::backend::Backend;
 use crate::judge::{Status, Verdict};
 use crate::load::{load_project, locate_project};
 use crate::plan::Trial;
+use crate::project::{Paths, Project};
 use crate::report::console;
 use crate::report::text::{render, Palette};
-use crate::runner::{run_one, Paths, Project, SetupError};
-use crate::session::{assemble, BackendSource, LazyStart};
+use crate::session::{run_one, BackendSource, LazyStart, Session, SetupError};
 
 /// Runs the corpus under `root` as libtest trials: the built-in reference models, the project
 /// file's external backends, and `extra` backends. `binary` is the plc-conformance executable
@@ -115,7 +115,7 @@ impl Harness {
             paths.vectors = files;
             whole_corpus = false;
         }
-        let mut project = match Project::load(&paths) {
+        let project = match Project::load(&paths) {
             Ok(p) => p,
             Err(errors) => {
                 console::error(&format!("the corpus does not load:\n{errors}"));
@@ -168,8 +168,8 @@ impl Harness {
                 });
             }
         }
-        let assembled = assemble(&mut project, sources, whole_corpus);
-        for (name, error) in assembled.failed {
+        let (session, failed) = Session::assemble(project, sources, whole_corpus);
+        for (name, error) in failed {
             let (what, message) = match error {
                 SetupError::Load(e) => ("known-differences", e.to_string()),
                 e => ("handshake", e.to_string()),
@@ -178,7 +178,7 @@ impl Harness {
                 Err(Failed::from(message))
             }));
         }
-        for lazy in &assembled.on_first_use {
+        for lazy in &session.on_first_use {
             let handshake = lazy.clone();
             tests.push(Test::test(
                 format!("{}::handshake", lazy.name()),
@@ -190,20 +190,18 @@ impl Harness {
                 },
             ));
         }
-        let lazies = assembled.on_first_use;
-        let by_name: BTreeMap<String, Arc<LazyStart>> = lazies
-            .iter()
+        let by_name: BTreeMap<String, Arc<LazyStart>> = (session.on_first_use.iter())
             .map(|l| (l.name().to_string(), l.clone()))
             .collect();
-        let trials = project.plan(&assembled.backends);
+        let trials = session.plan(&session.backends);
         tests.extend(trials.into_iter().map(|t| {
             let lazy = by_name.get(t.backend.name()).cloned();
             test(t, lazy, args.exact)
         }));
         let conclusion = libtest_mimic::run(&args, tests);
         // Started processes get their shutdown message before the harness exits.
-        drop(lazies);
-        drop(project);
+        drop(by_name);
+        drop(session);
         conclusion.exit_code()
     }
 }

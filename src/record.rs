@@ -11,14 +11,16 @@
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 use crate::backend::{Backend, Response};
-use crate::execute::execute;
+use crate::execute::Observation;
 use crate::judge::Effect;
 use crate::model::{Basis, Case, Expectation};
 use crate::plan::{Check, Trial};
-use crate::runner::Project;
+use crate::project::Project;
+use crate::session::observe;
 
 /// What recording did to one case.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -117,6 +119,7 @@ pub(crate) fn record(
     backend: &Arc<dyn Backend>,
     filter: Option<&str>,
     provenance: &Provenance,
+    stop: &AtomicBool,
 ) -> Result<Recording, RecordError> {
     let trials: Vec<Trial> = project
         .plan(std::slice::from_ref(backend))
@@ -127,11 +130,13 @@ pub(crate) fn record(
         .collect();
     // Per case: what the backend did on each trial.
     let mut by_case: Vec<(Arc<Case>, Vec<VariantEffect>)> = Vec::new();
-    for trial in &trials {
-        let Check::Native { case, .. } = &trial.check else {
+    // Executed as a run executes them (batched), not judged. An interrupted recording records
+    // what it observed.
+    for (trial, observations) in trials.iter().zip(observe(&trials, 1, stop)) {
+        let (Check::Native { case, .. }, Some(observations)) = (&trial.check, observations) else {
             continue;
         };
-        let effect = effect_of(trial);
+        let effect = effect_of(trial, &observations);
         match by_case.iter_mut().find(|(c, _)| Arc::ptr_eq(c, case)) {
             Some((_, list)) => list.push((trial.variant.clone(), effect)),
             None => by_case.push((case.clone(), vec![(trial.variant.clone(), effect)])),
@@ -188,11 +193,10 @@ pub(crate) fn record(
 }
 
 /// What the backend did on a trial (fill A), or why it cannot be recorded.
-fn effect_of(trial: &Trial) -> Result<Effect, NoEffect> {
+fn effect_of(trial: &Trial, observations: &[Observation]) -> Result<Effect, NoEffect> {
     let not = |why: &str| NoEffect::Unrecordable(Unrecordable(why.to_string()));
-    let observations = execute(trial);
     let mut effects = Vec::new();
-    for o in &observations {
+    for o in observations {
         match &o.result {
             Ok(Response::Done(outcome)) => {
                 let image = trial.image(o.fill);

@@ -111,8 +111,8 @@ pub mod report {
         pub use crate::report::text::{describe_setting, render, Palette};
     }
 }
-pub mod runner {
-    pub use crate::runner::{run_one, verdicts, Paths, Project, SetupError};
+pub mod session {
+    pub use crate::session::{BackendSource, Session, SetupError};
 }
 pub mod spec {
     pub use crate::spec::{schema, SchemaKind};

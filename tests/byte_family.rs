@@ -9,7 +9,8 @@ use std::path::PathBuf;
 
 use plc_conformance::testing::device::Device;
 use plc_conformance::testing::memory::Unit;
-use plc_conformance::testing::runner::{Paths, Project};
+use plc_conformance::testing::session::Session;
+use plc_conformance::{Paths, Project};
 
 fn fixture() -> PathBuf {
     common::root().join("tests/fixtures/byte-family")
@@ -41,7 +42,7 @@ fn run(env: &[(&str, &str)], args: &[&str]) -> (i32, String, String) {
 #[test]
 fn the_toy_family_loads_in_bytes() {
     let project = match Project::load(&Paths::under(&fixture())) {
-        Ok(p) => p,
+        Ok(p) => Session::with_references(p),
         Err(e) => panic!("the fixture does not load:\n{e}"),
     };
     let profile = project.profiles.get("toy-bytes").expect("the toy profile");

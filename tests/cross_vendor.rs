@@ -10,6 +10,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use common::{reference, session, Mutant};
+use plc_conformance::run_one;
 use plc_conformance::testing::backend::{Backend, Fault, Outcome, Response};
 use plc_conformance::testing::device::Device;
 use plc_conformance::testing::judge::{Difference, Status, Verdict};
@@ -19,11 +20,11 @@ use plc_conformance::testing::model::known::{Entry, KnownDifferences};
 use plc_conformance::testing::model::ErrorSignal;
 use plc_conformance::testing::plan::Trial;
 use plc_conformance::testing::report::text::{render, Palette};
-use plc_conformance::testing::runner::{run_one, Project};
+use plc_conformance::testing::session::Session;
 use rstest::rstest;
 
 /// Every cross-vendor trial on one backend.
-fn trials(session: &Project, backend: &Arc<dyn Backend>) -> Vec<Trial> {
+fn trials(session: &Session, backend: &Arc<dyn Backend>) -> Vec<Trial> {
     session
         .plan(std::slice::from_ref(backend))
         .into_iter()
@@ -32,14 +33,14 @@ fn trials(session: &Project, backend: &Arc<dyn Backend>) -> Vec<Trial> {
 }
 
 /// The verdicts of every cross-vendor trial on one backend, by trial name.
-fn verdicts(session: &Project, backend: &Arc<dyn Backend>) -> Vec<(String, Verdict)> {
+fn verdicts(session: &Session, backend: &Arc<dyn Backend>) -> Vec<(String, Verdict)> {
     trials(session, backend)
         .into_iter()
         .map(|t| (t.name(), run_one(&t)))
         .collect()
 }
 
-fn failing(session: &Project, backend: &Arc<dyn Backend>) -> Vec<String> {
+fn failing(session: &Session, backend: &Arc<dyn Backend>) -> Vec<String> {
     verdicts(session, backend)
         .into_iter()
         .filter(|(_, v)| v.is_failure())
@@ -120,7 +121,7 @@ fn an_outcome_that_depends_on_unset_memory_is_caught() {
 
 /// The FX5 model, except that after converting it copies a word the lowering never sets into
 /// the result: its answer depends on the fill.
-fn reads_unset_memory(s: &Project) -> Arc<dyn Backend> {
+fn reads_unset_memory(s: &Session) -> Arc<dyn Backend> {
     let fx5 = reference(s, "mitsubishi-fx5");
     Mutant::new("reads-unset-memory", &fx5, |req, base| {
         base.execute(req).map(|r| match r {
@@ -148,7 +149,7 @@ fn a_listed_cross_vendor_difference_is_a_known_difference_not_a_failure() {
         .into_iter()
         .find(|t| t.name() == name)
         .expect("planned");
-    s.known.insert(
+    s.project.known.insert(
         "reads-unset-memory".into(),
         KnownDifferences {
             file: "known.yaml".into(),
@@ -186,7 +187,7 @@ fn an_unspecified_cross_vendor_case_that_depends_on_the_fill_is_recorded() {
     );
     let mut builder = CorpusBuilder::default();
     builder.add_file(Path::new("xv.yaml"), &text, &s.profiles);
-    s.corpus = builder.finish().expect("loads");
+    s.project.corpus = builder.finish().expect("loads");
     let mutant = reads_unset_memory(&s);
     let v = verdicts(&s, &mutant);
     assert!(!v.is_empty());
@@ -331,13 +332,13 @@ const BEHAVIOURS: &[(&str, &str)] = &[
 /// The table of `docs/cross-vendor-behaviours.md`: one row per behaviour, one column per
 /// family, each cell the answers of the family's lowerings (by lowering where they differ),
 /// as the reference models give them.
-fn behaviour_table(project: &Project) -> String {
+fn behaviour_table(project: &Session) -> String {
     let trials: Vec<Trial> = project
         .plan(&project.backends)
         .into_iter()
         .filter(|t| t.is_cross_vendor())
         .collect();
-    let verdicts = plc_conformance::testing::runner::verdicts(&trials);
+    let verdicts = plc_conformance::verdicts(&trials);
     let mut families: Vec<&str> = Vec::new();
     for t in &trials {
         let name = t.backend.name();

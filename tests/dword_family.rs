@@ -9,7 +9,8 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use plc_conformance::testing::memory::Unit;
-use plc_conformance::testing::runner::{Paths, Project};
+use plc_conformance::testing::session::Session;
+use plc_conformance::{Paths, Project};
 
 fn fixture() -> PathBuf {
     common::root().join("tests/fixtures/dword-family")
@@ -38,7 +39,7 @@ fn cli(root: &Path, args: &[&str]) -> (i32, String, String) {
 #[test]
 fn the_toy_family_loads_in_32_bit_units() {
     let project = match Project::load(&Paths::under(&fixture())) {
-        Ok(p) => p,
+        Ok(p) => Session::with_references(p),
         Err(e) => panic!("the fixture does not load:\n{e}"),
     };
     let profile = project.profiles.get("toy-dwords").expect("the toy profile");

@@ -20,7 +20,8 @@ use plc_conformance::testing::judge::Verdict;
 use plc_conformance::testing::load::{load_project, ENV_SELF, FILE_NAME};
 use plc_conformance::testing::model::project::{ExternalSettings, Launch};
 use plc_conformance::testing::plan::Trial;
-use plc_conformance::testing::runner::{run_one, verdicts as run_all, Paths, Project, SetupError};
+use plc_conformance::testing::session::{BackendSource, Session, SetupError};
+use plc_conformance::{run_one, verdicts as run_all, Paths, Project};
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -32,16 +33,20 @@ fn fixtures() -> PathBuf {
 
 const BIN: &str = env!("CARGO_BIN_EXE_plc-conformance");
 
-fn fixture_session() -> Project {
+fn fixture_session() -> Session {
     let paths = Paths {
         vendors: root().join("vendors"),
         vectors: vec![fixtures().join("vectors")],
     };
-    Project::load(&paths).unwrap_or_else(|e| panic!("fixture corpus: {e}"))
+    Session::with_references(
+        Project::load(&paths).unwrap_or_else(|e| panic!("fixture corpus: {e}")),
+    )
 }
 
-fn corpus_session() -> Project {
-    Project::load(&Paths::under(root())).unwrap_or_else(|e| panic!("corpus: {e}"))
+fn corpus_session() -> Session {
+    Session::with_references(
+        Project::load(&Paths::under(root())).unwrap_or_else(|e| panic!("corpus: {e}")),
+    )
 }
 
 fn python_backend(name: &str, script: &Path, args: &[&str]) -> ExternalSettings {
@@ -65,7 +70,7 @@ fn faulty(mode: &str) -> ExternalSettings {
 }
 
 /// The trials of the one external backend in a session.
-fn trials_of(session: &Project, name: &str) -> Vec<Trial> {
+fn trials_of(session: &Session, name: &str) -> Vec<Trial> {
     let backend: Vec<Arc<dyn Backend>> = session
         .backends
         .iter()
@@ -77,7 +82,7 @@ fn trials_of(session: &Project, name: &str) -> Vec<Trial> {
 
 /// Verdicts by case id, run one trial at a time (as `cargo test` does) or in one batch (as
 /// `plc-conformance run` does).
-fn verdicts(session: &Project, name: &str, batched: bool) -> Vec<(String, Verdict)> {
+fn verdicts(session: &Session, name: &str, batched: bool) -> Vec<(String, Verdict)> {
     let trials = trials_of(session, name);
     assert!(
         trials.iter().all(|t| t.skip.is_none()),
@@ -95,10 +100,10 @@ fn verdicts(session: &Project, name: &str, batched: bool) -> Vec<(String, Verdic
         .collect()
 }
 
-fn with_faulty(mode: &str) -> Project {
+fn with_faulty(mode: &str) -> Session {
     let mut session = fixture_session();
     session
-        .add_external(faulty(mode), true)
+        .add(BackendSource::Process(faulty(mode)), true)
         .unwrap_or_else(|e| panic!("faulty backend in mode {mode} does not start: {e}"));
     session
 }
@@ -152,7 +157,9 @@ fn a_backend_that_cannot_restart_leaves_the_rest_unreachable() {
     spec.env
         .push(("FAULTY_MARKER".into(), marker.display().to_string()));
     let mut session = fixture_session();
-    session.add_external(spec, true).expect("starts");
+    session
+        .add(BackendSource::Process(spec), true)
+        .expect("starts");
     let v = verdicts(&session, "faulty", true);
     assert_eq!(v[0].1, Verdict::Conforms);
     assert_eq!(v[1].1.label(), "crashed");
@@ -179,7 +186,9 @@ fn a_hung_backend_times_out_and_is_replaced() {
     let mut session = fixture_session();
     let mut spec = faulty("hang");
     spec.timeout = Duration::from_millis(1500);
-    session.add_external(spec, true).expect("starts");
+    session
+        .add(BackendSource::Process(spec), true)
+        .expect("starts");
     let verdicts = verdicts(&session, "faulty", true);
     let target = &verdicts[1];
     assert_eq!(target.0, "ext-target");
@@ -257,7 +266,7 @@ fn a_wrong_value_differs() {
 
 fn start_error(spec: ExternalSettings) -> (ExternalErrorKind, String) {
     let mut session = fixture_session();
-    match session.add_external(spec, true) {
+    match session.add(BackendSource::Process(spec), true) {
         Err(SetupError::External(e)) => (e.kind.clone(), e.to_string()),
         Err(other) => panic!("unexpected error: {other}"),
         Ok(_) => panic!("the backend started"),
@@ -341,8 +350,9 @@ fn every_served_reference_model_matches_the_built_in_one_everywhere() {
     assert!(!builtin.is_empty());
     for model in builtin {
         let served = session
-            .add_external(served(model.profile()), true)
-            .unwrap_or_else(|e| panic!("serve {} starts: {e}", model.profile()));
+            .add(BackendSource::Process(served(model.profile())), true)
+            .unwrap_or_else(|e| panic!("serve {} starts: {e}", model.profile()))[0]
+            .clone();
         let direct: Vec<Verdict> = run_all(&session.plan(std::slice::from_ref(&model)));
         let served_trials = trials_of(&session, served.name());
         assert_eq!(direct.len(), served_trials.len(), "{}", model.name());
@@ -365,7 +375,9 @@ fn an_adapter_written_with_the_python_helper_conforms() {
     }
     let mut session = corpus_session();
     let spec = python_backend("habin-py", &fixtures().join("habin_adapter.py"), &[]);
-    session.add_external(spec, true).expect("starts");
+    session
+        .add(BackendSource::Process(spec), true)
+        .expect("starts");
     let trials = trials_of(&session, "habin-py");
     let verdicts = run_all(&trials);
     let mut ran = 0;
@@ -412,7 +424,9 @@ fn an_emulator_that_writes_sd0_is_held_to_the_error_code(
     }
     let mut session = corpus_session();
     let spec = python_backend("habin-py", &fixtures().join("habin_adapter.py"), &[mode]);
-    session.add_external(spec, true).expect("starts");
+    session
+        .add(BackendSource::Process(spec), true)
+        .expect("starts");
     let trials: Vec<Trial> = trials_of(&session, "habin-py")
         .into_iter()
         .filter(|t| t.skip.is_none())
@@ -492,7 +506,9 @@ fn known_differences_pass_stale_entries_fail_and_faults_stay_faults() {
         "differ.yaml",
         &listing("ext-target"),
     ));
-    session.add_external(spec, true).expect("starts");
+    session
+        .add(BackendSource::Process(spec), true)
+        .expect("starts");
     let v = verdicts(&session, "faulty", true);
     assert_eq!(v[1].1.label(), "known-difference");
     assert!(!v[1].1.is_failure());
@@ -506,7 +522,9 @@ fn known_differences_pass_stale_entries_fail_and_faults_stay_faults() {
         "stale.yaml",
         &listing("ext-before"),
     ));
-    session.add_external(spec, true).expect("starts");
+    session
+        .add(BackendSource::Process(spec), true)
+        .expect("starts");
     let v = verdicts(&session, "faulty", false);
     assert_eq!(v[0].1.label(), "stale-entry");
     assert!(v[0].1.is_failure());
@@ -524,7 +542,9 @@ fn known_differences_pass_stale_entries_fail_and_faults_stay_faults() {
         "crash.yaml",
         &listing("ext-target"),
     ));
-    session.add_external(spec, true).expect("starts");
+    session
+        .add(BackendSource::Process(spec), true)
+        .expect("starts");
     let v = verdicts(&session, "faulty", true);
     assert_eq!(v[1].1.label(), "crashed");
 }
@@ -540,7 +560,7 @@ fn a_known_differences_file_naming_an_unknown_case_is_an_error_with_its_line() {
         "differences:\n  - case: ext-target\n    reason: fine\n  - case: no-such-case\n    reason: typo\n    variant: rcpu\n",
     );
     spec.known_differences = Some(file.clone());
-    match session.add_external(spec, true) {
+    match session.add(BackendSource::Process(spec), true) {
         Err(SetupError::Load(e)) => {
             let text = e.to_string();
             assert!(
@@ -580,7 +600,7 @@ fn pymcprotocol_differs_exactly_where_its_known_differences_say() {
     };
     let mut session = corpus_session();
     session
-        .add_external(pymc.settings.clone(), true)
+        .add(BackendSource::Process(pymc.settings.clone()), true)
         .expect("pymcprotocol adapter starts");
     let trials = trials_of(&session, "pymcprotocol");
     let verdicts = run_all(&trials);
@@ -752,7 +772,7 @@ fn each_project_backend_fails_exactly_its_known_differences_without_the_file() {
             continue;
         };
         let mut with = corpus_session();
-        with.add_external(c.settings.clone(), true)
+        with.add(BackendSource::Process(c.settings.clone()), true)
             .unwrap_or_else(|e| panic!("{} starts: {e}", c.settings.name));
         let listed: Vec<String> = trials_of(&with, &c.settings.name)
             .iter()
@@ -766,7 +786,9 @@ fn each_project_backend_fails_exactly_its_known_differences_without_the_file() {
         let mut without = corpus_session();
         let mut bare = c.settings.clone();
         bare.known_differences = None;
-        without.add_external(bare, true).expect("starts");
+        without
+            .add(BackendSource::Process(bare), true)
+            .expect("starts");
         let trials = trials_of(&without, &c.settings.name);
         let failing: Vec<String> = trials
             .iter()
@@ -823,7 +845,7 @@ fn codecs_written_with_the_helpers_are_judged_by_the_harness() {
             ]);
             let mut settings = ExternalSettings::new(name.clone(), launch);
             settings.timeout = Duration::from_secs(5);
-            s.add_external(settings, true)
+            s.add(BackendSource::Process(settings), true)
                 .unwrap_or_else(|e| panic!("{name} starts: {e}"));
             let trials = trials_of(&s, &name);
             assert!(
@@ -871,7 +893,9 @@ fn capabilities_skip_what_a_backend_does_not_model() {
         &fixtures().join("faulty_adapter.py"),
         &["limited", "none"],
     );
-    session.add_external(spec, true).expect("starts");
+    session
+        .add(BackendSource::Process(spec), true)
+        .expect("starts");
     let trials = trials_of(&session, "limited");
     let reasons: Vec<&str> = trials.iter().filter_map(|t| t.skip.as_deref()).collect();
     assert!(
@@ -981,7 +1005,7 @@ fn a_slow_batch_reports_its_answers_as_they_come() {
         &["slow", "*"],
     );
     session
-        .add_external(slow, true)
+        .add(BackendSource::Process(slow), true)
         .unwrap_or_else(|e| panic!("the slow backend does not start: {e}"));
     let trials = trials_of(&session, "slow");
     let indices: Vec<usize> = (0..trials.len()).collect();

@@ -10,14 +10,14 @@ mod common;
 use std::path::Path;
 
 use common::{reference, session, Mutant};
+use plc_conformance::run_one;
 use plc_conformance::testing::backend::{Backend, Response};
 use plc_conformance::testing::judge::Difference;
 use plc_conformance::testing::judge::Verdict;
 use plc_conformance::testing::load::{load_profiles, CorpusBuilder};
 use plc_conformance::testing::model::{Basis, ErrorSignal};
 use plc_conformance::testing::plan::{Check, Trial};
-use plc_conformance::testing::runner::run_one;
-use plc_conformance::testing::runner::Project;
+use plc_conformance::Project;
 use std::sync::Arc;
 
 const PROFILE: &str = "idec-fc4a";

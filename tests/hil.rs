@@ -24,12 +24,13 @@ use plc_conformance::testing::error_chain::chain;
 use plc_conformance::testing::hil::{dry_run, generate, GenerateOptions};
 use plc_conformance::testing::judge::Verdict;
 use plc_conformance::testing::plan::Trial;
-use plc_conformance::testing::runner::{verdicts, Project};
+use plc_conformance::testing::session::{BackendSource, Session};
+use plc_conformance::verdicts;
 
 use common::{reference, session};
 use plc_conformance::testing::execute::{images, requests};
 
-fn manifest(project: &Project, profile: &str) -> Manifest {
+fn manifest(project: &Session, profile: &str) -> Manifest {
     generate(
         project,
         &GenerateOptions {
@@ -50,7 +51,7 @@ fn type_name(profile: &str) -> &'static str {
 }
 
 fn simulator(
-    project: &Project,
+    project: &Session,
     manifest: &Manifest,
     variant: &str,
     faults: Vec<FaultRule>,
@@ -83,14 +84,11 @@ fn settings(manifest: &Manifest, variant: &str, sim: &Simulator) -> SlmpSettings
     s
 }
 
-fn live(project: &mut Project, settings: SlmpSettings) -> Arc<dyn Backend> {
-    let backend = Arc::new(SlmpBackend::new(settings, &project.profiles).expect("backend"));
-    backend
-        .connect()
-        .unwrap_or_else(|e| panic!("interlocks: {e}"));
-    let backend: Arc<dyn Backend> = backend;
-    project.backends.push(backend.clone());
-    backend
+fn live(project: &mut Session, settings: SlmpSettings) -> Arc<dyn Backend> {
+    project
+        .add(BackendSource::Slmp(Box::new(settings)), true)
+        .unwrap_or_else(|e| panic!("interlocks: {}", chain(&e)))[0]
+        .clone()
 }
 
 /// A trial's identity across backends.
@@ -245,7 +243,7 @@ fn iqr_manifest() -> &'static Manifest {
 }
 
 /// A simulated iQ-R CPU (4E frames, long device form) set up by `change`.
-fn iqr_sim(project: &Project, change: impl FnOnce(&mut SimSettings)) -> Simulator {
+fn iqr_sim(project: &Session, change: impl FnOnce(&mut SimSettings)) -> Simulator {
     let m = iqr_manifest();
     let profile = project.profiles.get(&m.profile).cloned().expect("profile");
     let mut s = SimSettings::new(m.clone(), "rcpu", "R04CPU");
@@ -255,7 +253,7 @@ fn iqr_sim(project: &Project, change: impl FnOnce(&mut SimSettings)) -> Simulato
 
 /// The first trial the live backend would run whose instruction is `instruction`, and the
 /// backend itself (not connected).
-fn first_trial(project: &Project, backend: &Arc<SlmpBackend>, instruction: &str) -> Trial {
+fn first_trial(project: &Session, backend: &Arc<SlmpBackend>, instruction: &str) -> Trial {
     let b: Arc<dyn Backend> = backend.clone();
     project
         .plan(&[b])
@@ -275,7 +273,7 @@ fn execute_once(
 }
 
 fn iqr_backend(
-    project: &Project,
+    project: &Session,
     sim: &Simulator,
     change: impl FnOnce(&mut SlmpSettings),
 ) -> Arc<SlmpBackend> {
@@ -507,7 +505,7 @@ fn a_write_outside_the_sandbox_is_refused_before_any_byte_is_sent() {
 
 /// The FX5U program of the whole corpus in a simulated CPU, and a live backend past its
 /// interlocks.
-fn fx5u_live(project: &Project) -> (Simulator, Arc<SlmpBackend>) {
+fn fx5u_live(project: &Session) -> (Simulator, Arc<SlmpBackend>) {
     let m = manifest(project, "mitsubishi-fx5");
     let sim = simulator(project, &m, "fx5u", vec![]);
     let backend =
@@ -544,7 +542,7 @@ fn a_case_setting_words_the_client_cannot_address_is_not_run() {
 
 /// Runs the FX5U trials `which` picks through the simulated CPU: each must run and conform, the
 /// rungs must fire and the simulated CPU see nothing amiss. Returns the project.
-fn fx5u_trials_conform(which: impl Fn(&Trial) -> bool, count: usize) -> Project {
+fn fx5u_trials_conform(which: impl Fn(&Trial) -> bool, count: usize) -> Session {
     let project = session();
     let (sim, backend) = fx5u_live(&project);
     let b: Arc<dyn Backend> = backend.clone();
@@ -1013,7 +1011,7 @@ fn record_through_the_simulated_cpu_writes_nothing() {
 
 /// The trials of a rung, and the backend on a simulated CPU changed by `change`.
 fn rung_trials(
-    project: &Project,
+    project: &Session,
     change: impl FnOnce(&mut SimSettings, u16),
 ) -> (Simulator, Arc<SlmpBackend>, Trial, u16) {
     let probe = iqr_sim(project, |_| {});

@@ -23,7 +23,7 @@ use plc_conformance::testing::backend::Backend;
 use plc_conformance::testing::device::Device;
 use plc_conformance::testing::hil::{generate, GenerateOptions};
 use plc_conformance::testing::plan::Trial;
-use plc_conformance::testing::runner::verdicts;
+use plc_conformance::verdicts;
 use std::sync::Arc;
 
 use common::{reference, root, session};
@@ -96,11 +96,7 @@ impl Drop for VirtualPlc {
 }
 
 /// The manifest of the program generated for one variant of a profile.
-fn generated(
-    project: &plc_conformance::testing::runner::Project,
-    profile: &str,
-    variant: &str,
-) -> Manifest {
+fn generated(project: &plc_conformance::Project, profile: &str, variant: &str) -> Manifest {
     generate(
         project,
         &GenerateOptions {

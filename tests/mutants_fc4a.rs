@@ -375,7 +375,7 @@ fn unspecified_upper_byte_is_not_asserted() {
         .into_iter()
         .find(|t| t.case_id() == "atoh-upper-byte-0131h")
         .expect("the 0131H case is in the corpus");
-    match plc_conformance::testing::runner::run_one(&probe) {
+    match plc_conformance::run_one(&probe) {
         plc_conformance::testing::judge::Verdict::Recorded { observed, .. } => {
             let observed = observed.to_string();
             assert!(!observed.contains("error"), "recorded {observed}")

@@ -92,7 +92,7 @@ fn every_question_has_a_probe_that_decides_and_the_model_answers_its_reading() {
     let questions = load_open_questions(&root().join(OPEN_QUESTIONS), &s.profiles, &s.corpus)
         .unwrap_or_else(|e| panic!("{e}"));
     // Every case recorded rather than judged, so that the verdict says what the model did.
-    s.corpus.cases = s
+    s.project.corpus.cases = s
         .corpus
         .cases
         .iter()
@@ -103,7 +103,7 @@ fn every_question_has_a_probe_that_decides_and_the_model_answers_its_reading() {
             })
         })
         .collect();
-    s.corpus.cross_vendor = s
+    s.project.corpus.cross_vendor = s
         .corpus
         .cross_vendor
         .iter()
@@ -152,7 +152,7 @@ fn every_question_has_a_probe_that_decides_and_the_model_answers_its_reading() {
             problems.push(format!("{}: probe {} runs nowhere", q.id, decides.probe));
         }
         for t in &trials {
-            match plc_conformance::testing::runner::run_one(t) {
+            match plc_conformance::run_one(t) {
                 Verdict::Recorded {
                     observed,
                     fill_dependent: false,

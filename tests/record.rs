@@ -245,9 +245,12 @@ fn the_known_draft_loads_and_covers_exactly_the_differences() {
     let known =
         plc_conformance::testing::load::load_known(&file, Some(&profile), &project.corpus, true)
             .unwrap_or_else(|e| panic!("the draft does not load: {e}\n{}", draft.text));
-    project.known.insert("high-bytes-as-zero".into(), known);
+    project
+        .project
+        .known
+        .insert("high-bytes-as-zero".into(), known);
     let trials = project.plan(std::slice::from_ref(&mutant));
-    let verdicts = plc_conformance::testing::runner::verdicts(&trials);
+    let verdicts = plc_conformance::verdicts(&trials);
     let failing: Vec<String> = trials
         .iter()
         .zip(&verdicts)

@@ -13,7 +13,8 @@ use plc_conformance::testing::backend::Backend;
 use plc_conformance::testing::judge::Verdict;
 use plc_conformance::testing::load::ENV_SELF;
 use plc_conformance::testing::model::project::{ExternalSettings, Launch};
-use plc_conformance::testing::runner::{run_one, verdicts as run_all, Paths, Project};
+use plc_conformance::testing::session::{BackendSource, Session};
+use plc_conformance::{run_one, verdicts as run_all, Paths, Project};
 
 const BIN: &str = env!("CARGO_BIN_EXE_plc-conformance");
 
@@ -396,20 +397,22 @@ fn faulty(mode: &str, trigger: &str) -> ExternalSettings {
     spec
 }
 
-fn fixture_session(spec: ExternalSettings) -> Project {
+fn fixture_session(spec: ExternalSettings) -> Session {
     let paths = Paths {
         vendors: root().join("vendors"),
         vectors: vec![fixtures().join("vectors")],
     };
-    let mut session = Project::load(&paths).unwrap_or_else(|e| panic!("fixture corpus: {e}"));
+    let mut session = Session::with_references(
+        Project::load(&paths).unwrap_or_else(|e| panic!("fixture corpus: {e}")),
+    );
     session
-        .add_external(spec, true)
+        .add(BackendSource::Process(spec), true)
         .unwrap_or_else(|e| panic!("the faulty adapter does not start: {e}"));
     session
 }
 
 /// The fixture corpus's three verdicts on the faulty backend, batched or one at a time.
-fn verdicts(session: &Project, batched: bool) -> Vec<Verdict> {
+fn verdicts(session: &Session, batched: bool) -> Vec<Verdict> {
     let backend: Vec<std::sync::Arc<dyn Backend>> = session
         .backends
         .iter()

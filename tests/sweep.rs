@@ -14,7 +14,7 @@ use plc_conformance::testing::backend::{Backend, Request};
 use plc_conformance::testing::load::{load_corpus, load_profiles};
 use plc_conformance::testing::memory::Image;
 use plc_conformance::testing::model::cross_vendor::Operation;
-use plc_conformance::testing::runner::{Paths, Project};
+use plc_conformance::testing::session::{BackendSource, Session};
 use plc_conformance::testing::sweep::classes::ByteClasses;
 use plc_conformance::testing::sweep::generate::{Digits, Generator};
 use plc_conformance::testing::sweep::group::{labels, Groups};
@@ -22,6 +22,7 @@ use plc_conformance::testing::sweep::input::{Data, Point};
 use plc_conformance::testing::sweep::shrink::candidates;
 use plc_conformance::testing::sweep::target::Target;
 use plc_conformance::testing::sweep::{emit, exhaustive, render, Results, Settings, Sweep};
+use plc_conformance::{Paths, Project};
 
 fn no_stop() -> AtomicBool {
     AtomicBool::new(false)
@@ -45,7 +46,7 @@ fn random(op: Operation, count: u64, max_len: u32, seed: u64) -> Settings {
     settings
 }
 
-fn run(project: &Project, backends: &[Arc<dyn Backend>], settings: Settings) -> (Sweep, Results) {
+fn run(project: &Session, backends: &[Arc<dyn Backend>], settings: Settings) -> (Sweep, Results) {
     let sweep = Sweep::new(settings, &project.profiles, backends).expect("sweep sets up");
     let results = sweep.run(&no_stop(), &mut |_, _| {});
     (sweep, results)
@@ -235,7 +236,6 @@ fn a_mutant_shrinks_to_a_minimal_input_that_still_differs_and_emits_a_failing_ve
     let emitted_project = Project {
         profiles,
         corpus,
-        backends: Vec::new(),
         known: Default::default(),
     };
     assert!(failing_trials(&emitted_project, &iqr).is_empty());
@@ -299,7 +299,7 @@ fn a_stopped_sweep_reports_what_it_found() {
 }
 
 /// The cross-vendor corpus's behaviours, as the built-in models give them.
-fn corpus_behaviours(project: &Project, op: Operation) -> BTreeSet<Vec<String>> {
+fn corpus_behaviours(project: &Session, op: Operation) -> BTreeSet<Vec<String>> {
     let generator = match op {
         Operation::HexToValue => Generator::Random {
             count: 1,
@@ -471,7 +471,8 @@ fn a_sweep_finds_every_known_difference_of_pymcprotocol() {
         eprintln!("skipped: .venv-adapters is not installed (CI installs it)");
         return;
     }
-    let mut project = Project::load(&Paths::under(root())).expect("project loads");
+    let mut project =
+        Session::with_references(Project::load(&Paths::under(root())).expect("project loads"));
     let file = plc_conformance::testing::load::load_project(
         &root().join("plc-conformance.yaml"),
         true,
@@ -489,7 +490,10 @@ fn a_sweep_finds_every_known_difference_of_pymcprotocol() {
         .known_differences
         .clone()
         .expect("known differences");
-    let pymc = project.add_external(settings, true).expect("starts") as Arc<dyn Backend>;
+    let pymc = project
+        .add(BackendSource::Process(settings), true)
+        .expect("starts")[0]
+        .clone();
     let iqr = reference(&project, "mitsubishi-iqr");
     let known = project
         .known

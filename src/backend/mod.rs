@@ -387,3 +387,11 @@ const MODELS: &[MakeBackend] = &[
 pub fn reference_backends(profiles: &Profiles) -> Vec<Arc<dyn Backend>> {
     MODELS.iter().filter_map(|make| make(profiles)).collect()
 }
+
+/// The reference model of one profile: what a program generated for a CPU, or a simulated CPU,
+/// computes its answers with.
+pub(crate) fn reference_model(profiles: &Profiles, profile: &str) -> Option<Arc<dyn Backend>> {
+    reference_backends(profiles)
+        .into_iter()
+        .find(|b| b.profile() == profile && b.codec().is_none())
+}

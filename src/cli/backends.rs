@@ -12,8 +12,8 @@ use crate::load::{
     ENV_SELF, FILE_NAME,
 };
 use crate::model::project::{ExternalSettings, Launch, ProjectBackends};
-use crate::runner::{Paths, Project};
-use crate::session::{assemble, BackendSource};
+use crate::project::{Paths, Project};
+use crate::session::{BackendSource, Session};
 
 /// The project folder of the command: `--root`, else the nearest project folder at or above the
 /// current one (as a relative path, so that messages stay short), else none: the data built into
@@ -163,15 +163,16 @@ fn command_line_external(
     Ok(Some(settings))
 }
 
-/// Starts the external backends a command asks for and picks its backends, in the order given.
-/// `own_corpus` is false when the command reads another corpus (`--vectors`), which need not
-/// have every case a known-differences file names.
-pub(super) fn start(
-    project: &mut Project,
+/// The sources of the backends a command asks for, in the order given: with no `--backend`,
+/// the reference models and the project file's backends (but those run on request).
+/// `references` (the reference models first, the names given among them not again) is what a
+/// sweep asks for, whose oracle they are. Also the names of the backends given, in order.
+fn sources(
+    session: &Session,
     file: &ProjectBackends,
     args: &BackendArgs,
-) -> Result<Vec<Arc<dyn Backend>>, CliError> {
-    let own_corpus = args.vectors.is_empty();
+    references: bool,
+) -> Result<(Vec<BackendSource>, Vec<String>), CliError> {
     let mut known_files: BTreeMap<&str, PathBuf> = BTreeMap::new();
     for entry in &args.known_differences {
         let Some((name, path)) = entry.split_once('=') else {
@@ -181,27 +182,39 @@ pub(super) fn start(
         };
         known_files.insert(name, PathBuf::from(path));
     }
+    let models = session.reference_names();
     let mut sources = Vec::new();
-    if args.backends.is_empty() {
+    let mut chosen = Vec::new();
+    if references || args.backends.is_empty() {
         sources.push(BackendSource::References);
+    }
+    if args.backends.is_empty() {
         for c in file.configured.iter().filter(|c| !c.on_request) {
             sources.push(BackendSource::Process(c.settings.clone()));
         }
     }
     for name in &args.backends {
         if let Some(settings) = SlmpSettings::parse(name, Path::new("."))? {
+            chosen.push(settings.name.clone());
             sources.push(BackendSource::Slmp(Box::new(settings)));
+            continue;
         } else if let Some(mut settings) = command_line_external(name, args)? {
             settings.known_differences = known_files.remove(settings.name.as_str());
+            chosen.push(settings.name.clone());
             sources.push(BackendSource::Process(settings));
-        } else if let Some(b) = project.backends.iter().find(|b| b.name() == name) {
-            sources.push(BackendSource::InProcess(b.clone(), None));
+            continue;
+        }
+        chosen.push(name.clone());
+        if models.contains(name) {
+            if !references {
+                sources.push(BackendSource::Reference(name.clone()));
+            }
         } else if let Some(c) = file.configured.iter().find(|c| c.settings.name == *name) {
             sources.push(BackendSource::Process(c.settings.clone()));
         } else if let Some(skipped) = file.skipped.iter().find(|s| s.name == *name) {
             return Err(CliError::input(skipped.to_string()));
         } else {
-            let mut known: Vec<&str> = project.backends.iter().map(|b| b.name()).collect();
+            let mut known: Vec<&str> = models.iter().map(String::as_str).collect();
             known.extend(file.configured.iter().map(|c| c.settings.name.as_str()));
             return Err(CliError::input(format!(
                 "unknown backend `{name}`; expected one of: {}, external:NAME=COMMAND, or \
@@ -215,27 +228,67 @@ pub(super) fn start(
             "--known-differences names `{name}`, which is not an `external:` backend of this run"
         )));
     }
-    let assembled = assemble(project, sources, own_corpus);
-    match assembled.failed.into_iter().next() {
-        Some((_, error)) => Err(CliError::Setup(error)),
-        None => Ok(assembled.backends),
-    }
+    Ok((sources, chosen))
 }
 
-/// A loaded project with the chosen backends started (every external backend has agreed on
-/// the protocol before a case runs), and the project file they came from.
+/// Sets up the backends a command asks for in `session` (every external backend has agreed on
+/// the protocol before a case runs) and returns them, in the order given.
+pub(super) fn start(
+    session: &mut Session,
+    file: &ProjectBackends,
+    args: &BackendArgs,
+) -> Result<Vec<Arc<dyn Backend>>, CliError> {
+    set_up(session, file, args, false)
+}
+
+fn set_up(
+    session: &mut Session,
+    file: &ProjectBackends,
+    args: &BackendArgs,
+    references: bool,
+) -> Result<Vec<Arc<dyn Backend>>, CliError> {
+    // A command that reads another corpus (`--vectors`) need not have every case a
+    // known-differences file names.
+    let own_corpus = args.vectors.is_empty();
+    let before = session.backends.len();
+    let (sources, chosen) = sources(session, file, args, references)?;
+    for source in sources {
+        session.add(source, own_corpus)?;
+    }
+    Ok(match args.backends.is_empty() {
+        true => session.backends[before..].to_vec(),
+        false => (chosen.iter())
+            .filter_map(|name| session.backend(name).cloned())
+            .collect(),
+    })
+}
+
+/// A loaded project with the chosen backends set up, and the project file they came from.
 pub(super) struct Prepared {
-    pub project: Project,
+    pub session: Session,
     pub file: ProjectBackends,
     pub backends: Vec<Arc<dyn Backend>>,
 }
 
 pub(super) fn prepare(cli: &Cli, args: &BackendArgs) -> Result<Prepared, CliError> {
-    let mut project = load(&paths(cli, &args.vectors, "--vectors")?)?;
-    let file = project_file(cli)?;
-    let backends = start(&mut project, &file, args)?;
+    prepare_with(cli, args, false)
+}
+
+/// [`prepare`] with the reference models always there, and first.
+pub(super) fn prepare_with_references(cli: &Cli, args: &BackendArgs) -> Result<Prepared, CliError> {
+    prepare_with(cli, args, true)
+}
+
+fn prepare_with(cli: &Cli, args: &BackendArgs, references: bool) -> Result<Prepared, CliError> {
+    let mut session = Session::new(load(&paths(cli, &args.vectors, "--vectors")?)?);
+    // Only a command that names backends, or runs them all, starts the project file's.
+    let file = match references && args.backends.is_empty() {
+        true => ProjectBackends::default(),
+        false => project_file(cli)?,
+    };
+    let backends = set_up(&mut session, &file, args, references)?;
     Ok(Prepared {
-        project,
+        session,
         file,
         backends,
     })

@@ -9,7 +9,7 @@ use crate::backend::slmp::error::LiveError;
 use crate::load::LoadErrors;
 use crate::record::RecordError;
 use crate::report::baseline::BaselineError;
-use crate::runner::SetupError;
+use crate::session::SetupError;
 use crate::sweep::SweepError;
 
 /// Why a command could not do what it was asked (exit status 2).

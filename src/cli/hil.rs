@@ -4,7 +4,6 @@
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 use std::time::Duration;
 
 use super::backends::{load, paths};
@@ -13,9 +12,10 @@ use crate::backend::slmp::doctor::doctor;
 use crate::backend::slmp::limits::Family;
 use crate::backend::slmp::manifest::Manifest;
 use crate::backend::slmp::sim::{self, FaultRule, SimSettings, Simulator};
+use crate::backend::slmp::SlmpSettings;
 use crate::backend::slmp::{fence, mailbox};
-use crate::backend::slmp::{SlmpBackend, SlmpSettings};
 use crate::hil::{dry_run, generate, pulse_self_test, GenerateOptions};
+use crate::session::Session;
 
 #[derive(Debug, clap::Subcommand)]
 pub(crate) enum HilCommand {
@@ -157,11 +157,11 @@ pub(super) fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
             let _ = write!(text, "{requests} read requests sent, nothing written");
             let mut ok = findings.iter().all(|f| f.result.is_ok());
             if *self_test && ok {
-                let project = load(&paths(cli, &[], "--vectors")?)?;
-                let live = Arc::new(SlmpBackend::new(settings, &project.profiles)?);
+                let session = Session::new(load(&paths(cli, &[], "--vectors")?)?);
+                let live = session.live(settings)?;
                 live.connect()?;
                 let _ = writeln!(text);
-                match pulse_self_test(&project, &live) {
+                match pulse_self_test(&session, &live) {
                     Ok(check) => {
                         ok = check.fired_twice;
                         let _ = write!(
@@ -190,9 +190,9 @@ pub(super) fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
         }
         HilCommand::DryRun { backend } => {
             let settings = live_settings(backend)?;
-            let project = load(&paths(cli, &[], "--vectors")?)?;
-            let live = Arc::new(SlmpBackend::new(settings, &project.profiles)?);
-            let found = dry_run(&project, &live);
+            let session = Session::new(load(&paths(cli, &[], "--vectors")?)?);
+            let live = session.live(settings)?;
+            let found = dry_run(&session, &live);
             let mut text = String::new();
             for (trial, why) in &found.refused {
                 let _ = writeln!(text, "refused {trial}: {why}");
@@ -245,14 +245,9 @@ pub(super) fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
                 project.profiles.get(&m.profile).cloned().ok_or_else(|| {
                     CliError::input(format!("profile `{}` is not loaded", m.profile))
                 })?;
-            let model = project
-                .backends
-                .iter()
-                .find(|b| b.profile() == m.profile && b.codec().is_none())
-                .cloned()
-                .ok_or_else(|| {
-                    CliError::input(format!("no built-in reference model for {}", m.profile))
-                })?;
+            let model = crate::backend::reference_model(&project.profiles, &m.profile).ok_or_else(
+                || CliError::input(format!("no built-in reference model for {}", m.profile)),
+            )?;
             let type_name =
                 type_name
                     .clone()

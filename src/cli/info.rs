@@ -12,6 +12,7 @@ use super::{output, BackendArgs, Cli, CliError, Outcome, SchemaKind, EXIT_OK};
 use crate::backend::external::{protocol, serve as protocol_serve};
 use crate::load::{load_corpus, load_open_questions, load_profiles, OPEN_QUESTIONS};
 use crate::report::text::case_line;
+use crate::session::Session;
 use crate::spec;
 
 pub(super) fn validate(cli: &Cli, given: &[PathBuf]) -> Outcome {
@@ -64,9 +65,9 @@ pub(super) fn trials(cli: &Cli, filter: Option<&str>, names: &[String]) -> Outco
         .map_err(|e| CliError::input(e.to_string()))?
         .args;
     let Prepared {
-        project, backends, ..
+        session, backends, ..
     } = prepare(cli, &args)?;
-    let trials = project.plan(&backends);
+    let trials = session.plan(&backends);
     let mut out = String::new();
     for backend in &backends {
         let mine: Vec<_> = (trials.iter())
@@ -105,7 +106,7 @@ struct BackendOnly {
 
 pub(super) fn list(cli: &Cli, filter: Option<&str>) -> Outcome {
     let paths = paths(cli, &[], "--vectors")?;
-    let project = load(&paths)?;
+    let session = Session::with_references(load(&paths)?);
     let (file, file_path) = (project_file(cli)?, project_file_path(cli)?);
     // Written whole at the end: a closed pipe is then one error, not a panic mid-list.
     let mut out = String::new();
@@ -124,7 +125,7 @@ pub(super) fn list(cli: &Cli, filter: Option<&str>) -> Outcome {
             .map_or_else(|| "none".to_string(), |(f, _)| f.display().to_string())
     );
     let _ = writeln!(out, "backends:");
-    let width = project
+    let width = session
         .backends
         .iter()
         .map(|b| b.name().len())
@@ -132,7 +133,7 @@ pub(super) fn list(cli: &Cli, filter: Option<&str>) -> Outcome {
         .max()
         .unwrap_or(0)
         .max(10);
-    for b in &project.backends {
+    for b in &session.backends {
         let _ = writeln!(
             out,
             "  {:<width$} profile {:<18} {}",
@@ -159,7 +160,7 @@ pub(super) fn list(cli: &Cli, filter: Option<&str>) -> Outcome {
         let _ = writeln!(out, "  (skipped: {skipped})");
     }
     let _ = writeln!(out, "profiles:");
-    for p in project.profiles.iter() {
+    for p in session.profiles.iter() {
         let _ = writeln!(
             out,
             "  {:<18} {} — instructions: {}",
@@ -177,14 +178,14 @@ pub(super) fn list(cli: &Cli, filter: Option<&str>) -> Outcome {
     }
     let _ = writeln!(out, "cases:");
     let mut shown = 0;
-    for case in &project.corpus.cases {
+    for case in &session.corpus.cases {
         let line = case_line(case);
         if filter.is_none_or(|f| line.contains(f)) {
             let _ = writeln!(out, "  {line}");
             shown += 1;
         }
     }
-    let _ = write!(out, "{shown} of {} cases", project.corpus.cases.len());
+    let _ = write!(out, "{shown} of {} cases", session.corpus.cases.len());
     output::write(None, &out)?;
     Ok(EXIT_OK)
 }

@@ -49,13 +49,14 @@ pub(super) fn record_command(cli: &Cli, args: &RecordArgs) -> Outcome {
         fail_fast: false,
     };
     let Prepared {
-        project, backends, ..
+        session, backends, ..
     } = prepare(cli, &backend_args)?;
+    let project = &session.project;
     let Some(backend) = backends.first() else {
         return Err(CliError::input("record needs a --backend"));
     };
     if let Some(path) = &args.known {
-        return known_file(backend, &project, args.filter.as_deref(), path);
+        return known_file(backend, project, args.filter.as_deref(), path);
     }
     // Recording edits vector files in place: the copies built into the binary are not files.
     if !args.dry_run {
@@ -90,7 +91,13 @@ pub(super) fn record_command(cli: &Cli, args: &RecordArgs) -> Outcome {
         None => Ok(()),
     };
     simulated()?;
-    let recording = record(&project, backend, args.filter.as_deref(), &provenance)?;
+    let recording = record(
+        project,
+        backend,
+        args.filter.as_deref(),
+        &provenance,
+        crate::interrupt::stop_flag(),
+    )?;
     simulated()?;
     let (mut filled, mut replaced, mut kept, mut skipped, mut faulted) = (0, 0, 0, 0, 0);
     let mut out = String::new();
@@ -169,7 +176,7 @@ pub(super) fn record_command(cli: &Cli, args: &RecordArgs) -> Outcome {
 /// `record --known FILE`: the starting known-differences file (`crate::known_draft`).
 fn known_file(
     backend: &std::sync::Arc<dyn crate::backend::Backend>,
-    project: &crate::runner::Project,
+    project: &crate::project::Project,
     filter: Option<&str>,
     path: &std::path::Path,
 ) -> Outcome {

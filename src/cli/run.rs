@@ -3,7 +3,6 @@
 
 use std::io::Write;
 use std::path::Path;
-use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 use super::backends::{prepare, project_root, start, Prepared};
@@ -13,20 +12,17 @@ use super::{
     EXIT_OK,
 };
 use crate::backend::Backend;
-use crate::execute::{execute_all, Observation, Pace, Progress};
-use crate::judge::Verdict;
 use crate::plan::Trial;
 use crate::report::baseline;
 use crate::report::console;
-use crate::report::document::{self, Collector};
+use crate::report::document;
 use crate::report::json::{BackendInfo, RunInfo};
 use crate::report::matrix_text;
 use crate::report::progress::ProgressReporter;
 use crate::report::text::Palette;
 use crate::report::text_reporter::TextReporter;
 use crate::report::{All, Event, Reporter};
-use crate::runner::{self, Project};
-use crate::session::{idle_backends, judged_against, RunOutcome};
+use crate::session::{Against, RunOptions, RunOutcome, Session};
 
 pub(super) fn run(cli: &Cli, args: &RunArgs) -> Outcome {
     execute_command(
@@ -68,13 +64,13 @@ fn execute_command(
         None => None,
     };
     let Prepared {
-        project,
+        session,
         file,
         backends,
     } = prepare(cli, backend_args)?;
-    let mut trials = planned(&project, &backends, backend_args.filter.as_deref());
+    let mut trials = planned(&session, &backends, backend_args.filter.as_deref());
     if let Some(question) = probes {
-        let cases = probe_cases(cli, &project, question)?;
+        let cases = probe_cases(cli, &session, question)?;
         trials.retain(|t| cases.contains(t.case_id()));
     }
     if trials.is_empty() {
@@ -83,18 +79,14 @@ fn execute_command(
              what exists)",
         ));
     }
-    let jobs = backend_args.jobs();
     let date = utc_now();
-    let stop = crate::interrupt::stop_flag();
-    let mut collector = Collector::default();
-    let mut stopper = StopAtFailure { stop };
-    let mut text = None;
     // Backends left out are a fact about this machine, not a result: stderr, whatever the format.
     if backend_args.backends.is_empty() && !cli.quiet {
         for skipped in &file.skipped {
             console::note(&format!("skipped: {skipped}"));
         }
     }
+    let mut text = None;
     if format == Format::Text {
         let sink = Sink::open(report.output.as_deref())?;
         let palette = if sink.is_stdout() {
@@ -104,38 +96,42 @@ fn execute_command(
         };
         text = Some(TextReporter::new(sink, palette, show_recorded).quiet(cli.quiet));
     }
-    let started = std::time::Instant::now();
+    let options = RunOptions {
+        jobs: backend_args.jobs(),
+        fail_fast: backend_args.fail_fast,
+        filtered: backend_args.filter.is_some(),
+        allow_empty: backend_args.allow_empty,
+    };
+    let stop = crate::interrupt::stop_flag();
     let ran = {
-        let mut reporters: Vec<&mut dyn Reporter> = vec![&mut collector];
-        if let Some(text) = &mut text {
-            reporters.push(text);
-        }
-        if backend_args.fail_fast {
-            reporters.push(&mut stopper);
-        }
-        let mut all = All(reporters);
-        // `--fail-fast` holds every chunk back until the one before is judged: a run that
-        // executes faster than it reports would otherwise finish before the first failure
-        // is seen.
-        let pace = match backend_args.fail_fast {
-            true => Pace::Judged,
-            false => Pace::Ahead,
+        let mut none = All(Vec::new());
+        let reporter: &mut dyn Reporter = match &mut text {
+            Some(text) => text,
+            None => &mut none,
         };
         if cli.quiet {
-            runner::run(&trials, jobs, stop, pace, &mut all)
+            session.run(&trials, &options, stop, reporter)
         } else {
-            let mut progress = ProgressReporter::new(&trials, &mut all);
-            runner::run(&trials, jobs, stop, pace, &mut progress)
+            let mut progress = ProgressReporter::new(&trials, reporter);
+            session.run(&trials, &options, stop, &mut progress)
         }
     };
-    if let Err(e) = ran {
-        let path = report.output.as_deref().filter(|_| text.is_some());
-        return Err(CliError::write(path, e));
-    }
+    let mut outcome = match ran {
+        Ok(outcome) => outcome,
+        Err(e) => {
+            let path = report.output.as_deref().filter(|_| text.is_some());
+            return Err(CliError::write(path, e));
+        }
+    };
     if let Some(text) = text {
         text.into_inner().finish()?;
     }
-    let (records, summary, interrupted) = collector.finish();
+    let RunOutcome {
+        records,
+        summary,
+        interrupted,
+        ..
+    } = &outcome;
     let info = RunInfo {
         tool: format!("plc-conformance {}", env!("CARGO_PKG_VERSION")),
         commit: project_root(cli)
@@ -151,23 +147,23 @@ fn execute_command(
                 version: b.version(),
             })
             .collect(),
-        interrupted,
-        seconds: started.elapsed().as_secs_f64(),
+        interrupted: *interrupted,
+        seconds: outcome.seconds,
     };
     if format != Format::Text {
         let coloured = report.output.is_none()
             && anstream::AutoStream::choice(&std::io::stdout()) != anstream::ColorChoice::Never;
         let rendered = document::render(
             format,
-            &records,
-            &summary,
+            records,
+            summary,
             &info,
             coloured,
             text_width(report.output.is_none()),
         );
         output::write(report.output.as_deref(), &rendered)?;
     }
-    for (name, known) in &project.known {
+    for (name, known) in &session.known {
         if !known.ignored.is_empty() && !cli.quiet {
             console::note(&format!(
                 "{} entr{} of {} (backend {name}) name cases not in this corpus and were not used",
@@ -177,7 +173,7 @@ fn execute_command(
             ));
         }
     }
-    if let (Some(path), true) = (&report.save, interrupted) {
+    if let (Some(path), true) = (&report.save, *interrupted) {
         console::note(&format!(
             "the run was interrupted; {} is left as it was",
             path.display()
@@ -185,35 +181,14 @@ fn execute_command(
     } else if let Some(path) = &report.save {
         let saved = document::render(
             Format::Json,
-            &records,
-            &summary,
+            records,
+            summary,
             &info,
             false,
             matrix_text::DEFAULT_WIDTH,
         );
         output::write(Some(path), &saved)?;
     }
-    // A backend the run was asked for that ran nothing passed nothing: that is no pass.
-    let idle = if interrupted || backend_args.allow_empty {
-        Vec::new()
-    } else {
-        let asked: Vec<&str> = if backend_args.backends.is_empty() {
-            file.configured
-                .iter()
-                .filter(|c| !c.on_request)
-                .map(|c| c.settings.name.as_str())
-                .collect()
-        } else {
-            backends.iter().map(|b| b.name()).collect()
-        };
-        idle_backends(&trials, &asked, backend_args.filter.is_some())
-    };
-    let mut outcome = RunOutcome {
-        records,
-        summary,
-        idle,
-        baseline: None,
-    };
     for (name, why) in &outcome.idle {
         console::status(&format!(
             "error: backend `{name}` ran no trial: {why} (--allow-empty accepts such a run)"
@@ -229,7 +204,7 @@ fn execute_command(
 /// The case ids that probe an open question (every question's when `question` is empty).
 fn probe_cases(
     cli: &Cli,
-    project: &Project,
+    project: &Session,
     question: &str,
 ) -> Result<std::collections::BTreeSet<String>, CliError> {
     let Some(root) = super::backends::project_root(cli)? else {
@@ -257,22 +232,6 @@ fn probe_cases(
         .into_iter()
         .flat_map(|q| q.probes.iter().cloned())
         .collect())
-}
-
-/// Stops the run at the first failing trial (`--fail-fast`): no further batch starts.
-struct StopAtFailure<'a> {
-    stop: &'a AtomicBool,
-}
-
-impl Reporter for StopAtFailure<'_> {
-    fn event(&mut self, event: &Event<'_>) -> std::io::Result<()> {
-        if let Event::TrialFinished { verdict, .. } = event {
-            if verdict.is_failure() {
-                self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
-            }
-        }
-        Ok(())
-    }
 }
 
 /// The project's commit when its folder is in a git repository (`git describe --always
@@ -333,8 +292,8 @@ fn text_width(to_stdout: bool) -> usize {
 }
 
 /// The planned trials whose names contain `filter`.
-fn planned(project: &Project, backends: &[Arc<dyn Backend>], filter: Option<&str>) -> Vec<Trial> {
-    project
+fn planned(session: &Session, backends: &[Arc<dyn Backend>], filter: Option<&str>) -> Vec<Trial> {
+    session
         .plan(backends)
         .into_iter()
         .filter(|t| filter.is_none_or(|f| t.name().contains(f)))
@@ -370,7 +329,7 @@ fn report_baseline(path: Option<&Path>, outcome: &RunOutcome) {
 /// cross-vendor cases, compared as answers.
 fn against(cli: &Cli, args: &BackendArgs, other: &str) -> Outcome {
     let Prepared {
-        mut project,
+        mut session,
         file,
         backends,
     } = prepare(cli, args)?;
@@ -384,67 +343,14 @@ fn against(cli: &Cli, args: &BackendArgs, other: &str) -> Outcome {
         known_differences: Vec::new(),
         ..args.clone()
     };
-    let Some(b) = start(&mut project, &file, &other_args)?.first().cloned() else {
+    let Some(b) = start(&mut session, &file, &other_args)?.first().cloned() else {
         return Err(CliError::input(format!(
             "no backend `{other}` to compare with"
         )));
     };
-    let filter = args.filter.as_deref();
-    let trials_a = planned(&project, std::slice::from_ref(&a), filter);
-    let trials_b = planned(&project, std::slice::from_ref(&b), None);
-    let key = |t: &Trial| {
-        (
-            t.is_cross_vendor(),
-            t.input.instruction.clone(),
-            t.case_id().to_string(),
-            t.check_name().to_string(),
-            t.variant.clone(),
-        )
-    };
-    let same_family = a.profile() == b.profile();
     let stop = crate::interrupt::stop_flag();
-    // The questions both answer: A's trial and B's.
-    let pairs: Vec<(&Trial, &Trial)> = (trials_a.iter().filter(|t| t.skip.is_none()))
-        .filter_map(|ta| {
-            let tb = if same_family {
-                (trials_b.iter()).find(|t| t.skip.is_none() && key(t) == key(ta))
-            } else {
-                // Different families meet on the cross-vendor cases, through their own
-                // lowerings.
-                trials_b.iter().find(|t| {
-                    t.skip.is_none()
-                        && t.is_cross_vendor()
-                        && ta.is_cross_vendor()
-                        && t.case_id() == ta.case_id()
-                })
-            };
-            tb.map(|tb| (ta, tb))
-        })
-        .collect();
-    // A's side runs as any run does, batched per backend; B's trials are then judged against
-    // what A did, and where A gives nothing to judge against, A's trial is reported with why.
-    let asked: Vec<Trial> = pairs.iter().map(|(ta, _)| (*ta).clone()).collect();
-    let indices: Vec<usize> = (0..asked.len()).collect();
-    let jobs = args.jobs();
-    let mut observed: Vec<Option<Vec<Observation>>> = (0..asked.len()).map(|_| None).collect();
-    execute_all(&asked, &indices, jobs, stop, Pace::Ahead, |p| {
-        if let Progress::Observed(i, observations, _) = p {
-            observed[i] = Some(observations);
-        }
-        std::ops::ControlFlow::Continue(())
-    });
-    let mut paired: Vec<Trial> = Vec::new();
-    let mut unpaired: Vec<(Trial, Verdict)> = Vec::new();
-    // An interrupted run compares what it observed.
-    for ((ta, tb), observations) in pairs.iter().zip(observed) {
-        let Some(observations) = observations else {
-            continue;
-        };
-        match judged_against(ta, &observations, tb) {
-            Ok(t) => paired.push(t),
-            Err(verdict) => unpaired.push(((*ta).clone(), verdict)),
-        }
-    }
+    let Against { paired, unpaired } =
+        session.against(&a, &b, args.filter.as_deref(), args.jobs(), stop);
     let compared = paired.len() + unpaired.len();
     if compared == 0 {
         return Err(CliError::input(format!(
@@ -455,6 +361,13 @@ fn against(cli: &Cli, args: &BackendArgs, other: &str) -> Outcome {
     }
     let mut text =
         TextReporter::new(Sink::open(None)?, Palette::coloured(), false).quiet(cli.quiet);
+    // What the first backend gives nothing to judge against is reported first, with why.
+    let options = RunOptions {
+        jobs: 1,
+        fail_fast: false,
+        filtered: true,
+        allow_empty: true,
+    };
     let written = unpaired
         .iter()
         .enumerate()
@@ -466,9 +379,9 @@ fn against(cli: &Cli, args: &BackendArgs, other: &str) -> Outcome {
                 elapsed: std::time::Duration::ZERO,
             })
         })
-        .and_then(|()| runner::run(&paired, 1, stop, Pace::Ahead, &mut text));
-    let summary = written.map_err(|e| CliError::write(None, e))?;
-    let differing = summary.failed + unpaired.len();
+        .and_then(|()| session.run(&paired, &options, stop, &mut text));
+    let outcome = written.map_err(|e| CliError::write(None, e))?;
+    let differing = outcome.summary.failed + unpaired.len();
     let mut out = text.into_inner();
     writeln!(
         out,

@@ -3,17 +3,14 @@
 
 use std::io::{IsTerminal, Write as _};
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
-use super::backends::{prepare, Prepared};
+use super::backends::{prepare_with_references, Prepared};
 use super::output::Sink;
 use super::{output, BackendArgs, Cli, CliError, Outcome, EXIT_DIFFERENCES, EXIT_OK};
-use crate::backend::Backend;
 use crate::load::CorpusBuilder;
 use crate::model::cross_vendor::Operation;
 use crate::model::profile::Profiles;
 use crate::report::console;
-use crate::session::{assemble, BackendSource};
 use crate::sweep::generate::{Digits, Generator, BOUNDARIES, MAX_DIGITS};
 use crate::sweep::target::Target;
 use crate::sweep::{emit, render, Oracle, Settings, Sweep};
@@ -180,21 +177,9 @@ pub(super) fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
         allow_empty: false,
         fail_fast: false,
     };
-    let Prepared {
-        project, backends, ..
-    } = if args.backends.is_empty() {
-        // Only the reference models: no external backend of the project file is started.
-        let paths = super::backends::paths(cli, &[], "--vectors")?;
-        let mut project = super::backends::load(&paths)?;
-        let backends = assemble(&mut project, vec![BackendSource::References], true).backends;
-        Prepared {
-            file: Default::default(),
-            project,
-            backends,
-        }
-    } else {
-        prepare(cli, &backend_args)?
-    };
+    // The reference models are always there, and first: they are the oracle.
+    let Prepared { session, .. } = prepare_with_references(cli, &backend_args)?;
+    let project = &session.project;
     let target = match (&args.operation, &args.instruction) {
         (Some(OperationArg::HexToValue), _) => Target::Operation {
             operation: Operation::HexToValue,
@@ -239,20 +224,7 @@ pub(super) fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
             ))
         }
     };
-    // The reference models are always there: they are the oracle.
-    let mut chosen: Vec<Arc<dyn Backend>> = Vec::new();
-    for b in project
-        .backends
-        .iter()
-        .filter(|b| project.profiles.iter().any(|p| p.short == b.name()))
-    {
-        chosen.push(b.clone());
-    }
-    for b in backends {
-        if !chosen.iter().any(|c| c.name() == b.name()) {
-            chosen.push(b);
-        }
-    }
+    let chosen = &session.backends;
     let reads_text = match &target {
         Target::Operation { operation } => *operation == Operation::HexToValue,
         Target::Instruction {
@@ -312,7 +284,7 @@ pub(super) fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
     if let Some(j) = args.jobs {
         settings.jobs = j.max(1);
     }
-    let sweep = Sweep::new(settings, &project.profiles, &chosen)?;
+    let sweep = Sweep::new(settings, &project.profiles, chosen)?;
     // A space past 2^64 inputs cannot be numbered, let alone swept.
     if sweep.space.total() == u64::MAX {
         return Err(CliError::input(

@@ -23,7 +23,7 @@ use crate::device::Device;
 use crate::execute::{images, requests};
 use crate::model::profile::Profile;
 use crate::model::Operand;
-use crate::runner::Project;
+use crate::project::Project;
 
 pub(crate) use program::{setup_text, structured_text};
 
@@ -102,12 +102,9 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
     } else {
         options.variants.clone()
     };
-    let model: Arc<dyn Backend> = project
-        .backends
-        .iter()
-        .find(|b| b.profile() == profile.id && b.codec().is_none())
-        .cloned()
-        .ok_or_else(|| refused!("no built-in reference model for {}", profile.id))?;
+    let model: Arc<dyn Backend> =
+        crate::backend::reference_model(&project.profiles, &profile.id)
+            .ok_or_else(|| refused!("no built-in reference model for {}", profile.id))?;
     let trials: Vec<_> = project
         .plan(std::slice::from_ref(&model))
         .into_iter()

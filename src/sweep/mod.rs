@@ -7,13 +7,13 @@
 //! and each column (a backend through a lowering, or on a variant) runs it as a
 //! [`crate::plan::Trial`]: the plan's lowering makes its memory and operands, the executor runs
 //! it under both fills, and the judge records what the backend did as a
-//! [`crate::judge::Verdict`]. External backends get the trials through [`crate::runner::run`]
+//! [`crate::judge::Verdict`]. External backends get the trials through [`crate::session::run_trials`]
 //! with a [`crate::report::Reporter`] that keeps the verdicts, batched as in any run and stopped
 //! by the same flag. The built-in reference models run in process, spread over threads: each
 //! input's request is made as the plan makes it and answered by the model directly
 //! ([`direct`]), because millions of inputs would otherwise spend their time building trials
 //! rather than in the models; `Settings::direct = false` runs them as trials with
-//! [`crate::runner::run_one`] instead, with the same replies.
+//! [`crate::session::run_one`] instead, with the same replies.
 //!
 //! - [`generate`]: the generators, each a numbered space of inputs ([`generate::Space`]);
 //! - [`classes`]: byte classes, by which the full generator covers all 2^32 texts;
@@ -211,7 +211,7 @@ pub struct Faulted {
     pub inputs: u64,
 }
 
-/// Inputs per round for a sweep with an external backend (one `runner::run` each).
+/// Inputs per round for a sweep with an external backend (one `session::run_trials` each).
 const CHUNK_EXTERNAL: usize = 4096;
 /// Inputs per round for the built-in models only.
 const CHUNK_IN_PROCESS: usize = 1 << 16;
@@ -337,7 +337,7 @@ impl Sweep {
                                 } else {
                                     cases
                                         .trial(&columns[c])
-                                        .map(|t| Reply::of(&crate::runner::run_one(&t)))
+                                        .map(|t| Reply::of(&crate::session::run_one(&t)))
                                 };
                             }
                         }
@@ -366,7 +366,7 @@ impl Sweep {
                 out: &mut out,
             };
             // Keep writes nothing, so the run cannot fail on a report.
-            let _ = crate::runner::run(
+            let _ = crate::session::run_trials(
                 &trials,
                 self.settings.jobs.max(1),
                 stop,

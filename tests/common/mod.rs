@@ -8,7 +8,8 @@ use std::sync::{Arc, OnceLock};
 
 use plc_conformance::testing::backend::{Backend, Fault, Request, Response};
 use plc_conformance::testing::memory::Value;
-use plc_conformance::testing::runner::{Paths, Project};
+use plc_conformance::testing::session::Session;
+use plc_conformance::{Paths, Project};
 
 /// The project root: its `vendors/`, `vectors/` and project file.
 pub fn root() -> &'static Path {
@@ -41,15 +42,15 @@ pub fn scratch() -> tempfile::TempDir {
         .expect("temp dir")
 }
 
-pub fn session() -> Project {
+pub fn session() -> Session {
     match Project::load(&Paths::under(root())) {
-        Ok(s) => s,
+        Ok(s) => Session::with_references(s),
         Err(e) => panic!("the corpus does not load:\n{e}"),
     }
 }
 
 /// The reference backend of a profile.
-pub fn reference(session: &Project, profile: &str) -> Arc<dyn Backend> {
+pub fn reference(session: &Session, profile: &str) -> Arc<dyn Backend> {
     session
         .backends
         .iter()
@@ -166,7 +167,7 @@ pub fn failing_trials(session: &Project, backend: &Arc<dyn Backend>) -> Vec<Stri
         .plan(std::slice::from_ref(backend))
         .into_iter()
         .filter(|t| t.skip.is_none())
-        .filter(|t| plc_conformance::testing::runner::run_one(t).is_failure())
+        .filter(|t| plc_conformance::run_one(t).is_failure())
         .map(|t| t.name())
         .collect()
 }
