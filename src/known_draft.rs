@@ -13,6 +13,7 @@ use std::fmt::Write as _;
 use std::sync::Arc;
 
 use crate::backend::Backend;
+use crate::corpus_yaml::{folded, name_of, quote_str};
 use crate::judge::{Difference, Verdict};
 use crate::model::known::InputClass;
 use crate::plan::{Check, Trial};
@@ -106,14 +107,16 @@ pub fn draft(project: &Project, backend: &Arc<dyn Backend>, filter: Option<&str>
             continue;
         }
         let ids: BTreeSet<&str> = with.iter().map(|&i| seen[i].trial.case_id()).collect();
-        let name = serde_yaml::to_string(&class).unwrap_or_default();
+        let name = name_of(&class);
+        let cause = format!(
+            "differs on every case whose text has {name}: say what the implementation does"
+        );
+        let ids = ids.into_iter().collect::<Vec<_>>().join(", ");
         let _ = write!(
             out,
-            "  - cause: \"differs on every case whose text has {}: say what the implementation \
-             does\"\n    kind: bug\n    input: [{}]\n    reason: >-\n      {}\n",
-            name.trim(),
-            name.trim(),
-            ids.into_iter().collect::<Vec<_>>().join(", ")
+            "  - cause: {}\n    kind: bug\n    input: [{name}]\n    reason: {}\n",
+            quote_str(&cause),
+            folded("    ", &ids)
         );
         explained.extend(with);
         causes += 1;
@@ -143,12 +146,11 @@ pub fn draft(project: &Project, backend: &Arc<dyn Backend>, filter: Option<&str>
                 s.trial.variant
             );
         }
-        let _ = write!(
-            out,
-            "    reason: >-\n      {} (say what the implementation does and the manual rule it \
-             breaks)\n",
+        let reason = format!(
+            "{} (say what the implementation does and the manual rule it breaks)",
             s.what
         );
+        let _ = writeln!(out, "    reason: {}", folded("    ", &reason));
         cases += 1;
     }
     Draft {

@@ -84,6 +84,7 @@
 
 mod backend;
 mod cli;
+mod corpus_yaml;
 mod device;
 mod error_chain;
 mod execute;

@@ -15,6 +15,7 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 use crate::backend::{Backend, Response};
+use crate::corpus_yaml::{expect_lines, quote_str};
 use crate::execute::Observation;
 use crate::judge::Effect;
 use crate::model::{Basis, Case, Expectation};
@@ -337,22 +338,19 @@ fn edit(
     let cite = format!("observed on {} ({}), {}{was}", p.backend, p.version, p.date);
     let mut replacement: BTreeMap<&str, String> = BTreeMap::new();
     replacement.insert("basis", format!("{pad}basis: observed"));
-    replacement.insert(
-        "cite",
-        format!("{pad}cite: {}", crate::sweep::emit::quote_str(&cite)),
-    );
+    replacement.insert("cite", format!("{pad}cite: {}", quote_str(&cite)));
     replacement.insert(
         "provenance",
         format!(
             "{pad}provenance:\n{pad}  backend: {}\n{pad}  version: {}\n{pad}  date: \"{}\"\n{pad}  variants: [{}]\n{pad}  model: {}",
             p.backend,
-            crate::sweep::emit::quote_str(&p.version),
+            quote_str(&p.version),
             p.date,
             variants.join(", "),
-            crate::sweep::emit::quote_str(model)
+            quote_str(model)
         ),
     );
-    replacement.insert("expect", crate::sweep::emit::expect_lines(effect, &pad));
+    replacement.insert("expect", expect_lines(effect, &pad));
     let mut out: Vec<String> = lines[..start].iter().map(|s| s.to_string()).collect();
     let mut done: Vec<&str> = Vec::new();
     let mut cursor = start;

@@ -81,6 +81,7 @@ pub mod model {
     pub mod cross_vendor {
         pub use crate::model::cross_vendor::{
             Answer, CodecAbilities, CrossVendorCase, ErrorClass, Operation, OperationAbilities,
+            TextLayout,
         };
     }
     pub mod known {
@@ -142,5 +143,5 @@ pub mod sweep {
     }
 }
 pub mod text {
-    pub use crate::text::{digit_value, packed_char};
+    pub use crate::text::digit_value;
 }

@@ -1,7 +1,5 @@
-//! Hex digits and character storage shared by the reference models.
-
-use crate::device::Device;
-use crate::memory::Image;
+//! Hex digits shared by the reference models (how characters sit in memory is
+//! `TextLayout`'s, in `model::cross_vendor`).
 
 /// The value of a hex digit character. Only 30H-39H and 41H-46H are digits: lowercase is
 /// invalid in the manuals this project covers, except where a family's model says otherwise
@@ -22,17 +20,6 @@ pub(crate) fn digit_char(value: u64) -> u8 {
 /// The hex digits a value has (at least 1).
 pub(crate) fn significant_digits(v: u64) -> u32 {
     (64 - v.leading_zeros()).div_ceil(4).max(1)
-}
-
-/// The `k`-th character of text stored two characters per word, first character in the low
-/// byte (MELSEC string storage).
-pub fn packed_char(memory: &Image, head: &Device, k: u32) -> Option<u8> {
-    let word = memory.word(&head.offset(k / 2)?);
-    Some(if k % 2 == 0 {
-        word as u8
-    } else {
-        (word >> 8) as u8
-    })
 }
 
 #[cfg(test)]

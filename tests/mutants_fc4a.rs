@@ -14,9 +14,10 @@ use common::{assert_corpus_kills, failing_trials, map_done, reference, session, 
 use plc_conformance::testing::backend::{Backend, Fault, Outcome, Request, Response};
 use plc_conformance::testing::device::Device;
 use plc_conformance::testing::memory::{Image, Unit};
+use plc_conformance::testing::model::cross_vendor::TextLayout;
 use plc_conformance::testing::model::profile::{DeviceRange, DeviceRanges};
 use plc_conformance::testing::model::Operand;
-use plc_conformance::testing::text::{digit_value, packed_char};
+use plc_conformance::testing::text::digit_value;
 
 const PROFILE: &str = "idec-fc4a";
 
@@ -107,7 +108,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
             };
             let mut words = req.memory.explicit().clone();
             for k in 0..u32::from(n.min(4)) {
-                let ch = packed_char(req.memory, &s1, k).unwrap_or(0);
+                let ch = TextLayout::Packed.char_in(req.memory, &s1, k).unwrap_or(0);
                 if let Some(dev) = s1.offset(k) {
                     words.insert(dev, u32::from(ch));
                 }

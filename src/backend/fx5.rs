@@ -18,8 +18,9 @@ use super::reference::{constant_word, Model, Stop};
 use super::{Outcome, Request, Unsupported};
 use crate::device::Device;
 use crate::memory::{Image, Scratch};
+use crate::model::cross_vendor::TextLayout;
 use crate::model::Operand;
-use crate::text::{digit_char, digit_value, packed_char};
+use crate::text::{digit_char, digit_value};
 
 /// The profile this model implements.
 pub const PROFILE: &str = "mitsubishi-fx5";
@@ -141,7 +142,7 @@ pub fn asci_stores(chars: &[u8], packing: Packing, terminate: bool) -> Vec<Store
 pub fn hex_chars(memory: &Image, s: &Device, n: u32, packing: Packing) -> Vec<u8> {
     (0..n)
         .map(|k| match packing {
-            Packing::TwoPerWord => packed_char(memory, s, k).unwrap_or(0),
+            Packing::TwoPerWord => TextLayout::Packed.char_in(memory, s, k).unwrap_or(0),
             Packing::OnePerWord => s.offset(k).map_or(0, |dev| memory.word(&dev) as u8),
         })
         .collect()

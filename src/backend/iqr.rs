@@ -8,8 +8,9 @@
 use super::reference::{Model, Stop};
 use super::{Outcome, Request, Unsupported};
 use crate::memory::{Scratch, Unit};
+use crate::model::cross_vendor::TextLayout;
 use crate::model::Operand;
-use crate::text::{digit_char, digit_value, packed_char};
+use crate::text::{digit_char, digit_value};
 
 /// The profile this model implements.
 pub(crate) const PROFILE: &str = "mitsubishi-iqr";
@@ -74,7 +75,7 @@ fn habin(req: &Request<'_>, words: u32) -> Result<Outcome, Unsupported> {
         if k % 2 == 0 && !req.words_exist(s, k / 2 + 1) {
             return Ok(Outcome::error(req.error(ERR_DEVICE_RANGE)));
         }
-        let ch = packed_char(req.memory, s, k).unwrap_or(0);
+        let ch = TextLayout::Packed.char_in(req.memory, s, k).unwrap_or(0);
         if terminated && ch == 0 {
             break;
         }

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use super::backends::{prepare_with_references, Prepared};
 use super::output::Sink;
-use super::{output, BackendArgs, Cli, CliError, Outcome, EXIT_DIFFERENCES, EXIT_OK};
+use super::{output, BackendArgs, Cli, CliError, Format, Outcome, EXIT_DIFFERENCES, EXIT_OK};
 use crate::load::CorpusBuilder;
 use crate::model::cross_vendor::Operation;
 use crate::model::profile::Profiles;
@@ -85,9 +85,10 @@ pub(crate) struct SweepArgs {
     /// Classes of each group shrunk to a minimal input (the largest first).
     #[arg(long, value_name = "N", default_value_t = 4)]
     pub shrink: usize,
-    /// Results format.
-    #[arg(long, value_enum, default_value_t = SweepFormat::Text)]
-    pub format: SweepFormat,
+    /// Results format: text (behaviour groups, counts, first and shrunk inputs), json (the
+    /// whole results, versioned), or html (a page of the report).
+    #[arg(long, default_value = "text", value_parser = sweep_format())]
+    pub format: Format,
     /// Write the results to this file instead of standard output.
     #[arg(long, value_name = "FILE")]
     pub output: Option<PathBuf>,
@@ -158,11 +159,19 @@ pub(crate) enum GeneratorArg {
     Full,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub(crate) enum SweepFormat {
-    Text,
-    Json,
-    Html,
+/// The report formats a sweep's results have (the others are a run's: a matrix of trials,
+/// JUnit test cases).
+const SWEEP_FORMATS: [Format; 3] = [Format::Text, Format::Json, Format::Html];
+
+/// `--format`, restricted to [`SWEEP_FORMATS`].
+fn sweep_format() -> impl clap::builder::TypedValueParser<Value = Format> {
+    use clap::builder::TypedValueParser as _;
+    // The names alone: each format's help speaks of a run.
+    let names = (SWEEP_FORMATS.iter())
+        .filter_map(clap::ValueEnum::to_possible_value)
+        .map(|v| v.help(None::<&'static str>));
+    clap::builder::PossibleValuesParser::new(names)
+        .try_map(|name| <Format as clap::ValueEnum>::from_str(&name, false))
 }
 
 pub(super) fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
@@ -369,9 +378,10 @@ pub(super) fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
         ));
     }
     let rendered = match args.format {
-        SweepFormat::Text => render::text(&results),
-        SweepFormat::Json => render::json(&results),
-        SweepFormat::Html => render::html(&results),
+        Format::Json => render::json(&results),
+        Format::Html => render::html(&results),
+        // Text; the parser takes SWEEP_FORMATS only.
+        _ => render::text(&results),
     };
     match output_sink.take() {
         Some(mut sink) => {

@@ -15,9 +15,10 @@ use serde::{Deserialize, Serialize};
 
 use super::{Basis, Citation, ErrorSignal, Location, Operand};
 use crate::device::Device;
-use crate::memory::{Unit, Value};
+use crate::memory::{Image, Unit, Value};
+pub use crate::spec::cross_vendor::TextLayout;
+pub(crate) use crate::spec::cross_vendor::ValueOrder;
 pub use crate::spec::cross_vendor::{ErrorClass, Operation};
-pub(crate) use crate::spec::cross_vendor::{TextLayout, ValueOrder};
 
 /// How a family stores text (a lowering's `text`), in one place: packing a text into units,
 /// reading a character back, the vector notation that writes it, and which units can hold it.
@@ -58,6 +59,12 @@ impl TextLayout {
             TextLayout::PackedHighFirst => unit.bits() - 8 * (i + 1),
         };
         Some((value >> shift) as u8)
+    }
+
+    /// The `k`th character of a text stored this way from `head` on in `memory` (MELSEC
+    /// string storage is [`TextLayout::Packed`]: two characters a word, the first low).
+    pub fn char_in(self, memory: &Image, head: &Device, k: u32) -> Option<u8> {
+        self.char_at(memory.unit(), k, |i| Some(memory.read(&head.offset(i)?)))
     }
 
     /// The vector notation that stores a text this way (`ascii`, `ascii_words`), if one does.

@@ -11,10 +11,9 @@ use super::group::{Found, Reply};
 use super::input::{Data, Point};
 use super::target::{Ask, Column, Target};
 use super::{Results, Sweep};
-use crate::judge::Effect;
+use crate::corpus_yaml::{answer, expect_lines, hex_value, quote, quote_str};
 use crate::model::cross_vendor::{Answer, Operation};
-use crate::model::{Corpus, ErrorSignal, Operand};
-use crate::value::hex_word;
+use crate::model::{Corpus, Operand};
 
 /// A vector file's header and one case per shrunk input that can be written (the input, and
 /// the case's lines), and the inputs that could not be (with why).
@@ -221,7 +220,7 @@ fn cross_vendor_case(
         }
     }
     let _ = writeln!(y, "    digits: {}", to.point.digits);
-    let _ = writeln!(y, "    expect: {{{}}}", answer_yaml(&most));
+    let _ = writeln!(y, "    expect: {{{}}}", answer(&most));
     let except: Vec<&(String, Answer)> = by_key.iter().filter(|(_, a)| *a != most).collect();
     if !except.is_empty() || !unset.is_empty() {
         let _ = writeln!(y, "    except:");
@@ -229,7 +228,7 @@ fn cross_vendor_case(
             let _ = writeln!(
                 y,
                 "      {key}: {{{}, why: {}}}",
-                answer_yaml(a),
+                answer(a),
                 quote_str(&format!("the reference model's answer through {key}"))
             );
         }
@@ -359,85 +358,4 @@ fn native_case(
     }
     let _ = writeln!(y, "{}", expect_lines(effect, "    "));
     Ok(y)
-}
-
-/// An effect as a vector's `expect:` key at `indent`: every word written, and the error (or
-/// `none`), so that nothing the backend did is left implicit. No newline at the end.
-pub fn expect_lines(effect: &Effect, indent: &str) -> String {
-    let after: Vec<String> = effect
-        .changed
-        .iter()
-        .map(|(d, w)| format!("{d}: {}", effect.unit.hex(*w)))
-        .collect();
-    let error = match &effect.error {
-        None => "none".to_string(),
-        Some(ErrorSignal::Code(c)) => hex_word(*c),
-        Some(ErrorSignal::Flag(d)) => d.to_string(),
-    };
-    format!(
-        "{indent}expect:\n{indent}  after: {{{}}}\n{indent}  error: {error}",
-        after.join(", ")
-    )
-}
-
-fn hex_value(v: u64) -> String {
-    format!("{v:04X}H")
-}
-
-fn answer_yaml(a: &Answer) -> String {
-    match a {
-        Answer::Value(v) => format!("value: {}", hex_value(*v)),
-        Answer::Text(t) => format!("text: {}", quote(t)),
-        Answer::Error(c) => format!("error: {c}"),
-        Answer::ErrorAndValue(c, v) => format!("error: {c}, value: {}", hex_value(*v)),
-        Answer::OtherError(e) => format!("error: {e}"),
-    }
-}
-
-/// A YAML double-quoted string of bytes, one character per byte (`\xHH` above 7EH).
-pub fn quote(bytes: &[u8]) -> String {
-    let mut s = String::from("\"");
-    for &b in bytes {
-        match b {
-            b'"' => s.push_str("\\\""),
-            b'\\' => s.push_str("\\\\"),
-            0 => s.push_str("\\0"),
-            0x20..=0x7E => s.push(b as char),
-            _ => {
-                let _ = write!(s, "\\x{b:02X}");
-            }
-        }
-    }
-    s.push('"');
-    s
-}
-
-/// A YAML double-quoted string of text: characters kept, quotes, backslashes and control
-/// characters escaped.
-pub fn quote_str(text: &str) -> String {
-    let mut s = String::from("\"");
-    for c in text.chars() {
-        match c {
-            '"' => s.push_str("\\\""),
-            '\\' => s.push_str("\\\\"),
-            c if (c as u32) < 0x20 || c == '\u{7F}' => {
-                let _ = write!(s, "\\x{:02X}", c as u32);
-            }
-            c => s.push(c),
-        }
-    }
-    s.push('"');
-    s
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn quoting_keeps_every_byte() {
-        assert_eq!(quote(b"5A\"\\"), "\"5A\\\"\\\\\"");
-        assert_eq!(quote(&[0, 0x09, 0xEF]), "\"\\0\\x09\\xEF\"");
-        assert_eq!(quote_str("例 \"a\"\t"), "\"例 \\\"a\\\"\\x09\"");
-    }
 }
