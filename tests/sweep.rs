@@ -1381,7 +1381,7 @@ fn the_oracle_can_be_named_or_refused() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(
-        stderr.contains("`fx9/nothing` (from --oracle), which is not a built-in reading of hex-to-value; the readings are: iqr/habin-fixed,"),
+        stderr.contains("--oracle `fx9/nothing` is not a built-in reading of hex-to-value; the readings are: iqr/habin-fixed,"),
         "{stderr}"
     );
 }
@@ -1574,4 +1574,101 @@ fn a_model_unlike_its_rule_stops_an_each_text_sweep() {
         unreachable!()
     };
     assert!(t.contains(&b'~'), "{}", found.point);
+}
+
+/// An emitted file expects the reading the sweep judged its codec against: a codec that
+/// follows that reading exactly passes every case of it, and the deviating codec it was found
+/// with fails every one.
+#[test]
+fn an_emitted_file_expects_the_oracles_answer() {
+    if !common::python() {
+        return;
+    }
+    let dir = common::scratch();
+    let file = dir.path().join("found.yaml");
+    let file_arg = file.display().to_string();
+    let out = judged_sweep("lenient", &["--emit", &file_arg]);
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let written = std::fs::read_to_string(&file).expect("the emitted file");
+    let cases = written.matches("\n  - id: ").count();
+    assert!(cases > 0, "{written}");
+    assert!(
+        written.contains("the expectation is fx5/hexa-16bit's answer"),
+        "{written}"
+    );
+    let script = root().join("tests/fixtures/external/judged_codec.py");
+    let run = |mode: &str| {
+        let backend = format!("external:judged=python3 {} {mode}", script.display());
+        common::cli(&["run", "--vectors", &file_arg, "--backend", &backend])
+    };
+    let strict = run("strict");
+    let stdout = String::from_utf8_lossy(&strict.stdout);
+    assert_eq!(strict.status.code(), Some(0), "{stdout}\n{written}");
+    assert!(stdout.contains(&format!("{cases} passed")), "{stdout}");
+    let lenient = run("lenient");
+    let stdout = String::from_utf8_lossy(&lenient.stdout);
+    assert_eq!(lenient.status.code(), Some(1), "{stdout}");
+    assert!(stdout.contains(&format!("{cases} failed")), "{stdout}");
+}
+
+/// The shards of a sweep can shrink to the same input; their emitted files still load
+/// together (each case id names its shard).
+#[test]
+fn the_emitted_files_of_shards_load_together() {
+    let dir = common::scratch();
+    let files: Vec<String> = (1..=2)
+        .map(|k| {
+            let file = dir.path().join(format!("shard-{k}.yaml"));
+            let shard = format!("{k}/2");
+            let file_arg = file.display().to_string();
+            let out = common::cli(&[
+                "sweep",
+                "--operation",
+                "hex-to-value",
+                "--generator",
+                "random",
+                "--count",
+                "300",
+                "--seed",
+                "5",
+                "--digits",
+                "4",
+                "--shard",
+                &shard,
+                "--emit",
+                &file_arg,
+            ]);
+            assert!(
+                out.status.success(),
+                "{}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            file_arg
+        })
+        .collect();
+    let texts = |f: &str| -> BTreeSet<String> {
+        (std::fs::read_to_string(f).expect("emitted").lines())
+            .filter(|l| l.starts_with("    text: "))
+            .map(str::to_string)
+            .collect()
+    };
+    // The same input, found by both shards.
+    assert!(
+        texts(&files[0])
+            .intersection(&texts(&files[1]))
+            .next()
+            .is_some(),
+        "the shards found no common input; the test needs one"
+    );
+    let out = common::cli(&["validate", &files[0], &files[1]]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }

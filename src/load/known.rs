@@ -23,6 +23,15 @@ use crate::model::profile::Profile;
 use crate::model::{Basis, Corpus};
 use crate::spec::known::KnownFileSpec;
 
+/// An entry's coverage, cause, instruction, variant and location.
+type Seen = (
+    Covers,
+    Option<String>,
+    Option<String>,
+    Option<String>,
+    String,
+);
+
 /// Loads and checks a known-differences file against the backend's profile (`None` for a
 /// codec-level backend, which runs the cross-vendor cases only) and the corpus. With `strict`,
 /// an entry for a case the corpus does not have is an error (a typo would otherwise excuse
@@ -43,6 +52,8 @@ pub fn load_known(
         file: file.to_path_buf(),
         ..KnownDifferences::default()
     };
+    // What each entry so far covers, for the duplicate check.
+    let mut seen: Vec<Seen> = Vec::new();
     for (i, e) in spec.differences.into_iter().enumerate() {
         let key = |k: &str| format!("differences[{i}].{k}");
         let location = cx.location(&format!("differences[{i}]")).to_string();
@@ -65,6 +76,18 @@ pub fn load_known(
                     LoadErrorKind::Invalid(
                         "an entry needs the `case` it lists, or the `cases` (id patterns) or \
                          `input` (classes of text) of its cause"
+                            .into(),
+                    ),
+                );
+                continue;
+            }
+            (Some(_), false) if e.cause.is_some() => {
+                cx.error(
+                    key("cause"),
+                    LoadErrorKind::Invalid(
+                        "an entry of one `case` gives its `reason`; a `cause` (with its `kind`) \
+                         covers `cases` (id patterns) or `input` (classes of text): for a cause \
+                         seen on one case, write `cases: [ID]`"
                             .into(),
                     ),
                 );
@@ -102,20 +125,11 @@ pub fn load_known(
                     format!("{cause}{kind}: {reason}")
                 }
             }
-            (Covers::Case(_), cause) => {
-                let cause = cause.unwrap_or_default();
-                match (e.kind, cause.is_empty(), reason.is_empty()) {
-                    (_, true, true) => String::new(),
-                    (kind, _, _) => {
-                        let kind = kind.map(|k| format!(" ({k})")).unwrap_or_default();
-                        match (cause.is_empty(), reason.is_empty()) {
-                            (false, false) => format!("{cause}{kind}: {reason}"),
-                            (false, true) => format!("{cause}{kind}"),
-                            _ => format!("{reason}{kind}"),
-                        }
-                    }
-                }
-            }
+            (Covers::Case(_), _) => match (e.kind, reason.is_empty()) {
+                (_, true) => String::new(),
+                (None, false) => reason.to_string(),
+                (Some(kind), false) => format!("{reason} ({kind})"),
+            },
         };
         let entry = Entry {
             covers,
@@ -131,6 +145,38 @@ pub fn load_known(
                 LoadErrorKind::Invalid("a known difference needs its reason".into()),
             );
         }
+        // Two entries for the same trials, or two naming one cause for the same instruction
+        // and variant, would say the same thing twice, or two things about one trial.
+        let cause = e.cause.as_deref().map(str::trim).map(str::to_string);
+        let twin = seen.iter().find(|(covers, c, instruction, variant, _)| {
+            *instruction == entry.instruction
+                && *variant == entry.variant
+                && (*covers == entry.covers || (cause.is_some() && *c == cause))
+        });
+        if let Some((.., first)) = twin {
+            cx.error(
+                key(if entry.case().is_some() {
+                    "case"
+                } else {
+                    "cause"
+                }),
+                LoadErrorKind::Invalid(format!(
+                    "the same {} already listed at {first}: one entry says it once",
+                    match entry.covers {
+                        Covers::Case(_) => "trials are",
+                        Covers::Cause { .. } => "cause is",
+                    },
+                )),
+            );
+            continue;
+        }
+        seen.push((
+            entry.covers.clone(),
+            cause,
+            entry.instruction.clone(),
+            entry.variant.clone(),
+            entry.location.clone(),
+        ));
         if let Covers::Cause { patterns, .. } = &entry.covers {
             check_cause(&entry, patterns, profile, corpus, strict, &mut cx, &key);
             known.entries.push(entry);
@@ -211,19 +257,6 @@ pub fn load_known(
                     },
                 );
             }
-        }
-        if let Some(first) = known.entries.iter().find(|k| {
-            k.case() == Some(&case_id)
-                && k.instruction == entry.instruction
-                && k.variant == entry.variant
-        }) {
-            cx.error(
-                key("case"),
-                LoadErrorKind::Invalid(format!(
-                    "the same trials are already listed at {}",
-                    first.location
-                )),
-            );
         }
         known.entries.push(entry);
     }

@@ -123,15 +123,30 @@ pub(crate) struct FileContext<'a> {
     pub file: PathBuf,
     pub index: LineIndex,
     pub errors: &'a mut Vec<LoadError>,
+    /// The text holds what no parser may see (see [`check_text`]): nothing more is read.
+    refused: bool,
 }
 
 impl<'a> FileContext<'a> {
-    /// Starts reading a file, reporting keys repeated within a mapping.
+    /// Starts reading a file: first what no parser may see ([`check_text`]: a forbidden
+    /// character, a second document, nesting past [`locate::MAX_DEPTH`]), before anything walks
+    /// or builds the document, since a pathological nesting holds either for minutes; then the
+    /// keys repeated within a mapping.
     pub(crate) fn new(file: &Path, text: &str, errors: &'a mut Vec<LoadError>) -> Self {
+        if let Err(e) = check_text(file, text) {
+            errors.push(e);
+            return FileContext {
+                file: file.to_path_buf(),
+                index: LineIndex::new(""),
+                errors,
+                refused: true,
+            };
+        }
         let cx = FileContext {
             file: file.to_path_buf(),
             index: LineIndex::new(text),
             errors,
+            refused: false,
         };
         let repeated: Vec<(String, usize)> = cx.index.duplicates().to_vec();
         for (key, line) in repeated {
@@ -192,20 +207,22 @@ pub(crate) fn parse_document<T: DeserializeOwned + schemars::JsonSchema + 'stati
     text: &str,
     cx: &mut FileContext<'_>,
 ) -> Option<T> {
+    if cx.refused {
+        return None;
+    }
     if let Ok(doc) = serde_yaml::from_str::<serde_yaml::Value>(text) {
         if !shape::check(&doc, &schema_once::<T>(), cx) {
             return None;
         }
     }
-    parse_yaml(&cx.file.clone(), text)
+    deserialize(&cx.file.clone(), text)
         .map_err(|e| cx.errors.push(e))
         .ok()
 }
 
-/// Deserializes one YAML document, turning the deserializer's error into a [`LoadError`] with
-/// the line and key path it reports.
-pub(crate) fn parse_yaml<T: DeserializeOwned>(file: &Path, text: &str) -> Result<T, LoadError> {
-    check_text(file, text)?;
+/// Deserializes one YAML document already checked ([`check_text`]), turning the
+/// deserializer's error into a [`LoadError`] with the line and key path it reports.
+fn deserialize<T: DeserializeOwned>(file: &Path, text: &str) -> Result<T, LoadError> {
     serde_yaml::from_str(text).map_err(|e| {
         let line = e.location().map(|l| l.line());
         let mut message = e.to_string();

@@ -112,14 +112,19 @@ fn settings_line(results: &Results) -> String {
     )
 }
 
-/// A stable id from the input.
-fn id(prefix: &str, point: &Point) -> String {
+/// A stable id from the input (and the shard, when the sweep is one of several: two shards can
+/// shrink to the same input, and their files are loaded together).
+fn id(prefix: &str, point: &Point, sweep: &Sweep) -> String {
     let mut h: u64 = 0xCBF2_9CE4_8422_2325;
     for b in format!("{point}").bytes() {
         h ^= u64::from(b);
         h = h.wrapping_mul(0x0100_0000_01B3);
     }
-    format!("sweep-{prefix}-{:08x}", h as u32)
+    let id = format!("sweep-{prefix}-{:08x}", h as u32);
+    match sweep.settings.shard {
+        (_, 1) => id,
+        (k, n) => format!("{id}-shard-{k}-of-{n}"),
+    }
 }
 
 fn answers_line(columns: &[Column], replies: &[Reply]) -> String {
@@ -190,24 +195,49 @@ fn cross_vendor_case(
             "no reference model answered it: nothing to expect".into(),
         ));
     }
-    let mut counts: BTreeMap<&Answer, usize> = BTreeMap::new();
-    for (_, a) in &by_key {
-        *counts.entry(a).or_default() += 1;
-    }
-    let most = by_key
-        .iter()
-        .map(|(_, a)| a)
-        .max_by_key(|a| counts[a])
-        .cloned()
-        .unwrap_or(Answer::Value(0));
+    // The expectation is the reading the sweep judged its codecs against (what `run` then
+    // holds a codec to): the first judged codec column's oracle. Without one, the answer most
+    // readings give; the others are the lowerings' exceptions either way.
+    let oracle = (sweep.columns.iter())
+        .filter(|c| matches!(c.ask, Ask::Codec))
+        .find_map(|c| c.oracle)
+        .and_then(|j| match &sweep.columns[j].ask {
+            Ask::Lowering(l) => by_key.iter().find(|(key, _)| *key == l.key),
+            _ => None,
+        });
+    let (most, chosen) = match oracle {
+        Some((key, answer)) => (
+            answer.clone(),
+            format!("the expectation is {key}'s answer, the reading the sweep judged against"),
+        ),
+        None => {
+            let mut counts: BTreeMap<&Answer, usize> = BTreeMap::new();
+            for (_, a) in &by_key {
+                *counts.entry(a).or_default() += 1;
+            }
+            let most = (by_key.iter().map(|(_, a)| a))
+                .max_by_key(|a| counts[a])
+                .cloned()
+                .unwrap_or(Answer::Value(0));
+            (
+                most,
+                "the expectation is the answer most readings give".to_string(),
+            )
+        }
+    };
     let mut y = String::new();
-    let _ = writeln!(y, "  - id: {}", id(&operation.to_string(), &to.point));
+    let _ = writeln!(
+        y,
+        "  - id: {}",
+        id(&operation.to_string(), &to.point, sweep)
+    );
     let _ = writeln!(y, "    basis: inferred");
     let _ = writeln!(
         y,
         "    cite: {}",
         quote_str(&format!(
-            "each lowering's answer is its reference model's (docs/semantics.md#cross-vendor); {}",
+            "each lowering's answer is its reference model's (docs/semantics.md#cross-vendor); \
+             {chosen}; {}",
             provenance(results, from, to, &sweep.columns)
         ))
     );
@@ -289,7 +319,7 @@ fn native_case(
     let _ = writeln!(
         y,
         "  - id: {}",
-        id(&shape.instruction.to_lowercase(), &to.point)
+        id(&shape.instruction.to_lowercase(), &to.point, sweep)
     );
     let _ = writeln!(y, "    basis: inferred");
     let _ = writeln!(

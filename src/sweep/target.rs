@@ -273,6 +273,19 @@ fn codec_oracles(
     operation: Operation,
     oracle: &Oracle,
 ) -> Result<(), SweepError> {
+    let readings = (out.iter().filter(|c| c.in_process))
+        .map(|c| c.name.clone())
+        .collect::<Vec<_>>()
+        .join(", ");
+    // Named, the reading must exist whether or not a codec is swept: a typo judges nothing.
+    if let Oracle::Named(name) = oracle {
+        if !out.iter().any(|c| c.in_process && c.name == *name) {
+            return Err(SweepError(format!(
+                "--oracle `{name}` is not a built-in reading of {operation}; the readings are: \
+                 {readings}"
+            )));
+        }
+    }
     for i in 0..out.len() {
         if !matches!(out[i].ask, Ask::Codec) {
             continue;
@@ -291,16 +304,10 @@ fn codec_oracles(
             (Oracle::Declared, Some(name)) => (name, "its capabilities (--oracle overrides)"),
         };
         let Some(j) = (0..out.len()).find(|&j| out[j].in_process && out[j].name == name) else {
-            let readings: Vec<&str> = out
-                .iter()
-                .filter(|c| c.in_process)
-                .map(|c| c.name.as_str())
-                .collect();
             return Err(SweepError(format!(
                 "{} is judged against `{name}` (from {from}), which is not a built-in reading of \
                  {operation}; the readings are: {}",
-                out[i].name,
-                readings.join(", ")
+                out[i].name, readings
             )));
         };
         out[i].oracle = Some(j);

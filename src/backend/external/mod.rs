@@ -31,7 +31,9 @@ use protocol::{
 use super::{Backend, Fault, Outcome, Question, Request, Response, Setting};
 use crate::device::Device;
 use crate::memory::{Fill, Unit, Value};
-use crate::model::cross_vendor::{Answer, CodecAbilities, FieldShape, OperationAbilities};
+use crate::model::cross_vendor::{
+    Answer, CodecAbilities, FieldShape, Operation, OperationAbilities,
+};
 use crate::model::profile::{Profile, Profiles};
 use crate::model::project::ExternalSettings;
 use crate::model::{ErrorSignal, Operand};
@@ -130,7 +132,7 @@ impl ExternalBackend {
         let (profile, codec) = match &capabilities.codec {
             Some(codec) => (
                 None,
-                Some(check_codec(&spec, &capabilities, codec).map_err(error)?),
+                Some(check_codec(&spec, &capabilities, codec, profiles).map_err(error)?),
             ),
             None => (
                 Some(check_capabilities(&spec, &capabilities, profiles, version).map_err(error)?),
@@ -692,11 +694,14 @@ fn next_message(process: &mut Process, deadline: Instant) -> Next {
     }
 }
 
-/// Checks a codec-level handshake: no instruction-level claims beside it, no profile configured.
+/// Checks a codec-level handshake: no instruction-level claims beside it, no profile configured,
+/// every digit count and width one a field can have (each count once), and a declared reading
+/// one of the built-in lowerings of its operation (`fx5/hexa-16bit`).
 fn check_codec(
     spec: &ExternalSettings,
     caps: &Capabilities,
     codec: &protocol::CodecCapabilities,
+    profiles: &Profiles,
 ) -> Result<CodecAbilities, ExternalErrorKind> {
     if let Some(configured) = &spec.profile {
         return Err(ExternalErrorKind::Capabilities(format!(
@@ -717,34 +722,70 @@ fn check_codec(
                 .into(),
         ));
     }
-    let ability = |name: &str, c: &Option<protocol::OperationCapabilities>| match c {
+    let refuse = |why: String| Err(ExternalErrorKind::Capabilities(why));
+    let ability = |operation: Operation, c: &Option<protocol::OperationCapabilities>| match c {
         None => Ok(None),
         Some(c) => {
+            let name = operation.to_string();
             let width = c.width.unwrap_or(16);
             if width != 16 && width != 32 {
-                return Err(ExternalErrorKind::Capabilities(format!(
-                    "claims {name} of width {width}; give 16 or 32"
-                )));
+                return refuse(format!("claims {name} of width {width}; give 16 or 32"));
             }
-            if let Some(d) = c.digits.as_ref().and_then(|d| d.iter().find(|d| **d == 0)) {
-                return Err(ExternalErrorKind::Capabilities(format!(
-                    "claims {name} of {d} digits"
-                )));
+            if let Some(digits) = &c.digits {
+                if digits.is_empty() {
+                    return refuse(format!(
+                        "claims {name} of no digit count (`digits: []`); list the counts it \
+                         reads, or leave `digits` out for any"
+                    ));
+                }
+                if let Some(d) = digits.iter().find(|d| !(1..=16).contains(*d)) {
+                    return refuse(format!(
+                        "claims {name} of {d} digits; give counts from 1 to 16"
+                    ));
+                }
+                let mut sorted = digits.clone();
+                sorted.sort_unstable();
+                if let Some(d) = sorted.windows(2).find(|w| w[0] == w[1]) {
+                    return refuse(format!("claims {name} of {} digits twice", d[0]));
+                }
+            }
+            if c.widths.as_ref().is_some_and(|w| w.is_empty()) {
+                return refuse(format!(
+                    "claims {name} widths for no digit count (`widths: {{}}`); map counts to \
+                     widths, or leave `widths` out"
+                ));
             }
             let mut widths = std::collections::BTreeMap::new();
             for (d, w) in c.widths.iter().flatten() {
                 let count = d.parse::<u32>().ok().filter(|n| (1..=16).contains(n));
-                let Some(count) = count else {
-                    return Err(ExternalErrorKind::Capabilities(format!(
-                        "claims {name} widths for `{d}` digits; give a count from 1 to 16"
-                    )));
+                let Some(count) = count.filter(|n| n.to_string() == *d) else {
+                    return refuse(format!(
+                        "claims {name} widths for `{d}` digits; give a count from 1 to 16, \
+                         written as a plain number"
+                    ));
                 };
                 if ![8, 16, 32].contains(w) {
-                    return Err(ExternalErrorKind::Capabilities(format!(
+                    return refuse(format!(
                         "claims {name} of width {w} for {count} digits; give 8, 16 or 32"
-                    )));
+                    ));
                 }
                 widths.insert(count, *w);
+            }
+            if let Some(reading) = &c.reading {
+                let readings: Vec<String> = (profiles.iter())
+                    .flat_map(|p| {
+                        (p.cross_vendor.lowerings.iter())
+                            .filter(|l| l.operation == operation)
+                            .map(|l| l.key.clone())
+                    })
+                    .collect();
+                if !readings.contains(reading) {
+                    return refuse(format!(
+                        "declares {name} reading `{reading}`, which is not a built-in reading; \
+                         the readings are: {}",
+                        readings.join(", ")
+                    ));
+                }
             }
             Ok(Some(OperationAbilities {
                 digits: c.digits.clone(),
@@ -761,8 +802,8 @@ fn check_codec(
         }
     };
     let abilities = CodecAbilities {
-        hex_to_value: ability("hex-to-value", &codec.hex_to_value)?,
-        value_to_hex: ability("value-to-hex", &codec.value_to_hex)?,
+        hex_to_value: ability(Operation::HexToValue, &codec.hex_to_value)?,
+        value_to_hex: ability(Operation::ValueToHex, &codec.value_to_hex)?,
     };
     if abilities.hex_to_value.is_none() && abilities.value_to_hex.is_none() {
         return Err(ExternalErrorKind::Capabilities(
