@@ -22,8 +22,9 @@ use crate::session::verdicts;
 use crate::value::hex_word;
 
 /// Every input class, in the order the draft tries them.
-const CLASSES: [InputClass; 9] = [
+const CLASSES: [InputClass; 10] = [
     InputClass::Lowercase,
+    InputClass::OtherLowercase,
     InputClass::Blank,
     InputClass::Sign,
     InputClass::HexPrefix,

@@ -196,7 +196,7 @@ impl Harness {
         let trials = session.plan(&session.backends);
         tests.extend(trials.into_iter().map(|t| {
             let lazy = by_name.get(t.backend.name()).cloned();
-            test(t, lazy, args.exact)
+            test(t, lazy, &args)
         }));
         let conclusion = libtest_mimic::run(&args, tests);
         // Started processes get their shutdown message before the harness exits.
@@ -247,9 +247,16 @@ fn exact_files(args: &Arguments, paths: &Paths) -> Option<Vec<std::path::PathBuf
 
 /// One planned trial as a libtest trial; `lazy` starts its backend when the backend is only
 /// planned so far; `exact` when the trial runs alone (`--exact`, as under nextest).
-fn test(trial: Trial, lazy: Option<Arc<LazyStart>>, exact: bool) -> Test {
+/// A trial as a libtest test. A trial recorded rather than judged (an `unspecified` case, a
+/// listed known difference) is flagged ignored where libtest's flag is what a reader or a
+/// runner sees — listing (nextest lists, then runs each trial by name), a trial run by exact
+/// name, `--ignored` — and otherwise runs and reports itself ignored with its reason (what the
+/// backend did, or the entry), which a flagged trial, never run, could not give.
+fn test(trial: Trial, lazy: Option<Arc<LazyStart>>, args: &Arguments) -> Test {
     let name = trial.name();
-    let ignored = trial.ignored_because().is_some();
+    let flagged = args.list || args.exact || args.ignored || args.include_ignored;
+    let ignored = flagged && trial.ignored_because().is_some();
+    let exact = args.exact;
     Test::ignorable_test(name, move || outcome(trial, lazy, exact)).with_ignored_flag(ignored)
 }
 

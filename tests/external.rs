@@ -1096,3 +1096,61 @@ fn a_codec_that_declares_its_field_shape_differs_nowhere(
         "{stdout}{stderr}"
     );
 }
+
+/// An entry by the class `lowercase` covers the lowercase hex digits a-f, as a reader means
+/// it: a codec that takes a-f and refuses every other letter conforms on `0x5A` (whose `x`
+/// is a prefix, not a lowercase digit), so the entry does not go stale there.
+#[test]
+fn an_entry_by_lowercase_covers_the_digits_a_f_and_not_the_x_of_a_prefix() {
+    if !python() {
+        return;
+    }
+    let dir = common::scratch();
+    let known = dir.path().join("known.yaml");
+    std::fs::write(
+        &known,
+        "differences:\n  - cause: takes the lowercase hex digits a-f\n    kind: bug\n    input: [lowercase]\n",
+    )
+    .expect("write");
+    let script = fixtures().join("judged_codec.py");
+    let backend = format!("external:lc=python3 {} lowercase", script.display());
+    let known_arg = format!("lc={}", known.display());
+    let out = common::cli(&[
+        "run",
+        "--backend",
+        &backend,
+        "--known-differences",
+        &known_arg,
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    assert!(stdout.contains("0 failed"), "{stdout}");
+    assert!(stdout.contains("known differences)"), "{stdout}");
+}
+
+/// Under plain `cargo test` a trial recorded rather than judged runs and shows why it is
+/// ignored (what the backend did on an `unspecified` case); listed, it is flagged ignored as
+/// nextest needs.
+#[test]
+fn an_ignored_trial_shows_its_reason_under_plain_cargo_test() {
+    let Some(binary) = conformance_binary() else {
+        panic!("the conformance test binary is built with the tests");
+    };
+    let trial = "iqr::binha::binha-sm705-on-short-at-last-word::rcpu";
+    let out = std::process::Command::new(&binary)
+        .arg(trial)
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout}");
+    assert!(
+        stdout.contains(&format!("{trial} ... ignored (unspecified, recorded: ")),
+        "{stdout}"
+    );
+    let listed = std::process::Command::new(&binary)
+        .args(["--list", "--format", "terse", "--ignored", trial])
+        .output()
+        .expect("lists");
+    let stdout = String::from_utf8_lossy(&listed.stdout);
+    assert!(stdout.contains(&format!("{trial}: test")), "{stdout}");
+}

@@ -371,3 +371,70 @@ fn the_families_table_counts_every_family_s_cases() {
         "the README's families table's counts by basis (left) against the corpus (right)"
     );
 }
+
+/// How each family is named where the families are listed, by profile id.
+const FAMILY_NAMES: &[(&str, &str)] = &[
+    ("mitsubishi-iqr", "iQ-R"),
+    ("mitsubishi-fx5", "FX5"),
+    ("mitsubishi-fx3", "FX3"),
+    ("idec-fc4a", "FC4A"),
+    ("siemens-s7-1200", "S7-1200"),
+    ("siemens-s7-200", "S7-200"),
+    ("delta-dvp", "Delta DVP"),
+    ("panasonic-fp", "Panasonic FP"),
+    ("keyence-kv", "KEYENCE KV"),
+    ("omron-cs-cj", "Omron"),
+];
+
+/// The first paragraph after a document's title.
+fn first_paragraph(text: &str) -> String {
+    (text
+        .lines()
+        .skip_while(|l| l.starts_with('#') || l.trim().is_empty()))
+    .take_while(|l| !l.trim().is_empty())
+    .collect::<Vec<_>>()
+    .join(" ")
+}
+
+/// Wherever the families are listed — the README's opening, `--help`, the library guide's
+/// opening, the families page — every family of `vendors/` is named.
+#[test]
+fn every_family_is_named_wherever_families_are_listed() {
+    let ids: std::collections::BTreeSet<String> = std::fs::read_dir(root().join("vendors"))
+        .expect("vendors")
+        .filter_map(|e| {
+            let path = e.ok()?.path();
+            Some(path.file_stem()?.to_str()?.to_string())
+        })
+        .collect();
+    let named: std::collections::BTreeSet<String> =
+        FAMILY_NAMES.iter().map(|(id, _)| id.to_string()).collect();
+    assert_eq!(
+        ids, named,
+        "a family of vendors/ without its name here (left)"
+    );
+    let read = |f: &str| std::fs::read_to_string(root().join(f)).expect(f);
+    let help = bin().arg("--help").output().expect("--help runs");
+    let places = [
+        ("the README's opening", first_paragraph(&read("README.md"))),
+        (
+            "plc-conformance --help",
+            String::from_utf8_lossy(&help.stdout).replace('\n', " "),
+        ),
+        (
+            "docs/check-your-library.md's opening",
+            first_paragraph(&read("docs/check-your-library.md")),
+        ),
+        ("docs/families.md", read("docs/families.md")),
+    ];
+    for (place, text) in &places {
+        let missing: Vec<&str> = (FAMILY_NAMES.iter())
+            .filter(|(_, name)| !text.contains(name))
+            .map(|(_, name)| *name)
+            .collect();
+        assert!(
+            missing.is_empty(),
+            "{place} does not name {missing:?}:\n{text}"
+        );
+    }
+}

@@ -37,8 +37,11 @@ pub(crate) use crate::report::document::Format;
     version,
     about = "Differential conformance harness for PLC instructions",
     long_about = "Runs a corpus of test vectors taken from vendor manuals against reference models \
-                  of MELSEC iQ-R, MELSEC iQ-F FX5 and IDEC MicroSmart, and against emulators \
-                  plugged in from outside, and reports every semantic difference as a diff.\n\n\
+                  of ten families (MELSEC iQ-R, MELSEC iQ-F FX5, MELSEC FX3, IDEC MicroSmart \
+                  FC4A, Siemens S7-1200/S7-1500, Siemens S7-200/S7-200 SMART, Delta DVP, \
+                  Panasonic FP, KEYENCE KV and Omron CS/CJ/CP), against emulators and libraries \
+                  plugged in from outside, and against a live MELSEC CPU, and reports every \
+                  semantic difference as a diff.\n\n\
                   Exit status: 0 conforms / valid, 1 differences found, 2 bad input or usage."
 )]
 pub(crate) struct Cli {

@@ -140,6 +140,12 @@ mod tests {
     fn each_class_holds_for_its_characters_only() {
         assert!(InputClass::Lowercase.holds(b"5a8D"));
         assert!(!InputClass::Lowercase.holds(b"5A8D"));
+        // A reader's classes: the x of a prefix is no lowercase digit, nor another letter.
+        assert!(!InputClass::Lowercase.holds(b"0x5A"));
+        assert!(!InputClass::OtherLowercase.holds(b"0x5A"));
+        assert!(InputClass::OtherLowercase.holds(b"5A8g"));
+        assert!(InputClass::OtherLowercase.holds(b"x5A8"));
+        assert!(!InputClass::OtherLowercase.holds(b"5a8f"));
         assert!(InputClass::Blank.holds(b"5A\t8"));
         assert!(InputClass::Sign.holds(b"-5A8"));
         assert!(InputClass::HexPrefix.holds(b"0X5A"));

@@ -68,8 +68,11 @@ impl std::fmt::Display for Kind {
 )]
 #[serde(rename_all = "kebab-case")]
 pub enum InputClass {
-    /// A letter a-z (61H-7AH).
+    /// A lowercase hex digit a-f (61H-66H): what "lowercase" means of a hex field.
     Lowercase,
+    /// Another lowercase letter g-z (67H-7AH), the `x` of a `0x` prefix aside (that is
+    /// `hex-prefix`).
+    OtherLowercase,
     /// A space or a tab, line feed, vertical tab, form feed or carriage return (20H, 09H-0DH).
     Blank,
     /// `+` or `-`.
@@ -94,7 +97,11 @@ impl InputClass {
     pub fn holds(self, text: &[u8]) -> bool {
         let any = |f: fn(u8) -> bool| text.iter().any(|&b| f(b));
         match self {
-            InputClass::Lowercase => any(|b| b.is_ascii_lowercase()),
+            InputClass::Lowercase => any(|b| (b'a'..=b'f').contains(&b)),
+            InputClass::OtherLowercase => text.iter().enumerate().any(|(i, &b)| {
+                let prefix_x = b == b'x' && i > 0 && text[i - 1] == b'0';
+                (b'g'..=b'z').contains(&b) && !prefix_x
+            }),
             InputClass::Blank => any(|b| b == b' ' || (0x09..=0x0D).contains(&b)),
             InputClass::Sign => any(|b| b == b'+' || b == b'-'),
             InputClass::HexPrefix => text.windows(2).any(|w| w == b"0x" || w == b"0X"),
