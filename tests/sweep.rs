@@ -1386,7 +1386,8 @@ fn the_oracle_can_be_named_or_refused() {
     );
 }
 
-/// A judged sweep writes as vectors only the inputs where the codec parts from its oracle.
+/// A judged sweep writes as vectors only the inputs where the codec parts from its oracle, and
+/// expects there the oracle's answer.
 #[test]
 fn a_judged_sweep_emits_only_where_the_codec_differs() {
     if !common::python() {
@@ -1422,6 +1423,31 @@ fn a_judged_sweep_emits_only_where_the_codec_differs() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     let notes = stderr.matches("not written as a vector: ").count();
     assert_eq!(texts.len() + notes, shrunk.len(), "{stderr}\n{written}");
+    // The file expects the reading the codec was judged against: a codec that follows that
+    // reading exactly passes every case of it, and the deviating one fails every one.
+    assert!(
+        written.contains("the expectation is fx5/hexa-16bit's answer"),
+        "{written}"
+    );
+    let script = root().join("tests/fixtures/external/judged_codec.py");
+    let run = |mode: &str| {
+        let backend = format!("external:judged=python3 {} {mode}", script.display());
+        common::cli(&["run", "--vectors", &file_arg, "--backend", &backend])
+    };
+    let strict = run("strict");
+    let stdout = String::from_utf8_lossy(&strict.stdout);
+    assert_eq!(strict.status.code(), Some(0), "{stdout}\n{written}");
+    assert!(
+        stdout.contains(&format!("{} passed", texts.len())),
+        "{stdout}"
+    );
+    let lenient = run("lenient");
+    let stdout = String::from_utf8_lossy(&lenient.stdout);
+    assert_eq!(lenient.status.code(), Some(1), "{stdout}");
+    assert!(
+        stdout.contains(&format!("{} failed", texts.len())),
+        "{stdout}"
+    );
 }
 
 /// Each built-in hex-to-value lowering's rule ([`exhaustive::answer`]) is what its model answers
@@ -1574,46 +1600,6 @@ fn a_model_unlike_its_rule_stops_an_each_text_sweep() {
         unreachable!()
     };
     assert!(t.contains(&b'~'), "{}", found.point);
-}
-
-/// An emitted file expects the reading the sweep judged its codec against: a codec that
-/// follows that reading exactly passes every case of it, and the deviating codec it was found
-/// with fails every one.
-#[test]
-fn an_emitted_file_expects_the_oracles_answer() {
-    if !common::python() {
-        return;
-    }
-    let dir = common::scratch();
-    let file = dir.path().join("found.yaml");
-    let file_arg = file.display().to_string();
-    let out = judged_sweep("lenient", &["--emit", &file_arg]);
-    assert_eq!(
-        out.status.code(),
-        Some(1),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let written = std::fs::read_to_string(&file).expect("the emitted file");
-    let cases = written.matches("\n  - id: ").count();
-    assert!(cases > 0, "{written}");
-    assert!(
-        written.contains("the expectation is fx5/hexa-16bit's answer"),
-        "{written}"
-    );
-    let script = root().join("tests/fixtures/external/judged_codec.py");
-    let run = |mode: &str| {
-        let backend = format!("external:judged=python3 {} {mode}", script.display());
-        common::cli(&["run", "--vectors", &file_arg, "--backend", &backend])
-    };
-    let strict = run("strict");
-    let stdout = String::from_utf8_lossy(&strict.stdout);
-    assert_eq!(strict.status.code(), Some(0), "{stdout}\n{written}");
-    assert!(stdout.contains(&format!("{cases} passed")), "{stdout}");
-    let lenient = run("lenient");
-    let stdout = String::from_utf8_lossy(&lenient.stdout);
-    assert_eq!(lenient.status.code(), Some(1), "{stdout}");
-    assert!(stdout.contains(&format!("{cases} failed")), "{stdout}");
 }
 
 /// The shards of a sweep can shrink to the same input; their emitted files still load

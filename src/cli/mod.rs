@@ -9,6 +9,7 @@ mod backends;
 mod error;
 mod hil;
 mod info;
+mod init;
 mod output;
 mod record;
 mod run;
@@ -134,6 +135,12 @@ pub(crate) enum Command {
     /// Write what a backend did into the vectors as `observed` expectations, with provenance;
     /// fill in the outcome of `unspecified` cases; never overwrite a `manual` expectation.
     Record(record::RecordArgs),
+    /// Start checking a library: write a commented adapter (Python, JavaScript or Rust), an
+    /// empty known-differences file and a CI job.
+    Init {
+        #[command(subcommand)]
+        command: init::InitCommand,
+    },
     /// A real MELSEC CPU on a bench: generate its test program, look at the bench read-only,
     /// dry-run a live backend, or serve a simulated CPU on 127.0.0.1.
     Hil {
@@ -287,6 +294,7 @@ pub(crate) fn main() -> ExitCode {
         Command::Sweep(args) => sweep::sweep(&cli, args),
         Command::Record(args) => record::record_command(&cli, args),
         Command::Hil { command } => hil::hil(&cli, command),
+        Command::Init { command } => init::init(command),
     };
     // Errors are rendered here and nowhere else.
     let code = outcome.unwrap_or_else(|e| {

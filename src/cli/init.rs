@@ -1,0 +1,165 @@
+//! `init codec`: the files a library maintainer starts from — a commented adapter that runs as
+//! it is (a stand-in conversion stands where the library's calls go), an empty
+//! known-differences file and a CI job — for Python, JavaScript or Rust
+//! (`docs/check-your-library.md` walks from them).
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use super::{output, CliError, Outcome, EXIT_OK};
+use crate::load::valid_name;
+
+#[derive(Debug, clap::Subcommand)]
+pub(crate) enum InitCommand {
+    /// A codec-level backend for a library's hex conversions: its adapter, its
+    /// known-differences file and a CI job.
+    Codec(CodecArgs),
+}
+
+#[derive(Debug, clap::Args)]
+#[command(group(clap::ArgGroup::new("language").required(true).args(["python", "js", "rust"])))]
+pub(crate) struct CodecArgs {
+    /// An adapter in Python, through the plc_adapter helper.
+    #[arg(long)]
+    pub python: bool,
+    /// An adapter in JavaScript, through the plc-conformance-adapter helper.
+    #[arg(long)]
+    pub js: bool,
+    /// A `harness = false` test of a Rust crate, through plc_conformance::Codec.
+    #[arg(long)]
+    pub rust: bool,
+    /// The backend's name, in trial names and file names (lowercase letters, digits, `-`, `_`).
+    #[arg(long, default_value = "mylib")]
+    pub name: String,
+    /// The folder to write into (your library's repository).
+    #[arg(long, value_name = "DIR", default_value = ".")]
+    pub dir: PathBuf,
+}
+
+/// One file of a scaffold: where it goes under the folder, and its template.
+struct Template {
+    path: String,
+    text: &'static str,
+}
+
+const PYTHON: &str = include_str!("../../templates/init/codec.py");
+const JS: &str = include_str!("../../templates/init/codec.js");
+const RUST: &str = include_str!("../../templates/init/conformance.rs");
+const KNOWN: &str = include_str!("../../templates/init/known.yaml");
+const CI_PYTHON: &str = include_str!("../../templates/init/ci-python.yml");
+const CI_JS: &str = include_str!("../../templates/init/ci-js.yml");
+const CI_RUST: &str = include_str!("../../templates/init/ci-rust.yml");
+
+pub(super) fn init(command: &InitCommand) -> Outcome {
+    let InitCommand::Codec(args) = command;
+    let name = &args.name;
+    if !valid_name(name) {
+        return Err(CliError::input(format!(
+            "--name {name}: use lowercase letters, digits, `-` and `_`"
+        )));
+    }
+    // An adapter that a process runs: its file, and the command that runs it.
+    let script = |extension: &str, interpreter: &str, text: &'static str| {
+        let path = format!("{name}_adapter.{extension}");
+        let run = format!(
+            "plc-conformance run --backend 'external:{name}={interpreter} {path}' \
+             --known-differences {name}={name}.known.yaml"
+        );
+        (Template { path, text }, run)
+    };
+    let ((adapter, run), ci) = if args.python {
+        (script("py", "python3", PYTHON), CI_PYTHON)
+    } else if args.js {
+        (script("js", "node", JS), CI_JS)
+    } else {
+        let test = Template {
+            path: "tests/conformance.rs".into(),
+            text: RUST,
+        };
+        let run = "cargo test --test conformance (after the Cargo.toml lines at the top of \
+                   tests/conformance.rs)";
+        ((test, run.to_string()), CI_RUST)
+    };
+    let files = [
+        adapter,
+        Template {
+            path: format!("{name}.known.yaml"),
+            text: KNOWN,
+        },
+        Template {
+            path: ".github/workflows/plc-conformance.yml".into(),
+            text: ci,
+        },
+    ];
+    // Nothing is written when anything would be replaced: a scaffold is a start, not an edit.
+    let taken: Vec<String> = (files.iter())
+        .map(|f| args.dir.join(&f.path))
+        .filter(|p| p.exists())
+        .map(|p| p.display().to_string())
+        .collect();
+    if !taken.is_empty() {
+        return Err(CliError::input(format!(
+            "init writes only where no file is, and these exist: {}; give another --dir or \
+             --name",
+            taken.join(", ")
+        )));
+    }
+    let mut said = String::new();
+    for f in &files {
+        let path = args.dir.join(&f.path);
+        create_parent(&path)?;
+        output::write(Some(&path), &fill(f.text, name))?;
+        let _ = writeln!(said, "wrote {}", path.display());
+    }
+    let _ = write!(
+        said,
+        "next: put your library's calls where the adapter's stand-in is, then\n  {run}\n\
+         the guide: docs/check-your-library.md"
+    );
+    output::write(None, &said)?;
+    Ok(EXIT_OK)
+}
+
+fn create_parent(path: &Path) -> Result<(), CliError> {
+    match path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        Some(parent) => std::fs::create_dir_all(parent)
+            .map_err(|e| CliError::input(format!("cannot create {}: {e}", parent.display()))),
+        None => Ok(()),
+    }
+}
+
+/// A template with the backend's name (`{{name}}`) and its Rust type (`{{type}}`: `my-lib`
+/// is `MyLibCodec`) filled in.
+fn fill(template: &str, name: &str) -> String {
+    let type_name: String = name
+        .split(['-', '_'])
+        .filter(|p| !p.is_empty())
+        .map(|p| {
+            let mut c = p.chars();
+            c.next()
+                .map(|f| f.to_ascii_uppercase().to_string() + c.as_str())
+                .unwrap_or_default()
+        })
+        .collect();
+    let type_name = match type_name.chars().next() {
+        Some(c) if c.is_ascii_digit() => format!("Codec{type_name}"),
+        _ => format!("{type_name}Codec"),
+    };
+    template
+        .replace("{{name}}", name)
+        .replace("{{type}}", &type_name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fill;
+
+    #[test]
+    fn a_template_gets_the_name_and_a_rust_type() {
+        assert_eq!(
+            fill("{{name}}: {{type}}", "my-lib_2"),
+            "my-lib_2: MyLib2Codec"
+        );
+        assert_eq!(fill("{{type}}", "9lives"), "Codec9lives");
+    }
+}

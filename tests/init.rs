@@ -1,0 +1,144 @@
+//! `plc-conformance init codec`: the scaffold a library maintainer starts from runs as written
+//! (its stand-in conversion shows the differences such a conversion has), and nothing is
+//! replaced.
+
+mod common;
+
+use std::path::Path;
+
+use common::{bin, root, scratch};
+
+/// `init codec` with `args` in `dir`: the exit status and what it said.
+fn init(dir: &Path, args: &[&str]) -> (Option<i32>, String) {
+    let out = bin()
+        .current_dir(dir)
+        .args(["init", "codec"])
+        .args(args)
+        .output()
+        .expect("runs");
+    let said = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    (out.status.code(), said)
+}
+
+/// Runs the scaffold's own command (`command` starts its adapter) in `dir`.
+fn run_adapter(dir: &Path, command: &str, env: &[(&str, &Path)]) -> (Option<i32>, String) {
+    let mut run = bin();
+    run.current_dir(dir).args([
+        "run",
+        "--backend",
+        &format!("external:mylib={command}"),
+        "--known-differences",
+        "mylib=mylib.known.yaml",
+    ]);
+    for (k, v) in env {
+        run.env(k, v);
+    }
+    let out = run.output().expect("runs");
+    let said = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    (out.status.code(), said)
+}
+
+#[test]
+fn a_python_scaffold_runs_as_written_and_is_never_replaced() {
+    let dir = scratch();
+    let (code, said) = init(dir.path(), &["--python", "--name", "mylib"]);
+    assert_eq!(code, Some(0), "{said}");
+    for file in [
+        "mylib_adapter.py",
+        "mylib.known.yaml",
+        ".github/workflows/plc-conformance.yml",
+    ] {
+        let text = std::fs::read_to_string(dir.path().join(file)).expect(file);
+        assert!(!text.contains("{{"), "{file} keeps a placeholder:\n{text}");
+    }
+    assert!(
+        said.contains("external:mylib=python3 mylib_adapter.py"),
+        "{said}"
+    );
+    // Run again: nothing is replaced.
+    std::fs::write(dir.path().join("mylib.known.yaml"), "edited").expect("write");
+    let (code, said) = init(dir.path(), &["--python", "--name", "mylib"]);
+    assert_eq!(code, Some(2), "{said}");
+    assert!(said.contains("init writes only where no file is"), "{said}");
+    let kept = std::fs::read_to_string(dir.path().join("mylib.known.yaml")).expect("kept");
+    assert_eq!(kept, "edited");
+    std::fs::remove_file(dir.path().join("mylib.known.yaml")).expect("rm");
+    std::fs::remove_dir_all(dir.path().join(".github")).expect("rm");
+    std::fs::remove_file(dir.path().join("mylib_adapter.py")).expect("rm");
+    init(dir.path(), &["--python", "--name", "mylib"]);
+    if !common::python() {
+        return;
+    }
+    // The stand-in, Python's int(text, 16), takes lowercase digits, signs and 0x: the first
+    // verdict shows those differences, every one a trial of the corpus.
+    let helper = root().join("adapters/python");
+    let (code, said) = run_adapter(
+        dir.path(),
+        "python3 mylib_adapter.py",
+        &[("PYTHONPATH", &helper)],
+    );
+    assert_eq!(code, Some(1), "{said}");
+    assert!(
+        said.contains("cross-vendor::mylib::codec::xv-h2v-61h"),
+        "{said}"
+    );
+    assert!(said.contains(" failed, "), "{said}");
+}
+
+#[test]
+fn a_javascript_scaffold_runs_as_written() {
+    let node = std::process::Command::new("node").arg("--version").output();
+    if node.is_err() {
+        assert!(
+            std::env::var_os("PLC_CONFORMANCE_REQUIRE_BACKENDS").is_none(),
+            "node is required"
+        );
+        eprintln!("skipped: node is not installed");
+        return;
+    }
+    let dir = scratch();
+    let (code, said) = init(dir.path(), &["--js", "--name", "mylib"]);
+    assert_eq!(code, Some(0), "{said}");
+    // The helper, where `npm install PATH/TO/adapters/js` puts it.
+    let modules = dir.path().join("node_modules");
+    std::fs::create_dir(&modules).expect("mkdir");
+    std::os::unix::fs::symlink(
+        root().join("adapters/js"),
+        modules.join("plc-conformance-adapter"),
+    )
+    .expect("link");
+    let (code, said) = run_adapter(dir.path(), "node mylib_adapter.js", &[]);
+    assert_eq!(code, Some(1), "{said}");
+    assert!(
+        said.contains("cross-vendor::mylib::codec::xv-h2v-61h"),
+        "{said}"
+    );
+}
+
+#[test]
+fn a_rust_scaffold_names_its_codec_after_the_backend() {
+    let dir = scratch();
+    let (code, said) = init(dir.path(), &["--rust", "--name", "my-lib"]);
+    assert_eq!(code, Some(0), "{said}");
+    let test = std::fs::read_to_string(dir.path().join("tests/conformance.rs")).expect("written");
+    assert!(test.contains("struct MyLibCodec;"), "{test}");
+    assert!(
+        test.contains("Some(\"my-lib.known.yaml\".into())"),
+        "{test}"
+    );
+    assert!(!test.contains("{{"), "{test}");
+    let (code, said) = init(dir.path(), &["--rust", "--name", "My Lib"]);
+    assert_eq!(code, Some(2), "{said}");
+    assert!(
+        said.contains("--name My Lib: use lowercase letters"),
+        "{said}"
+    );
+}
