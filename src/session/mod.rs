@@ -142,10 +142,39 @@ impl Session {
         strict_known: bool,
     ) -> (Session, Vec<(String, SetupError)>) {
         let mut session = Session::new(project);
+        // The processes start side by side: each handshake mostly waits for an interpreter
+        // and a library to load (a quarter of a second for a Python library, more for Node),
+        // and listing the trials (as nextest does before every run) starts them all.
+        let profiles = &session.project.profiles;
+        let mut started: Vec<Option<Result<ExternalBackend, ExternalError>>> =
+            std::thread::scope(|scope| {
+                let starting: Vec<_> = (sources.iter())
+                    .map(|source| match source {
+                        BackendSource::Process(settings) => Some(
+                            scope.spawn(move || ExternalBackend::start(settings.clone(), profiles)),
+                        ),
+                        _ => None,
+                    })
+                    .collect();
+                (starting.into_iter())
+                    .map(|s| {
+                        s.map(|s| {
+                            s.join()
+                                .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+                        })
+                    })
+                    .collect()
+            });
         let mut failed = Vec::new();
-        for source in sources {
+        for (source, started) in sources.into_iter().zip(started.iter_mut()) {
             let name = source.name();
-            if let Err(e) = session.add(source, strict_known) {
+            let added = match (source, started.take()) {
+                (BackendSource::Process(settings), Some(started)) => {
+                    session.add_started(settings, started, strict_known)
+                }
+                (source, _) => session.add(source, strict_known).map(|_| ()),
+            };
+            if let Err(e) = added {
                 failed.push((name, e));
             }
         }
@@ -179,17 +208,9 @@ impl Session {
                 .find(|b| b.name() == name)
                 .ok_or(SetupError::NoModel(name))?,
             BackendSource::Process(settings) => {
-                let known = settings.known_differences.clone();
-                let started = ExternalBackend::start(settings, &self.project.profiles)
-                    .map_err(SetupError::External)?;
-                // The backend's profile was checked when it started; a codec-level one has
-                // none.
-                if let Some(file) = known {
-                    self.project
-                        .add_known(&name, started.profile(), &file, strict_known)
-                        .map_err(SetupError::Load)?;
-                }
-                Arc::new(started)
+                let started = ExternalBackend::start(settings.clone(), &self.project.profiles);
+                self.add_started(settings, started, strict_known)?;
+                return Ok(&self.backends[before..]);
             }
             BackendSource::ProcessOnFirstUse(settings) => {
                 let profile = settings.profile.clone();
@@ -223,6 +244,27 @@ impl Session {
         self.backends.push(backend);
         self.asked.push(name);
         Ok(&self.backends[before..])
+    }
+
+    /// Adds a process started from `settings` (or why it did not start), with its known
+    /// differences; its name is checked as [`Session::add`] checks every name.
+    fn add_started(
+        &mut self,
+        settings: ExternalSettings,
+        started: Result<ExternalBackend, ExternalError>,
+        strict_known: bool,
+    ) -> Result<(), SetupError> {
+        self.check_name(&settings.name)?;
+        let started = started.map_err(SetupError::External)?;
+        // The backend's profile was checked when it started; a codec-level one has none.
+        if let Some(file) = &settings.known_differences {
+            self.project
+                .add_known(&settings.name, started.profile(), file, strict_known)
+                .map_err(SetupError::Load)?;
+        }
+        self.backends.push(Arc::new(started));
+        self.asked.push(settings.name);
+        Ok(())
     }
 
     /// A live CPU backend built from its settings and manifest, with no socket opened: what a
