@@ -1,7 +1,6 @@
 //! Loading cross-vendor vector files and the `cross_vendor` sections of profiles.
 
 use std::collections::{BTreeMap, BTreeSet};
-use std::path::Path;
 use std::sync::Arc;
 
 use super::checks::{check_cite, check_expect_optional, check_id, text_bytes, unknown};
@@ -492,15 +491,13 @@ fn lowering_device(
 }
 
 /// Reads a cross-vendor file into cases.
-pub(crate) fn add_file(
-    file: &Path,
+pub(crate) fn read_file(
     text: &str,
     profiles: &Profiles,
-    errors: &mut Vec<super::LoadError>,
+    cx: &mut FileContext<'_>,
 ) -> Vec<(String, CrossVendorCase)> {
-    let mut cx = FileContext::new(file, text, errors);
-    match super::parse_document::<CrossVendorFileSpec>(text, &mut cx) {
-        Some(spec) => read_cases(&spec, profiles, &mut cx),
+    match super::parse_document::<CrossVendorFileSpec>(text, cx) {
+        Some(spec) => read_cases(&spec, profiles, cx),
         None => Vec::new(),
     }
 }

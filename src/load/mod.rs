@@ -248,12 +248,10 @@ fn deserialize<T: DeserializeOwned>(file: &Path, text: &str) -> Result<T, LoadEr
     })
 }
 
-/// Reads a YAML file: a regular file (a FIFO or a device would block or never end) holding
-/// UTF-8; invalid UTF-8 is reported on its line.
 /// What the deserializer must never see: characters YAML forbids, a second document, nesting
 /// deeper than [`locate::MAX_DEPTH`] (which the deserializer takes quadratic time over). Found
 /// in one pass that stops at the first problem, with its line.
-pub(crate) fn check_text(file: &Path, text: &str) -> Result<(), LoadError> {
+fn check_text(file: &Path, text: &str) -> Result<(), LoadError> {
     locate::check_text(text).map_err(|(line, message)| LoadError {
         file: file.to_path_buf(),
         line: Some(line),

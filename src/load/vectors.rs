@@ -52,12 +52,11 @@ pub struct CorpusBuilder {
 impl CorpusBuilder {
     /// Adds one vector file given as text; `file` is the name errors will show.
     pub fn add_file(&mut self, file: &Path, text: &str, profiles: &Profiles) {
-        if let Err(e) = super::check_text(file, text) {
-            self.errors.push(e);
-            return;
-        }
-        if super::cross_vendor::is_cross_vendor(&super::LineIndex::new(text)) {
-            let cases = super::cross_vendor::add_file(file, text, profiles, &mut self.errors);
+        // One context for either kind of file: the text checked and its lines indexed once
+        // (a text refused by the check has no lines, and reads as no document).
+        let mut cx = FileContext::new(file, text, &mut self.errors);
+        if super::cross_vendor::is_cross_vendor(&cx.index) {
+            let cases = super::cross_vendor::read_file(text, profiles, &mut cx);
             for (key, case) in cases {
                 if self.claim_id(&key, &case.id, &case.location) {
                     self.cross_vendor.push(Arc::new(case));
@@ -65,7 +64,6 @@ impl CorpusBuilder {
             }
             return;
         }
-        let mut cx = FileContext::new(file, text, &mut self.errors);
         let Some(spec) = super::parse_document::<VectorFileSpec>(text, &mut cx) else {
             return;
         };
