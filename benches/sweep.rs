@@ -9,7 +9,10 @@
 //! - protocol: generated inputs through `plc-conformance serve` (the native adapter), batched;
 //! - full: all 2^32 four-byte texts through every built-in hex-to-value lowering by byte class;
 //!   and a shard asked text by text through the models, and a larger one through the lowerings'
-//!   rules (`--each-text`), with the whole space extrapolated from each.
+//!   rules (`--each-text`), with the whole space extrapolated from each;
+//! - codecs: a Python and a JavaScript codec whose decode is one line (`benches/int_codec.py`,
+//!   `benches/int_codec.js`), swept beside the built-in models over random texts: the time their
+//!   column adds against the codec's own bare loop over the same texts, side by side.
 //!
 //! Results: `docs/performance.md`, section "Sweeps".
 
@@ -29,7 +32,7 @@ use plc_conformance::testing::plan::Input;
 use plc_conformance::testing::session::{BackendSource, Session};
 use plc_conformance::testing::sweep::generate::Generator;
 use plc_conformance::testing::sweep::group::Groups;
-use plc_conformance::testing::sweep::input::Point;
+use plc_conformance::testing::sweep::input::{Data, Point};
 use plc_conformance::testing::sweep::target::{Cases, Target};
 use plc_conformance::testing::sweep::{Settings, Sweep};
 use plc_conformance::{Paths, Project};
@@ -57,7 +60,10 @@ fn main() {
     if wanted("full") {
         full(&project, cores, if quick { 1 << 16 } else { 1 << 22 });
     }
-    // Last: it adds an external backend to the project.
+    // Last: these add external backends to the project.
+    if wanted("codecs") {
+        codecs(&mut project, root, if quick { 20_000 } else { 100_000 });
+    }
     if wanted("protocol") {
         protocol(&mut project, root, if quick { 10_000 } else { 100_000 });
     }
@@ -280,4 +286,81 @@ fn full(project: &Session, cores: usize, texts: u64) {
             r.groups.by_key.len()
         );
     }
+}
+
+/// A Python and a JavaScript codec's columns against their own bare loops over the same texts:
+/// the sweep with the built-in models alone, then with the codec beside them; the difference is
+/// what the codec's column adds, to be at most twice the codec's bare loop.
+fn codecs(project: &mut Session, root: &Path, count: u64) {
+    let mut settings = Settings::new(
+        Target::Operation {
+            operation: Operation::HexToValue,
+        },
+        Generator::Random { count, max_len: 8 },
+        1,
+    );
+    settings.shrink = 0;
+    let references: Vec<_> = project.backends.clone();
+    let base = Sweep::new(settings.clone(), &project.profiles, &references).expect("sweep");
+    let (alone, _) = best(3, || base.run(&AtomicBool::new(false), &mut |_, _| {}));
+    // The texts a codec of 1 to 8 digits is asked, for the bare loops.
+    let file =
+        std::env::temp_dir().join(format!("plc-conformance-bench-{}.txt", std::process::id()));
+    let mut lines = String::new();
+    for i in 0..count {
+        let p = base.space.point(i);
+        if let Data::Text(t) = &p.data {
+            if (1..=8).contains(&p.digits) && !t.is_empty() {
+                let hex: String = t.iter().map(|b| format!("{b:02x}")).collect();
+                lines.push_str(&format!("{hex} {}\n", p.digits));
+            }
+        }
+    }
+    std::fs::write(&file, lines).expect("texts written");
+    for (name, program) in [("python", "python3"), ("javascript", "node")] {
+        let script = root.join(if program == "node" {
+            "benches/int_codec.js"
+        } else {
+            "benches/int_codec.py"
+        });
+        let script = script.display().to_string();
+        let bare = (0..3)
+            .filter_map(|_| {
+                let out = std::process::Command::new(program)
+                    .args([script.as_str(), "--bare", &file.display().to_string()])
+                    .output()
+                    .ok()?;
+                String::from_utf8_lossy(&out.stdout)
+                    .trim()
+                    .parse::<f64>()
+                    .ok()
+            })
+            .fold(f64::INFINITY, f64::min);
+        if !bare.is_finite() {
+            println!("codecs: {name}: skipped, `{program}` does not run here");
+            continue;
+        }
+        let mut external = ExternalSettings::new(
+            format!("int-{name}"),
+            Launch::Exec(vec![program.into(), script]),
+        );
+        external.timeout = std::time::Duration::from_secs(30);
+        let codec = project
+            .add(BackendSource::Process(external), false)
+            .expect("the codec starts")[0]
+            .clone();
+        let mut backends = references.clone();
+        backends.push(codec);
+        let sweep = Sweep::new(settings.clone(), &project.profiles, &backends).expect("sweep");
+        let (with, r) = best(3, || sweep.run(&AtomicBool::new(false), &mut |_, _| {}));
+        let added = with - alone;
+        println!(
+            "codecs: {name}: {} random texts (1-8 bytes): the built-in models alone {alone:.3} s, \
+             with the codec's column {with:.3} s: the column adds {added:.3} s; the codec's bare \
+             loop over the same texts {bare:.3} s: {:.2}x (target <= 2x)",
+            r.swept,
+            added / bare
+        );
+    }
+    let _ = std::fs::remove_file(&file);
 }

@@ -134,3 +134,27 @@ pub mod testing;
 pub fn main() -> std::process::ExitCode {
     cli::main()
 }
+
+/// The `plc-conformance` command line with backends written in Rust beside the built-in ones,
+/// each chosen by its name with `--backend` (and `--known-differences NAME=FILE`). A codec's
+/// crate builds its own command from it, and every command works on the codec in process: a
+/// sweep of every 4-byte text calls it directly, text by text, at its own speed.
+///
+/// ```no_run
+/// # struct Mine;
+/// # impl plc_conformance::Codec for Mine {
+/// #     fn name(&self) -> &str { "mine" }
+/// #     fn abilities(&self) -> plc_conformance::CodecAbilities { unimplemented!() }
+/// #     fn convert(&self, _: &plc_conformance::Question<'_>)
+/// #         -> Result<plc_conformance::Answer, plc_conformance::Unsupported> { unimplemented!() }
+/// # }
+/// // src/bin/plc-conformance-mine.rs:
+/// // cargo run --release --bin plc-conformance-mine -- sweep --operation hex-to-value \
+/// //     --generator full --each-text --backend mine
+/// fn main() -> std::process::ExitCode {
+///     plc_conformance::command_line(vec![plc_conformance::codec_backend(Mine)])
+/// }
+/// ```
+pub fn command_line(backends: Vec<std::sync::Arc<dyn Backend>>) -> std::process::ExitCode {
+    cli::main_with(backends)
+}

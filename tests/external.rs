@@ -301,7 +301,7 @@ fn handshake_failures_are_errors_before_any_case() {
     let (kind, text) = start_error(faulty("version"));
     assert_eq!(kind, ExternalErrorKind::Version { theirs: 99 });
     assert!(
-        text.contains("speaks protocol version 99; this harness speaks versions 1 to 4"),
+        text.contains("speaks protocol version 99; this harness speaks versions 1 to 5"),
         "{text}"
     );
 

@@ -366,7 +366,8 @@ fn known_differences_for_a_backend_that_is_not_an_external_one_of_the_run_is_an_
         assert_eq!(out.status.code(), Some(2), "{err}");
         assert!(
             err.contains(
-                "--known-differences names `iqr`, which is not an `external:` backend of this run"
+                "--known-differences names `iqr`, which is not an `external:` or in-process \
+                 backend of this run"
             ),
             "{err}"
         );

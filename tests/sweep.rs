@@ -628,10 +628,12 @@ fn the_direct_path_gives_the_replies_of_the_trial_path() {
         ),
     ] {
         let mut settings = Settings::new(target.clone(), generator, 4);
-        let direct =
-            Sweep::new(settings.clone(), &project.profiles, &project.backends).expect("sweep");
+        // A codec too (in process here; one in another process is asked the same way).
+        let mut backends = project.backends.clone();
+        backends.push(plc_conformance::codec_backend(Lenient));
+        let direct = Sweep::new(settings.clone(), &project.profiles, &backends).expect("sweep");
         settings.direct = false;
-        let trials = Sweep::new(settings, &project.profiles, &project.backends).expect("sweep");
+        let trials = Sweep::new(settings, &project.profiles, &backends).expect("sweep");
         let points: Vec<(u64, Point)> = (0..direct.space.total())
             .map(|i| (i, direct.space.point(i)))
             .collect();
@@ -1657,4 +1659,363 @@ fn the_emitted_files_of_shards_load_together() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+}
+
+/// A codec written in Rust that parts from the vendors in every way a code can: lowercase
+/// accepted, `unsupported` for texts opening with `Z`, a text (no value) for `~~~~`, and a
+/// blank-skipping field that skips texts with a blank between pairs; and it writes values
+/// without leading zeros.
+struct Lenient;
+
+impl plc_conformance::Codec for Lenient {
+    fn name(&self) -> &str {
+        "lenient"
+    }
+    fn abilities(&self) -> plc_conformance::CodecAbilities {
+        let mut field = plc_conformance::OperationAbilities {
+            digits: Some(vec![4]),
+            ..Default::default()
+        };
+        let write = field.clone();
+        field.shape.blanks_between_pairs = true;
+        plc_conformance::CodecAbilities {
+            hex_to_value: Some(field),
+            value_to_hex: Some(write),
+        }
+    }
+    fn convert(
+        &self,
+        q: &plc_conformance::Question<'_>,
+    ) -> Result<plc_conformance::Answer, plc_conformance::Unsupported> {
+        use plc_conformance::{Answer, ErrorClass, Operation, Unsupported};
+        if q.operation == Operation::ValueToHex {
+            // No leading zeros, though the field does not say so.
+            return Ok(Answer::Text(format!("{:X}", q.value).into_bytes()));
+        }
+        if q.text.first() == Some(&b'Z') {
+            return Err(Unsupported("no Z".into()));
+        }
+        if q.text == b"~~~~" {
+            return Ok(Answer::Text(b"?".to_vec()));
+        }
+        Ok(std::str::from_utf8(q.text)
+            .ok()
+            .and_then(|t| u16::from_str_radix(t, 16).ok())
+            .map_or(Answer::Error(ErrorClass::InvalidDigit), |v| {
+                Answer::Value(u64::from(v))
+            }))
+    }
+}
+
+/// A codec in process sweeps every text at its own speed (each text a `convert` call, tallied
+/// with the rules), with exactly the groups, counts, first inputs and classes of asking each text
+/// through the general path; and a codec whose answer no tuple can share (a text) keeps those
+/// texts apart rather than counting them with their tuple.
+#[test]
+fn a_codec_in_process_sweeps_each_text_as_the_general_path_does() {
+    let project = session();
+    let mut backends = project.backends.clone();
+    backends.push(plc_conformance::codec_backend(Lenient));
+    let mut settings = Settings::new(
+        operation(Operation::HexToValue),
+        Generator::Full { by_class: false },
+        1,
+    );
+    settings.shrink = 1;
+    // The shard that holds "~~~~", the one text answered with a text.
+    let tilde = u64::from(exhaustive::unscramble(u32::from_be_bytes(*b"~~~~")));
+    settings.shard = (tilde % 8192 + 1, 8192);
+    let (_, fast) = run(&project, &backends, settings.clone());
+    settings.exhaustive = false;
+    let (_, slow) = run(&project, &backends, settings.clone());
+    let report = fast
+        .exhaustive
+        .as_ref()
+        .expect("asked through the rules and the codec");
+    assert!(report.apart >= 1, "{report:?}");
+    assert!(report.disagreement.is_none());
+    assert!(slow.exhaustive.is_none());
+    assert_eq!(fast.swept, slow.swept);
+    assert_eq!(summary(&fast), summary(&slow));
+    let lenient = |r: &Results| -> BTreeSet<String> {
+        r.ordered()
+            .iter()
+            .map(|g| g.key.signature.last().cloned().unwrap_or_default())
+            .collect()
+    };
+    for label in [
+        "value#1",
+        "invalid-digit",
+        "skipped",
+        "unsupported",
+        "text#",
+    ] {
+        assert!(
+            lenient(&fast).iter().any(|l| l.starts_with(label)),
+            "{label}: {:?}",
+            lenient(&fast)
+        );
+    }
+}
+
+/// A codec that declares its field's shape sweeps with no difference where it follows it, as it
+/// runs the corpus with none: a token without leading zeros against FX5 ASCI, and a field read
+/// low byte first with blanks between pairs skipped, but written high byte first, against
+/// HABIN and BINHA (each direction its own shape).
+#[test]
+fn a_codec_that_follows_its_declared_field_sweeps_with_no_difference() {
+    if !common::python() {
+        return;
+    }
+    for (script, operation, oracle) in [
+        ("token_codec.py", "value-to-hex", "fx5/asci-16bit"),
+        ("mixed_order_codec.py", "hex-to-value", "iqr/habin-fixed"),
+        ("mixed_order_codec.py", "value-to-hex", "iqr/binha-fixed"),
+    ] {
+        let script = root().join("tests/fixtures/external").join(script);
+        let backend = format!("external:shaped=python3 {}", script.display());
+        let out = common::cli(&[
+            "sweep",
+            "--operation",
+            operation,
+            "--generator",
+            "random",
+            "--count",
+            "3000",
+            "--seed",
+            "3",
+            "--digits",
+            "4",
+            "--shrink",
+            "0",
+            "--backend",
+            &backend,
+            "--oracle",
+            oracle,
+        ]);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let line = stdout
+            .lines()
+            .find(|l| l.contains("shaped against"))
+            .unwrap_or_else(|| panic!("{operation}: no judged line: {stdout}"));
+        assert!(line.contains("differs on 0 of"), "{operation}: {line}");
+        assert!(
+            !line.contains("differs on 0 of 0 "),
+            "{operation}: nothing asked: {line}"
+        );
+        assert_eq!(out.status.code(), Some(0), "{operation}: {stdout}");
+    }
+}
+
+/// The JSON results of a sweep, without how long it took (and, by class, how many random texts
+/// checked the classes: each shard checks its own).
+fn found(path: &std::path::Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(path).expect("results written");
+    let mut v: serde_json::Value = serde_json::from_str(&text).expect("JSON results");
+    let o = v.as_object_mut().expect("an object");
+    o.remove("elapsed_seconds");
+    if let Some(b) = o.get_mut("byte_classes").and_then(|b| b.as_object_mut()) {
+        b.remove("checked");
+    }
+    v
+}
+
+/// Four shards' JSON results merged are the sweep run in one piece: groups, counts, first
+/// inputs, classes and shrunk inputs, with a codec in another process among the columns and
+/// with the full generator by class (whose groups have more classes than a group keeps: a
+/// shard keeps them all, so the merge keeps the whole sweep's first ones).
+#[test]
+fn four_shards_merged_are_the_whole_sweep() {
+    if !common::python() {
+        return;
+    }
+    let dir = scratch();
+    let token = format!(
+        "external:token=python3 {}",
+        root()
+            .join("tests/fixtures/external/token_codec.py")
+            .display()
+    );
+    let sweeps: [Vec<&str>; 2] = [
+        vec![
+            "sweep",
+            "--operation",
+            "value-to-hex",
+            "--generator",
+            "random",
+            "--count",
+            "3000",
+            "--seed",
+            "4",
+            "--backend",
+            &token,
+        ],
+        vec![
+            "sweep",
+            "--operation",
+            "hex-to-value",
+            "--generator",
+            "full",
+            "--seed",
+            "4",
+            "--class-check",
+            "1000",
+        ],
+    ];
+    for (s, args) in sweeps.iter().enumerate() {
+        let file = |name: &str| dir.path().join(format!("{s}-{name}.json"));
+        let run = |extra: &[&str], out: &std::path::Path| {
+            let mut all = args.clone();
+            all.extend_from_slice(extra);
+            all.extend_from_slice(&["--format", "json", "--output", out.to_str().expect("path")]);
+            let o = common::cli(&all);
+            assert!(
+                o.status.code().is_some_and(|c| c <= 1),
+                "{all:?}: {}",
+                String::from_utf8_lossy(&o.stderr)
+            );
+        };
+        run(&[], &file("whole"));
+        let shards: Vec<std::path::PathBuf> = (1..=4)
+            .map(|k| {
+                let path = file(&format!("shard-{k}"));
+                run(&["--shard", &format!("{k}/4")], &path);
+                path
+            })
+            .collect();
+        let mut merge = vec!["--merge"];
+        merge.extend(shards.iter().map(|p| p.to_str().expect("path")));
+        run(&merge, &file("merged"));
+        let (whole, merged) = (found(&file("whole")), found(&file("merged")));
+        assert!(
+            whole["groups"].as_array().is_some_and(|g| g.len() > 3),
+            "{whole}"
+        );
+        assert_eq!(whole, merged, "sweep {s}");
+    }
+}
+
+/// A merge refuses, with the file and the reason, what is not the whole of this sweep: a
+/// missing or repeated shard, another sweep's shards, and a file that is not sweep results.
+#[test]
+fn a_merge_refuses_what_is_not_the_whole_sweep() {
+    let dir = scratch();
+    let args = [
+        "sweep",
+        "--operation",
+        "value-to-hex",
+        "--generator",
+        "values",
+    ];
+    let shard = |k: u32| {
+        let path = dir.path().join(format!("s{k}.json"));
+        let mut all = args.to_vec();
+        let s = format!("{k}/3");
+        let p = path.to_str().expect("path").to_string();
+        all.extend_from_slice(&["--shard", &s, "--format", "json", "--output", &p]);
+        let o = common::cli(&all);
+        assert!(o.status.code().is_some_and(|c| c <= 1));
+        p
+    };
+    let (a, b, c) = (shard(1), shard(2), shard(3));
+    let bad = dir.path().join("bad.json");
+    std::fs::write(&bad, "{\"tool\":\n").expect("written");
+    let bad = bad.to_str().expect("path").to_string();
+    for (files, other, wanted) in [
+        (vec![&a, &b], None, "missing 3/3".to_string()),
+        (vec![&a, &b, &c, &b], None, format!("{b}: shard 2/3 again")),
+        (
+            vec![&a, &b, &c],
+            Some("--generator=values32"),
+            format!("{a}: another sweep: its `generator`"),
+        ),
+        (vec![&bad], None, format!("{bad}:2:")),
+    ] {
+        let mut all = args.to_vec();
+        if let Some(o) = other {
+            all.truncate(3);
+            all.push(o);
+        }
+        all.push("--merge");
+        all.extend(files.iter().map(|f| f.as_str()));
+        let o = common::cli(&all);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{all:?}: {stderr}");
+        assert!(stderr.contains(&wanted), "{all:?}: {stderr}");
+    }
+}
+
+/// A codec that crashes or hangs on one text of a bulk `convert` message faults on that text
+/// alone: the message's questions are asked again one case at a time, so every other text is
+/// answered and the fault is the outcome of the text that caused it.
+#[test]
+fn a_codec_that_crashes_or_hangs_on_one_text_of_a_bulk_message_faults_that_text_alone() {
+    use plc_conformance::testing::model::project::{ExternalSettings, Launch};
+    use plc_conformance::testing::sweep::group::Reply;
+    if !common::python() {
+        return;
+    }
+    let script = root().join("tests/fixtures/external/faulty_codec.py");
+    let texts: [&[u8]; 6] = [b"5A8D", b"1G34", b"0000", b"5a8D", b"12G4", b"FFFF"];
+    for (mode, label) in [("crash-on-g", "crashed"), ("hang-on-g", "timeout")] {
+        let mut project = session();
+        let mut settings = ExternalSettings::new(
+            "faulty",
+            Launch::Exec(vec![
+                "python3".into(),
+                script.display().to_string(),
+                mode.into(),
+            ]),
+        );
+        // The hang costs this once for the message and once for each text holding a G.
+        settings.timeout = std::time::Duration::from_secs(2);
+        let codec = project
+            .add(BackendSource::Process(settings), false)
+            .expect("the codec starts")[0]
+            .clone();
+        let sweep = Sweep::new(
+            random(Operation::HexToValue, 10, 4, 1),
+            &project.profiles,
+            &[codec],
+        )
+        .expect("sweep");
+        let points: Vec<(u64, Point)> = texts
+            .iter()
+            .enumerate()
+            .map(|(i, t)| {
+                let mut p = sweep.space.point(0);
+                p.data = Data::Text(t.to_vec());
+                p.digits = 4;
+                (i as u64, p)
+            })
+            .collect();
+        let answers = sweep.answers(&points, &no_stop());
+        for (text, replies) in texts.iter().zip(&answers) {
+            let reply = replies.as_ref().and_then(|r| r.last()).expect("answered");
+            let shown = String::from_utf8_lossy(text);
+            match reply {
+                Reply::Failed { label: l, .. } => {
+                    assert!(
+                        text.contains(&b'G') && l == label,
+                        "{mode}: {shown}: {reply}"
+                    )
+                }
+                _ => assert!(!text.contains(&b'G'), "{mode}: {shown}: {reply}"),
+            }
+        }
+        let shown: Vec<String> = answers
+            .iter()
+            .map(|r| {
+                r.as_ref()
+                    .and_then(|r| r.last())
+                    .map(ToString::to_string)
+                    .unwrap_or_default()
+            })
+            .collect();
+        assert_eq!(
+            shown,
+            ["5A8DH", label, "0000H", "invalid-digit", label, "FFFFH"],
+            "{mode}"
+        );
+    }
 }

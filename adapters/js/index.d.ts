@@ -3,9 +3,16 @@
 import type { Readable, Writable } from 'node:stream';
 
 export const VERSION: string;
-/** The newest protocol version this module speaks. */
+/** The version a codec answers a harness older than version 5 with (and the fallback). */
 export const PROTOCOL_VERSION: 2;
-export const PROTOCOL_VERSIONS: readonly [1, 2];
+/**
+ * The protocol versions this module speaks: 1 (instruction level), 2 (codec level), 3
+ * (byte-addressed families), 4 (32-bit units) and 5 (`convert`: many conversions of a codec in
+ * one message, answered by one `converted` line).
+ */
+export const PROTOCOL_VERSIONS: readonly [1, 2, 3, 4, 5];
+/** The first version that carries `convert`: a codec answers a hello of 5 or later with 5, an older one with 2. */
+export const CONVERT_VERSION: 5;
 export type ErrorClass = 'invalid-digit' | 'invalid-count' | 'device-range' | 'error';
 export const ERROR_CLASSES: readonly ErrorClass[];
 
@@ -95,6 +102,38 @@ export type ErrorMap =
   | Array<[new (...args: any[]) => Error, ErrorClass]>
   | Record<string, ErrorClass>;
 
+/**
+ * What the protocol's field is, where it is not a fixed run of digits, most significant first
+ * (docs/protocol.md, "Field shapes"). The harness decides which cases each shape skips or reads
+ * otherwise; the helper only declares the shape in its hello.
+ */
+export interface FieldShape {
+  /** The value width in bits for each digit count taken: { 2: 8, 4: 16 }. */
+  widths?: Record<number, 8 | 16 | 32>;
+  /** A token of whatever length: decode reads the characters it is given. */
+  variable?: boolean;
+  /** Whether encode writes the field's leading zeros (true when absent). */
+  leadingZeros?: boolean;
+  /** 'low-first': the first character pair is the low byte (the MEWTOCOL order). */
+  byteOrder?: 'high-first' | 'low-first';
+  /** The field is checked with the frame around it: a text with characters after it is not asked. */
+  wholeFrame?: boolean;
+  /**
+   * Hex-to-value only: decode skips blanks (20H) between byte pairs, as Python's
+   * `bytes.fromhex`. Given for value-to-hex (in `encodeField`, or in `field` with an `encode`),
+   * serveCodec throws a TypeError at start-up.
+   */
+  blanksBetweenPairs?: boolean;
+}
+
+/**
+ * A codec-level backend. It answers protocol version 2 (`run`, one case per answer line) and 5
+ * (also `convert`: the texts or values of one operation in one message, answered by one
+ * `converted` line; what a sweep of millions of texts uses). Each item of a `convert` answers
+ * exactly what a `run` case with the same input answers: the value (or the written bytes, as a
+ * latin-1 string), `{error: class}`, or `{unsupported: reason}`; an exception `errors` does not
+ * map ends the process with its stack and none of the message's answers.
+ */
 export interface CodecOptions extends LoopOptions {
   /** hex-to-value: the characters (any byte values) and the digit count -> the value. */
   decode?: (text: Buffer, digits: number) => number | bigint | Promise<number | bigint>;
@@ -112,19 +151,15 @@ export interface CodecOptions extends LoopOptions {
   decodeReading?: string;
   /** The built-in reading encode follows ('fx5/asci-16bit'). */
   encodeReading?: string;
-  /** What the protocol's field is, where it is not a fixed run of digits, most significant first. */
-  field?: {
-    /** The value width in bits for each digit count taken: { 2: 8, 4: 16 }. */
-    widths?: Record<number, 8 | 16 | 32>;
-    /** A token of whatever length: decode reads the characters it is given. */
-    variable?: boolean;
-    /** Whether encode writes the field's leading zeros (true when absent). */
-    leadingZeros?: boolean;
-    /** 'low-first': the first character pair is the low byte (the MEWTOCOL order). */
-    byteOrder?: 'high-first' | 'low-first';
-    /** The field is checked with the frame around it: a text with characters after it is not asked. */
-    wholeFrame?: boolean;
-  };
+  /** What the protocol's field is, in both directions (unless decodeField or encodeField says otherwise). */
+  field?: FieldShape;
+  /**
+   * The field of hex-to-value, used instead of `field`: a library that reads the low byte first
+   * but writes the high byte first gives `decodeField: { byteOrder: 'low-first' }`.
+   */
+  decodeField?: FieldShape;
+  /** The field of value-to-hex, used instead of `field` (no `blanksBetweenPairs`). */
+  encodeField?: Omit<FieldShape, 'blanksBetweenPairs'>;
   /** How the library's exceptions answer: by constructor, or by error name. */
   errors?: ErrorMap;
   /** The same for decode alone, before `errors`. */

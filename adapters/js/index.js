@@ -6,8 +6,10 @@
  * docs/protocol.md on its stdin and stdout. This module does the protocol; the adapter supplies
  * the conversion, at one of two levels:
  *
- * - codec level (protocol version 2): `serveCodec({decode, encode, ...})`, text to value and
- *   value to text, run against the cross-vendor corpus with no memory, devices or fill;
+ * - codec level (protocol version 2, and 5 for batched conversions): `serveCodec({decode,
+ *   encode, ...})`, text to value and value to text, run against the cross-vendor corpus with
+ *   no memory, devices or fill, and by `plc-conformance sweep` over millions of texts (version
+ *   5: one `convert` message of many texts, answered by one `converted` line);
  * - instruction level (protocol version 1 or 2): `serve(run, {profile, instructions, ...})`,
  *   one function executing one case of a vendor's instruction on a CPU's memory.
  *
@@ -23,9 +25,15 @@
 const readline = require('node:readline');
 
 const VERSION = '0.2.0';
-/** The protocol versions this module speaks: 1 (instruction level) and 2 (adds codec level). */
-const PROTOCOL_VERSIONS = Object.freeze([1, 2, 3, 4]);
+/**
+ * The protocol versions this module speaks: 1 (instruction level), 2 (adds codec level), 3
+ * (byte-addressed families), 4 (families whose unit is a 32-bit word) and 5 (adds `convert`:
+ * many conversions of a codec in one message, answered by one `converted` line).
+ */
+const PROTOCOL_VERSIONS = Object.freeze([1, 2, 3, 4, 5]);
 const PROTOCOL_VERSION = 2;
+/** The first version that carries `convert`: a codec answers a hello of 5 or later with 5, an older one with 2. */
+const CONVERT_VERSION = 5;
 /** The error classes a codec answers with. */
 const ERROR_CLASSES = Object.freeze(['invalid-digit', 'invalid-count', 'device-range', 'error']);
 const HEX_TO_VALUE = 'hex-to-value';
@@ -270,7 +278,7 @@ function encodeLine(message) {
  * order, awaiting an answer that is a promise before reading on. Resolves on shutdown or at the
  * end of input; by default the process then exits once stdout is flushed.
  */
-async function loop(hello, answer, options) {
+async function loop(hello, answer, options, convert) {
   const input = options.input || process.stdin;
   const output = options.output || process.stdout;
   const stderr = options.stderr || process.stderr;
@@ -297,6 +305,11 @@ async function loop(hello, answer, options) {
       const message = JSON.parse(line);
       if (message.type === 'hello') {
         write(await hello(message, log));
+      } else if (message.type === 'convert' && convert) {
+        // One line for the whole message, written once: an exception that ends the process
+        // leaves none of its answers, and the harness asks the items again one by one.
+        const line = convert(message);
+        output.write(typeof line === 'string' ? line : await line);
       } else if (message.type === 'run') {
         // Each answer goes out at once: the harness's time limit for a case runs from the
         // previous answer.
@@ -355,9 +368,16 @@ function serve(run, options) {
   return loop(hello, answer, options);
 }
 
-const FIELD_KEYS = { widths: 'widths', variable: 'variable', leadingZeros: 'leading-zeros', byteOrder: 'byte-order', wholeFrame: 'whole-frame' };
+const FIELD_KEYS = {
+  widths: 'widths',
+  variable: 'variable',
+  leadingZeros: 'leading-zeros',
+  byteOrder: 'byte-order',
+  wholeFrame: 'whole-frame',
+  blanksBetweenPairs: 'blanks-between-pairs',
+};
 
-function codecCapability(digits, width, reading, field) {
+function codecCapability(digits, width, reading, field, operation = HEX_TO_VALUE, label = 'field') {
   if (width !== 16 && width !== 32) throw new TypeError(`width must be 16 or 32, not ${width}`);
   const capability = { width };
   if (reading !== undefined && reading !== null) capability.reading = String(reading);
@@ -370,21 +390,24 @@ function codecCapability(digits, width, reading, field) {
   }
   for (const [key, value] of Object.entries(field || {})) {
     const wire = FIELD_KEYS[key];
-    if (!wire) throw new TypeError(`field: ${key} is not one of ${Object.keys(FIELD_KEYS).join(', ')}`);
+    if (!wire) throw new TypeError(`${label}: ${key} is not one of ${Object.keys(FIELD_KEYS).join(', ')}`);
     if (key === 'widths') {
       const widths = {};
       for (const [d, w] of Object.entries(value)) {
         if (!(Number(d) >= 1) || ![8, 16, 32].includes(w)) {
-          throw new TypeError(`field widths: digit counts to 8, 16 or 32 bits, not ${JSON.stringify(value)}`);
+          throw new TypeError(`${label} widths: digit counts to 8, 16 or 32 bits, not ${JSON.stringify(value)}`);
         }
         widths[String(Number(d))] = w;
       }
       capability.widths = widths;
     } else if (key === 'byteOrder') {
       if (value !== 'high-first' && value !== 'low-first') {
-        throw new TypeError(`field byteOrder: 'high-first' or 'low-first', not ${JSON.stringify(value)}`);
+        throw new TypeError(`${label} byteOrder: 'high-first' or 'low-first', not ${JSON.stringify(value)}`);
       }
       capability[wire] = value;
+    } else if (key === 'blanksBetweenPairs' && operation !== HEX_TO_VALUE) {
+      // Only a text is read: value -> text has no blanks to skip (the harness refuses it).
+      throw new TypeError(`${label} blanksBetweenPairs: a shape of hex-to-value only (text -> value skips blanks between byte pairs); give it in decodeField, not for value-to-hex`);
     } else {
       capability[wire] = Boolean(value);
     }
@@ -440,9 +463,99 @@ function textBytes(text) {
   throw new TypeError(`encode must return a Buffer, Uint8Array, byte array or string, not ${typeof text}`);
 }
 
+// --- protocol version 5: `convert`, many conversions of one operation in one message ----------
+//
+// A sweep sends millions of texts; the loop below is what a conversion costs beyond the
+// library's own call. Each item answers exactly what a `run` case with the same text (or value)
+// and digit count answers; the library is called synchronously, and a promise it returns is
+// awaited (the rest of the message then goes on after it). Plain answers are the library's
+// numbers and strings themselves; the line is one JSON.stringify and one write.
+
+function isThenable(value) {
+  return value !== null && (typeof value === 'object' || typeof value === 'function')
+    && typeof value.then === 'function';
+}
+
+/** The answers that are no plain value or text, shared: one object per error class. */
+const ERROR_ANSWERS = Object.freeze(Object.fromEntries(ERROR_CLASSES.map((c) => [c, Object.freeze({ error: c })])));
+
+/** The answer to an exception, as the per-case path answers it; one that is not mapped is thrown on. */
+function failed(error, classify) {
+  if (error instanceof Unsupported) return { unsupported: error.message };
+  const errorClass = classify(error);
+  if (errorClass === undefined) throw error;
+  return ERROR_ANSWERS[errorClass];
+}
+
 /**
- * Answers the harness as a codec-level backend (protocol version 2) until shutdown or the end
- * of input.
+ * out[i] = item(i) for each item from `from` on, an exception as failed() answers it. Returns
+ * out, or, once an item returns a promise, a promise of out that goes on after it settles.
+ */
+function runItems(out, from, item, classify) {
+  const n = out.length;
+  for (let i = from; i < n; i += 1) {
+    let answer;
+    try {
+      answer = item(i);
+    } catch (error) {
+      out[i] = failed(error, classify);
+      continue;
+    }
+    if (isThenable(answer)) {
+      return Promise.resolve(answer).then((a) => a, (error) => failed(error, classify)).then((a) => {
+        out[i] = a;
+        return runItems(out, i + 1, item, classify);
+      });
+    }
+    out[i] = answer;
+  }
+  return out;
+}
+
+/** Characters above U+00FF: a text of a convert message is one character per byte. */
+const NOT_LATIN1 = /[^\u0000-\u00ff]/;
+/** A string whose UTF-8 bytes are its characters. */
+const ASCII = /^[\u0000-\u007f]*$/;
+
+/** The texts of a convert message as Buffers, one byte per character. */
+function latin1Buffers(texts) {
+  const joined = texts.join('');
+  if (NOT_LATIN1.test(joined) || texts.some((t) => typeof t !== 'string')) {
+    throw new TypeError('convert: a text that is not a string of characters U+0000-U+00FF');
+  }
+  // One Buffer for the whole message, and a view of it per text.
+  const all = Buffer.from(joined, 'latin1');
+  const buffers = new Array(texts.length);
+  let at = 0;
+  for (let i = 0; i < texts.length; i += 1) {
+    const end = at + texts[i].length;
+    buffers[i] = all.subarray(at, end);
+    at = end;
+  }
+  return buffers;
+}
+
+/** What encode returned, as the characters of the answer: the per-case conversion and check. */
+function latin1Text(text) {
+  if (typeof text === 'string' && ASCII.test(text)) return text;
+  return Buffer.from(textBytes(text)).toString('latin1');
+}
+
+/** The `converted` line: one JSON.stringify, bigint values written as plain integers. */
+function convertedLine(id, answers, big) {
+  if (!big) return `${JSON.stringify({ type: 'converted', id, answers })}\n`;
+  const items = answers.map((a) => (typeof a === 'bigint' ? a.toString() : JSON.stringify(a)));
+  return `{"type":"converted","id":${JSON.stringify(id)},"answers":[${items.join(',')}]}\n`;
+}
+
+/**
+ * Answers the harness as a codec-level backend until shutdown or the end of input. Speaks
+ * protocol version 2 (`run`: one answer line per case) and 5 (also `convert`: the texts or
+ * values of one operation in one message, answered by one `converted` line, which is what makes
+ * a sweep of millions of texts fast): 5 to a harness that speaks it, else 2. Each item of a
+ * `convert` answers exactly what a `run` case with the same input answers; an exception
+ * `errors` does not map ends the process with its stack and none of the message's answers (the
+ * harness then asks its items one by one).
  * @param {object} options
  *   decode(text: Buffer, digits) -> number | bigint (hex-to-value; absent: not implemented);
  *   encode(value: number, digits) -> Buffer | Uint8Array | number[] | string (value-to-hex);
@@ -455,27 +568,43 @@ function textBytes(text) {
  *   ('fx5/hexa-16bit'): a sweep of the operation judges the codec against it. field: what
  *   the protocol's field is, where not a fixed run of digits (docs/protocol.md, "Field
  *   shapes"): { widths: { 2: 8, 4: 16 }, variable: true, leadingZeros: false,
- *   byteOrder: 'low-first', wholeFrame: true }.
+ *   byteOrder: 'low-first', wholeFrame: true, blanksBetweenPairs: true }; blanksBetweenPairs
+ *   (decode skips blanks between byte pairs, as Python's bytes.fromhex) is a shape of
+ *   hex-to-value only, refused for value-to-hex. decodeField, encodeField: the field of one
+ *   direction, used instead of `field` for it (a library that reads the low byte first but
+ *   writes the high byte first: decodeField: { byteOrder: 'low-first' }).
  */
 function serveCodec(options) {
   const {
     decode, encode, name, version, decodeDigits, encodeDigits, width = 16, decodeReading, encodeReading,
-    field,
+    field, decodeField, encodeField,
   } = options || {};
   if (!name || !version) throw new TypeError('serveCodec needs name and version');
   if (!decode && !encode) throw new TypeError('serveCodec needs decode, encode or both');
+  if (decodeField !== undefined && !decode) throw new TypeError('serveCodec: decodeField is the field of decode, which is not given');
+  if (encodeField !== undefined && !encode) throw new TypeError('serveCodec: encodeField is the field of encode, which is not given');
   // Each direction's table: its own entries (decodeErrors, encodeErrors) before the shared ones.
   const shared = errorTable(options.errors);
   const own = { [HEX_TO_VALUE]: errorTable(options.decodeErrors), [VALUE_TO_HEX]: errorTable(options.encodeErrors) };
   const codec = {};
-  if (decode) codec[HEX_TO_VALUE] = codecCapability(decodeDigits, width, decodeReading, field);
-  if (encode) codec[VALUE_TO_HEX] = codecCapability(encodeDigits, width, encodeReading, field);
+  if (decode) {
+    codec[HEX_TO_VALUE] = decodeField === undefined
+      ? codecCapability(decodeDigits, width, decodeReading, field, HEX_TO_VALUE)
+      : codecCapability(decodeDigits, width, decodeReading, decodeField, HEX_TO_VALUE, 'decodeField');
+  }
+  if (encode) {
+    codec[VALUE_TO_HEX] = encodeField === undefined
+      ? codecCapability(encodeDigits, width, encodeReading, field, VALUE_TO_HEX)
+      : codecCapability(encodeDigits, width, encodeReading, encodeField, VALUE_TO_HEX, 'encodeField');
+  }
 
   const hello = (message, log) => {
     if (!(message.protocol >= 2)) {
       log(`plc-conformance-adapter: ${name} is a codec-level backend, which needs protocol version 2; the harness speaks ${message.protocol}\n`);
     }
-    return { type: 'hello', protocol: 2, backend: { name, version }, capabilities: { codec } };
+    // 5 (convert) to a harness that speaks it (or a newer one), else 2 as before.
+    const protocol = message.protocol >= CONVERT_VERSION ? CONVERT_VERSION : 2;
+    return { type: 'hello', protocol, backend: { name, version }, capabilities: { codec } };
   };
   const answer = async (request) => {
     const { id, operation, digits } = request;
@@ -507,7 +636,58 @@ function serveCodec(options) {
       return { type: 'result', id, error: errorClass };
     }
   };
-  return loop(hello, answer, options);
+
+  // Version 5: everything that does not depend on the item is resolved once per message.
+  const convert = (message) => {
+    const { id, operation, digits } = message;
+    let items;
+    if (operation === HEX_TO_VALUE) items = message.texts;
+    else if (operation === VALUE_TO_HEX) items = message.values;
+    else items = message.texts || message.values || [];
+    if (!Array.isArray(items) || !Array.isArray(digits) || items.length !== digits.length) {
+      throw new TypeError(`convert ${JSON.stringify(id)}: one digit count per item is needed`);
+    }
+    const declared = codec[operation];
+    const table = own[operation];
+    const classify = (error) => (table && errorClassOf(error, table)) || errorClassOf(error, shared);
+    const out = new Array(items.length);
+    let big = false;
+    let item;
+    if (!declared) {
+      const reason = { unsupported: `${operation} is not implemented by ${name}` };
+      out.fill(reason);
+      return convertedLine(id, out, false);
+    }
+    if (operation === HEX_TO_VALUE) {
+      const texts = latin1Buffers(items);
+      const checked = (value) => {
+        if (typeof value === 'bigint') big = true;
+        else if (!Number.isInteger(value)) throw new TypeError(`decode must return an integer, not ${JSON.stringify(value)}`);
+        return value;
+      };
+      item = (i) => {
+        const d = digits[i];
+        if (!takes(declared, d)) throw new Unsupported(`${HEX_TO_VALUE} with ${d} digits is not implemented`);
+        const value = decode(texts[i], d);
+        if (typeof value === 'number' && Number.isInteger(value)) return value;
+        return isThenable(value) ? Promise.resolve(value).then(checked) : checked(value);
+      };
+    } else {
+      item = (i) => {
+        const d = digits[i];
+        if (!takes(declared, d)) throw new Unsupported(`${VALUE_TO_HEX} with ${d} digits is not implemented`);
+        const value = items[i];
+        if (!(value >= 0 && value < 2 ** widthOf(declared, d))) {
+          throw new Unsupported(`${value} is wider than ${widthOf(declared, d)} bits`);
+        }
+        const text = encode(value, d);
+        return isThenable(text) ? Promise.resolve(text).then(latin1Text) : latin1Text(text);
+      };
+    }
+    const answers = runItems(out, 0, item, classify);
+    return isThenable(answers) ? answers.then((a) => convertedLine(id, a, big)) : convertedLine(id, answers, big);
+  };
+  return loop(hello, answer, options, convert);
 }
 
 /**
@@ -539,6 +719,7 @@ module.exports = {
   VERSION,
   PROTOCOL_VERSION,
   PROTOCOL_VERSIONS,
+  CONVERT_VERSION,
   ERROR_CLASSES,
   Case,
   CodecError,

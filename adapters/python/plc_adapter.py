@@ -4,8 +4,10 @@ The harness starts the adapter as a child process and speaks the JSON-lines prot
 docs/protocol.md on its stdin and stdout. This module does the protocol; the adapter supplies
 the conversion, at one of two levels.
 
-Codec level (protocol version 2): two functions, text to value and value to text. The harness
-runs the cross-vendor corpus against them directly, with no memory, devices or fill:
+Codec level (protocol version 2, and 5 for batched conversions): two functions, text to value
+and value to text. The harness runs the cross-vendor corpus against them directly, with no
+memory, devices or fill, and `plc-conformance sweep` runs millions of generated texts through
+them (protocol version 5: one `convert` message of many texts, answered by one line):
 
     import plc_adapter
     import mylib
@@ -16,6 +18,10 @@ runs the cross-vendor corpus against them directly, with no memory, devices or f
         name="mylib", version="1.2.0",
         decode_digits=[4], encode_digits=[4], width=16,
         errors={mylib.BadDigit: "invalid-digit"})
+
+A library whose field is not a plain run of digits says so with field= (both directions) or
+decode_field= / encode_field= (one direction each), e.g. one that reads the low byte first but
+writes the high byte first: decode_field={"byte_order": "low-first"}.
 
 Instruction level (protocol version 1 or 2): one function that executes one case of a vendor's
 instruction on a CPU's memory:
@@ -41,13 +47,18 @@ into the protocol.
 import json
 import sys
 from collections import namedtuple
+from itertools import repeat
 
 __version__ = "0.2.0"
 
 # The protocol versions this module speaks: 1 (instruction level), 2 (adds codec level), 3
-# (byte-addressed families) and 4 (families whose unit is a 32-bit word).
-PROTOCOL_VERSIONS = (1, 2, 3, 4)
+# (byte-addressed families), 4 (families whose unit is a 32-bit word) and 5 (adds `convert`:
+# many conversions of a codec in one message, answered by one `converted` line).
+PROTOCOL_VERSIONS = (1, 2, 3, 4, 5)
 PROTOCOL_VERSION = 2
+# The first version that carries `convert` messages: a codec answers a hello of 5 or later
+# with 5, an older one with 2.
+CONVERT_VERSION = 5
 
 # The error classes a codec answers with (docs/protocol.md, "Version 2").
 ERROR_CLASSES = ("invalid-digit", "invalid-count", "device-range", "error")
@@ -58,6 +69,7 @@ VALUE_TO_HEX = "value-to-hex"
 
 __all__ = [
     "Case",
+    "CONVERT_VERSION",
     "CodecError",
     "Device",
     "ERROR_CLASSES",
@@ -271,6 +283,30 @@ class Case:
 _dumps = json.JSONEncoder(separators=(",", ":")).encode
 
 
+class _SmallInts(dict):
+    """parse_int for the `convert` messages of text: their ints are digit counts (and the id),
+    which a dict gives faster than int() parses them. Only short numbers are kept."""
+
+    __slots__ = ()
+
+    def __missing__(self, text):
+        value = int(text)
+        if len(text) <= 3:
+            self[text] = value
+        return value
+
+
+_loads_texts = json.JSONDecoder(parse_int=_SmallInts().__getitem__).decode
+
+
+def _loads(line):
+    """json.loads, with the faster reading of ints for a `convert` message of texts (both read
+    every line alike: which one runs is only a matter of speed)."""
+    if line.startswith('{"type":"convert"') and '"value-to-hex"' not in line:
+        return _loads_texts(line)
+    return json.loads(line)
+
+
 def _negotiate(message, levels):
     """The protocol version to answer a harness hello with: the harness's own when this
     module speaks it, else the highest this module speaks (the harness then refuses)."""
@@ -282,14 +318,22 @@ def _negotiate(message, levels):
     return max(levels)
 
 
-def _loop(stdin, stdout, hello, answer):
+def _loop(stdin, stdout, hello, answer, convert=None):
     """Reads the harness's messages until shutdown or end of input. hello(message) and
-    answer(request) return the message to send back."""
+    answer(request) return the message to send back; convert(message), for a codec, the whole
+    `converted` line (protocol version 5)."""
+    write, flush = stdout.write, stdout.flush
     for line in stdin:
         if not line.strip():
             continue
-        message = json.loads(line)
+        message = _loads(line)
         kind = message.get("type")
+        if kind == "convert" and convert is not None:
+            # One line for the whole message, written once: an exception that ends the process
+            # leaves none of its answers, and the harness asks the items again one by one.
+            write(convert(message))
+            flush()
+            continue
         if kind == "hello":
             stdout.write(_dumps(hello(message)) + "\n")
         elif kind == "run":
@@ -368,10 +412,11 @@ def serve(run, name, version, profile, instructions, variants=None, flags=None,
     _serving(lambda i, o: _loop(i, o, hello, answer), stdin, stdout)
 
 
-FIELD_KEYS = ("widths", "variable", "leading_zeros", "byte_order", "whole_frame")
+FIELD_KEYS = ("widths", "variable", "leading_zeros", "byte_order", "whole_frame",
+              "blanks_between_pairs")
 
 
-def _codec_capability(digits, width, reading, field=None):
+def _codec_capability(digits, width, reading, field=None, operation=HEX_TO_VALUE, label="field"):
     if width not in (16, 32):
         raise ValueError("width must be 16 or 32, not %r" % (width,))
     capability = {"width": width}
@@ -384,15 +429,20 @@ def _codec_capability(digits, width, reading, field=None):
         capability["digits"] = digits
     for key, value in (field or {}).items():
         if key not in FIELD_KEYS:
-            raise ValueError("field: %r is not one of %s" % (key, ", ".join(FIELD_KEYS)))
+            raise ValueError("%s: %r is not one of %s" % (label, key, ", ".join(FIELD_KEYS)))
         if key == "widths":
             if not all(int(d) >= 1 and w in (8, 16, 32) for d, w in value.items()):
-                raise ValueError("field widths: digit counts to 8, 16 or 32 bits, not %r" % (value,))
+                raise ValueError("%s widths: digit counts to 8, 16 or 32 bits, not %r" % (label, value))
             capability["widths"] = {str(int(d)): w for d, w in value.items()}
         elif key == "byte_order":
             if value not in ("high-first", "low-first"):
-                raise ValueError("field byte_order: 'high-first' or 'low-first', not %r" % (value,))
+                raise ValueError("%s byte_order: 'high-first' or 'low-first', not %r" % (label, value))
             capability["byte-order"] = value
+        elif key == "blanks_between_pairs" and operation != HEX_TO_VALUE:
+            # Only a text is read: value -> text has no blanks to skip (the harness refuses it).
+            raise ValueError("%s blanks_between_pairs: a shape of hex-to-value only (text -> "
+                             "value skips blanks between byte pairs); give it in decode_field=, "
+                             "not for value-to-hex" % (label,))
         else:
             capability[key.replace("_", "-")] = bool(value)
     return capability
@@ -431,12 +481,224 @@ def _text_bytes(text):
     raise TypeError("encode must return bytes or str, not %s" % type(text).__name__)
 
 
+# --- protocol version 5: `convert`, many conversions of one operation in one message ----------
+#
+# A sweep sends millions of texts; the loops below are what a conversion costs beyond the
+# library's own call. Until the first exception of a message the library is called by map()
+# over the items (C-level iteration, no Python frame of this module per item) and the returns
+# are checked afterwards, by type, in one pass; from the first exception on (a message of
+# random texts has many), a plain loop catches each where it is raised, which costs far less
+# per exception than restarting map(). Plain answers are the library's ints and strings
+# themselves; an error answer is one shared object per exception type. Each item answers
+# exactly what a `run` case with the same text (or value) and digit count answers.
+
+
+class _Answer(dict):
+    """An answer of a `converted` line that is not a plain value or text: {"error": class} or
+    {"unsupported": reason}. A type of its own, so that a dict a library returns is never taken
+    for one."""
+
+    __slots__ = ()
+
+
+def _failed(error, table, cache):
+    """The answer to an exception the library raised, as the per-case path answers it, or None
+    for one `table` does not map (the caller re-raises it). cache: exception type -> answer,
+    for the types whose class does not depend on the instance (all but CodecError)."""
+    if isinstance(error, Unsupported):
+        return _Answer(unsupported=str(error))
+    answer = cache.get(type(error))
+    if answer is None:
+        error_class = _error_class(error, table)
+        if error_class is None:
+            return None
+        answer = _Answer(error=error_class)
+        if not isinstance(error, CodecError):
+            cache[type(error)] = answer
+    return answer
+
+
+def _decoded(value, table):
+    """A value decode returned that is not exactly an int: the per-case check, and its answer."""
+    try:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise TypeError("decode must return an int, not %s" % type(value).__name__)
+        return value
+    except Exception as error:  # noqa: BLE001 - mapped, or re-raised to crash
+        error_class = _error_class(error, table)
+        if error_class is None:
+            raise
+        return _Answer(error=error_class)
+
+
+def _encoded(text, table):
+    """What encode returned, as the characters of the answer (one per byte): the per-case
+    conversion (str as UTF-8, bytes, a list of byte values) and its check."""
+    try:
+        if type(text) is str and text.isascii():
+            return text
+        return _text_bytes(text).decode("latin-1")
+    except Exception as error:  # noqa: BLE001 - mapped, or re-raised to crash
+        error_class = _error_class(error, table)
+        if error_class is None:
+            raise
+        return _Answer(error=error_class)
+
+
+def _check_values(out, table):
+    """Checks the values decode returned (out holds nothing else)."""
+    if list(map(type, out)).count(int) != len(out):
+        for k, value in enumerate(out):
+            if type(value) is not int:
+                out[k] = _decoded(value, table)
+
+
+def _check_texts(out, table):
+    """Turns the texts encode returned (out holds nothing else) into answers."""
+    kinds = list(map(type, out))
+    if kinds.count(str) == len(out) and "".join(out).isascii():
+        return
+    if kinds.count(bytes) == len(out):
+        out[:] = map(bytes.decode, out, repeat("latin-1"))
+        return
+    out[:] = [_encoded(text, table) for text in out]
+
+
+def _convert_fast(function, arguments, digits, table, decoding):
+    """function(argument, digits) over items the declared capabilities all take, as the list
+    of answers. An exception `table` does not map propagates (ending the process), after the
+    returns before it are checked, as the per-case path would have met them first."""
+    out = []
+    arguments, digits = iter(arguments), iter(digits)
+    try:
+        # list.extend keeps the items map() gave before an exception.
+        out.extend(map(function, arguments, digits))
+    except Exception as error:  # noqa: BLE001 - mapped, or re-raised to crash
+        (_check_values if decoding else _check_texts)(out, table)
+        cache = {}
+        answer = _failed(error, table, cache)
+        if answer is None:
+            raise
+        append = out.append
+        append(answer)
+    else:
+        (_check_values if decoding else _check_texts)(out, table)
+        return out
+    # From the first exception on, item by item; the answer to a type of exception seen before
+    # is looked up here, without a call (a message of random texts raises on most items).
+    get = cache.get
+    if decoding:
+        for argument, d in zip(arguments, digits):
+            try:
+                value = function(argument, d)
+            except Exception as error:  # noqa: BLE001 - mapped, or re-raised to crash
+                answer = get(error.__class__)
+                if answer is None:
+                    answer = _failed(error, table, cache)
+                    if answer is None:
+                        raise
+                append(answer)
+                continue
+            append(value if type(value) is int else _decoded(value, table))
+    else:
+        for argument, d in zip(arguments, digits):
+            try:
+                text = function(argument, d)
+            except Exception as error:  # noqa: BLE001 - mapped, or re-raised to crash
+                answer = _failed(error, table, cache)
+                if answer is None:
+                    raise
+                append(answer)
+                continue
+            append(text if type(text) is str and text.isascii() else _encoded(text, table))
+    return out
+
+
+def _takes_all(declared, digits):
+    """Whether the operation takes every digit count of the message (then no item is refused
+    for its count, and the library is called on all of them)."""
+    counts = set(digits)
+    return all(type(d) is int and _takes(declared, d) for d in counts)
+
+
+def _latin1(texts):
+    """The texts as bytes, one per character (U+0000-U+00FF), or None when one is not such a
+    text (the item-by-item path then ends the process on it)."""
+    try:
+        # One join, encode and split is faster than an encode per text; a text holding the
+        # separator splits into more parts, and then each is encoded on its own.
+        data = "\0".join(texts).encode("latin-1").split(b"\0")
+        return data if len(data) == len(texts) else list(map(str.encode, texts, repeat("latin-1")))
+    except (TypeError, UnicodeError):
+        return None
+
+
+def _convert_decode(decode, declared, table, texts, digits):
+    data = _latin1(texts)
+    if data is not None and _takes_all(declared, digits):
+        return _convert_fast(decode, data, digits, table, True)
+    out = []
+    append = out.append
+    for text, d in zip(texts, digits):
+        # One character per byte (U+0000-U+00FF); a character above is the harness's error.
+        text = text.encode("latin-1")
+        try:
+            if not _takes(declared, d):
+                raise Unsupported("%s with %s digits is not implemented" % (HEX_TO_VALUE, d))
+            append(_decoded(decode(text, d), table))
+        except Unsupported as why:
+            append(_Answer(unsupported=str(why)))
+        except Exception as error:  # noqa: BLE001 - mapped, or re-raised to crash
+            error_class = _error_class(error, table)
+            if error_class is None:
+                raise
+            append(_Answer(error=error_class))
+    return out
+
+
+def _one_width(declared, digits):
+    """The width every digit count of the message has, or None when they differ."""
+    widths = set(_width(declared, d) for d in set(digits))
+    return widths.pop() if len(widths) == 1 else None
+
+
+def _convert_encode(encode, declared, table, values, digits):
+    fast = _takes_all(declared, digits)
+    if fast and values:
+        width = _one_width(declared, digits)
+        try:
+            fast = width is not None and 0 <= min(values) and max(values) < 1 << width
+        except TypeError:
+            fast = False
+    if fast:
+        return _convert_fast(encode, values, digits, table, False)
+    out = []
+    append = out.append
+    for value, d in zip(values, digits):
+        try:
+            if not _takes(declared, d):
+                raise Unsupported("%s with %s digits is not implemented" % (VALUE_TO_HEX, d))
+            if not 0 <= value < 1 << _width(declared, d):
+                raise Unsupported("%s is wider than %d bits" % (value, _width(declared, d)))
+            append(_encoded(encode(value, d), table))
+        except Unsupported as why:
+            append(_Answer(unsupported=str(why)))
+        except Exception as error:  # noqa: BLE001 - mapped, or re-raised to crash
+            error_class = _error_class(error, table)
+            if error_class is None:
+                raise
+            append(_Answer(error=error_class))
+    return out
+
+
 def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits=None,
                 encode_digits=None, width=16, errors=None, stdin=None, stdout=None,
                 decode_reading=None, encode_reading=None, decode_errors=None,
-                encode_errors=None, field=None):
-    """Answers the harness as a codec-level backend (protocol version 2) until it says shutdown
-    or closes stdin.
+                encode_errors=None, field=None, decode_field=None, encode_field=None):
+    """Answers the harness as a codec-level backend until it says shutdown or closes stdin.
+    Speaks protocol version 2 (one `run` case at a time) and 5 (also `convert`: many texts or
+    values of one operation in one message, answered by one `converted` line, which is what
+    makes a sweep of millions of texts fast): 5 to a harness that speaks it, else 2.
 
     decode: function(text: bytes, digits: int) -> int, for hex-to-value (None: not
       implemented). text is the characters to convert, any byte values.
@@ -457,7 +719,21 @@ def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits
       significant first (docs/protocol.md, "Field shapes"): {"widths": {2: 8, 4: 16}} (the bits
       for each digit count taken), "variable": True (a token of whatever length), "leading_zeros":
       False (value -> text writes none), "byte_order": "low-first" (the first character pair is
-      the low byte), "whole_frame": True (the field is checked with the frame around it).
+      the low byte), "whole_frame": True (the field is checked with the frame around it),
+      "blanks_between_pairs": True (text -> value skips blanks between byte pairs, as
+      bytes.fromhex does; hex-to-value only: given for value-to-hex it is refused at start-up).
+      The harness decides which cases each shape skips or reads otherwise; this module only
+      declares the shape in its hello.
+    decode_field, encode_field: the field shape of one direction, used instead of `field` for
+      it (keys as for `field`): a library that reads the low byte first but writes the high
+      byte first gives decode_field={"byte_order": "low-first"}; blanks_between_pairs goes in
+      decode_field (or in `field` of a codec without encode).
+
+    Each item of a `convert` message answers exactly what a `run` case with the same text (or
+    value) and digit count answers: the value (or text), {"error": class} for an exception
+    `errors` maps or a CodecError, {"unsupported": reason} outside the declared digit counts or
+    width, or for Unsupported. An exception `errors` does not map ends the process with its
+    traceback and none of the message's answers; the harness then asks its items one by one.
     """
     if name is None or version is None:
         raise TypeError("serve_codec needs name= and version=")
@@ -476,19 +752,53 @@ def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits
         HEX_TO_VALUE: {**(errors or {}), **(decode_errors or {})},
         VALUE_TO_HEX: {**(errors or {}), **(encode_errors or {})},
     }
+    if decode_field is not None and decode is None:
+        raise TypeError("serve_codec: decode_field= is the field of decode=, which is not given")
+    if encode_field is not None and encode is None:
+        raise TypeError("serve_codec: encode_field= is the field of encode=, which is not given")
     codec = {}
     if decode is not None:
-        codec[HEX_TO_VALUE] = _codec_capability(decode_digits, width, decode_reading, field)
+        codec[HEX_TO_VALUE] = _codec_capability(
+            decode_digits, width, decode_reading,
+            field if decode_field is None else decode_field, HEX_TO_VALUE,
+            "field" if decode_field is None else "decode_field")
     if encode is not None:
-        codec[VALUE_TO_HEX] = _codec_capability(encode_digits, width, encode_reading, field)
+        codec[VALUE_TO_HEX] = _codec_capability(
+            encode_digits, width, encode_reading,
+            field if encode_field is None else encode_field, VALUE_TO_HEX,
+            "field" if encode_field is None else "encode_field")
 
     def hello(message):
-        if message.get("protocol", 1) < 2:
+        asked = message.get("protocol", 1)
+        if asked < 2:
             sys.stderr.write("plc_adapter: %s is a codec-level backend, which needs protocol "
                              "version 2; the harness speaks %r\n" % (name, message.get("protocol")))
-        return {"type": "hello", "protocol": 2,
+        # 5 (convert) to a harness that speaks it (or a newer one), else 2 as before.
+        return {"type": "hello", "protocol": CONVERT_VERSION if asked >= CONVERT_VERSION else 2,
                 "backend": {"name": name, "version": version},
                 "capabilities": {"codec": codec}}
+
+    def convert(message):
+        # Everything that does not depend on the item is resolved here, once per message.
+        ident = message["id"]
+        operation = message.get("operation")
+        digits = message["digits"]
+        items = message["texts"] if operation == HEX_TO_VALUE else \
+            message["values"] if operation == VALUE_TO_HEX else \
+            message.get("texts", message.get("values", ()))
+        if len(items) != len(digits):
+            raise ValueError("convert %r: %d digit counts for %d items"
+                             % (ident, len(digits), len(items)))
+        declared = codec.get(operation)
+        table = by_operation.get(operation, {})
+        if declared is None:
+            answers = [_Answer(unsupported="%s is not implemented by %s" % (operation, name))] \
+                * len(items)
+        elif operation == HEX_TO_VALUE:
+            answers = _convert_decode(decode, declared, table, items, digits)
+        else:
+            answers = _convert_encode(encode, declared, table, items, digits)
+        return _dumps({"type": "converted", "id": ident, "answers": answers}) + "\n"
 
     def answer(request):
         ident = request["id"]
@@ -522,4 +832,4 @@ def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits
                 raise
             return {"type": "result", "id": ident, "error": error_class}
 
-    _serving(lambda i, o: _loop(i, o, hello, answer), stdin, stdout)
+    _serving(lambda i, o: _loop(i, o, hello, answer, convert), stdin, stdout)

@@ -285,6 +285,11 @@ pub trait Backend: Send + Sync {
     fn codec(&self) -> Option<&CodecAbilities> {
         None
     }
+    /// A codec written in Rust that this backend calls in process ([`codec_backend`]): a sweep
+    /// of every 4-byte text calls it directly, text by text, at its own speed.
+    fn as_codec(&self) -> Option<&dyn Codec> {
+        None
+    }
     /// Answers cross-vendor questions, in order (codec-level backends), calling `answered` as
     /// [`Backend::execute_batch`] does.
     fn convert_batch(
@@ -347,6 +352,9 @@ impl<C: Codec> Backend for CodecBackend<C> {
     }
     fn codec(&self) -> Option<&CodecAbilities> {
         Some(&self.abilities)
+    }
+    fn as_codec(&self) -> Option<&dyn Codec> {
+        Some(&self.codec)
     }
     fn convert_batch(
         &self,

@@ -169,6 +169,7 @@ fn command_line_external(
 /// sweep asks for, whose oracle they are. Also the names of the backends given, in order.
 fn sources(
     session: &Session,
+    in_process: &[Arc<dyn Backend>],
     file: &ProjectBackends,
     args: &BackendArgs,
     references: bool,
@@ -205,7 +206,12 @@ fn sources(
             continue;
         }
         chosen.push(name.clone());
-        if models.contains(name) {
+        if let Some(b) = in_process.iter().find(|b| b.name() == name) {
+            sources.push(BackendSource::InProcess(
+                b.clone(),
+                known_files.remove(name.as_str()),
+            ));
+        } else if models.contains(name) {
             if !references {
                 sources.push(BackendSource::Reference(name.clone()));
             }
@@ -215,6 +221,7 @@ fn sources(
             return Err(CliError::input(skipped.to_string()));
         } else {
             let mut known: Vec<&str> = models.iter().map(String::as_str).collect();
+            known.extend(in_process.iter().map(|b| b.name()));
             known.extend(file.configured.iter().map(|c| c.settings.name.as_str()));
             return Err(CliError::input(format!(
                 "unknown backend `{name}`; expected one of: {}, external:NAME=COMMAND, or \
@@ -225,7 +232,8 @@ fn sources(
     }
     if let Some(name) = known_files.keys().next() {
         return Err(CliError::input(format!(
-            "--known-differences names `{name}`, which is not an `external:` backend of this run"
+            "--known-differences names `{name}`, which is not an `external:` or in-process \
+             backend of this run"
         )));
     }
     Ok((sources, chosen))
@@ -235,14 +243,16 @@ fn sources(
 /// the protocol before a case runs) and returns them, in the order given.
 pub(super) fn start(
     session: &mut Session,
+    cli: &Cli,
     file: &ProjectBackends,
     args: &BackendArgs,
 ) -> Result<Vec<Arc<dyn Backend>>, CliError> {
-    set_up(session, file, args, false)
+    set_up(session, cli, file, args, false)
 }
 
 fn set_up(
     session: &mut Session,
+    cli: &Cli,
     file: &ProjectBackends,
     args: &BackendArgs,
     references: bool,
@@ -251,7 +261,7 @@ fn set_up(
     // known-differences file names.
     let own_corpus = args.vectors.is_empty();
     let before = session.backends.len();
-    let (sources, chosen) = sources(session, file, args, references)?;
+    let (sources, chosen) = sources(session, &cli.in_process.0, file, args, references)?;
     for source in sources {
         session.add(source, own_corpus)?;
     }
@@ -286,7 +296,7 @@ fn prepare_with(cli: &Cli, args: &BackendArgs, references: bool) -> Result<Prepa
         true => ProjectBackends::default(),
         false => project_file(cli)?,
     };
-    let backends = set_up(&mut session, &file, args, references)?;
+    let backends = set_up(&mut session, cli, &file, args, references)?;
     Ok(Prepared {
         session,
         file,

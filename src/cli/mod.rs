@@ -67,6 +67,21 @@ pub(crate) struct Cli {
     pub quiet: bool,
     #[command(subcommand)]
     pub command: Command,
+    /// Backends written in Rust that the binary was built with ([`main_with`]).
+    #[arg(skip)]
+    pub in_process: InProcess,
+}
+
+/// Backends in process, chosen by name with `--backend`.
+#[derive(Clone, Default)]
+pub(crate) struct InProcess(pub Vec<std::sync::Arc<dyn crate::backend::Backend>>);
+
+impl std::fmt::Debug for InProcess {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_list()
+            .entries(self.0.iter().map(|b| b.name()))
+            .finish()
+    }
 }
 
 /// The heading of the options every command takes.
@@ -264,7 +279,13 @@ pub(crate) enum SchemaKind {
 
 /// Parses the arguments, runs the command and returns its exit status.
 pub(crate) fn main() -> ExitCode {
-    let cli = Cli::parse();
+    main_with(Vec::new())
+}
+
+/// The command line with backends written in Rust beside the built-in ones.
+pub(crate) fn main_with(in_process: Vec<std::sync::Arc<dyn crate::backend::Backend>>) -> ExitCode {
+    let mut cli = Cli::parse();
+    cli.in_process = InProcess(in_process);
     match cli.color {
         Color::Always => anstream::ColorChoice::Always.write_global(),
         Color::Never => anstream::ColorChoice::Never.write_global(),

@@ -343,7 +343,10 @@ fn against(cli: &Cli, args: &BackendArgs, other: &str) -> Outcome {
         known_differences: Vec::new(),
         ..args.clone()
     };
-    let Some(b) = start(&mut session, &file, &other_args)?.first().cloned() else {
+    let Some(b) = start(&mut session, cli, &file, &other_args)?
+        .first()
+        .cloned()
+    else {
         return Err(CliError::input(format!(
             "no backend `{other}` to compare with"
         )));

@@ -60,6 +60,12 @@ pub(crate) struct SweepArgs {
     /// together are the whole sweep.
     #[arg(long, value_name = "K/N", default_value = "1/1")]
     pub shard: String,
+    /// Put the shards of a sweep back together: their JSON results (`--shard K/N --format json
+    /// --output FILE`), each shard once. Give the arguments the shards ran with (without
+    /// --shard); the first inputs are asked again of the same backends, and the groups shrunk as
+    /// the whole sweep shrinks them.
+    #[arg(long, value_name = "FILE", num_args = 1.., conflicts_with = "shard")]
+    pub merge: Vec<PathBuf>,
     /// Backends to sweep besides the reference models (which are always there, as the oracle):
     /// a name or `external:NAME=COMMAND`, as for `run`; repeat for several.
     #[arg(long = "backend", value_name = "NAME")]
@@ -119,6 +125,21 @@ fn refuse_hand_written(path: &Path) -> Result<(), CliError> {
          another file",
         path.display()
     )))
+}
+
+/// The shards' JSON results, read and parsed (file, line and column on a bad one).
+fn read_shards(
+    paths: &[PathBuf],
+) -> Result<Vec<(PathBuf, crate::sweep::merge::ShardFile)>, CliError> {
+    paths
+        .iter()
+        .map(|p| {
+            let text = std::fs::read_to_string(p).map_err(|e| {
+                CliError::input(format!("--merge {}: cannot be read: {e}", p.display()))
+            })?;
+            Ok((p.clone(), crate::sweep::merge::read(p, &text)?))
+        })
+        .collect()
 }
 
 /// The emitted cases that load as the corpus would load them, each checked in a file of its
@@ -301,6 +322,11 @@ pub(super) fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
              --alphabet or fewer --digits",
         ));
     }
+    // The shards' files are read before anything is swept or asked.
+    let shards = match args.merge.is_empty() {
+        true => None,
+        false => Some(read_shards(&args.merge)?),
+    };
     // Where the results go is settled before the sweep, not found wrong after it.
     if let (Some(path), false) = (&args.emit, args.force) {
         refuse_hand_written(path)?;
@@ -334,17 +360,26 @@ pub(super) fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
         bar
     });
     let seed = sweep.settings.seed;
-    console::status(&format!(
-        "sweeping {} with the {} generator{}: {} input(s) in this shard",
-        sweep.settings.target,
-        sweep.settings.generator.name(),
-        if sweep.settings.generator.uses_seed() {
-            format!(", seed {seed} (--seed {seed} repeats it)")
-        } else {
-            String::new()
-        },
-        render::thousands(sweep.space.total().div_ceil(sweep.settings.shard.1))
-    ));
+    if let Some(files) = &shards {
+        console::status(&format!(
+            "merging {} shard(s) of {} with the {} generator: their first inputs asked again",
+            files.len(),
+            sweep.settings.target,
+            sweep.settings.generator.name()
+        ));
+    } else {
+        console::status(&format!(
+            "sweeping {} with the {} generator{}: {} input(s) in this shard",
+            sweep.settings.target,
+            sweep.settings.generator.name(),
+            if sweep.settings.generator.uses_seed() {
+                format!(", seed {seed} (--seed {seed} repeats it)")
+            } else {
+                String::new()
+            },
+            render::thousands(sweep.space.total().div_ceil(sweep.settings.shard.1))
+        ));
+    }
     if matches!(sweep.settings.generator, Generator::Full { by_class: true }) {
         console::status(&format!(
             "by byte class: the classes are found first, then one text per tuple of classes is \
@@ -354,12 +389,16 @@ pub(super) fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
     }
     // SIGINT and SIGTERM (handled in `cli::main`) stop the sweep after the round under way and
     // kill every backend process group, so a hung backend ends the round too.
-    let mut results = sweep.run(crate::interrupt::stop_flag(), &mut |done, of| {
-        if let Some(bar) = &bar {
-            bar.set_length(of);
-            bar.set_position(done);
-        }
-    });
+    let stop = crate::interrupt::stop_flag();
+    let mut results = match shards {
+        Some(files) => crate::sweep::merge::merge(&sweep, &files, stop)?,
+        None => sweep.run(stop, &mut |done, of| {
+            if let Some(bar) = &bar {
+                bar.set_length(of);
+                bar.set_position(done);
+            }
+        }),
+    };
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }

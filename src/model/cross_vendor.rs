@@ -255,6 +255,9 @@ pub struct FieldShape {
     /// The codec checks its field as part of a whole frame (trailing text, a checksum): a text
     /// with characters after its field is not asked.
     pub whole_frame: bool,
+    /// Text -> value skips blanks (20H) between byte pairs (Python's `bytes.fromhex`): a text
+    /// with a blank where a pair could start is not asked, since the vendors refuse it.
+    pub blanks_between_pairs: bool,
 }
 
 impl Default for FieldShape {
@@ -265,6 +268,7 @@ impl Default for FieldShape {
             leading_zeros: true,
             low_byte_first: false,
             whole_frame: false,
+            blanks_between_pairs: false,
         }
     }
 }
@@ -315,10 +319,61 @@ impl OperationAbilities {
     }
 }
 
+/// The parts of a question [`CodecAbilities::declines_asking`] looks at.
+struct Asking<'a> {
+    operation: Operation,
+    text: &'a [u8],
+    value: u64,
+    digits: u32,
+    expect: Option<&'a Answer>,
+}
+
+/// Whether a blank (20H) stands where a byte pair could start: after an even number of the
+/// characters that are not blanks.
+pub(crate) fn blank_between_pairs(text: &[u8]) -> bool {
+    let mut seen = 0usize;
+    for &b in text {
+        if b == b' ' {
+            if seen % 2 == 0 {
+                return true;
+            }
+        } else {
+            seen += 1;
+        }
+    }
+    false
+}
+
 impl CodecAbilities {
     /// Why a case is outside what the codec implements, if it is: it is then skipped with this
     /// reason, never failed.
     pub fn declines(&self, case: &CrossVendorCase) -> Option<String> {
+        self.declines_asking(
+            case.operation,
+            &case.text,
+            case.value,
+            case.digits,
+            case.expect.as_ref(),
+        )
+    }
+
+    /// [`CodecAbilities::declines`] of a question given by its parts (a sweep asks millions
+    /// without making a case of each).
+    pub fn declines_asking(
+        &self,
+        operation: Operation,
+        text: &[u8],
+        value: u64,
+        digits: u32,
+        expect: Option<&Answer>,
+    ) -> Option<String> {
+        let case = Asking {
+            operation,
+            text,
+            value,
+            digits,
+            expect,
+        };
         let ability = match case.operation {
             Operation::HexToValue => &self.hex_to_value,
             Operation::ValueToHex => &self.value_to_hex,
@@ -359,6 +414,13 @@ impl CodecAbilities {
                     "reads a token of whatever length, and the case gives {text} character(s) \
                      for a {digits}-digit field"
                 ));
+            }
+            if shape.blanks_between_pairs && blank_between_pairs(case.text) {
+                return Some(
+                    "skips blanks between byte pairs, and the text has a blank where a pair \
+                     could start"
+                        .into(),
+                );
             }
             if shape.whole_frame && text > digits {
                 return Some(format!(

@@ -6,11 +6,13 @@
 //! trial path (`runner::run_one`).
 
 use super::group::Reply;
-use super::target::{Ask, Cases, Column};
-use crate::backend::{Request, Response};
+use super::input::{Data, Point};
+use super::target::{case_id, Ask, Cases, Column};
+use crate::backend::{Fault, Request, Response};
 use crate::judge::lift::lift;
 use crate::judge::Effect;
 use crate::memory::{Fill, Image, Unit};
+use crate::model::cross_vendor::Operation;
 use crate::plan::{declined, lowered_input, Input};
 
 /// The memory of one input under both fills.
@@ -119,4 +121,78 @@ pub(crate) fn reply(
             }
         }
     })
+}
+
+/// A codec column's replies to the points, asked in one batch (`Backend::convert_batch`, which
+/// a codec in another process answers in a few messages): `(point, reply)` per point, one outside
+/// its abilities skipped with the plan's reason. A reply is what the judge records of an
+/// `unspecified` codec trial (`tests/sweep.rs` checks it against the trial path); `None` for a
+/// question the stop left unanswered.
+pub(crate) fn codec_replies(
+    column: &Column,
+    operation: Operation,
+    points: &[(u64, Point)],
+    stop: &std::sync::atomic::AtomicBool,
+) -> Vec<(usize, Option<Reply>)> {
+    let backend = column.backend.as_ref();
+    let Some(abilities) = backend.codec() else {
+        return Vec::new();
+    };
+    let ids: Vec<String> = points.iter().map(|(i, _)| case_id(*i)).collect();
+    let mut out = Vec::with_capacity(points.len());
+    let mut asked = Vec::new();
+    let mut questions = Vec::new();
+    for (p, ((_, point), id)) in points.iter().zip(&ids).enumerate() {
+        let (text, value): (&[u8], u64) = match &point.data {
+            Data::Text(t) => (t, 0),
+            Data::Value(v) => (&[], *v),
+        };
+        match abilities.declines_asking(operation, text, value, point.digits, None) {
+            Some(why) => out.push((
+                p,
+                Some(Reply::Skipped {
+                    reason: format!("{} {why}", backend.name()),
+                }),
+            )),
+            None => {
+                asked.push(p);
+                questions.push(crate::backend::Question {
+                    case_id: id,
+                    operation,
+                    text,
+                    value,
+                    digits: point.digits,
+                });
+            }
+        }
+    }
+    let answers = backend.convert_batch(&questions, &mut |_| {});
+    let stopped = stop.load(std::sync::atomic::Ordering::Relaxed);
+    for (p, answer) in asked.into_iter().zip(answers) {
+        let reply = match answer {
+            Ok(Response::Answer(answer)) => Some(Reply::Answer {
+                answer,
+                fill_dependent: false,
+            }),
+            Ok(Response::Unsupported(reason)) => Some(Reply::Failed {
+                label: "unsupported".into(),
+                detail: reason,
+            }),
+            // A question the stop cut off was not answered: it is not counted as swept.
+            Err(_) if stopped => None,
+            Ok(Response::Done(_)) => Some(failed(Fault::Protocol(
+                "an instruction's outcome answered a codec question".into(),
+            ))),
+            Err(fault) => Some(failed(fault)),
+        };
+        out.push((p, reply));
+    }
+    out
+}
+
+fn failed(fault: Fault) -> Reply {
+    Reply::Failed {
+        label: fault.kind().to_string(),
+        detail: fault.to_string(),
+    }
 }

@@ -24,9 +24,14 @@
 //!    text made of class-boundary bytes, and — with the groups, counts, first inputs and classes
 //!    of the general path — on every text of a shard.
 //!
-//! Only the built-in lowerings whose rule is known here run this way, at a count of 4 (the
-//! natural count of a 4-byte text) and with no flags; any other sweep, and any with an external
-//! backend, takes the general path.
+//! A codec written in Rust ([`crate::backend::Codec`], in process) joins them: its `convert` is
+//! called on each text as a rule is, its answer made a code, and its texts tallied and checked
+//! the same way — a codec's own speed, where a question through the general path costs a request
+//! and a reply (seconds a million texts against hours for the space).
+//!
+//! Only the built-in lowerings whose rule is known here and codecs in process run this way, at a
+//! count of 4 (the natural count of a 4-byte text) and with no flags; any other sweep, and any
+//! with an external backend, takes the general path.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
@@ -220,19 +225,91 @@ pub fn unscramble(x: u32) -> u32 {
     x.wrapping_mul(A)
 }
 
-/// A sweep this module can run: each column's rule.
-#[derive(Debug, Clone)]
-pub struct Plan {
+/// A sweep this module can run: each column's rule, or its codec asked in process.
+pub struct Plan<'s> {
     /// The distinct rules of the columns.
     rules: Vec<Rule>,
-    /// Each column's place in `rules`.
+    /// The codecs written in Rust among the columns, asked each text directly.
+    codecs: Vec<InProcess<'s>>,
+    /// Each column's place among its answers' codes: a place in `rules`, or `rules.len()` plus
+    /// a place in `codecs`.
     of: Vec<usize>,
+}
+
+/// A codec written in Rust ([`crate::backend::Codec`]) as a column of this path: each text is
+/// its own `convert` call, its answer a code as a rule's is, so that the texts are tallied and
+/// checked exactly as the rules' are (a code no tuple can share, [`OTHER`], keeps a text apart).
+struct InProcess<'s> {
+    codec: &'s dyn crate::backend::Codec,
+    /// Every 4-digit text is outside its abilities (the general path skips each).
+    declined: bool,
+    /// Its field skips blanks between byte pairs: a text with one there is skipped.
+    blanks: bool,
+}
+
+/// A codec's codes: a value below 2^32 is itself; these are above.
+const SKIPPED: u64 = 1 << 40;
+const UNSUPPORTED: u64 = 1 << 41;
+const CLASS: u64 = 1 << 42;
+/// Any other answer (a wider value, a text, an error with a value): never counted with a
+/// tuple, asked through the general path on its own.
+const OTHER: u64 = 1 << 43;
+
+fn class_code(c: &crate::model::cross_vendor::ErrorClass) -> u64 {
+    use crate::model::cross_vendor::ErrorClass;
+    CLASS
+        + match c {
+            ErrorClass::InvalidDigit => 0,
+            ErrorClass::InvalidCount => 1,
+            ErrorClass::DeviceRange => 2,
+            ErrorClass::Error => 3,
+        }
+}
+
+impl InProcess<'_> {
+    #[inline]
+    fn code(&self, text: [u8; 4]) -> u64 {
+        if self.declined || (self.blanks && crate::model::cross_vendor::blank_between_pairs(&text))
+        {
+            return SKIPPED;
+        }
+        let question = crate::backend::Question {
+            case_id: "",
+            operation: Operation::HexToValue,
+            text: &text,
+            value: 0,
+            digits: 4,
+        };
+        match self.codec.convert(&question) {
+            Ok(Answer::Value(v)) if v >> 32 == 0 => v,
+            Ok(Answer::Error(c)) => class_code(&c),
+            Err(_) => UNSUPPORTED,
+            Ok(_) => OTHER,
+        }
+    }
+}
+
+/// Whether a codec's reply through the general path is the code its `convert` call gave.
+fn codec_agrees(code: u64, reply: &Reply) -> bool {
+    match reply {
+        Reply::Answer {
+            answer: Answer::Value(v),
+            fill_dependent: false,
+        } => code == *v,
+        Reply::Answer {
+            answer: Answer::Error(c),
+            fill_dependent: false,
+        } => code == class_code(c),
+        Reply::Skipped { .. } => code == SKIPPED,
+        Reply::Failed { label, .. } => label == "unsupported" && code == UNSUPPORTED,
+        _ => false,
+    }
 }
 
 /// The plan for `sweep`, when every text of it can be asked through the rules: the full
 /// generator asking each text, hex-to-value, a count of 4 and no flags, and every column a
-/// built-in lowering with a known rule, asked directly.
-pub fn plan(sweep: &Sweep) -> Option<Plan> {
+/// built-in lowering with a known rule, asked directly, or a codec written in Rust.
+pub fn plan(sweep: &Sweep) -> Option<Plan<'_>> {
     let s = &sweep.settings;
     if !s.exhaustive
         || !s.direct
@@ -249,7 +326,33 @@ pub fn plan(sweep: &Sweep) -> Option<Plan> {
     }
     let mut rules = Vec::new();
     let mut of = Vec::new();
-    for c in &sweep.columns {
+    let mut codecs = Vec::new();
+    let mut codec_columns = Vec::new();
+    for (i, c) in sweep.columns.iter().enumerate() {
+        if let (Ask::Codec, Some(codec), Some(field)) =
+            (&c.ask, c.backend.as_codec(), c.field.as_ref())
+        {
+            let sample = crate::model::cross_vendor::CrossVendorCase {
+                text: b"0000".to_vec(),
+                ..super::target::Cases::new(
+                    &s.target,
+                    None,
+                    0,
+                    &sweep.space.with_setting(Data::Text(b"0000".to_vec()), 0),
+                )
+                .cross_vendor?
+                .as_ref()
+                .clone()
+            };
+            codecs.push(InProcess {
+                codec,
+                declined: crate::plan::codec_declined(c.backend.as_ref(), &sample).is_some(),
+                blanks: field.1.shape.blanks_between_pairs,
+            });
+            codec_columns.push(i);
+            of.push(usize::MAX);
+            continue;
+        }
         let Ask::Lowering(l) = &c.ask else {
             return None;
         };
@@ -265,7 +368,31 @@ pub fn plan(sweep: &Sweep) -> Option<Plan> {
             }
         });
     }
-    Some(Plan { rules, of })
+    for (k, &i) in codec_columns.iter().enumerate() {
+        of[i] = rules.len() + k;
+    }
+    Some(Plan { rules, codecs, of })
+}
+
+impl Plan<'_> {
+    /// The codes of a text, rule by rule, then codec by codec; whether one is [`OTHER`].
+    #[inline]
+    fn codes(&self, text: [u8; 4], codes: &mut [u64]) -> bool {
+        let (by_rule, by_codec) = codes.split_at_mut(self.rules.len());
+        for (code, rule) in by_rule.iter_mut().zip(&self.rules) {
+            *code = u64::from(answer(*rule, text));
+        }
+        let mut other = false;
+        for (code, codec) in by_codec.iter_mut().zip(&self.codecs) {
+            *code = codec.code(text);
+            other |= *code == OTHER;
+        }
+        other
+    }
+
+    fn width(&self) -> usize {
+        self.rules.len() + self.codecs.len()
+    }
 }
 
 /// How the texts were asked, as the results tell it.
@@ -318,18 +445,15 @@ pub fn run(
     let shard_inputs = (1u64 << 32).saturating_sub(k - 1).div_ceil(n);
     progress(0, shard_inputs);
     let Some((classes, _)) = classes::derive(sweep, stop) else {
-        let groups = Groups::new(sweep.settings.max_classes);
+        let groups = Groups::new(sweep.settings.class_cap());
         return Some(sweep.results(shard_inputs, 0, true, groups, started));
     };
     let tuples = classes.tuples() as usize;
-    let r = plan.rules.len();
-    // Each tuple's representative's answers, rule by rule.
-    let mut table = vec![0u32; tuples * r];
+    let r = plan.width();
+    // Each tuple's representative's answers, rule by rule (then codec by codec).
+    let mut table = vec![0u64; tuples * r];
     for (t, row) in table.chunks_mut(r).enumerate() {
-        let rep = classes.representative(t as u64);
-        for (slot, rule) in row.iter_mut().zip(&plan.rules) {
-            *slot = answer(*rule, rep);
-        }
+        plan.codes(classes.representative(t as u64), row);
     }
     let of: Vec<u32> = (0..=255u8)
         .map(|b| classes.tuple_of([0, 0, 0, b]) as u32)
@@ -355,7 +479,7 @@ pub fn run(
         .chain(apart.iter().map(|&i| (i, None)))
         .collect();
     adds.sort_unstable();
-    let mut groups = Groups::new(sweep.settings.max_classes);
+    let mut groups = Groups::new(sweep.settings.class_cap());
     let mut swept = 0;
     let mut disagreement = None;
     let mut errors: Vec<Option<Reply>> = vec![None; sweep.columns.len()];
@@ -370,7 +494,11 @@ pub fn run(
             if let (Some(t), None) = (tuple, &disagreement) {
                 let row = &table[t * r..t * r + r];
                 let alike = replies.iter().enumerate().all(|(c, reply)| {
-                    let code = row[plan.of[c]];
+                    let place = plan.of[c];
+                    if place >= plan.rules.len() {
+                        return codec_agrees(row[place], reply);
+                    }
+                    let code = row[place] as u32;
                     agrees(code, reply) && (code < ERROR || same_error(&mut errors[c], reply))
                 });
                 if !alike {
@@ -416,7 +544,7 @@ fn tally(
     sweep: &Sweep,
     plan: &Plan,
     classes: &ByteClasses,
-    table: &[u32],
+    table: &[u64],
     of: &[u32],
     stop: &AtomicBool,
     progress: &mut dyn FnMut(u64, u64),
@@ -428,7 +556,7 @@ fn tally(
         .div_ceil(u64::from(n));
     let tuples = classes.tuples() as usize;
     let width = classes.len() as u32;
-    let r = plan.rules.len();
+    let r = plan.width();
     let next = AtomicUsize::new(0);
     let done = AtomicU64::new(0);
     let apart_total = AtomicUsize::new(0);
@@ -443,17 +571,15 @@ fn tally(
                         first: vec![u32::MAX; tuples],
                         apart: Vec::new(),
                     };
-                    let mut codes = vec![0u32; r];
+                    let mut codes = vec![0u64; r];
                     let mut ask = |text: [u8; 4], index: u32, t: &mut Tally| {
                         let tuple = ((((of[text[0] as usize] * width) + of[text[1] as usize])
                             * width
                             + of[text[2] as usize])
                             * width
                             + of[text[3] as usize]) as usize;
-                        for (code, rule) in codes.iter_mut().zip(&plan.rules) {
-                            *code = answer(*rule, text);
-                        }
-                        if codes[..] == table[tuple * r..tuple * r + r] {
+                        let other = plan.codes(text, &mut codes);
+                        if !other && codes[..] == table[tuple * r..tuple * r + r] {
                             t.count[tuple] += 1;
                             t.first[tuple] = t.first[tuple].min(index);
                         } else {

@@ -126,8 +126,17 @@ impl std::fmt::Display for Reply {
 /// The behaviour signature of one input: per column, the class of its answer, with equal
 /// values numbered alike across columns (`value#1` twice means the same value).
 pub fn labels(replies: &[Reply]) -> Vec<String> {
-    let same = |x: &Reply, y: &Reply| match (x, y) {
-        (Reply::Answer { answer: a, .. }, Reply::Answer { answer: b, .. }) => a == b,
+    labels_read(&[], 0, replies)
+}
+
+/// [`labels`], a codec's answer numbered as the answer its field gives for (see
+/// [`reads_alike`]): `"7F"` from a field without leading zeros is the `"007F"` of a 4-digit
+/// reading. `columns` may be empty (every reply read as it is).
+pub(crate) fn labels_read(columns: &[Column], digits: u32, replies: &[Reply]) -> Vec<String> {
+    let same = |i: usize, x: &Reply, y: &Reply| match (x, y) {
+        (Reply::Answer { answer: a, .. }, Reply::Answer { answer: b, .. }) => {
+            a == b || columns.get(i).is_some_and(|c| reads_alike(c, digits, x, y))
+        }
         (Reply::Memory { effect: a, .. }, Reply::Memory { effect: b, .. }) => a == b,
         _ => false,
     };
@@ -135,11 +144,12 @@ pub fn labels(replies: &[Reply]) -> Vec<String> {
     let mut seen: Vec<(Cow<'_, str>, Vec<&Reply>)> = Vec::new();
     replies
         .iter()
-        .map(|r| {
+        .enumerate()
+        .map(|(i, r)| {
             let (class, numbered) = r.class();
             let mut label = if numbered {
                 let n = match seen.iter_mut().find(|(c, _)| *c == class) {
-                    Some((_, distinct)) => match distinct.iter().position(|x| same(x, r)) {
+                    Some((_, distinct)) => match distinct.iter().position(|x| same(i, r, x)) {
                         Some(i) => i + 1,
                         None => {
                             distinct.push(r);
@@ -163,24 +173,58 @@ pub fn labels(replies: &[Reply]) -> Vec<String> {
         .collect()
 }
 
+/// Whether `mine`, the reply of `column` to an input of `digits` digits, is `theirs` as the
+/// column's field gives it: the same reply, or for a codec with a declared field shape, the
+/// answer `theirs` written or read the field's way (`OperationAbilities::shaped`). A codec that
+/// follows its shape then differs nowhere, in a sweep as in a run.
+pub(crate) fn reads_alike(column: &Column, digits: u32, mine: &Reply, theirs: &Reply) -> bool {
+    if mine == theirs {
+        return true;
+    }
+    match (&column.field, mine, theirs) {
+        (
+            Some((operation, field)),
+            Reply::Answer {
+                answer: a,
+                fill_dependent: x,
+            },
+            Reply::Answer {
+                answer: b,
+                fill_dependent: y,
+            },
+        ) => x == y && field.shaped(*operation, digits, b) == *a,
+        _ => false,
+    }
+}
+
 /// The columns that differ from their oracle on this input (neither side skipped).
-pub(crate) fn differing(columns: &[Column], replies: &[Reply]) -> Vec<usize> {
+pub(crate) fn differing(columns: &[Column], digits: u32, replies: &[Reply]) -> Vec<usize> {
     columns
         .iter()
         .enumerate()
         .filter_map(|(i, c)| {
             let o = c.oracle?;
             let (mine, theirs) = (&replies[i], &replies[o]);
-            (!mine.is_skipped() && !theirs.is_skipped() && mine != theirs).then_some(i)
+            (!mine.is_skipped() && !theirs.is_skipped() && !reads_alike(c, digits, mine, theirs))
+                .then_some(i)
         })
         .collect()
 }
 
-/// Whether the columns that ran do not all answer alike.
-pub(crate) fn disagree(replies: &[Reply]) -> bool {
-    let mut ran = replies.iter().filter(|r| !r.is_skipped());
+/// Whether the columns that ran do not all answer alike (a codec's answer read as its field
+/// gives it).
+pub(crate) fn disagree(columns: &[Column], digits: u32, replies: &[Reply]) -> bool {
+    let mut ran = replies.iter().enumerate().filter(|(_, r)| !r.is_skipped());
     match ran.next() {
-        Some(first) => ran.any(|r| r != first),
+        Some((f, first)) => ran.any(|(i, r)| {
+            let alike = match columns.get(i) {
+                Some(c) => reads_alike(c, digits, r, first),
+                None => r == first,
+            } || columns
+                .get(f)
+                .is_some_and(|c| reads_alike(c, digits, first, r));
+            !alike
+        }),
         None => false,
     }
 }
@@ -282,7 +326,7 @@ impl Groups {
         weight: u64,
     ) {
         let key = Key {
-            signature: labels(&replies),
+            signature: labels_read(columns, point.digits, &replies),
             features: point.features(counted),
         };
         let class = point.class(counted);
@@ -293,7 +337,7 @@ impl Groups {
             replies: replies.to_vec(),
         };
         let names = |replies: &[Reply]| -> Vec<String> {
-            differing(columns, replies)
+            differing(columns, point.digits, replies)
                 .into_iter()
                 .map(|i| columns[i].name.clone())
                 .collect()
@@ -305,7 +349,7 @@ impl Groups {
                 inputs: 0,
                 differing: names(&replies),
                 known: Vec::new(),
-                disagree: disagree(&replies),
+                disagree: disagree(columns, point.digits, &replies),
                 representative: found(&replies),
                 classes: BTreeMap::new(),
             }),
@@ -410,11 +454,11 @@ mod tests {
             labels(&[value(5), value(6), err, value(5)]),
             vec!["value#1", "value#2", "invalid-digit", "value#1"]
         );
-        assert!(disagree(&[value(1), value(2)]));
-        assert!(!disagree(&[
-            value(1),
-            Reply::Skipped { reason: "x".into() },
-            value(1)
-        ]));
+        assert!(disagree(&[], 4, &[value(1), value(2)]));
+        assert!(!disagree(
+            &[],
+            4,
+            &[value(1), Reply::Skipped { reason: "x".into() }, value(1)]
+        ));
     }
 }

@@ -21,6 +21,7 @@
 //! - [`group`]: answers reduced to behaviour signatures and counted;
 //! - [`shrink`]: a group's inputs reduced to the simplest that behaves the same;
 //! - [`emit`]: a shrunk input written as a vector in the corpus format;
+//! - [`merge`]: the JSON results of a sweep's shards put back together as the whole sweep's;
 //! - [`render`]: the results as text, JSON and HTML.
 
 pub(crate) mod classes;
@@ -31,6 +32,7 @@ pub(crate) mod generate;
 pub(crate) mod group;
 pub(crate) mod input;
 pub(crate) mod known;
+pub(crate) mod merge;
 pub mod render;
 pub(crate) mod rng;
 pub(crate) mod shrink;
@@ -87,6 +89,16 @@ pub struct Settings {
 }
 
 impl Settings {
+    /// The classes a group keeps: `max_classes`, except in a shard, which keeps them all so that
+    /// a merge can keep the whole sweep's first `max_classes` (`merge`).
+    pub(crate) fn class_cap(&self) -> usize {
+        if self.shard.1 > 1 {
+            usize::MAX
+        } else {
+            self.max_classes
+        }
+    }
+
     pub fn new(target: Target, generator: Generator, seed: u64) -> Settings {
         Settings {
             target,
@@ -213,7 +225,7 @@ pub struct Faulted {
 
 /// Inputs per round for a sweep with an external backend (one `session::run_trials` each).
 const CHUNK_EXTERNAL: usize = 4096;
-/// Inputs per round for the built-in models only.
+/// Inputs per round for the built-in models and codecs asked directly.
 const CHUNK_IN_PROCESS: usize = 1 << 16;
 
 /// Why a sweep cannot be set up as asked.
@@ -308,10 +320,26 @@ impl Sweep {
         let mut out: Vec<Vec<Option<Reply>>> = vec![vec![None; n]; points.len()];
         let in_process: Vec<usize> = (0..n).filter(|&c| self.columns[c].in_process).collect();
         let target = &self.settings.target;
-        if !in_process.is_empty() {
-            let jobs = self.settings.jobs.max(1);
-            let per = points.len().div_ceil(jobs).max(1);
-            std::thread::scope(|scope| {
+        // Codecs are asked their questions directly, in one batch each, while the models work:
+        // a trial per question would cost more than the conversion, and a codec in another
+        // process would leave this one waiting (`Settings::direct` off asks them through
+        // trials, with the same replies).
+        let codecs: Vec<usize> = (0..n)
+            .filter(|&c| self.settings.direct && matches!(self.columns[c].ask, Ask::Codec))
+            .collect();
+        let operation = target.reads(self.shape.as_ref());
+        let asked: Vec<Vec<(usize, Option<Reply>)>> = std::thread::scope(|scope| {
+            let handles: Vec<_> = codecs
+                .iter()
+                .filter(|_| !stop.load(Ordering::Relaxed))
+                .map(|&c| {
+                    let column = &self.columns[c];
+                    scope.spawn(move || direct::codec_replies(column, operation, points, stop))
+                })
+                .collect();
+            if !in_process.is_empty() {
+                let jobs = self.settings.jobs.max(1);
+                let per = points.len().div_ceil(jobs).max(1);
                 for (rows, points) in out.chunks_mut(per).zip(points.chunks(per)) {
                     let columns = &self.columns;
                     let in_process = &in_process;
@@ -343,9 +371,20 @@ impl Sweep {
                         }
                     });
                 }
-            });
+            }
+            handles
+                .into_iter()
+                .map(|h| h.join().unwrap_or_default())
+                .collect()
+        });
+        for (&c, replies) in codecs.iter().zip(asked) {
+            for (p, reply) in replies {
+                out[p][c] = reply;
+            }
         }
-        let others: Vec<usize> = (0..n).filter(|&c| !self.columns[c].in_process).collect();
+        let others: Vec<usize> = (0..n)
+            .filter(|&c| !self.columns[c].in_process && !codecs.contains(&c))
+            .collect();
         if !others.is_empty() && !stop.load(Ordering::Relaxed) {
             let cases: Vec<Cases> = points
                 .iter()
@@ -392,22 +431,7 @@ impl Sweep {
         }
         let started = Instant::now();
         let by_class = matches!(self.settings.generator, Generator::Full { by_class: true });
-        let mut split_texts = 0;
-        let space = match (&self.space.classes, by_class) {
-            (None, true) => {
-                let found = match classes::derive(self, stop) {
-                    Some((c, asked)) => {
-                        split_texts = asked;
-                        c
-                    }
-                    None => classes::ByteClasses::by_kind(),
-                };
-                let mut space = self.space.clone();
-                space.classes = Some(Arc::new(found));
-                std::borrow::Cow::Owned(space)
-            }
-            _ => std::borrow::Cow::Borrowed(&self.space),
-        };
+        let (space, split_texts) = self.space_to_run(stop);
         let total = space.total();
         let weighted = space.classes.is_some();
         let shard = self.settings.shard;
@@ -418,12 +442,16 @@ impl Sweep {
         } else {
             total.saturating_sub(shard.0 - 1).div_ceil(shard.1)
         };
-        let chunk = if self.columns.iter().all(|c| c.in_process) {
+        // Codecs asked directly take a round's questions in bulk, as the models do; trials go
+        // in smaller rounds, so that progress and a stop stay close to them.
+        let chunk = if (self.columns.iter())
+            .all(|c| c.in_process || (self.settings.direct && matches!(c.ask, Ask::Codec)))
+        {
             CHUNK_IN_PROCESS
         } else {
             CHUNK_EXTERNAL
         };
-        let mut groups = Groups::new(self.settings.max_classes);
+        let mut groups = Groups::new(self.settings.class_cap());
         let mut digests = std::collections::HashMap::new();
         let mut swept = 0u64;
         let mut asked = 0u64;
@@ -485,6 +513,22 @@ impl Sweep {
         }
         results.elapsed = started.elapsed();
         results
+    }
+
+    /// The space the sweep numbers its inputs in: for the full generator by class, with the
+    /// byte classes found first (and the texts asked to find them).
+    pub(crate) fn space_to_run(&self, stop: &AtomicBool) -> (std::borrow::Cow<'_, Space>, u64) {
+        let by_class = matches!(self.settings.generator, Generator::Full { by_class: true });
+        match (&self.space.classes, by_class) {
+            (None, true) => {
+                let (found, asked) = classes::derive(self, stop)
+                    .unwrap_or_else(|| (classes::ByteClasses::by_kind(), 0));
+                let mut space = self.space.clone();
+                space.classes = Some(Arc::new(found));
+                (std::borrow::Cow::Owned(space), asked)
+            }
+            _ => (std::borrow::Cow::Borrowed(&self.space), 0),
+        }
     }
 
     /// The results of this sweep with what was swept, before shrinking, with neither classes nor

@@ -9,7 +9,7 @@
 
 use std::sync::atomic::AtomicBool;
 
-use super::group::{labels, Found, Key};
+use super::group::{labels_read, Found, Key};
 use super::input::{Data, Point};
 use super::{Results, Shrunk, Sweep};
 
@@ -55,7 +55,7 @@ pub(crate) fn shrink_groups(sweep: &Sweep, results: &Results, stop: &AtomicBool)
 pub(crate) fn shrink(sweep: &Sweep, found: &Found, stop: &AtomicBool) -> Found {
     let counted = sweep.counted();
     let key = Key {
-        signature: labels(&found.replies),
+        signature: labels_read(&sweep.columns, found.point.digits, &found.replies),
         features: found.point.features(counted),
     };
     let mut current = found.clone();
@@ -75,7 +75,10 @@ pub(crate) fn shrink(sweep: &Sweep, found: &Found, stop: &AtomicBool) -> Found {
             .into_iter()
             .zip(answers)
             .filter_map(|((_, p), r)| r.map(|r| (p, r)))
-            .filter(|(p, r)| labels(r) == key.signature && p.features(counted) == key.features)
+            .filter(|(p, r)| {
+                labels_read(&sweep.columns, p.digits, r) == key.signature
+                    && p.features(counted) == key.features
+            })
             .min_by(|a, b| a.0.simplicity().cmp(&b.0.simplicity()));
         match best {
             Some((point, replies)) => {

@@ -16,7 +16,9 @@ use super::input::{Data, Point};
 use super::SweepError;
 use crate::backend::Backend;
 use crate::device::Device;
-use crate::model::cross_vendor::{CrossVendorCase, Lowering, Operation, TextLayout, ValueOrder};
+use crate::model::cross_vendor::{
+    CrossVendorCase, Lowering, Operation, OperationAbilities, TextLayout, ValueOrder,
+};
 use crate::model::profile::{Profile, Profiles};
 use crate::model::{Basis, Case, Citation, Indirect, Location, Operand};
 use crate::plan::lowering::value_memory;
@@ -98,6 +100,9 @@ pub struct Column {
     pub in_process: bool,
     /// Why the backend does not run this lowering, if it does not.
     pub lowering_skip: Option<String>,
+    /// A codec's field for the swept operation: its answers are compared with what the field
+    /// would give for the oracle's (no leading zeros, the low byte first).
+    pub field: Option<(Operation, OperationAbilities)>,
 }
 
 impl std::fmt::Debug for Column {
@@ -350,6 +355,11 @@ pub(crate) fn columns(
                             oracle: None,
                             in_process: false,
                             lowering_skip: None,
+                            field: match operation {
+                                Operation::HexToValue => abilities.hex_to_value.clone(),
+                                Operation::ValueToHex => abilities.value_to_hex.clone(),
+                            }
+                            .map(|a| (*operation, a)),
                         });
                     }
                     continue;
@@ -372,6 +382,7 @@ pub(crate) fn columns(
                         oracle: None,
                         in_process: reference(backend),
                         lowering_skip: lowering_skip(backend, profile, l),
+                        field: None,
                     });
                 }
             }
@@ -396,6 +407,7 @@ pub(crate) fn columns(
                             oracle: None,
                             in_process: reference(backend),
                             lowering_skip: None,
+                            field: None,
                         });
                     }
                 }

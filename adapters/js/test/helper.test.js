@@ -147,8 +147,9 @@ function habinCase(id, overrides = {}) {
 
 test('an instruction-level backend answers hello with the version the harness speaks', async () => {
   const hello4 = { ...HELLO_3, protocol: 4 };
+  const hello5 = { ...HELLO_3, protocol: 5 };
   const hello9 = { ...HELLO_3, protocol: 9 };
-  for (const [hello, version] of [[HELLO_1, 1], [HELLO_2, 2], [HELLO_3, 3], [hello4, 4], [hello9, 4], [{ type: 'hello' }, 1]]) {
+  for (const [hello, version] of [[HELLO_1, 1], [HELLO_2, 2], [HELLO_3, 3], [hello4, 4], [hello5, 5], [hello9, 5], [{ type: 'hello' }, 1]]) {
     const { answers } = await drive('habin.js', [], [hello, SHUTDOWN]);
     assert.deepEqual(answers[0], {
       type: 'hello',

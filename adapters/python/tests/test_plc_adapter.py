@@ -129,7 +129,9 @@ def habin_case(ident, **overrides):
 
 class InstructionLevel(unittest.TestCase):
     def test_hello_answers_the_version_the_harness_speaks(self):
-        for hello, version in ((HELLO_1, 1), (HELLO_2, 2), (HELLO_3, 3), ({"type": "hello"}, 1)):
+        hellos = ((HELLO_1, 1), (HELLO_2, 2), (HELLO_3, 3), (dict(HELLO_3, protocol=4), 4),
+                  (dict(HELLO_3, protocol=5), 5), (dict(HELLO_3, protocol=9), 5), ({"type": "hello"}, 1))
+        for hello, version in hellos:
             answers, _, _ = drive("habin.py", [], [hello, SHUTDOWN])
             self.assertEqual(answers[0], {
                 "type": "hello", "protocol": version,

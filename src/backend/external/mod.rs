@@ -20,12 +20,14 @@ use std::time::{Duration, Instant};
 
 use serde::Serialize;
 
+mod convert;
+
 pub(crate) use process::{adopt_orphans, closing, kill_all, MAX_LINE};
 use process::{describe_exit, Next, Process};
 use protocol::{
-    first_version_for, BackendInfo, BackendMessage, Capabilities, CaseRequest, CodecRequest,
-    ErrorReport, FillName, HarnessMessage, MemoryRange, OperandValue, ProtocolViolation, RunCase,
-    SignalReport, PROTOCOL_VERSION, SUPPORTED_VERSIONS,
+    first_version_for, BackendInfo, BackendMessage, Capabilities, CaseRequest, ErrorReport,
+    FillName, HarnessMessage, MemoryRange, OperandValue, ProtocolViolation, RunCase, SignalReport,
+    PROTOCOL_VERSION, SUPPORTED_VERSIONS,
 };
 
 use super::{Backend, Fault, Outcome, Question, Request, Response, Setting};
@@ -93,6 +95,11 @@ pub struct ExternalBackend {
     profile: Option<Arc<Profile>>,
     /// What a codec-level backend implements.
     codec: Option<CodecAbilities>,
+    /// The protocol version the handshake agreed.
+    version: u32,
+    /// Codec questions still travel in `convert` messages (version 5); cleared when one hangs
+    /// or crashes the process.
+    converting: std::sync::atomic::AtomicBool,
     state: Mutex<State>,
 }
 
@@ -152,6 +159,8 @@ impl ExternalBackend {
             capabilities,
             profile,
             codec,
+            version,
+            converting: std::sync::atomic::AtomicBool::new(true),
             state: Mutex::new(State {
                 process,
                 next_id: 1,
@@ -379,6 +388,9 @@ impl ExternalBackend {
             BackendMessage::Hello { .. } => {
                 Err(unexpected("a hello in the middle of a run".into()))
             }
+            BackendMessage::Converted { id, .. } => Err(unexpected(format!(
+                "a `converted` line (for message {id}) where a case's answer was due"
+            ))),
         }
     }
 }
@@ -413,18 +425,11 @@ impl Backend for ExternalBackend {
         questions: &[Question<'_>],
         answered: &mut dyn FnMut(usize),
     ) -> Vec<Result<Response, Fault>> {
+        if self.converts() {
+            return self.convert_all(questions, answered);
+        }
         self.send_all(questions.len(), answered, |i, id| {
-            let q = &questions[i];
-            RunCase::Codec(CodecRequest {
-                id,
-                case: q.case_id.to_string(),
-                operation: q.operation,
-                text: (q.operation == crate::model::cross_vendor::Operation::HexToValue)
-                    .then(|| q.text.to_vec()),
-                value: (q.operation == crate::model::cross_vendor::Operation::ValueToHex)
-                    .then_some(q.value),
-                digits: q.digits,
-            })
+            convert::codec_case(&questions[i], id)
         })
     }
 
@@ -771,6 +776,12 @@ fn check_codec(
                 }
                 widths.insert(count, *w);
             }
+            if c.blanks_between_pairs == Some(true) && operation == Operation::ValueToHex {
+                return refuse(format!(
+                    "claims {name} skips blanks between byte pairs; only a text is read, so \
+                     give `blanks-between-pairs` for hex-to-value"
+                ));
+            }
             if let Some(reading) = &c.reading {
                 let readings: Vec<String> = (profiles.iter())
                     .flat_map(|p| {
@@ -797,6 +808,7 @@ fn check_codec(
                     leading_zeros: c.leading_zeros.unwrap_or(true),
                     low_byte_first: c.byte_order == Some(protocol::ByteOrder::LowFirst),
                     whole_frame: c.whole_frame.unwrap_or(false),
+                    blanks_between_pairs: c.blanks_between_pairs.unwrap_or(false),
                 },
             }))
         }

@@ -16,12 +16,15 @@ use crate::memory::{Unit, Value};
 use crate::model::cross_vendor::{ErrorClass, Operation};
 
 /// The newest protocol version this harness speaks: it says so in its `hello`.
-pub(crate) const PROTOCOL_VERSION: u32 = 4;
+pub(crate) const PROTOCOL_VERSION: u32 = 5;
 /// The versions a backend may answer with: 1 (instruction level only), 2 (instruction or
-/// codec level), 3 (also byte-addressed families, whose memory ranges carry `bytes`) and 4
-/// (also families whose unit is a 32-bit word, `dwords`). Any other is refused before a case
-/// runs.
-pub(crate) const SUPPORTED_VERSIONS: [u32; 4] = [1, 2, 3, 4];
+/// codec level), 3 (also byte-addressed families, whose memory ranges carry `bytes`), 4
+/// (also families whose unit is a 32-bit word, `dwords`) and 5 (also `convert`: many
+/// conversions answered in one line). Any other is refused before a case runs.
+pub(crate) const SUPPORTED_VERSIONS: [u32; 5] = [1, 2, 3, 4, 5];
+
+/// The first version that carries `convert` messages.
+pub(crate) const CONVERT_VERSION: u32 = 5;
 
 /// The first version that can carry memory of `unit`s.
 pub(crate) fn first_version_for(unit: Unit) -> u32 {
@@ -53,6 +56,23 @@ pub enum HarnessMessage {
     /// Cases to execute: the backend answers each with one `result` or `unsupported` line, in
     /// the order given.
     Run { cases: Vec<RunCase> },
+    /// Version 5, codec level: conversions of one operation, answered by one `converted` line.
+    /// A sweep asks millions of texts; a line per answer is what made a codec in another
+    /// process slow, not the codec.
+    Convert {
+        /// Echoed by the answer.
+        id: u64,
+        operation: Operation,
+        /// The digit count of each item.
+        digits: Vec<u32>,
+        /// Hex-to-value: the texts, one character per byte (U+0000-U+00FF).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        #[schemars(with = "Option<Vec<String>>")]
+        texts: Option<Vec<Latin1>>,
+        /// Value-to-hex: the values.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        values: Option<Vec<u64>>,
+    },
     /// The last message: the backend exits. The harness then closes stdin and, after a grace
     /// period, kills a backend that is still running.
     Shutdown,
@@ -342,6 +362,64 @@ pub enum BackendMessage {
     /// The backend does not implement this case. For a case it claims in its capabilities this
     /// counts as a difference, never as a skip.
     Unsupported { id: u64, reason: String },
+    /// Version 5: the answers to one `convert` message, one per item, in order.
+    Converted {
+        /// The `id` of the `convert` message answered.
+        id: u64,
+        answers: Vec<Converted>,
+    },
+}
+
+/// Bytes carried as a JSON string of one character per byte (U+0000-U+00FF): what a codec's
+/// text is in a `convert` message, read with one call in any language (`latin-1`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Latin1(pub Vec<u8>);
+
+impl Serialize for Latin1 {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(&self.0.iter().map(|&b| char::from(b)).collect::<String>())
+    }
+}
+
+impl<'de> Deserialize<'de> for Latin1 {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let s = std::borrow::Cow::<str>::deserialize(d)?;
+        s.chars()
+            .map(|c| u8::try_from(u32::from(c)).ok())
+            .collect::<Option<Vec<u8>>>()
+            .map(Latin1)
+            .ok_or_else(|| {
+                serde::de::Error::custom(
+                    "a character above U+00FF in a text (one character per byte)",
+                )
+            })
+    }
+}
+
+/// One answer of a `converted` line.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(untagged)]
+pub enum Converted {
+    /// Hex-to-value: the value (a negative one is a difference, not garbage).
+    Value(i64),
+    /// Value-to-hex: the characters written, one per byte.
+    Text(#[schemars(with = "String")] Latin1),
+    Error(ConvertedError),
+    Unsupported(ConvertedUnsupported),
+}
+
+/// `{"error": "invalid-digit"}`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ConvertedError {
+    pub error: ErrorClass,
+}
+
+/// `{"unsupported": "why"}`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ConvertedUnsupported {
+    pub unsupported: String,
 }
 
 /// Who the backend is.
@@ -460,6 +538,14 @@ pub struct OperationCapabilities {
         skip_serializing_if = "Option::is_none"
     )]
     pub whole_frame: Option<bool>,
+    /// Text -> value skips blanks (20H) between byte pairs, as Python's `bytes.fromhex`: a text
+    /// with a blank where a pair could start is skipped.
+    #[serde(
+        rename = "blanks-between-pairs",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub blanks_between_pairs: Option<bool>,
 }
 
 /// Which byte a field's first character pair is.
@@ -556,6 +642,11 @@ impl HarnessMessage {
             protocol: Option<u32>,
             harness: Option<String>,
             cases: Option<Vec<RunCase>>,
+            id: Option<u64>,
+            operation: Option<Operation>,
+            digits: Option<Vec<u32>>,
+            texts: Option<Vec<Latin1>>,
+            values: Option<Vec<u64>>,
         }
         #[derive(Deserialize)]
         #[serde(deny_unknown_fields)]
@@ -578,6 +669,11 @@ impl HarnessMessage {
             ("protocol", l.protocol.is_some()),
             ("harness", l.harness.is_some()),
             ("cases", l.cases.is_some()),
+            ("id", l.id.is_some()),
+            ("operation", l.operation.is_some()),
+            ("digits", l.digits.is_some()),
+            ("texts", l.texts.is_some()),
+            ("values", l.values.is_some()),
         ];
         let only = |allowed: &[&str]| only_fields(&l.kind, &present, allowed);
         let missing = |k: &'static str| serde_json::Error::missing_field(k);
@@ -595,13 +691,23 @@ impl HarnessMessage {
                     cases: l.cases.ok_or_else(|| missing("cases"))?,
                 })
             }
+            "convert" => {
+                only(&["id", "operation", "digits", "texts", "values"])?;
+                Ok(HarnessMessage::Convert {
+                    id: l.id.ok_or_else(|| missing("id"))?,
+                    operation: l.operation.ok_or_else(|| missing("operation"))?,
+                    digits: l.digits.ok_or_else(|| missing("digits"))?,
+                    texts: l.texts,
+                    values: l.values,
+                })
+            }
             "shutdown" => {
                 only(&[])?;
                 Ok(HarnessMessage::Shutdown)
             }
             other => Err(serde_json::Error::unknown_variant(
                 other,
-                &["hello", "run", "shutdown"],
+                &["hello", "run", "convert", "shutdown"],
             )),
         }
     }
@@ -629,6 +735,7 @@ impl BackendMessage {
             capabilities: Option<Capabilities>,
             value: Option<i64>,
             text: Option<Vec<u8>>,
+            answers: Option<Vec<Converted>>,
         }
         let l: Line = serde_json::from_slice(line)?;
         let present = [
@@ -642,6 +749,7 @@ impl BackendMessage {
             ("capabilities", l.capabilities.is_some()),
             ("value", l.value.is_some()),
             ("text", l.text.is_some()),
+            ("answers", l.answers.is_some()),
         ];
         let only = |allowed: &[&str]| only_fields(&l.kind, &present, allowed);
         let missing = |k: &'static str| serde_json::Error::missing_field(k);
@@ -672,9 +780,16 @@ impl BackendMessage {
                     capabilities: l.capabilities.ok_or_else(|| missing("capabilities"))?,
                 })
             }
+            "converted" => {
+                only(&["id", "answers"])?;
+                Ok(BackendMessage::Converted {
+                    id: l.id.ok_or_else(|| missing("id"))?,
+                    answers: l.answers.ok_or_else(|| missing("answers"))?,
+                })
+            }
             other => Err(serde_json::Error::unknown_variant(
                 other,
-                &["hello", "result", "unsupported"],
+                &["hello", "result", "unsupported", "converted"],
             )),
         }
     }
@@ -684,7 +799,7 @@ impl BackendMessage {
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(untagged)]
 #[schemars(
-    title = "plc-conformance external-backend protocol, versions 1 to 3",
+    title = "plc-conformance external-backend protocol, versions 1 to 5",
     description = "One JSON object per line. The harness sends HarnessMessage lines on the \
                    backend's stdin; the backend answers with BackendMessage lines on stdout."
 )]

@@ -9,8 +9,8 @@ use std::collections::BTreeMap;
 use std::io::{BufRead, Write};
 
 use super::protocol::{
-    BackendInfo, BackendMessage, Capabilities, CaseRequest, ErrorReport, FillName, HarnessMessage,
-    OperandValue, RunCase, SignalReport, PROTOCOL_VERSION,
+    BackendInfo, BackendMessage, Capabilities, CaseRequest, Converted, ConvertedUnsupported,
+    ErrorReport, FillName, HarnessMessage, OperandValue, RunCase, SignalReport, PROTOCOL_VERSION,
 };
 use crate::backend::{Backend, Request, Response};
 use crate::memory::{Fill, Image};
@@ -91,6 +91,15 @@ pub fn serve(
                     };
                     write_message(&mut output, &message)?;
                 }
+            }
+            HarnessMessage::Convert { id, digits, .. } => {
+                let unsupported = || {
+                    Converted::Unsupported(ConvertedUnsupported {
+                        unsupported: "this server answers at the instruction level".into(),
+                    })
+                };
+                let answers = digits.iter().map(|_| unsupported()).collect();
+                write_message(&mut output, &BackendMessage::Converted { id, answers })?;
             }
             HarnessMessage::Shutdown => return Ok(()),
         }
