@@ -1,0 +1,1 @@
+../adapters/python/plc_adapter.py

@@ -1,0 +1,59 @@
+"""The process that serves a codec for `codec_cases`: `python -m plc_conformance.serve FILE SPEC`
+imports the module FILE, finds its decode and encode functions and serves them with
+plc_adapter.serve_codec as SPEC (JSON) says."""
+
+import importlib
+import importlib.util
+import json
+import os
+import sys
+
+import plc_adapter
+from plc_conformance.pytest_cases import SERVING
+
+
+def _resolve(dotted):
+    """"module:qualname" -> the object."""
+    module, _, name = dotted.partition(":")
+    value = importlib.import_module(module)
+    for part in name.split("."):
+        value = getattr(value, part)
+    return value
+
+
+def _attribute(module, qualname):
+    value = module
+    for part in qualname.split("."):
+        value = getattr(value, part)
+    return value
+
+
+def _field(field):
+    """A field shape as JSON carried it: widths' digit counts back to ints."""
+    if field and "widths" in field:
+        field = dict(field, widths={int(k): v for k, v in field["widths"].items()})
+    return field
+
+
+def main():
+    file, spec = sys.argv[1], json.loads(sys.argv[2])
+    os.environ[SERVING] = "1"
+    # The module's folder and the folder pytest ran in, as pytest's own imports see them.
+    sys.path[:0] = [os.path.dirname(file), os.getcwd()]
+    loaded = importlib.util.spec_from_file_location(spec["module"], file)
+    module = importlib.util.module_from_spec(loaded)
+    sys.modules[spec["module"]] = module
+    loaded.loader.exec_module(module)
+    plc_adapter.serve_codec(
+        decode=_attribute(module, spec["decode"]) if spec["decode"] else None,
+        encode=_attribute(module, spec["encode"]) if spec["encode"] else None,
+        name=spec["name"], version="pytest",
+        decode_digits=spec["decode_digits"], encode_digits=spec["encode_digits"],
+        width=spec["width"],
+        errors={_resolve(k): v for k, v in spec["errors"].items()},
+        field=_field(spec["field"]), decode_field=_field(spec["decode_field"]),
+        encode_field=_field(spec["encode_field"]))
+
+
+if __name__ == "__main__":
+    main()
