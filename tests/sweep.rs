@@ -2019,3 +2019,93 @@ fn a_codec_that_crashes_or_hangs_on_one_text_of_a_bulk_message_faults_that_text_
         );
     }
 }
+
+/// A judged codec wired without its field shape shows mostly its adapter's artefacts; the sweep
+/// names the shape that describes them (no leading zeros, the low byte first, a token of
+/// whatever length), and names none for a codec whose differences are its own (lowercase
+/// taken).
+#[test]
+fn a_sweep_names_the_field_shape_that_describes_a_codecs_differences() {
+    if !common::python() {
+        return;
+    }
+    let fixture = |f: &str| root().join("tests/fixtures/external").join(f);
+    for (script, mode, operation, oracle, wanted) in [
+        (
+            "token_codec.py",
+            "--undeclared",
+            "value-to-hex",
+            "fx5/asci-16bit",
+            Some("\"leading-zeros\": false"),
+        ),
+        (
+            "mixed_order_codec.py",
+            "--undeclared",
+            "hex-to-value",
+            "iqr/habin-fixed",
+            Some("\"byte-order\": \"low-first\""),
+        ),
+        (
+            "token_codec.py",
+            "--undeclared",
+            "hex-to-value",
+            "fx5/hexa-16bit",
+            Some("\"variable\": true"),
+        ),
+        (
+            "judged_codec.py",
+            "lenient",
+            "hex-to-value",
+            "fx5/hexa-16bit",
+            None,
+        ),
+    ] {
+        let backend = format!(
+            "external:codec=python3 {} {mode}",
+            fixture(script).display()
+        );
+        let out = common::cli(&[
+            "sweep",
+            "--operation",
+            operation,
+            "--generator",
+            "random",
+            "--count",
+            "3000",
+            "--seed",
+            "3",
+            "--digits",
+            "4",
+            "--shrink",
+            "0",
+            "--backend",
+            &backend,
+            "--oracle",
+            oracle,
+            "--format",
+            "json",
+        ]);
+        let doc: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON results");
+        let hints: Vec<String> = doc["hints"]
+            .as_array()
+            .map(|h| {
+                h.iter()
+                    .map(|h| h["shape"].as_str().unwrap_or("").to_string())
+                    .collect()
+            })
+            .unwrap_or_default();
+        assert_eq!(
+            out.status.code(),
+            Some(1),
+            "{script} {operation}: it differs"
+        );
+        match wanted {
+            Some(shape) => assert_eq!(
+                hints.first().map(String::as_str),
+                Some(shape),
+                "{script} {operation}"
+            ),
+            None => assert!(hints.is_empty(), "{script} {operation}: {hints:?}"),
+        }
+    }
+}

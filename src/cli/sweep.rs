@@ -402,7 +402,9 @@ pub(super) fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
-    if crate::sweep::known::apply(&mut results, &project.known) {
+    let stale = crate::sweep::known::apply(&mut results, &project.known);
+    results.hints = crate::sweep::explain::hints(&sweep, &results);
+    if stale {
         console::warning(
             "a value has no input class: of a known-differences file, only an entry for every \
              case (`cases: ['*']`) covers a value-to-hex sweep's inputs, so its other entries \

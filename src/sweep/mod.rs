@@ -21,6 +21,7 @@
 //! - [`group`]: answers reduced to behaviour signatures and counted;
 //! - [`shrink`]: a group's inputs reduced to the simplest that behaves the same;
 //! - [`emit`]: a shrunk input written as a vector in the corpus format;
+//! - [`explain`]: a judged codec's differences read for the field shape that would describe them;
 //! - [`merge`]: the JSON results of a sweep's shards put back together as the whole sweep's;
 //! - [`render`]: the results as text, JSON and HTML.
 
@@ -28,6 +29,7 @@ pub(crate) mod classes;
 pub(crate) mod direct;
 pub mod emit;
 pub mod exhaustive;
+pub(crate) mod explain;
 pub(crate) mod generate;
 pub(crate) mod group;
 pub(crate) mod input;
@@ -175,6 +177,9 @@ pub struct Results {
     /// Every text asked through the built-in lowerings' rules ([`exhaustive`]): how.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub exhaustive: Option<exhaustive::Report>,
+    /// Field shapes that would describe a judged codec's differences ([`explain`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub hints: Vec<explain::Hint>,
 }
 
 impl Results {
@@ -553,6 +558,7 @@ impl Sweep {
             shrunk: Vec::new(),
             classes: None,
             exhaustive: None,
+            hints: Vec::new(),
         }
     }
 

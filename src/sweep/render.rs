@@ -265,6 +265,17 @@ pub fn text(results: &Results) -> String {
                 crate::report::sanitize::terminal(&k.reason)
             );
         }
+        for h in results.hints.iter().filter(|h| h.column == j.column) {
+            let _ = writeln!(
+                out,
+                "    {} of those {} are {}; if that is how the protocol's field works, the codec \
+                 declares {} (docs/protocol.md#field-shapes)",
+                thousands(h.inputs),
+                thousands(h.of),
+                h.why,
+                h.shape
+            );
+        }
     }
     if judged.is_empty() {
         for p in pairs(results) {
@@ -488,6 +499,9 @@ pub struct Document<'a> {
     /// Every text asked through the built-in lowerings' rules, and the models' check of them.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub each_text: Option<&'a super::exhaustive::Report>,
+    /// Field shapes that would describe most of a judged codec's differences.
+    #[serde(skip_serializing_if = "<[_]>::is_empty")]
+    pub hints: &'a [super::explain::Hint],
 }
 
 #[derive(Serialize)]
@@ -545,6 +559,7 @@ pub fn document(results: &Results) -> Document<'_> {
             .collect(),
         byte_classes: results.classes.as_ref(),
         each_text: results.exhaustive.as_ref(),
+        hints: &results.hints,
     }
 }
 
