@@ -185,7 +185,7 @@ pub(crate) fn hints(sweep: &Sweep, results: &Results) -> Vec<Hint> {
         if found.iter().any(|h| answered(&h.shape)) {
             found.retain(|h| answered(&h.shape));
         }
-        found.sort_by(|a, b| b.inputs.cmp(&a.inputs));
+        found.sort_by_key(|h| std::cmp::Reverse(h.inputs));
         out.extend(found);
     }
     out
