@@ -1758,6 +1758,40 @@ fn a_codec_in_process_sweeps_each_text_as_the_general_path_does() {
     }
 }
 
+/// A judged sweep of 3,000 random 4-digit inputs of a fixture codec (`tests/fixtures/external/`,
+/// run with `mode`) as the backend `shaped`.
+fn shaped_sweep(
+    script: &str,
+    mode: &str,
+    operation: &str,
+    oracle: &str,
+    extra: &[&str],
+) -> std::process::Output {
+    let script = root().join("tests/fixtures/external").join(script);
+    let backend = format!("external:shaped=python3 {} {mode}", script.display());
+    let mut args = vec![
+        "sweep",
+        "--operation",
+        operation,
+        "--generator",
+        "random",
+        "--count",
+        "3000",
+        "--seed",
+        "3",
+        "--digits",
+        "4",
+        "--shrink",
+        "0",
+        "--backend",
+        &backend,
+        "--oracle",
+        oracle,
+    ];
+    args.extend_from_slice(extra);
+    common::cli(&args)
+}
+
 /// A codec that declares its field's shape sweeps with no difference where it follows it, as it
 /// runs the corpus with none: a token without leading zeros against FX5 ASCI, and a field read
 /// low byte first with blanks between pairs skipped, but written high byte first, against
@@ -1772,27 +1806,7 @@ fn a_codec_that_follows_its_declared_field_sweeps_with_no_difference() {
         ("mixed_order_codec.py", "hex-to-value", "iqr/habin-fixed"),
         ("mixed_order_codec.py", "value-to-hex", "iqr/binha-fixed"),
     ] {
-        let script = root().join("tests/fixtures/external").join(script);
-        let backend = format!("external:shaped=python3 {}", script.display());
-        let out = common::cli(&[
-            "sweep",
-            "--operation",
-            operation,
-            "--generator",
-            "random",
-            "--count",
-            "3000",
-            "--seed",
-            "3",
-            "--digits",
-            "4",
-            "--shrink",
-            "0",
-            "--backend",
-            &backend,
-            "--oracle",
-            oracle,
-        ]);
+        let out = shaped_sweep(script, "", operation, oracle, &[]);
         let stdout = String::from_utf8_lossy(&out.stdout);
         let line = stdout
             .lines()
@@ -2029,7 +2043,6 @@ fn a_sweep_names_the_field_shape_that_describes_a_codecs_differences() {
     if !common::python() {
         return;
     }
-    let fixture = |f: &str| root().join("tests/fixtures/external").join(f);
     for (script, mode, operation, oracle, wanted) in [
         (
             "token_codec.py",
@@ -2060,31 +2073,7 @@ fn a_sweep_names_the_field_shape_that_describes_a_codecs_differences() {
             None,
         ),
     ] {
-        let backend = format!(
-            "external:codec=python3 {} {mode}",
-            fixture(script).display()
-        );
-        let out = common::cli(&[
-            "sweep",
-            "--operation",
-            operation,
-            "--generator",
-            "random",
-            "--count",
-            "3000",
-            "--seed",
-            "3",
-            "--digits",
-            "4",
-            "--shrink",
-            "0",
-            "--backend",
-            &backend,
-            "--oracle",
-            oracle,
-            "--format",
-            "json",
-        ]);
+        let out = shaped_sweep(script, mode, operation, oracle, &["--format", "json"]);
         let doc: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON results");
         let hints: Vec<String> = doc["hints"]
             .as_array()
