@@ -2098,3 +2098,58 @@ fn a_sweep_names_the_field_shape_that_describes_a_codecs_differences() {
         }
     }
 }
+
+/// A codec in process that panics on a question has crashed on that case, as a process that
+/// exits would have: the other questions are answered, in a sweep as in a run.
+#[test]
+fn a_codec_in_process_that_panics_has_crashed_on_that_case() {
+    use plc_conformance::testing::sweep::group::Reply;
+    struct Panicky;
+    impl plc_conformance::Codec for Panicky {
+        fn name(&self) -> &str {
+            "panicky"
+        }
+        fn abilities(&self) -> plc_conformance::CodecAbilities {
+            plc_conformance::CodecAbilities {
+                hex_to_value: Some(Default::default()),
+                value_to_hex: None,
+            }
+        }
+        fn convert(
+            &self,
+            q: &plc_conformance::Question<'_>,
+        ) -> Result<plc_conformance::Answer, plc_conformance::Unsupported> {
+            assert!(q.text != b"PANIC", "a text it cannot take");
+            Ok(plc_conformance::Answer::Value(q.text.len() as u64))
+        }
+    }
+    let project = session();
+    let sweep = Sweep::new(
+        random(Operation::HexToValue, 10, 4, 1),
+        &project.profiles,
+        &[plc_conformance::codec_backend(Panicky)],
+    )
+    .expect("sweep");
+    let points: Vec<(u64, Point)> = [&b"12"[..], b"PANIC", b"123"]
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let mut p = sweep.space.point(0);
+            p.data = Data::Text(t.to_vec());
+            p.digits = t.len() as u32;
+            (i as u64, p)
+        })
+        .collect();
+    let replies: Vec<String> = sweep
+        .answers(&points, &no_stop())
+        .into_iter()
+        .map(|r| match r.and_then(|r| r.last().cloned()) {
+            Some(Reply::Failed { label, detail }) => {
+                assert!(detail.contains("a text it cannot take"), "{detail}");
+                label
+            }
+            other => format!("{:?}", other.map(|r| r.to_string())),
+        })
+        .collect();
+    assert_eq!(replies, ["Some(\"0002H\")", "crashed", "Some(\"0003H\")"]);
+}

@@ -363,14 +363,29 @@ impl<C: Codec> Backend for CodecBackend<C> {
     ) -> Vec<Result<Response, Fault>> {
         questions
             .iter()
-            .map(|q| {
-                Ok(match self.codec.convert(q) {
-                    Ok(answer) => Response::Answer(answer),
-                    Err(u) => u.into(),
-                })
+            .map(|q| match convert_or_panic(&self.codec, q) {
+                Ok(Ok(answer)) => Ok(Response::Answer(answer)),
+                Ok(Err(u)) => Ok(u.into()),
+                Err(panic) => Err(Fault::Crashed(panic)),
             })
             .collect()
     }
+}
+
+/// A codec's answer, or what it panicked with: a codec in process that panics on a question has
+/// crashed on that case, as a process that exits would have, and the run goes on.
+pub(crate) fn convert_or_panic(
+    codec: &dyn Codec,
+    question: &Question<'_>,
+) -> Result<Result<Answer, Unsupported>, String> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| codec.convert(question))).map_err(
+        |panic| {
+            let message = (panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "a panic".into());
+            format!("the codec panicked on case {}: {message}", question.case_id)
+        },
+    )
 }
 
 /// Makes a reference model's backend when its profile is loaded.

@@ -280,11 +280,12 @@ impl InProcess<'_> {
             value: 0,
             digits: 4,
         };
-        match self.codec.convert(&question) {
-            Ok(Answer::Value(v)) if v >> 32 == 0 => v,
-            Ok(Answer::Error(c)) => class_code(&c),
-            Err(_) => UNSUPPORTED,
-            Ok(_) => OTHER,
+        // A panic is kept apart too: the general path asks the text and records the crash.
+        match crate::backend::convert_or_panic(self.codec, &question) {
+            Ok(Ok(Answer::Value(v))) if v >> 32 == 0 => v,
+            Ok(Ok(Answer::Error(c))) => class_code(&c),
+            Ok(Err(_)) => UNSUPPORTED,
+            _ => OTHER,
         }
     }
 }

@@ -177,7 +177,7 @@ pub struct Results {
     /// Every text asked through the built-in lowerings' rules ([`exhaustive`]): how.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub exhaustive: Option<exhaustive::Report>,
-    /// Field shapes that would describe a judged codec's differences ([`explain`]).
+    /// Field shapes that would describe a judged codec's differences (`sweep::explain`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub hints: Vec<explain::Hint>,
 }
@@ -377,9 +377,11 @@ impl Sweep {
                     });
                 }
             }
+            // A codec's panic is caught as its crash (`backend::convert_or_panic`); one of this
+            // harness's own is not a result.
             handles
                 .into_iter()
-                .map(|h| h.join().unwrap_or_default())
+                .map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
                 .collect()
         });
         for (&c, replies) in codecs.iter().zip(asked) {
