@@ -1080,24 +1080,15 @@ fn a_sweep_whose_codec_faults_fails_and_names_it() {
     if !common::python() {
         return;
     }
-    let script = root().join("tests/fixtures/external/faulty_codec.py");
     for mode in ["crash", "garbage"] {
-        let backend = format!("external:faulty=python3 {} {mode}", script.display());
-        let out = common::cli(&[
-            "sweep",
-            "--operation",
+        let out = fixture_sweep(
+            "faulty",
+            "faulty_codec.py",
+            mode,
             "hex-to-value",
-            "--generator",
-            "random",
-            "--count",
-            "60",
-            "--seed",
-            "1",
-            "--digits",
-            "4",
-            "--backend",
-            &backend,
-        ]);
+            ["60", "1"],
+            &[],
+        );
         let stdout = String::from_utf8_lossy(&out.stdout);
         assert_eq!(out.status.code(), Some(1), "{mode}: {stdout}");
         assert!(stdout.contains("FAULTED: faulty "), "{mode}: {stdout}");
@@ -1137,10 +1128,30 @@ fn judged_sweep(mode: &str, extra: &[&str]) -> std::process::Output {
     judged_sweep_of("hex-to-value", mode, extra)
 }
 
-/// [`judged_sweep`] of either operation.
+/// [`judged_sweep`] of either operation: 400 random inputs, seed 5.
 fn judged_sweep_of(operation: &str, mode: &str, extra: &[&str]) -> std::process::Output {
-    let script = root().join("tests/fixtures/external/judged_codec.py");
-    let backend = format!("external:judged=python3 {} {mode}", script.display());
+    fixture_sweep(
+        "judged",
+        "judged_codec.py",
+        mode,
+        operation,
+        ["400", "5"],
+        extra,
+    )
+}
+
+/// A sweep of random 4-digit inputs (`[count, seed]`) with a fixture codec of
+/// `tests/fixtures/external/`, run with `mode`, as the backend `name`.
+fn fixture_sweep(
+    name: &str,
+    script: &str,
+    mode: &str,
+    operation: &str,
+    [count, seed]: [&str; 2],
+    extra: &[&str],
+) -> std::process::Output {
+    let script = root().join("tests/fixtures/external").join(script);
+    let backend = format!("external:{name}=python3 {} {mode}", script.display());
     let mut args = vec![
         "sweep",
         "--operation",
@@ -1148,9 +1159,9 @@ fn judged_sweep_of(operation: &str, mode: &str, extra: &[&str]) -> std::process:
         "--generator",
         "random",
         "--count",
-        "400",
+        count,
         "--seed",
-        "5",
+        seed,
         "--digits",
         "4",
         "--backend",
@@ -1758,8 +1769,8 @@ fn a_codec_in_process_sweeps_each_text_as_the_general_path_does() {
     }
 }
 
-/// A judged sweep of 3,000 random 4-digit inputs of a fixture codec (`tests/fixtures/external/`,
-/// run with `mode`) as the backend `shaped`.
+/// A judged sweep of 3,000 random 4-digit inputs (seed 3, nothing shrunk) of a fixture codec,
+/// run with `mode`, as the backend `shaped`.
 fn shaped_sweep(
     script: &str,
     mode: &str,
@@ -1767,29 +1778,9 @@ fn shaped_sweep(
     oracle: &str,
     extra: &[&str],
 ) -> std::process::Output {
-    let script = root().join("tests/fixtures/external").join(script);
-    let backend = format!("external:shaped=python3 {} {mode}", script.display());
-    let mut args = vec![
-        "sweep",
-        "--operation",
-        operation,
-        "--generator",
-        "random",
-        "--count",
-        "3000",
-        "--seed",
-        "3",
-        "--digits",
-        "4",
-        "--shrink",
-        "0",
-        "--backend",
-        &backend,
-        "--oracle",
-        oracle,
-    ];
+    let mut args = vec!["--shrink", "0", "--oracle", oracle];
     args.extend_from_slice(extra);
-    common::cli(&args)
+    fixture_sweep("shaped", script, mode, operation, ["3000", "3"], &args)
 }
 
 /// A codec that declares its field's shape sweeps with no difference where it follows it, as it

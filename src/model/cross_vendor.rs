@@ -319,15 +319,6 @@ impl OperationAbilities {
     }
 }
 
-/// The parts of a question [`CodecAbilities::declines_asking`] looks at.
-struct Asking<'a> {
-    operation: Operation,
-    text: &'a [u8],
-    value: u64,
-    digits: u32,
-    expect: Option<&'a Answer>,
-}
-
 /// Whether a blank (20H) stands where a byte pair could start: after an even number of the
 /// characters that are not blanks.
 pub(crate) fn blank_between_pairs(text: &[u8]) -> bool {
@@ -367,24 +358,17 @@ impl CodecAbilities {
         digits: u32,
         expect: Option<&Answer>,
     ) -> Option<String> {
-        let case = Asking {
-            operation,
-            text,
-            value,
-            digits,
-            expect,
-        };
-        let ability = match case.operation {
+        let ability = match operation {
             Operation::HexToValue => &self.hex_to_value,
             Operation::ValueToHex => &self.value_to_hex,
         };
         let Some(ability) = ability else {
-            return Some(format!("implements no {}", case.operation));
+            return Some(format!("implements no {}", operation));
         };
         let digits_ok = match (&ability.digits, ability.shape.widths.is_empty()) {
-            (Some(list), _) => list.contains(&case.digits),
-            (None, false) => ability.shape.widths.contains_key(&case.digits),
-            (None, true) => (1..=8).contains(&case.digits),
+            (Some(list), _) => list.contains(&digits),
+            (None, false) => ability.shape.widths.contains_key(&digits),
+            (None, true) => (1..=8).contains(&digits),
         };
         if !digits_ok {
             let listed = ability.digits.clone().or_else(|| {
@@ -402,59 +386,58 @@ impl CodecAbilities {
             );
             return Some(format!(
                 "takes {taken} digit(s), not {} ({})",
-                case.digits, case.operation
+                digits, operation
             ));
         }
         let shape = &ability.shape;
-        let text = case.text.len();
-        let digits = case.digits as usize;
-        if case.operation == Operation::HexToValue {
-            if shape.variable && text != digits {
+        let (length, count) = (text.len(), digits as usize);
+        if operation == Operation::HexToValue {
+            if shape.variable && length != count {
                 return Some(format!(
-                    "reads a token of whatever length, and the case gives {text} character(s) \
-                     for a {digits}-digit field"
+                    "reads a token of whatever length, and the case gives {length} character(s) \
+                     for a {count}-digit field"
                 ));
             }
-            if shape.blanks_between_pairs && blank_between_pairs(case.text) {
+            if shape.blanks_between_pairs && blank_between_pairs(text) {
                 return Some(
                     "skips blanks between byte pairs, and the text has a blank where a pair \
                      could start"
                         .into(),
                 );
             }
-            if shape.whole_frame && text > digits {
+            if shape.whole_frame && length > count {
                 return Some(format!(
                     "checks its field as part of a whole frame, and the text has {} character(s) \
-                     after its {digits}-digit field",
-                    text - digits
+                     after its {count}-digit field",
+                    length - count
                 ));
             }
         }
         if shape.variable
-            && case.operation == Operation::ValueToHex
-            && u64::BITS - case.value.leading_zeros() > 4 * case.digits
+            && operation == Operation::ValueToHex
+            && u64::BITS - value.leading_zeros() > 4 * digits
         {
             return Some(format!(
-                "writes every significant digit of the value, and {} has more than {digits}",
-                Answer::Value(case.value)
+                "writes every significant digit of the value, and {} has more than {count}",
+                Answer::Value(value)
             ));
         }
-        if shape.low_byte_first && digits % 2 == 1 {
+        if shape.low_byte_first && count % 2 == 1 {
             return Some(format!(
-                "puts the first character pair in the low byte, and {digits} digit(s) are no \
+                "puts the first character pair in the low byte, and {count} digit(s) are no \
                  whole bytes"
             ));
         }
-        let width = ability.width_for(case.digits);
+        let width = ability.width_for(digits);
         let fits = |v: u64| width >= 64 || v >> width == 0;
-        match (case.operation, &case.expect) {
+        match (operation, expect) {
             (Operation::HexToValue, Some(Answer::Value(v))) if !fits(*v) => Some(format!(
                 "the expected value {} is wider than its {width} bits",
                 Answer::Value(*v),
             )),
-            (Operation::ValueToHex, _) if !fits(case.value) => Some(format!(
+            (Operation::ValueToHex, _) if !fits(value) => Some(format!(
                 "the value {} is wider than its {width} bits",
-                Answer::Value(case.value),
+                Answer::Value(value),
             )),
             _ => None,
         }

@@ -180,19 +180,12 @@ pub(crate) fn codec_replies(
             }),
             // A question the stop cut off was not answered: it is not counted as swept.
             Err(_) if stopped => None,
-            Ok(Response::Done(_)) => Some(failed(Fault::Protocol(
+            Ok(Response::Done(_)) => Some(Reply::failed(&Fault::Protocol(
                 "an instruction's outcome answered a codec question".into(),
             ))),
-            Err(fault) => Some(failed(fault)),
+            Err(fault) => Some(Reply::failed(&fault)),
         };
         out.push((p, reply));
     }
     out
-}
-
-fn failed(fault: Fault) -> Reply {
-    Reply::Failed {
-        label: fault.kind().to_string(),
-        detail: fault.to_string(),
-    }
 }

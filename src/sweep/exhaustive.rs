@@ -241,10 +241,20 @@ pub struct Plan<'s> {
 /// checked exactly as the rules' are (a code no tuple can share, [`OTHER`], keeps a text apart).
 struct InProcess<'s> {
     codec: &'s dyn crate::backend::Codec,
-    /// Every 4-digit text is outside its abilities (the general path skips each).
-    declined: bool,
-    /// Its field skips blanks between byte pairs: a text with one there is skipped.
-    blanks: bool,
+    /// What it takes (of hex-to-value): a text outside it is skipped, as the general path
+    /// skips it.
+    abilities: crate::model::cross_vendor::CodecAbilities,
+    /// Every 4-digit text is outside it; else only some texts can be (a field that skips
+    /// blanks between byte pairs is the one shape that looks at the text's bytes), and only
+    /// then is each text checked.
+    declined: Declined,
+}
+
+#[derive(PartialEq, Eq)]
+enum Declined {
+    Every,
+    Some,
+    None,
 }
 
 /// A codec's codes: a value below 2^32 is itself; these are above.
@@ -267,10 +277,21 @@ fn class_code(c: &crate::model::cross_vendor::ErrorClass) -> u64 {
 }
 
 impl InProcess<'_> {
+    /// Whether the codec's abilities decline a 4-digit text, as `plan::codec_declined` does.
+    fn declines(&self, text: &[u8]) -> bool {
+        (self.abilities)
+            .declines_asking(Operation::HexToValue, text, 0, 4, None)
+            .is_some()
+    }
+
     #[inline]
     fn code(&self, text: [u8; 4]) -> u64 {
-        if self.declined || (self.blanks && crate::model::cross_vendor::blank_between_pairs(&text))
-        {
+        let declined = match self.declined {
+            Declined::Every => true,
+            Declined::Some => self.declines(&text),
+            Declined::None => false,
+        };
+        if declined {
             return SKIPPED;
         }
         let question = crate::backend::Question {
@@ -333,23 +354,22 @@ pub fn plan(sweep: &Sweep) -> Option<Plan<'_>> {
         if let (Ask::Codec, Some(codec), Some(field)) =
             (&c.ask, c.backend.as_codec(), c.field.as_ref())
         {
-            let sample = crate::model::cross_vendor::CrossVendorCase {
-                text: b"0000".to_vec(),
-                ..super::target::Cases::new(
-                    &s.target,
-                    None,
-                    0,
-                    &sweep.space.with_setting(Data::Text(b"0000".to_vec()), 0),
-                )
-                .cross_vendor?
-                .as_ref()
-                .clone()
-            };
-            codecs.push(InProcess {
+            let mut codec = InProcess {
                 codec,
-                declined: crate::plan::codec_declined(c.backend.as_ref(), &sample).is_some(),
-                blanks: field.1.shape.blanks_between_pairs,
-            });
+                abilities: crate::model::cross_vendor::CodecAbilities {
+                    hex_to_value: Some(field.1.clone()),
+                    value_to_hex: None,
+                },
+                declined: Declined::Some,
+            };
+            codec.declined = if codec.declines(b"0000") {
+                Declined::Every
+            } else if field.1.shape.blanks_between_pairs {
+                Declined::Some
+            } else {
+                Declined::None
+            };
+            codecs.push(codec);
             codec_columns.push(i);
             of.push(usize::MAX);
             continue;

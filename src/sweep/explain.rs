@@ -10,7 +10,9 @@ use super::group::Reply;
 use super::input::{Data, Point};
 use super::target::Ask;
 use super::{Results, Sweep};
-use crate::model::cross_vendor::{blank_between_pairs, Answer, Operation, OperationAbilities};
+use crate::model::cross_vendor::{
+    blank_between_pairs, Answer, FieldShape, Operation, OperationAbilities,
+};
 
 /// A field shape that would describe most of a judged codec's differences.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
@@ -32,15 +34,22 @@ const ENRICHED: f64 = 2.0;
 /// A share of the differing inputs that names a shape whatever its share among all inputs.
 const NEARLY_ALL: f64 = 0.95;
 
-/// A candidate shape: what it is declared as, what its inputs share, and whether it describes
-/// one differing input (the point, and the codec's answer and the oracle's when both are
-/// answers).
+/// A candidate shape: what it is declared as, what its inputs share, and how it is read off a
+/// differing input.
 struct Candidate {
     shape: &'static str,
     why: &'static str,
     /// Not suggested when the codec declares it already.
     declared: fn(&OperationAbilities) -> bool,
-    describes: fn(Operation, &Point, Option<(&Answer, &Answer)>) -> bool,
+    reads: Reads,
+}
+
+enum Reads {
+    /// A trait of the input (the shape would not have asked it).
+    Input(fn(Operation, &Point) -> bool),
+    /// The codec's answer is the oracle's as a field of this shape (a fixed field with this
+    /// change) writes or reads it.
+    Answer(fn(&mut FieldShape)),
 }
 
 const CANDIDATES: &[Candidate] = &[
@@ -49,7 +58,9 @@ const CANDIDATES: &[Candidate] = &[
         why: "texts with characters after the digit count: a codec that checks its field as part \
               of a frame (a trailing character, a checksum) refuses them",
         declared: |a| a.shape.whole_frame,
-        describes: |op, p, _| op == Operation::HexToValue && text(p).len() > p.digits as usize,
+        reads: Reads::Input(|op, p| {
+            op == Operation::HexToValue && text(p).len() > p.digits as usize
+        }),
     },
     Candidate {
         shape: "\"variable\": true",
@@ -57,63 +68,48 @@ const CANDIDATES: &[Candidate] = &[
             "texts shorter or longer than the digit count: a codec that reads a token of whatever \
               length reads them all",
         declared: |a| a.shape.variable,
-        describes: |op, p, _| op == Operation::HexToValue && text(p).len() != p.digits as usize,
+        reads: Reads::Input(|op, p| {
+            op == Operation::HexToValue && text(p).len() != p.digits as usize
+        }),
     },
     Candidate {
         shape: "\"blanks-between-pairs\": true",
         why: "texts with a blank where a byte pair could start: a codec that reads its field with \
               bytes.fromhex skips it",
         declared: |a| a.shape.blanks_between_pairs,
-        describes: |op, p, _| op == Operation::HexToValue && blank_between_pairs(text(p)),
+        reads: Reads::Input(|op, p| op == Operation::HexToValue && blank_between_pairs(text(p))),
     },
     Candidate {
         shape: "\"byte-order\": \"low-first\"",
         why: "answers that are the oracle's with the bytes in the other order",
         declared: |a| a.shape.low_byte_first,
-        describes: |op, p, answers| {
-            let Some((mine, theirs)) = answers else {
-                return false;
-            };
-            let low = OperationAbilities {
-                shape: crate::model::cross_vendor::FieldShape {
-                    low_byte_first: true,
-                    ..Default::default()
-                },
-                ..Default::default()
-            };
-            mine != theirs
-                && p.digits % 2 == 0
-                && p.digits > 2
-                && low.shaped(op, p.digits, theirs) == *mine
-        },
+        reads: Reads::Answer(|s| s.low_byte_first = true),
     },
     Candidate {
         shape: "\"leading-zeros\": false",
         why: "answers that are the oracle's text without its leading zeros",
         declared: |a| !a.shape.leading_zeros,
-        describes: |op, p, answers| {
-            let Some((mine, theirs)) = answers else {
-                return false;
-            };
-            let bare = OperationAbilities {
-                shape: crate::model::cross_vendor::FieldShape {
-                    leading_zeros: false,
-                    ..Default::default()
-                },
-                ..Default::default()
-            };
-            op == Operation::ValueToHex
-                && mine != theirs
-                && bare.shaped(op, p.digits, theirs) == *mine
-        },
+        reads: Reads::Answer(|s| s.leading_zeros = false),
     },
 ];
 
-/// Whether a shape is read off the answers (the others off the input).
-fn answered(shape: &str) -> bool {
-    CANDIDATES
-        .iter()
-        .any(|k| k.shape == shape && k.why.starts_with("answers"))
+impl Reads {
+    /// Whether it describes a differing input: the point, and the codec's answer and the
+    /// oracle's when both are answers.
+    fn describe(&self, op: Operation, p: &Point, answers: Option<(&Answer, &Answer)>) -> bool {
+        match (self, answers) {
+            (Reads::Input(trait_of), _) => trait_of(op, p),
+            (Reads::Answer(change), Some((mine, theirs))) => {
+                let mut field = OperationAbilities::default();
+                change(&mut field.shape);
+                // An odd count holds no whole bytes: a low-first field does not take it.
+                mine != theirs
+                    && (p.digits % 2 == 0 || !field.shape.low_byte_first)
+                    && field.shaped(op, p.digits, theirs) == *mine
+            }
+            (Reads::Answer(_), None) => false,
+        }
+    }
 }
 
 fn text(p: &Point) -> &[u8] {
@@ -144,7 +140,7 @@ pub(crate) fn hints(sweep: &Sweep, results: &Results) -> Vec<Hint> {
                 (Reply::Failed { .. }, _) => return false,
                 _ => None,
             };
-            (k.describes)(*operation, &r.point, answers)
+            k.reads.describe(*operation, &r.point, answers)
         };
         let all: Vec<&super::group::Group> = results.groups.by_key.values().collect();
         let swept: u64 = all.iter().map(|g| g.inputs).sum();
@@ -155,7 +151,7 @@ pub(crate) fn hints(sweep: &Sweep, results: &Results) -> Vec<Hint> {
         if of == 0 {
             continue;
         }
-        let mut found: Vec<Hint> = CANDIDATES
+        let mut found: Vec<(bool, Hint)> = CANDIDATES
             .iter()
             .filter(|k| !(k.declared)(field))
             .filter_map(|k| {
@@ -171,22 +167,25 @@ pub(crate) fn hints(sweep: &Sweep, results: &Results) -> Vec<Hint> {
                 let share = inputs as f64 / of as f64;
                 let base = anywhere as f64 / swept.max(1) as f64;
                 let named = share >= NEARLY_ALL || (share >= SHARE && share >= ENRICHED * base);
-                named.then(|| Hint {
-                    column: column.name.clone(),
-                    shape: k.shape.to_string(),
-                    inputs,
-                    of,
-                    why: k.why.to_string(),
+                named.then(|| {
+                    let hint = Hint {
+                        column: column.name.clone(),
+                        shape: k.shape.to_string(),
+                        inputs,
+                        of,
+                        why: k.why.to_string(),
+                    };
+                    (matches!(k.reads, Reads::Answer(_)), hint)
                 })
             })
             .collect();
         // An answer the shape would have written is a closer reading than a trait of the
         // input: when one describes the differences, the input's traits are not named.
-        if found.iter().any(|h| answered(&h.shape)) {
-            found.retain(|h| answered(&h.shape));
+        if found.iter().any(|(answered, _)| *answered) {
+            found.retain(|(answered, _)| *answered);
         }
-        found.sort_by_key(|h| std::cmp::Reverse(h.inputs));
-        out.extend(found);
+        found.sort_by_key(|(_, h)| std::cmp::Reverse(h.inputs));
+        out.extend(found.into_iter().map(|(_, h)| h));
     }
     out
 }

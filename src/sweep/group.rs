@@ -52,10 +52,7 @@ impl Reply {
             Verdict::Skipped { reason } => Reply::Skipped {
                 reason: reason.clone(),
             },
-            Verdict::Fault { fault, .. } => Reply::Failed {
-                label: fault.kind().to_string(),
-                detail: fault.to_string(),
-            },
+            Verdict::Fault { fault, .. } => Reply::failed(fault),
             Verdict::Unsupported { reason } => Reply::Failed {
                 label: "unsupported".into(),
                 detail: reason.clone(),
@@ -64,6 +61,14 @@ impl Reply {
                 label: other.label().to_string(),
                 detail: format!("{other:?}"),
             },
+        }
+    }
+
+    /// No usable answer, for this fault.
+    pub(crate) fn failed(fault: &crate::backend::Fault) -> Reply {
+        Reply::Failed {
+            label: fault.kind().to_string(),
+            detail: fault.to_string(),
         }
     }
 

@@ -7,37 +7,15 @@
 // answers: the batch is a faster path to the same answers, never other ones.
 const test = require('node:test');
 const assert = require('node:assert/strict');
-const path = require('node:path');
-const { spawn } = require('node:child_process');
 const { PassThrough } = require('node:stream');
 
 const helper = require('..');
 
-const EXAMPLES = path.join(__dirname, '..', 'examples');
+const { EXAMPLES, drive } = require('../test-support/drive');
 const HELLO_2 = { type: 'hello', protocol: 2, harness: 'plc-conformance 0.2.0' };
 const HELLO_5 = { type: 'hello', protocol: 5, harness: 'plc-conformance 0.5.0' };
 const SHUTDOWN = { type: 'shutdown' };
 
-/** Runs an example with the given protocol messages on stdin; resolves with what it did. */
-function drive(fixture, args, messages, { closeStdin = true } = {}) {
-  return new Promise((resolve, reject) => {
-    const child = spawn(process.execPath, [path.join(EXAMPLES, fixture), ...args], { stdio: ['pipe', 'pipe', 'pipe'] });
-    let stdout = '';
-    let stderr = '';
-    child.stdout.on('data', (d) => { stdout += d; });
-    child.stderr.on('data', (d) => { stderr += d; });
-    const timer = setTimeout(() => { child.kill('SIGKILL'); reject(new Error(`${fixture} hung; stderr: ${stderr}`)); }, 10000);
-    child.on('error', reject);
-    child.on('close', (code) => {
-      clearTimeout(timer);
-      const lines = stdout.split('\n').filter((l) => l !== '');
-      resolve({ lines, answers: lines.map((l) => JSON.parse(l)), stderr, code });
-    });
-    child.stdin.on('error', () => {});
-    for (const m of messages) child.stdin.write(`${JSON.stringify(m)}\n`);
-    if (closeStdin) child.stdin.end();
-  });
-}
 
 /** Runs serveCodec in process over the messages; resolves with the lines written. */
 async function inProcess(options, messages) {

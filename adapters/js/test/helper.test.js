@@ -4,35 +4,14 @@
 const test = require('node:test');
 const assert = require('node:assert/strict');
 const path = require('node:path');
-const { spawn } = require('node:child_process');
 const { PassThrough } = require('node:stream');
 const fs = require('node:fs');
 const os = require('node:os');
 
 const helper = require('..');
 
-const FIXTURES = path.join(__dirname, '..', 'examples');
+const { EXAMPLES: FIXTURES, drive } = require('../test-support/drive');
 
-/** Runs a fixture with the given protocol messages on stdin; resolves with what it did. */
-function drive(fixture, args, messages, { closeStdin = true } = {}) {
-  return new Promise((resolve, reject) => {
-    const child = spawn(process.execPath, [path.join(FIXTURES, fixture), ...args], { stdio: ['pipe', 'pipe', 'pipe'] });
-    let stdout = '';
-    let stderr = '';
-    child.stdout.on('data', (d) => { stdout += d; });
-    child.stderr.on('data', (d) => { stderr += d; });
-    const timer = setTimeout(() => { child.kill('SIGKILL'); reject(new Error(`${fixture} hung; stderr: ${stderr}`)); }, 10000);
-    child.on('error', reject);
-    child.on('close', (code, signal) => {
-      clearTimeout(timer);
-      const lines = stdout.split('\n').filter((l) => l !== '');
-      resolve({ lines, answers: lines.map((l) => JSON.parse(l)), stderr, code, signal });
-    });
-    child.stdin.on('error', () => {}); // a crashed backend closes its end early
-    for (const m of messages) child.stdin.write(`${JSON.stringify(m)}\n`);
-    if (closeStdin) child.stdin.end();
-  });
-}
 
 const HELLO_2 = { type: 'hello', protocol: 2, harness: 'plc-conformance 0.2.0' };
 const HELLO_1 = { type: 'hello', protocol: 1, harness: 'plc-conformance 0.1.0' };

@@ -12,28 +12,18 @@ import io
 import json
 import os
 import random
-import subprocess
 import sys
 import unittest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-FIXTURES = os.path.join(HERE, "fixtures")
 sys.path.insert(0, os.path.join(HERE, ".."))
 
 import plc_adapter  # noqa: E402
 
-HELLO_2 = {"type": "hello", "protocol": 2, "harness": "plc-conformance 0.2.0"}
+# The fixtures are driven as test_plc_adapter.py drives them.
+from test_plc_adapter import HELLO_2, SHUTDOWN, drive  # noqa: E402
+
 HELLO_5 = {"type": "hello", "protocol": 5, "harness": "plc-conformance 0.5.0"}
-SHUTDOWN = {"type": "shutdown"}
-
-
-def drive(fixture, args, messages):
-    """Runs a fixture with the messages on stdin; returns (answers, stderr, exit status)."""
-    proc = subprocess.run(
-        [sys.executable, os.path.join(FIXTURES, fixture)] + list(args),
-        input="".join(json.dumps(m) + "\n" for m in messages),
-        capture_output=True, text=True, timeout=30)
-    return [json.loads(line) for line in proc.stdout.split("\n") if line], proc.stderr, proc.returncode
 
 
 def h2v_batch(ident, texts, digits):

@@ -117,37 +117,13 @@ impl ExternalBackend {
         self.run_chunk(state, &cases, false, |_| false, answered).0
     }
 
-    /// Starts the process again if a fault ended it; a fault when it cannot be.
+    /// The process, started again if a fault ended it; the fault when it cannot be.
     fn live_process(&self, state: &mut State) -> Result<(), Fault> {
-        if let Some(why) = &state.down {
-            return Err(Fault::Unreachable(why.clone()));
+        self.start_again(state);
+        match &state.down {
+            Some(why) => Err(Fault::Unreachable(why.clone())),
+            None => Ok(()),
         }
-        if state.process.is_none() {
-            match super::handshake(&self.settings) {
-                Ok((p, _, _, _)) => {
-                    self.restarts
-                        .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                    state.process = Some(p);
-                }
-                Err(_) if closing() => {
-                    state.down = Some(INTERRUPTED.into());
-                    return Err(Fault::Unreachable(INTERRUPTED.into()));
-                }
-                Err(kind) => {
-                    let why = format!(
-                        "could not be started again: {}",
-                        super::ExternalError {
-                            backend: self.settings.name.clone(),
-                            command: self.settings.launch.to_string(),
-                            kind,
-                        }
-                    );
-                    state.down = Some(why.clone());
-                    return Err(Fault::Unreachable(why));
-                }
-            }
-        }
-        Ok(())
     }
 
     /// Reads the `converted` line answering message `id`; a fault ends the process.

@@ -214,31 +214,7 @@ impl ExternalBackend {
             }
             if state.process.is_none() {
                 sent = false;
-                match handshake(&self.settings) {
-                    Ok((p, _, _, _)) => {
-                        if self.settings.persistent {
-                            self.restarts
-                                .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                        }
-                        state.process = Some(p)
-                    }
-                    Err(_) if closing() => {
-                        state.down = Some(INTERRUPTED.into());
-                        continue;
-                    }
-                    Err(kind) => {
-                        let why = format!(
-                            "could not be started again: {}",
-                            ExternalError {
-                                backend: self.settings.name.clone(),
-                                command: self.settings.launch.to_string(),
-                                kind,
-                            }
-                        );
-                        state.down = Some(why);
-                        continue;
-                    }
-                }
+                self.start_again(state);
             }
             let Some(process) = state.process.as_mut() else {
                 continue;
@@ -285,6 +261,35 @@ impl ExternalBackend {
             }
         }
         (results, ahead_sent && state.process.is_some())
+    }
+
+    /// Starts the process again after a fault ended it. When it cannot be started (or the run
+    /// is being interrupted) the backend is down: every later case gets the reason as its
+    /// fault, without another attempt.
+    fn start_again(&self, state: &mut State) {
+        if state.process.is_some() || state.down.is_some() {
+            return;
+        }
+        match handshake(&self.settings) {
+            Ok((p, _, _, _)) => {
+                if self.settings.persistent {
+                    self.restarts
+                        .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                }
+                state.process = Some(p);
+            }
+            Err(_) if closing() => state.down = Some(INTERRUPTED.into()),
+            Err(kind) => {
+                state.down = Some(format!(
+                    "could not be started again: {}",
+                    ExternalError {
+                        backend: self.settings.name.clone(),
+                        command: self.settings.launch.to_string(),
+                        kind,
+                    }
+                ));
+            }
+        }
     }
 
     /// Why the rest of the trials are not run once the circuit breaker trips: a backend that
