@@ -25,18 +25,22 @@ pub mod backend {
     pub mod omron {
         pub use crate::backend::omron::{Designator, Parity};
     }
-    pub mod slmp {
-        pub use crate::backend::slmp::{
-            fault_of, fence, limits, mailbox, SlmpBackend, SlmpSettings,
+    pub mod bench {
+        pub use crate::backend::bench::{
+            fence, mailbox, Addressing, BenchBackend, BenchSettings, Failure, Identity, Link,
+            LinkError, LinkSettings, RunState,
         };
+        pub mod manifest {
+            pub use crate::backend::bench::manifest::Manifest;
+        }
+    }
+    pub mod slmp {
+        pub use crate::backend::slmp::{fault_of, limits, SlmpSettings, ADDRESSING};
         pub mod client {
             pub use crate::backend::slmp::client::{Client, ClientError, ClientSettings, Code};
         }
         pub mod frame {
             pub use crate::backend::slmp::frame::{command, DeviceForm, FrameKind};
-        }
-        pub mod manifest {
-            pub use crate::backend::slmp::manifest::Manifest;
         }
         pub mod sim {
             pub use crate::backend::slmp::sim::{

@@ -10,14 +10,15 @@ use std::net::TcpListener;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use plc_conformance::testing::backend::slmp::fence::{parse_ranges, WordRange};
+use plc_conformance::testing::backend::bench::fence::{parse_ranges, WordRange};
+use plc_conformance::testing::backend::bench::mailbox;
+use plc_conformance::testing::backend::bench::manifest::Manifest;
+use plc_conformance::testing::backend::bench::BenchBackend;
 use plc_conformance::testing::backend::slmp::frame::{command, DeviceForm, FrameKind};
-use plc_conformance::testing::backend::slmp::mailbox;
-use plc_conformance::testing::backend::slmp::manifest::Manifest;
 use plc_conformance::testing::backend::slmp::sim::{
     FaultAction, FaultRule, SimSettings, Simulator,
 };
-use plc_conformance::testing::backend::slmp::{SlmpBackend, SlmpSettings};
+use plc_conformance::testing::backend::slmp::{SlmpSettings, ADDRESSING};
 use plc_conformance::testing::backend::{Backend, Fault};
 use plc_conformance::testing::device::Device;
 use plc_conformance::testing::error_chain::chain;
@@ -68,7 +69,7 @@ fn simulator(
 }
 
 fn settings(manifest: &Manifest, variant: &str, sim: &Simulator) -> SlmpSettings {
-    let sandbox = parse_ranges(&manifest.writes.join(",")).expect("writes");
+    let sandbox = parse_ranges(&manifest.writes.join(","), &ADDRESSING).expect("writes");
     let mut s = SlmpSettings::new(
         "live",
         sim.address().to_string(),
@@ -79,14 +80,14 @@ fn settings(manifest: &Manifest, variant: &str, sim: &Simulator) -> SlmpSettings
     );
     s.first_poll = Duration::from_micros(300);
     s.max_poll = Duration::from_millis(2);
-    s.client.reply_timeout = Duration::from_millis(500);
+    s.link.reply_timeout = Duration::from_millis(500);
     s.case_timeout = Duration::from_millis(800);
     s
 }
 
 fn live(project: &mut Session, settings: SlmpSettings) -> Arc<dyn Backend> {
     project
-        .add(BackendSource::Slmp(Box::new(settings)), true)
+        .add(BackendSource::Bench(Box::new(settings.erased())), true)
         .unwrap_or_else(|e| panic!("interlocks: {}", chain(&e)))[0]
         .clone()
 }
@@ -253,7 +254,7 @@ fn iqr_sim(project: &Session, change: impl FnOnce(&mut SimSettings)) -> Simulato
 
 /// The first trial the live backend would run whose instruction is `instruction`, and the
 /// backend itself (not connected).
-fn first_trial(project: &Session, backend: &Arc<SlmpBackend>, instruction: &str) -> Trial {
+fn first_trial(project: &Session, backend: &Arc<BenchBackend>, instruction: &str) -> Trial {
     let b: Arc<dyn Backend> = backend.clone();
     project
         .plan(&[b])
@@ -264,7 +265,7 @@ fn first_trial(project: &Session, backend: &Arc<SlmpBackend>, instruction: &str)
 
 /// Executes the trial's first request (fill A) once.
 fn execute_once(
-    backend: &SlmpBackend,
+    backend: &BenchBackend,
     trial: &Trial,
 ) -> Result<plc_conformance::testing::backend::Response, Fault> {
     let imgs = images(trial);
@@ -276,10 +277,10 @@ fn iqr_backend(
     project: &Session,
     sim: &Simulator,
     change: impl FnOnce(&mut SlmpSettings),
-) -> Arc<SlmpBackend> {
+) -> Arc<BenchBackend> {
     let mut s = settings(iqr_manifest(), "rcpu", sim);
     change(&mut s);
-    Arc::new(SlmpBackend::new(s, &project.profiles).expect("backend"))
+    Arc::new(BenchBackend::new(s, &project.profiles).expect("backend"))
 }
 
 fn rule(command: u16, nth: usize, action: FaultAction) -> FaultRule {
@@ -415,10 +416,10 @@ fn no_connection_is_unreachable() {
         iqr_manifest().clone(),
         "rcpu",
         "R04CPU",
-        parse_ranges(&iqr_manifest().writes.join(",")).expect("writes"),
+        parse_ranges(&iqr_manifest().writes.join(","), &ADDRESSING).expect("writes"),
     );
-    s.client.read_retries = 0;
-    let backend = Arc::new(SlmpBackend::new(s, &project.profiles).expect("backend"));
+    s.link.read_retries = 0;
+    let backend = Arc::new(BenchBackend::new(s, &project.profiles).expect("backend"));
     assert!(chain(&backend.connect().expect_err("refused")).contains("no connection to"));
     let trial = first_trial(&project, &backend, "BINHA");
     assert_eq!(
@@ -478,7 +479,7 @@ fn a_write_outside_the_sandbox_is_refused_before_any_byte_is_sent() {
         "R04CPU",
         vec![WordRange::new("D", 0, 150)],
     );
-    let backend = Arc::new(SlmpBackend::new(s, &project.profiles).expect("backend"));
+    let backend = Arc::new(BenchBackend::new(s, &project.profiles).expect("backend"));
     let trial = first_trial(&project, &backend, "BINHA");
     match execute_once(&backend, &trial) {
         Ok(plc_conformance::testing::backend::Response::Unsupported(why)) => {
@@ -505,11 +506,12 @@ fn a_write_outside_the_sandbox_is_refused_before_any_byte_is_sent() {
 
 /// The FX5U program of the whole corpus in a simulated CPU, and a live backend past its
 /// interlocks.
-fn fx5u_live(project: &Session) -> (Simulator, Arc<SlmpBackend>) {
+fn fx5u_live(project: &Session) -> (Simulator, Arc<BenchBackend>) {
     let m = manifest(project, "mitsubishi-fx5");
     let sim = simulator(project, &m, "fx5u", vec![]);
-    let backend =
-        Arc::new(SlmpBackend::new(settings(&m, "fx5u", &sim), &project.profiles).expect("backend"));
+    let backend = Arc::new(
+        BenchBackend::new(settings(&m, "fx5u", &sim), &project.profiles).expect("backend"),
+    );
     backend.connect().expect("interlocks");
     (sim, backend)
 }
@@ -596,17 +598,18 @@ fn a_mailbox_in_link_registers_is_numbered_in_hexadecimal() {
     let options = |at: &str| GenerateOptions {
         profile: "mitsubishi-fx5".into(),
         variants: vec!["fx5u".into()],
-        mailbox: Some(mailbox::head(at).expect("a device")),
+        mailbox: Some(mailbox::head(at, &ADDRESSING).expect("a device")),
         ..GenerateOptions::default()
     };
     let generated = generate(&project, &options("W100")).expect("generate");
     let m = generated.manifest;
     assert_eq!(m.mailbox, "W100");
-    assert_eq!(m.mailbox_head().expect("head").index, 0x100);
+    assert_eq!(m.mailbox_head(&ADDRESSING).expect("head").index, 0x100);
     assert!(generated.program.contains("W108"), "the trigger is W108");
     let sim = simulator(&project, &m, "fx5u", vec![]);
-    let backend =
-        Arc::new(SlmpBackend::new(settings(&m, "fx5u", &sim), &project.profiles).expect("backend"));
+    let backend = Arc::new(
+        BenchBackend::new(settings(&m, "fx5u", &sim), &project.profiles).expect("backend"),
+    );
     backend.connect().expect("the signature is found at W100");
     let trial = first_trial(&project, &backend, "ASCI");
     let verdict = verdicts(std::slice::from_ref(&trial)).remove(0);
@@ -630,7 +633,7 @@ fn a_sandbox_over_the_mailbox_is_refused() {
         vec![WordRange::new("D", 0, 18431)],
     );
     let e = chain(
-        &SlmpBackend::new(s, &project.profiles)
+        &BenchBackend::new(s, &project.profiles)
             .err()
             .expect("refused"),
     );
@@ -649,9 +652,9 @@ fn a_dry_run_opens_no_socket() {
         m.clone(),
         "rcpu",
         "R04CPU",
-        parse_ranges(&m.writes.join(",")).expect("writes"),
+        parse_ranges(&m.writes.join(","), &ADDRESSING).expect("writes"),
     );
-    let backend = Arc::new(SlmpBackend::new(s, &project.profiles).expect("backend"));
+    let backend = Arc::new(BenchBackend::new(s, &project.profiles).expect("backend"));
     let found = dry_run(&project, &backend);
     assert!(found.trials > 300, "{found:?}");
     assert_eq!(found.executions, 2 * found.trials);
@@ -871,7 +874,7 @@ fn the_hil_commands_through_the_binary() {
         assert!(out_dir.join(f).is_file(), "{f}");
     }
     let manifest_file = out_dir.join("manifest.json");
-    let m = Manifest::load(&manifest_file).expect("the written manifest loads");
+    let m = Manifest::load(&manifest_file, &ADDRESSING).expect("the written manifest loads");
     // The same program as the one generated for both variants (the variants are not hashed).
     assert_eq!(m.hash, iqr_manifest().hash, "generate is deterministic");
     assert_eq!(m.rungs, iqr_manifest().rungs);
@@ -921,12 +924,12 @@ fn the_long_device_form_on_an_fx5_is_refused_before_any_write() {
     let sim = simulator(&project, &m, &variant, vec![]);
     let mut s = settings(&m, &variant, &sim);
     assert_eq!(
-        (s.client.frame, s.client.form),
+        (s.link.frame, s.link.form),
         (FrameKind::E3, DeviceForm::Short),
         "the FX5 default"
     );
-    s.client.form = DeviceForm::Long;
-    let backend = SlmpBackend::new(s, &project.profiles).expect("backend");
+    s.link.form = DeviceForm::Long;
+    let backend = BenchBackend::new(s, &project.profiles).expect("backend");
     let e = chain(&backend.connect().expect_err("C059H"));
     assert!(e.contains("end code C059H"), "{e}");
     assert_eq!(writes_sent(&sim), 0);
@@ -1013,7 +1016,7 @@ fn record_through_the_simulated_cpu_writes_nothing() {
 fn rung_trials(
     project: &Session,
     change: impl FnOnce(&mut SimSettings, u16),
-) -> (Simulator, Arc<SlmpBackend>, Trial, u16) {
+) -> (Simulator, Arc<BenchBackend>, Trial, u16) {
     let probe = iqr_sim(project, |_| {});
     let probe_backend = iqr_backend(project, &probe, |_| {});
     let trial = first_trial(project, &probe_backend, "HABIN");
@@ -1168,7 +1171,7 @@ fn every_call_takes_the_operands_in_the_manuals_order() {
 
 /// The mailbox word that selects the rung, as the program writes it.
 fn rung_word(m: &Manifest) -> String {
-    let head = mailbox::head(&m.mailbox).expect("mailbox");
+    let head = mailbox::head(&m.mailbox, &ADDRESSING).expect("mailbox");
     mailbox::at(&head, mailbox::off::RUNG).to_string()
 }
 
@@ -1334,7 +1337,7 @@ fn special_registers_are_written_only_when_named() {
             .expect("a live backend")
     };
     let backend =
-        Arc::new(SlmpBackend::new(parsed("manifest"), &project.profiles).expect("backend"));
+        Arc::new(BenchBackend::new(parsed("manifest"), &project.profiles).expect("backend"));
     assert!(backend
         .fence()
         .allowed()
@@ -1357,14 +1360,14 @@ fn special_registers_are_written_only_when_named() {
             .collect::<Vec<_>>()
             .join(",")
     );
-    let backend = Arc::new(SlmpBackend::new(parsed(&named), &project.profiles).expect("backend"));
+    let backend = Arc::new(BenchBackend::new(parsed(&named), &project.profiles).expect("backend"));
     let found = dry_run(&project, &backend);
     assert_eq!(found.refused, Vec::<(String, String)>::new());
     let bits = SlmpSettings::parse(&spec("manifest,Y0-Y17"), std::path::Path::new("."))
         .expect("parses")
         .expect("a live backend");
     let e = chain(
-        &SlmpBackend::new(bits, &project.profiles)
+        &BenchBackend::new(bits, &project.profiles)
             .err()
             .expect("refused"),
     );
@@ -1375,17 +1378,14 @@ fn special_registers_are_written_only_when_named() {
 /// names only D: a client writes W1F0 and reads it back.
 #[test]
 fn the_simulated_iqr_cpu_serves_link_registers() {
+    use plc_conformance::testing::backend::bench::fence::WriteFence;
     use plc_conformance::testing::backend::slmp::client::{Client, ClientSettings};
-    use plc_conformance::testing::backend::slmp::fence::WriteFence;
     let project = session();
     let sim = iqr_sim(&project, |_| {});
     let mut c = Client::new(ClientSettings::new(sim.address().to_string()));
     let w = Device::hexadecimal("W", 0x1F0);
     let fence = WriteFence::new(vec![WordRange::new("W", 0x1F0, 0x1F1)]);
-    for write in fence
-        .writes(DeviceForm::Long, 960, &w, &[0x1234, 0x5678])
-        .expect("inside")
-    {
+    for write in fence.writes(960, &w, &[0x1234, 0x5678]).expect("inside") {
         c.write(&write).expect("W is served");
     }
     assert_eq!(c.read_words(&w, 2).expect("read"), [0x1234, 0x5678]);

@@ -12,13 +12,14 @@ use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 
+use plc_conformance::testing::backend::bench::fence::{self, WordRange, WriteFence};
+use plc_conformance::testing::backend::bench::manifest::Manifest;
+use plc_conformance::testing::backend::bench::BenchBackend;
 use plc_conformance::testing::backend::slmp::client::{Client, ClientError, ClientSettings, Code};
-use plc_conformance::testing::backend::slmp::fence::{self, WordRange, WriteFence};
 use plc_conformance::testing::backend::slmp::frame::{DeviceForm, FrameKind};
 use plc_conformance::testing::backend::slmp::limits::{self, Family};
-use plc_conformance::testing::backend::slmp::manifest::Manifest;
 use plc_conformance::testing::backend::slmp::sim::{RemoteProgram, SimSettings, Simulator};
-use plc_conformance::testing::backend::slmp::{fault_of, SlmpBackend, SlmpSettings};
+use plc_conformance::testing::backend::slmp::{fault_of, SlmpSettings, ADDRESSING};
 use plc_conformance::testing::backend::Backend;
 use plc_conformance::testing::device::Device;
 use plc_conformance::testing::hil::{generate, GenerateOptions};
@@ -144,7 +145,7 @@ fn the_client_talks_to_virtual_plc() {
         let fence = WriteFence::new(vec![WordRange::new("D", 100, 199)]);
         let words = [0x0001, 0x8000, 0xFFFF, 0x5A8D];
         for w in fence
-            .writes(form, 960, &Device::new("D", 100), &words)
+            .writes(960, &Device::new("D", 100), &words)
             .expect("inside")
         {
             c.write(&w)
@@ -195,7 +196,7 @@ fn virtual_plc_faults_map_to_their_kinds() {
     let fence = WriteFence::new(vec![WordRange::new("D", 0, 9)]);
     let write = || {
         fence
-            .writes(DeviceForm::Long, 960, &Device::new("D", 0), &[7])
+            .writes(960, &Device::new("D", 0), &[7])
             .expect("inside")
             .remove(0)
     };
@@ -225,7 +226,7 @@ fn pymcprotocol_talks_to_the_simulated_cpu() {
     let Some(python) = venv_python() else { return };
     let project = session();
     let manifest = generated(&project, "mitsubishi-iqr", "rcpu");
-    let head = manifest.mailbox_head().expect("mailbox");
+    let head = manifest.mailbox_head(&ADDRESSING).expect("mailbox");
     let profile = project
         .profiles
         .get("mitsubishi-iqr")
@@ -358,9 +359,7 @@ fn the_client_keeps_to_the_limits_of_aslmps_simulated_fx5u() {
         let head = Device::new("D", 1000);
         let words: Vec<u16> = (0..961u16).map(|i| i.wrapping_mul(37) ^ 0x5A00).collect();
         let fence = WriteFence::new(vec![WordRange::new("D", 1000, 1960)]);
-        let writes = fence
-            .writes(DeviceForm::Short, batch, &head, &words)
-            .expect("inside");
+        let writes = fence.writes(batch, &head, &words).expect("inside");
         assert_eq!(writes.len(), 961usize.div_ceil(batch), "{code}");
         for w in &writes {
             c.write(w).unwrap_or_else(|e| panic!("{code}: {e}"));
@@ -497,7 +496,7 @@ fn a_live_run_against_aslmps_simulated_cpu(
     let shown = String::from_utf8_lossy(&doctor.stdout);
     assert!(doctor.status.success(), "{shown}");
     assert!(shown.contains("ok    program signature"), "{shown}");
-    let sandbox = fence::parse_ranges(&manifest.writes.join(",")).expect("writes");
+    let sandbox = fence::parse_ranges(&manifest.writes.join(","), &ADDRESSING).expect("writes");
     let mut s = SlmpSettings::new(
         "aslmp",
         server.address(entry),
@@ -506,11 +505,11 @@ fn a_live_run_against_aslmps_simulated_cpu(
         type_name,
         sandbox,
     );
-    s.client.frame = frame;
-    s.client.code = code;
+    s.link.frame = frame;
+    s.link.code = code;
     s.fit_limits();
     s.case_timeout = Duration::from_secs(5);
-    let backend = Arc::new(SlmpBackend::new(s, &project.profiles).expect("backend"));
+    let backend = Arc::new(BenchBackend::new(s, &project.profiles).expect("backend"));
     backend
         .connect()
         .unwrap_or_else(|e| panic!("interlocks: {e}"));
@@ -553,7 +552,7 @@ fn plc_comm_slmp_talks_to_the_simulated_cpu() {
     let Some(python) = venv_python() else { return };
     let project = session();
     let manifest = generated(&project, "mitsubishi-fx5", "fx5u");
-    let head = manifest.mailbox_head().expect("mailbox");
+    let head = manifest.mailbox_head(&ADDRESSING).expect("mailbox");
     let profile = project
         .profiles
         .get("mitsubishi-fx5")

@@ -5,6 +5,7 @@
 //! YAML, planning, judging or reporting; everything vendor-specific it needs comes in the
 //! [`Request`] from the profile.
 
+pub(crate) mod bench;
 pub(crate) mod external;
 pub(crate) mod fc4a;
 pub(crate) mod fp;

@@ -197,7 +197,7 @@ fn sources(
     for name in &args.backends {
         if let Some(settings) = SlmpSettings::parse(name, Path::new("."))? {
             chosen.push(settings.name.clone());
-            sources.push(BackendSource::Slmp(Box::new(settings)));
+            sources.push(BackendSource::Bench(Box::new(settings.erased())));
             continue;
         } else if let Some(mut settings) = command_line_external(name, args)? {
             settings.known_differences = known_files.remove(settings.name.as_str());

@@ -4,8 +4,8 @@
 use std::fmt;
 use std::path::Path;
 
+use crate::backend::bench::error::LiveError;
 use crate::backend::external::serve::ServeError;
-use crate::backend::slmp::error::LiveError;
 use crate::load::LoadErrors;
 use crate::record::RecordError;
 use crate::report::baseline::BaselineError;

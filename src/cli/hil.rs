@@ -8,12 +8,12 @@ use std::time::Duration;
 
 use super::backends::{load, paths};
 use super::{output, Cli, CliError, Outcome, EXIT_DIFFERENCES, EXIT_OK};
-use crate::backend::slmp::doctor::doctor;
+use crate::backend::bench::doctor::doctor;
+use crate::backend::bench::manifest::Manifest;
+use crate::backend::bench::{fence, mailbox};
 use crate::backend::slmp::limits::Family;
-use crate::backend::slmp::manifest::Manifest;
 use crate::backend::slmp::sim::{self, FaultRule, SimSettings, Simulator};
-use crate::backend::slmp::SlmpSettings;
-use crate::backend::slmp::{fence, mailbox};
+use crate::backend::slmp::{self, SlmpSettings};
 use crate::hil::{dry_run, generate, pulse_self_test, GenerateOptions};
 use crate::session::Session;
 
@@ -102,7 +102,8 @@ pub(super) fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
             let mailbox = mailbox
                 .as_deref()
                 .map(|m| {
-                    mailbox::head(m).map_err(|e| CliError::within(format!("--mailbox {m}"), e))
+                    mailbox::head(m, &slmp::ADDRESSING)
+                        .map_err(|e| CliError::within(format!("--mailbox {m}"), e))
                 })
                 .transpose()?;
             let project = load(&paths(cli, &[], "--vectors")?)?;
@@ -230,7 +231,7 @@ pub(super) fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
                 .map(|f| FaultRule::parse(f).map_err(|e| CliError::within("--fault", e)))
                 .collect::<Result<Vec<_>, _>>()?;
             let project = load(&paths(cli, &[], "--vectors")?)?;
-            let m = Manifest::load(manifest)?;
+            let m = Manifest::load(manifest, &slmp::ADDRESSING)?;
             let variant = match variant {
                 Some(v) => v.clone(),
                 None if m.variants.len() == 1 => m.variants[0].clone(),

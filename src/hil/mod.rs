@@ -12,12 +12,13 @@ mod program;
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
+use crate::backend::bench::error::{refused, LiveError};
+use crate::backend::bench::fence::{self, WordRange};
+use crate::backend::bench::mailbox;
+use crate::backend::bench::manifest::{self, Call, ErrorDevices, Manifest, Rung, Unrealisable};
+use crate::backend::bench::{Addressing, BenchBackend};
 use crate::backend::external::window;
-use crate::backend::slmp::error::{refused, LiveError};
-use crate::backend::slmp::fence::{self, WordRange};
-use crate::backend::slmp::mailbox;
-use crate::backend::slmp::manifest::{self, Call, ErrorDevices, Manifest, Rung, Unrealisable};
-use crate::backend::slmp::{self, SlmpBackend};
+use crate::backend::slmp;
 use crate::backend::Backend;
 use crate::device::Device;
 use crate::execute::{images, requests};
@@ -70,10 +71,10 @@ pub(crate) fn unrealisable(instruction: &str, operand: &str, value: i64) -> Opti
     })
 }
 
-/// Why a device operand cannot be part of a live case ([`slmp::unaddressable`]): the case's
+/// Why a device operand cannot be part of a live case (the link's `unaddressable`): the case's
 /// memory could be neither set nor read back.
 pub(crate) fn unaddressable(operand: &str, device: &Device) -> Option<String> {
-    slmp::unaddressable(device).map(|why| {
+    slmp::ADDRESSING.unaddressable(device).map(|why| {
         format!("operand {operand} = {device}: {why}, so no program can hold it as written")
     })
 }
@@ -169,12 +170,12 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
         let imgs = images(t);
         for req in requests(t, &imgs) {
             // Words the client cannot address are never written: such a case is not run
-            // (`SlmpBackend::plan` says why), so they take no part in the sandbox.
+            // (`BenchBackend::plan` says why), so they take no part in the sandbox.
             windows.extend(
                 window::ranges(&req)
                     .into_iter()
-                    .filter(|(head, _)| slmp::unaddressable(head).is_none())
-                    .map(|(head, last)| WordRange::new(head.code(), head.index, last)),
+                    .filter(|(head, _)| slmp::ADDRESSING.unaddressable(head).is_none())
+                    .map(|(head, last)| WordRange::within(&head, head.index, last)),
             );
         }
     }
@@ -189,7 +190,7 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
         Some(m) => m.clone(),
         None => choose_mailbox(&profile, &variants, &writes)?,
     };
-    if let Some(why) = slmp::unaddressable(&mailbox) {
+    if let Some(why) = slmp::ADDRESSING.unaddressable(&mailbox) {
         return Err(refused!("the mailbox cannot be at {mailbox}: {why}"));
     }
     let whole = mailbox::range(&mailbox);
@@ -233,7 +234,7 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
         hash: String::new(),
     };
     manifest.hash = manifest.compute_hash();
-    manifest.validate()?;
+    manifest.validate(&slmp::ADDRESSING)?;
     let program = structured_text(&manifest, &profile)?;
     let setup = setup_text(&manifest, &profile, trials.len());
     Ok(Generated {
@@ -342,7 +343,7 @@ pub struct DryRun {
 /// Every trial of the corpus the backend would run, with what it would write: the plan the
 /// live backend makes for each execution, fence checked, and nothing sent (the backend opens no
 /// socket before its first case).
-pub fn dry_run(project: &Project, backend: &Arc<SlmpBackend>) -> DryRun {
+pub fn dry_run(project: &Project, backend: &Arc<BenchBackend>) -> DryRun {
     let as_backend: Arc<dyn Backend> = backend.clone();
     let mut out = DryRun::default();
     let mut writes = Vec::new();
@@ -350,7 +351,7 @@ pub fn dry_run(project: &Project, backend: &Arc<SlmpBackend>) -> DryRun {
     let mailbox_words = backend
         .settings()
         .manifest
-        .mailbox_head()
+        .mailbox_head(backend.settings().link.addressing())
         .map(|m| mailbox::pc_words(&m))
         .unwrap_or_default();
     for t in project.plan(&[as_backend]) {
@@ -415,7 +416,7 @@ pub struct PulseCheck {
 /// what a case writes: its window (inside the fence) and the mailbox's PC words.
 pub fn pulse_self_test(
     project: &Project,
-    backend: &Arc<SlmpBackend>,
+    backend: &Arc<BenchBackend>,
 ) -> Result<PulseCheck, LiveError> {
     let as_backend: Arc<dyn Backend> = backend.clone();
     let profile = project

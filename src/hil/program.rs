@@ -12,10 +12,12 @@
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
-use crate::backend::slmp::error::{refused, LiveError};
-use crate::backend::slmp::fence;
-use crate::backend::slmp::mailbox::{self, off, state};
-use crate::backend::slmp::manifest::{parse_operand, Manifest};
+use crate::backend::bench::error::{refused, LiveError};
+use crate::backend::bench::fence;
+use crate::backend::bench::mailbox::{self, off, state};
+use crate::backend::bench::manifest::{parse_operand, Manifest};
+use crate::backend::bench::Addressing;
+use crate::backend::slmp;
 use crate::device::Device;
 use crate::model::profile::Profile;
 use crate::model::Operand;
@@ -57,7 +59,7 @@ fn int(value: u16) -> String {
 
 /// The structured text of the test program; `Err` when an instruction has no call form.
 pub(crate) fn structured_text(manifest: &Manifest, profile: &Profile) -> Result<String, LiveError> {
-    let mb = manifest.mailbox_head()?;
+    let mb = manifest.mailbox_head(&slmp::ADDRESSING)?;
     let w = |o| word(&mb, o);
     let e = &manifest.error;
     let hash = manifest.hash32();
@@ -338,10 +340,11 @@ pub(crate) fn setup_text(manifest: &Manifest, profile: &Profile, trials: usize) 
          mailbox's three PC words.\n\n",
     );
     t.push_str("## What the run writes\n\n");
-    let ranges = fence::parse_ranges(&manifest.writes.join(",")).unwrap_or_default();
+    let ranges =
+        fence::parse_ranges(&manifest.writes.join(","), &slmp::ADDRESSING).unwrap_or_default();
     let (data, special): (Vec<_>, Vec<_>) = ranges
         .iter()
-        .partition(|r| fence::Kind::of(&r.code) == fence::Kind::Data);
+        .partition(|r| slmp::ADDRESSING.kind(&r.head()) == fence::Kind::Data);
     let list = |rs: &[&fence::WordRange]| {
         rs.iter()
             .map(ToString::to_string)
@@ -369,7 +372,7 @@ pub(crate) fn setup_text(manifest: &Manifest, profile: &Profile, trials: usize) 
             list(&special)
         );
     }
-    if let Ok(head) = manifest.mailbox_head() {
+    if let Ok(head) = manifest.mailbox_head(&slmp::ADDRESSING) {
         let pc = mailbox::pc_words(&head);
         let _ =
             writeln!(

@@ -25,9 +25,9 @@ use first_use::Placeholder;
 pub(crate) use run::{observe, run_trials, RunOptions, RunOutcome};
 pub use run::{run_one, verdicts};
 
+use crate::backend::bench::error::LiveError;
+use crate::backend::bench::{BenchBackend, BenchSettings, LinkSettings};
 use crate::backend::external::{ExternalBackend, ExternalError};
-use crate::backend::slmp::error::LiveError;
-use crate::backend::slmp::{SlmpBackend, SlmpSettings};
 use crate::backend::{reference_backends, Backend};
 use crate::load::LoadErrors;
 use crate::model::project::ExternalSettings;
@@ -48,10 +48,10 @@ pub enum BackendSource {
     ProcessOnFirstUse(ExternalSettings),
     /// A backend in this process, with its known-differences file.
     InProcess(Arc<dyn Backend>, Option<PathBuf>),
-    /// A live CPU over SLMP (`backend::slmp`): built without a socket, then connected and its
-    /// read-only interlocks run, so that a bench that is not ready is an error before any case
-    /// and before any write.
-    Slmp(Box<SlmpSettings>),
+    /// A live CPU over any link (`backend::bench`; SLMP is one): built without a socket, then
+    /// connected and its read-only interlocks run, so that a bench that is not ready is an error
+    /// before any case and before any write.
+    Bench(Box<BenchSettings>),
 }
 
 /// Why a backend could not be set up.
@@ -224,7 +224,7 @@ impl Session {
                 self.on_first_use.push(lazy.clone());
                 Arc::new(Placeholder::new(name.clone(), profile, lazy))
             }
-            BackendSource::Slmp(settings) => {
+            BackendSource::Bench(settings) => {
                 let live = self.live(*settings)?;
                 live.connect().map_err(|source| SetupError::Live {
                     backend: name.clone(),
@@ -268,10 +268,13 @@ impl Session {
     }
 
     /// A live CPU backend built from its settings and manifest, with no socket opened: what a
-    /// dry run plans with, and what [`BackendSource::Slmp`] then connects.
-    pub(crate) fn live(&self, settings: SlmpSettings) -> Result<Arc<SlmpBackend>, SetupError> {
+    /// dry run plans with, and what [`BackendSource::Bench`] then connects.
+    pub(crate) fn live<L: LinkSettings + Clone + 'static>(
+        &self,
+        settings: BenchSettings<L>,
+    ) -> Result<Arc<BenchBackend>, SetupError> {
         let backend = settings.name.clone();
-        SlmpBackend::new(settings, &self.project.profiles)
+        BenchBackend::new(settings, &self.project.profiles)
             .map(Arc::new)
             .map_err(|source| SetupError::Live { backend, source })
     }
@@ -307,7 +310,7 @@ impl BackendSource {
             BackendSource::Reference(name) => name.clone(),
             BackendSource::Process(s) | BackendSource::ProcessOnFirstUse(s) => s.name.clone(),
             BackendSource::InProcess(b, _) => b.name().to_string(),
-            BackendSource::Slmp(s) => s.name.clone(),
+            BackendSource::Bench(s) => s.name.clone(),
         }
     }
 }

@@ -308,19 +308,15 @@ mod tests {
 
     #[test]
     fn a_batch_write_carries_each_word_as_four_digits() {
-        let fence = crate::backend::slmp::fence::WriteFence::new(vec![
-            crate::backend::slmp::fence::WordRange::new("D", 0, 99),
-        ]);
-        let w = fence
-            .writes(
-                DeviceForm::Short,
-                960,
-                &crate::device::Device::new("D", 10),
-                &[0x5A8D, 0x0001],
-            )
-            .expect("inside")
-            .remove(0);
-        let body = w.body().clone();
+        let body = crate::backend::slmp::frame::write_words(
+            DeviceForm::Short,
+            DeviceRef {
+                code: D,
+                number: 10,
+            },
+            &[0x5A8D, 0x0001],
+        )
+        .expect("encodes");
         let text = encode_request(&request(FrameKind::E3, 0, body)).expect("encodes");
         assert_eq!(
             String::from_utf8_lossy(&text),

@@ -15,13 +15,13 @@ use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
 use std::time::{Duration, Instant};
 
 use super::ascii;
-use super::fence::FencedWrite;
 pub use super::frame::Code;
 use super::frame::{
     self, hex, message_len, DeviceForm, DeviceRef, FrameError, FrameKind, Request, Response, Route,
     TypeName,
 };
 use super::limits::{limits, Family, Limits};
+use crate::backend::bench::fence::FencedWrite;
 use crate::device::Device;
 
 /// How to reach and talk to one CPU port.
@@ -385,10 +385,18 @@ impl Client {
         })
     }
 
-    /// 1401: one write the fence let through; never sent twice.
+    /// 1401: one write the fence let through, encoded here and nowhere else; never sent twice.
     pub fn write(&mut self, write: &FencedWrite) -> Result<(), ClientError> {
         let what = format!("1401 (write {})", write.range());
-        let data = self.exchange(&what, write.body())?;
+        let body = device_ref(write.head(), &what).and_then(|head| {
+            frame::write_words(self.settings.form, head, write.words()).map_err(|e| {
+                ClientError::Request {
+                    what: what.clone(),
+                    detail: e.to_string(),
+                }
+            })
+        })?;
+        let data = self.exchange(&what, &body)?;
         if data.is_empty() {
             Ok(())
         } else {
@@ -523,7 +531,7 @@ fn read_full(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::backend::slmp::fence::{WordRange, WriteFence};
+    use crate::backend::bench::fence::{WordRange, WriteFence};
     use std::net::TcpListener;
 
     /// A server that answers each request with the given byte chunks (with a pause between
@@ -660,7 +668,7 @@ mod tests {
     fn a_refused_write_sends_nothing() {
         let (address, server) = scripted(vec![]);
         let fence = WriteFence::new(vec![WordRange::new("D", 0, 99)]);
-        let refused = fence.writes(DeviceForm::Short, 960, &Device::new("D", 99), &[1, 2]);
+        let refused = fence.writes(960, &Device::new("D", 99), &[1, 2]);
         assert!(refused.is_err());
         let c = Client::new(settings(&address));
         assert!(!c.is_connected(), "a client connects only when it sends");

@@ -445,7 +445,7 @@ impl Response {
 
 /// The command, subcommand and data of a request, before framing.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Body {
+pub(crate) struct Body {
     pub command: u16,
     pub subcommand: u16,
     pub data: Vec<u8>,
@@ -513,7 +513,7 @@ pub(crate) fn read_words(
     })
 }
 
-/// 1401: write `words` from `head`. Only [`super::fence::WriteFence`] calls this.
+/// 1401: write `words` from `head`. Only the client's write of a fenced write calls this.
 pub(super) fn write_words(
     form: DeviceForm,
     head: DeviceRef,

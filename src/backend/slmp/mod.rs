@@ -1,58 +1,85 @@
-//! A real MELSEC CPU as a backend, over SLMP (binary, TCP).
+//! A MELSEC CPU over SLMP (3E or 4E frames, binary or ASCII code, TCP): one link of the bench
+//! layer ([`crate::backend::bench`]), which owns the mailbox, the fence and the interlocks.
 //!
-//! An SLMP client can read and write devices but cannot execute an instruction, so the CPU runs
-//! a generated test program (`plc-conformance hil generate`) with one rung per instruction and
-//! operand tuple of the corpus, and the PC hands it one case at a time through a mailbox of data
-//! registers ([`mailbox`]): write the case's memory window, the rung and the flags, then the
-//! trigger; poll until the program acknowledges; read the window and the captured error flag and
-//! registers back. The words that changed are the case's writes.
-//!
-//! Safety comes first, because the other end is a CPU that might be wired to something:
-//! - every write is built by the [`fence::WriteFence`] from the declared sandbox and the
-//!   mailbox's PC words, and refused before a byte is encoded when one word lies outside;
-//! - nothing is written before the interlocks pass: the CPU's type name equals the configured
-//!   `confirm`, the CPU is in RUN, the mailbox carries the signature (magic, layout, hash) of
-//!   the very program the manifest describes, and its scan counter moves;
-//! - the backend is built without a socket ([`SlmpBackend::new`]): a dry run or planning never
-//!   connects, and [`SlmpBackend::connect`] is the one step that does;
-//! - no command beyond 0101, 0401, 0403 and 1401 can be encoded: no remote RUN/STOP/RESET.
-//!
-//! Faults map onto the kinds every backend reports: no reply or no acknowledgement in time is a
-//! timeout, a lost connection a crash, a reply that is not SLMP, an error end code or an
-//! inconsistent capture a protocol error, and a CPU that cannot be reached or leaves RUN is
-//! unreachable. After `max_consecutive_faults` faults in a row the remaining trials are not run.
+//! The link names the CPU by its type name (0101), reads its state from SD203, and reads and
+//! writes words with 0401, 0403 and 1401. No other command can be encoded: no remote
+//! RUN/STOP/RESET. `sim` is a simulated CPU speaking the same frames.
 
 pub(crate) mod ascii;
 pub(crate) mod client;
-pub(crate) mod doctor;
-pub(crate) mod error;
-pub mod fence;
 pub(crate) mod frame;
 pub mod limits;
-pub mod mailbox;
-pub(crate) mod manifest;
-pub(crate) mod settings;
 pub(crate) mod sim;
 
-use std::collections::HashMap;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
+use std::path::Path;
+use std::time::Duration;
 
-use client::{Client, ClientError};
-use fence::{WordRange, WriteFence};
-use mailbox::{off, state, Signature};
-pub use settings::SlmpSettings;
+use client::{Client, ClientError, ClientSettings, Code};
+use frame::{DeviceForm, FrameKind};
+use limits::Family;
 
-use super::external::{closing, window};
-use super::{Backend, Fault, Outcome, Request, Response, Setting};
-use crate::backend::slmp::error::{refused, LiveError};
+use super::bench::error::{refused, LiveError};
+use super::bench::fence::{FencedWrite, Kind, WordRange};
+use super::bench::manifest::Manifest;
+use super::bench::settings::Spec;
+use super::bench::{
+    Addressing, BenchSettings, Failure, Identity, Link, LinkError, LinkSettings, RunState,
+};
+use super::Fault;
 use crate::device::Device;
-use crate::error_chain::chain;
-use crate::memory::Value;
-use crate::model::pointer_words;
-use crate::model::profile::{Profile, Profiles, Variant};
-use manifest::Call;
+
+/// How SLMP reaches a MELSEC CPU's devices.
+pub struct Slmp;
+
+/// The one [`Slmp`] addressing.
+pub static ADDRESSING: Slmp = Slmp;
+
+/// The special register that holds the CPU's operating status.
+const STATUS: (&str, u32) = ("SD", 203);
+
+impl Addressing for Slmp {
+    fn hex_numbered(&self, code: &str) -> bool {
+        frame::hex_numbered(code)
+    }
+
+    /// Data, file and link registers (D, R, ZR, W) are memory a test program may own; special
+    /// and link special registers (SD, SW) are the CPU's and the network's own.
+    fn kind(&self, device: &Device) -> Kind {
+        match device.code() {
+            "D" | "R" | "ZR" | "W" => Kind::Data,
+            "SD" | "SW" => Kind::Special,
+            _ => Kind::Bit,
+        }
+    }
+
+    /// The client has no SLMP device code for timers, counters and index registers; and a
+    /// profile that numbers a code otherwise than MELSEC does would put other words in the
+    /// program, the manifest and a sandbox (`W1A` is hexadecimal, `D100` decimal).
+    fn unaddressable(&self, device: &Device) -> Option<String> {
+        let code = device.code();
+        if frame::device_code(code).is_none() {
+            return Some(format!(
+                "{code} has no SLMP device code in this client (it addresses {})",
+                frame::DEVICE_LETTERS.join(", ")
+            ));
+        }
+        (device.is_hexadecimal() != frame::hex_numbered(code)).then(|| {
+            let (profile, melsec) = match device.is_hexadecimal() {
+                true => ("hexadecimal", "decimal"),
+                false => ("decimal", "hexadecimal"),
+            };
+            format!("the profile numbers {code} in {profile}, and MELSEC in {melsec}")
+        })
+    }
+
+    fn sandbox_devices(&self) -> &'static str {
+        "D, R, ZR, W, and SD or SW when named"
+    }
+
+    fn data_devices(&self) -> &'static str {
+        "data or link register (D, R, ZR, W)"
+    }
+}
 
 /// Whether an SD203 value says RUN: its low four bits hold the operating status, 0 for RUN (the
 /// Q-series special register list says so for SD203; the iQ-R list codes the per-CPU status
@@ -73,704 +100,213 @@ pub(crate) fn status_text(sd203: u16) -> String {
     format!("{name} (SD203={sd203:04X}H)")
 }
 
-/// A live CPU backend.
-pub struct SlmpBackend {
-    settings: SlmpSettings,
-    profile: Arc<Profile>,
-    rungs: HashMap<String, u16>,
-    unrealisable: HashMap<String, String>,
-    instructions: Vec<String>,
-    mailbox: Device,
-    fence: WriteFence,
-    signature: Signature,
-    state: Mutex<Live>,
-    reconnects: AtomicUsize,
+fn run_state(sd203: u16) -> RunState {
+    RunState {
+        running: is_run(sd203),
+        text: status_text(sd203),
+    }
 }
 
-struct Live {
-    client: Client,
-    /// The interlocks passed on the current connection.
-    verified: bool,
-    /// The connection (by count) the interlocks passed on: a read retried on a new connection
-    /// leaves `verified` set, and the next write must not go out before they run again.
-    verified_on: u64,
-    /// The last trigger written (or found acknowledged).
-    trigger: u16,
-    /// The CPU's type name, once read.
-    cpu: Option<String>,
-    /// The mailbox says the simulated CPU runs the program, not a CPU.
-    simulated: bool,
-    /// The rung whose proof of execution said, on the last case, that it did not execute.
-    not_executed: Option<u16>,
-    /// Set when the circuit breaker trips or the CPU left RUN: every later case gets this.
-    down: Option<String>,
-    faults_in_a_row: usize,
-}
-
-/// One case's capture from the mailbox.
-#[derive(Debug, Clone, Copy)]
-struct Status {
-    ack: u16,
-    state: u16,
-    flag_before: u16,
-    flag_after: u16,
-    code: u16,
-    extra: u16,
-    next: u16,
-    /// The proof of execution: the rung that ran, the trigger it ran for, its ENO.
-    ran: u16,
-    ran_for: u16,
-    eno: u16,
-    sd203: u16,
-}
-
-/// Why a case went wrong before it had an outcome.
-enum CaseError {
-    Client(ClientError),
-    Fault(Fault),
-    /// The CPU left RUN: no further case can run.
-    Stopped(String),
-}
-
-impl From<ClientError> for CaseError {
+impl From<ClientError> for LinkError {
     fn from(e: ClientError) -> Self {
-        CaseError::Client(e)
+        let failure = match e {
+            ClientError::Connect { .. } => Failure::Unreachable,
+            ClientError::Timeout { .. } => Failure::Timeout,
+            ClientError::Closed { .. } => Failure::Lost,
+            ClientError::Frame { .. }
+            | ClientError::EndCode { .. }
+            | ClientError::Request { .. } => Failure::Protocol,
+        };
+        LinkError::new(failure, e)
+    }
+}
+
+impl From<ClientError> for LiveError {
+    fn from(e: ClientError) -> Self {
+        LiveError::Link(e.into())
     }
 }
 
 /// The fault kind of a client error.
 pub fn fault_of(e: &ClientError) -> Fault {
-    let text = e.to_string();
-    match e {
-        ClientError::Connect { .. } => Fault::Unreachable(text),
-        ClientError::Timeout { .. } => Fault::Timeout(text),
-        ClientError::Closed { .. } => Fault::Crashed(text),
-        ClientError::Frame { .. } | ClientError::EndCode { .. } | ClientError::Request { .. } => {
-            Fault::Protocol(text)
-        }
-    }
+    LinkError::from(e.clone()).fault()
 }
 
-/// What a case writes: its window with the values before execution.
-pub struct Plan {
-    pub rung: u16,
-    pub flags: u16,
-    /// Each window range with its words.
-    pub window: Vec<(Device, Vec<u16>)>,
-}
+/// The SLMP client as a bench's link.
+struct SlmpLink(Client);
 
-/// Why this backend can neither set nor read a device's words, if it cannot: the client has no
-/// SLMP device code for it (timers, counters and index registers are not addressed here), or
-/// the profile numbers it otherwise than MELSEC does (the program, the manifest and a sandbox
-/// write `W1A` in hexadecimal, `D100` in decimal). The one rule for a case's operands
-/// (`hil generate`), its sandbox and its window.
-pub(crate) fn unaddressable(device: &Device) -> Option<String> {
-    let code = device.code();
-    if frame::device_code(code).is_none() {
-        return Some(format!(
-            "{code} has no SLMP device code in this client (it addresses {})",
-            frame::DEVICE_LETTERS.join(", ")
-        ));
-    }
-    (device.is_hexadecimal() != frame::hex_numbered(code)).then(|| {
-        let (profile, melsec) = match device.is_hexadecimal() {
-            true => ("hexadecimal", "decimal"),
-            false => ("decimal", "hexadecimal"),
-        };
-        format!("the profile numbers {code} in {profile}, and MELSEC in {melsec}")
-    })
-}
-
-impl SlmpBackend {
-    /// The backend, checked against the profiles, without any connection.
-    pub fn new(settings: SlmpSettings, profiles: &Profiles) -> Result<SlmpBackend, LiveError> {
-        let manifest = &settings.manifest;
-        let profile = profiles.get(&manifest.profile).cloned().ok_or_else(|| {
-            refused!(
-                "the manifest is for profile `{}`, which is not loaded; known profiles: {}",
-                manifest.profile,
-                profiles.ids().join(", ")
-            )
-        })?;
-        let Some(variant) = profile.variant(&settings.variant) else {
-            return Err(refused!(
-                "variant `{}` is not a variant of {}; it has: {}",
-                settings.variant,
-                profile.id,
-                profile
-                    .variants
-                    .iter()
-                    .map(|v| v.id.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ));
-        };
-        if !manifest.variants.contains(&settings.variant) {
-            return Err(refused!(
-                "the manifest's program was generated for variants {}, not `{}`",
-                manifest.variants.join(", "),
-                settings.variant
-            ));
-        }
-        let mailbox = manifest.mailbox_head()?;
-        let whole = mailbox::range(&mailbox);
-        if let Some(why) = settings.sandbox.iter().find_map(fence::sandbox_refuses) {
-            return Err(refused!("`sandbox`: {why}"));
-        }
-        if !profile.words_exist(variant, &mailbox, mailbox::WORDS) {
-            return Err(refused!(
-                "the mailbox {whole} does not exist on variant {} of {}",
-                settings.variant,
-                profile.id
-            ));
-        }
-        if let Some(r) = settings.sandbox.iter().find(|r| r.overlaps(&whole)) {
-            return Err(refused!(
-                "the sandbox range {r} overlaps the mailbox {whole}: the program's own words \
-                 must not be writable"
-            ));
-        }
-        let mut allowed = settings.sandbox.clone();
-        allowed.extend(mailbox::pc_words(&mailbox));
-        let rungs = manifest.rung_index()?;
-        let unrealisable = manifest
-            .unrealisable
-            .iter()
-            .map(|u| {
-                for v in u.operands.values() {
-                    manifest::parse_operand(v, &|code| profile.devices.is_hexadecimal(code))?;
-                }
-                Ok((u.key(), u.reason.clone()))
-            })
-            .collect::<Result<HashMap<_, _>, LiveError>>()?;
-        let mut instructions: Vec<String> = manifest
-            .rungs
-            .iter()
-            .map(|r| r.instruction.clone())
-            .chain(manifest.unrealisable.iter().map(|u| u.instruction.clone()))
-            .collect();
-        instructions.sort();
-        instructions.dedup();
-        let signature = manifest.signature();
-        Ok(SlmpBackend {
-            state: Mutex::new(Live {
-                client: Client::new(settings.client.clone()),
-                verified: false,
-                verified_on: 0,
-                trigger: 0,
-                cpu: None,
-                simulated: false,
-                not_executed: None,
-                down: None,
-                faults_in_a_row: 0,
-            }),
-            fence: WriteFence::new(allowed),
-            settings,
-            profile,
-            rungs,
-            unrealisable,
-            instructions,
-            mailbox,
-            signature,
-            reconnects: AtomicUsize::new(0),
+impl Link for SlmpLink {
+    fn identify(&mut self) -> Result<Identity, LinkError> {
+        let t = self.0.type_name()?;
+        Ok(Identity {
+            shown: t.to_string(),
+            name: t.name,
         })
     }
 
-    pub fn settings(&self) -> &SlmpSettings {
-        &self.settings
+    fn run_state(&mut self) -> Result<RunState, LinkError> {
+        let words = self.0.random_read(&[Device::new(STATUS.0, STATUS.1)])?;
+        Ok(run_state(words.first().copied().unwrap_or(u16::MAX)))
     }
 
-    pub fn fence(&self) -> &WriteFence {
-        &self.fence
+    fn read(&mut self, head: &Device, count: u32) -> Result<Vec<u16>, LinkError> {
+        Ok(self.0.read_words(head, count)?)
     }
 
-    fn variant(&self) -> Option<&Variant> {
-        self.profile.variant(&self.settings.variant)
+    /// One random read (0403) of the devices and SD203.
+    fn poll(&mut self, devices: &[Device]) -> Result<(Vec<u16>, RunState), LinkError> {
+        let mut asked = devices.to_vec();
+        asked.push(Device::new(STATUS.0, STATUS.1));
+        let mut words = self.0.random_read(&asked)?;
+        let sd203 = words.pop().unwrap_or(u16::MAX);
+        Ok((words, run_state(sd203)))
     }
 
-    /// Connects and runs the interlocks now, so that a bench that is not ready is an error
-    /// before the first case. Writes nothing.
-    pub fn connect(&self) -> Result<(), LiveError> {
-        let mut live = self.lock();
-        self.verify(&mut live).map_err(|e| match e {
-            CaseError::Client(c) => LiveError::Client(c),
-            CaseError::Fault(f) => LiveError::Refused(f.to_string()),
-            CaseError::Stopped(s) => LiveError::Refused(s),
-        })
+    fn write(&mut self, write: &FencedWrite) -> Result<(), LinkError> {
+        Ok(self.0.write(write)?)
     }
 
-    fn lock(&self) -> std::sync::MutexGuard<'_, Live> {
-        match self.state.lock() {
-            Ok(s) => s,
-            Err(poisoned) => poisoned.into_inner(),
-        }
+    fn batch_words(&self) -> usize {
+        self.0.settings().limits.batch_words
     }
 
-    /// The CPU's type name as read by the interlocks (after [`SlmpBackend::connect`]).
-    pub fn cpu(&self) -> Option<String> {
-        self.lock().cpu.clone()
+    fn connections(&self) -> u64 {
+        self.0.connections
     }
 
-    /// The rung the last case's proof of execution found not executed, taken once: what the
-    /// pulse self-test tells from any other fault.
-    pub fn take_not_executed(&self) -> Option<u16> {
-        self.lock().not_executed.take()
+    fn requests(&self) -> u64 {
+        self.0.requests
     }
 
-    /// Requests sent so far.
-    pub fn requests(&self) -> u64 {
-        self.lock().client.requests
+    fn is_connected(&self) -> bool {
+        self.0.is_connected()
     }
 
-    /// The rung, flags and window a request would run with, each window range checked against
-    /// the fence; no socket is involved. `Err` is why the case cannot run on this program.
-    pub fn plan(&self, req: &Request<'_>) -> Result<Plan, LiveError> {
-        let key = Call::new(req.operands, req.indirect).key(req.instruction);
-        let Some(&rung) = self.rungs.get(&key) else {
-            return Err(LiveError::Refused(self.no_rung(&key)));
-        };
-        let all = req.all_flags();
-        let flags = self
-            .settings
-            .manifest
-            .flags
-            .iter()
-            .enumerate()
-            .filter(|(_, f)| all.get(*f).copied().unwrap_or(false))
-            .fold(0u16, |acc, (i, _)| acc | 1 << i);
-        let mut window = Vec::new();
-        for (head, last) in window::ranges(req) {
-            let (code, first) = (head.code(), head.index);
-            if let Some(why) = unaddressable(&head) {
-                return Err(refused!("not run: the case sets {code} words: {why}"));
-            }
-            let range = WordRange::new(code, first, last);
-            self.fence
-                .check(&range)
-                .map_err(|e| match fence::Kind::of(code) {
-                    fence::Kind::Special => refused!(
-                        "not run: {e}; {code} is a special register, which `sandbox=manifest` \
-                     leaves out: name it to let the harness write it (sandbox=manifest,{range})"
-                    ),
-                    _ => refused!(
-                        "not run: {e}; declare a sandbox that covers the manifest's `writes`"
-                    ),
-                })?;
-            let words = (first..=last)
-                .step_by(head.points() as usize)
-                .map(|i| req.memory.word(&head.with_index(i)))
-                .collect();
-            window.push((head, words));
-        }
-        Ok(Plan {
-            rung,
-            flags,
-            window,
-        })
-    }
-
-    fn no_rung(&self, key: &str) -> String {
-        match self.unrealisable.get(key) {
-            Some(reason) => format!("the program cannot hold `{key}`: {reason}"),
-            None => format!(
-                "the program has no rung for `{key}`: generate it again from this corpus \
-                 (`plc-conformance hil generate`) and write it to the CPU"
-            ),
-        }
-    }
-
-    /// The interlocks, before any write on a connection: type name, RUN, signature, a moving
-    /// scan counter, and the program idle. Read-only.
-    fn verify(&self, live: &mut Live) -> Result<(), CaseError> {
-        let name = live.client.type_name()?;
-        live.cpu = Some(name.to_string());
-        if name.name != self.settings.confirm {
-            return Err(CaseError::Stopped(format!(
-                "the CPU says it is `{}`, but `confirm` says `{}`: not the CPU this backend is \
-                 configured for, so nothing is written",
-                name.name, self.settings.confirm
-            )));
-        }
-        let sd203 = live
-            .client
-            .random_read(&[Device::new("SD", 203)])?
-            .first()
-            .copied()
-            .unwrap_or(u16::MAX);
-        if !is_run(sd203) {
-            return Err(CaseError::Stopped(format!(
-                "the CPU is in {}: the test program runs only in RUN; nothing is written and no \
-                 remote RUN is sent",
-                status_text(sd203)
-            )));
-        }
-        let words = live.client.read_words(&self.mailbox, mailbox::WORDS)?;
-        if let Some(why) = Signature::of(&words).mismatch(&self.signature) {
-            return Err(CaseError::Stopped(why));
-        }
-        live.simulated = words.get(off::ORIGIN as usize) == Some(&mailbox::SIMULATOR);
-        let scans = |w: &[u16]| w.get(off::SCANS as usize).copied().unwrap_or(0);
-        let first = scans(&words);
-        let since = Instant::now();
-        let counter = mailbox::at(&self.mailbox, off::SCANS);
-        loop {
-            let now = live.client.read_words(&counter, 1)?;
-            if now.first().copied() != Some(first) {
-                break;
-            }
-            if since.elapsed() > Duration::from_secs(1) {
-                return Err(CaseError::Stopped(format!(
-                    "the scan counter {counter} did not move in 1 s: the program is not \
-                     running"
-                )));
-            }
-            std::thread::sleep(Duration::from_millis(5));
-        }
-        // A case left over from a lost connection finishes before a new one starts.
-        let pair = |w: &[u16]| (w[0], w[1]);
-        let trigger_at = mailbox::at(&self.mailbox, off::TRIGGER);
-        let mut tw = live.client.read_words(&trigger_at, 2)?;
-        let since = Instant::now();
-        while pair(&tw).0 != pair(&tw).1 {
-            if since.elapsed() > self.settings.case_timeout {
-                return Err(CaseError::Fault(Fault::Timeout(format!(
-                    "the program is still busy with an earlier case (trigger {}, ack {}) after \
-                     {} s",
-                    tw[0],
-                    tw[1],
-                    self.settings.case_timeout.as_secs_f64()
-                ))));
-            }
-            std::thread::sleep(Duration::from_millis(2));
-            tw = live.client.read_words(&trigger_at, 2)?;
-        }
-        live.trigger = tw[1];
-        live.verified = true;
-        live.verified_on = live.client.connections;
-        Ok(())
-    }
-
-    fn poll(&self, live: &mut Live) -> Result<Status, ClientError> {
-        let at = |o| mailbox::at(&self.mailbox, o);
-        let w = live.client.random_read(&[
-            at(off::ACK),
-            at(off::STATE),
-            at(off::FLAG_BEFORE),
-            at(off::FLAG_AFTER),
-            at(off::CODE),
-            at(off::CODE_EXTRA),
-            at(off::CODE_NEXT),
-            at(off::RAN),
-            at(off::RAN_FOR),
-            at(off::ENO),
-            Device::new("SD", 203),
-        ])?;
-        let get = |i: usize| w.get(i).copied().unwrap_or(0);
-        Ok(Status {
-            ack: get(0),
-            state: get(1),
-            flag_before: get(2),
-            flag_after: get(3),
-            code: get(4),
-            extra: get(5),
-            next: get(6),
-            ran: get(7),
-            ran_for: get(8),
-            eno: get(9),
-            sd203: get(10),
-        })
-    }
-
-    /// One case on the CPU.
-    fn run_case(
-        &self,
-        live: &mut Live,
-        req: &Request<'_>,
-        plan: &Plan,
-    ) -> Result<Outcome, CaseError> {
-        live.not_executed = None;
-        if !live.verified
-            || live.verified_on != live.client.connections
-            || !live.client.is_connected()
-        {
-            if live.client.connections > 0 {
-                self.reconnects.fetch_add(1, Ordering::Relaxed);
-            }
-            self.verify(live)?;
-        }
-        let form = self.settings.client.form;
-        let batch = self.settings.client.limits.batch_words;
-        let refused = |e: fence::Refused| CaseError::Fault(Fault::Protocol(e.to_string()));
-        for (head, words) in &plan.window {
-            for w in self
-                .fence
-                .writes(form, batch, head, words)
-                .map_err(refused)?
-            {
-                live.client.write(&w)?;
-            }
-        }
-        let rung_at = mailbox::at(&self.mailbox, off::RUNG);
-        for w in self
-            .fence
-            .writes(form, batch, &rung_at, &[plan.rung, plan.flags])
-            .map_err(refused)?
-        {
-            live.client.write(&w)?;
-        }
-        let trigger = mailbox::next_trigger(live.trigger);
-        let trigger_at = mailbox::at(&self.mailbox, off::TRIGGER);
-        for w in self
-            .fence
-            .writes(form, batch, &trigger_at, &[trigger])
-            .map_err(refused)?
-        {
-            live.client.write(&w)?;
-        }
-        live.trigger = trigger;
-        let deadline = Instant::now() + self.settings.case_timeout;
-        let mut wait = self.settings.first_poll;
-        let status = loop {
-            let s = self.poll(live)?;
-            if !is_run(s.sd203) {
-                return Err(CaseError::Stopped(format!(
-                    "the CPU left RUN during case {} (now {}); if an operation error stops it, \
-                     set the CPU parameter for operation errors to continue (docs/live-cpu.md)",
-                    req.case_id,
-                    status_text(s.sd203)
-                )));
-            }
-            if s.ack == trigger {
-                // The program acknowledges in the scan it goes idle (or finds the error reset
-                // failed): an acknowledgement in any other state is not the program's.
-                if s.state != state::IDLE && s.state != state::RESET_FAILED {
-                    return Err(CaseError::Fault(Fault::Protocol(format!(
-                        "case {} is acknowledged (trigger {trigger}) while the program's state \
-                         says {} ({}): the generated program acknowledges only once it is done, \
-                         so something other than it answered; nothing is judged",
-                        req.case_id,
-                        s.state,
-                        state::name(s.state)
-                    ))));
-                }
-                break s;
-            }
-            if Instant::now() >= deadline {
-                return Err(CaseError::Fault(Fault::Timeout(format!(
-                    "the program did not acknowledge case {} (trigger {trigger}, ack {}, state \
-                     {}) within {} s: is the CPU in RUN with the generated program, and the \
-                     mailbox where the manifest says?",
-                    req.case_id,
-                    s.ack,
-                    s.state,
-                    self.settings.case_timeout.as_secs_f64()
-                ))));
-            }
-            std::thread::sleep(wait);
-            wait = (wait * 2).min(self.settings.max_poll);
-        };
-        if status.state == state::RESET_FAILED || status.flag_before != 0 {
-            return Err(CaseError::Fault(Fault::Unreachable(format!(
-                "the error flag {} stayed on after the error reset ({}), so case {} was not \
-                 executed (SD0={:04X}H)",
-                self.settings.manifest.error.flag,
-                self.settings.manifest.error.reset,
-                req.case_id,
-                status.code
-            ))));
-        }
-        // The proof of execution: the rung itself says it ran for this trigger, and executed.
-        let not_executed = if status.ran != plan.rung || status.ran_for != trigger {
-            Some(format!(
-                "rung {} did not run for case {} (trigger {trigger}): the mailbox says rung {} \
-                 ran last, for trigger {}; the rung is missing from the program on the CPU or \
-                 did not execute, so nothing is judged",
-                plan.rung, req.case_id, status.ran, status.ran_for
-            ))
-        } else if status.eno == 0 && status.flag_after == 0 {
-            Some(format!(
-                "rung {} was enabled for case {} but its instruction reported ENO FALSE and no \
-                 error: it did not execute (a pulse form whose enable did not fall since the \
-                 last case, or a call edited out of the rung), so nothing is judged",
-                plan.rung, req.case_id
-            ))
-        } else {
-            None
-        };
-        if let Some(why) = not_executed {
-            live.not_executed = Some(plan.rung);
-            return Err(CaseError::Fault(Fault::Protocol(why)));
-        }
-        let mut outcome = Outcome::default();
-        // The rung stores each address in its pointer its own way: not judged.
-        let pointers = pointer_words(req.indirect.values());
-        for (head, before) in &plan.window {
-            let after = live.client.read_words(head, before.len() as u32)?;
-            for (i, (b, a)) in before.iter().zip(&after).enumerate() {
-                let device = head.with_index(head.index + i as u32);
-                if a != b && !pointers.contains(&device) {
-                    outcome.writes.insert(device, Value::from(*a));
-                }
-            }
-        }
-        if status.flag_after != 0 {
-            let errors = &self.settings.manifest.error;
-            if status.next != status.code {
-                return Err(CaseError::Fault(Fault::Protocol(format!(
-                    "{} changed after the scan of case {}: {:04X}H right after the instruction, \
-                     {:04X}H one scan later",
-                    errors.register, req.case_id, status.code, status.next
-                ))));
-            }
-            // The code is SD0 as read; the registers go to the judge, which holds each one
-            // (SD8067 beside SD0 on FX5) to the code.
-            outcome.error = Some(req.error(status.code));
-            let read = [
-                (Some(&errors.register), status.code),
-                (errors.extra.as_ref(), status.extra),
-            ];
-            for (name, value) in read {
-                if let Some(device) = name.and_then(|n| n.parse::<Device>().ok()) {
-                    outcome.registers.insert(device, Value::from(value));
-                }
-            }
-        }
-        Ok(outcome)
-    }
-
-    /// The CPU (or the simulated one) as it reported itself, the variant, the program and the
-    /// transport.
-    fn what_answers(&self) -> String {
-        let live = self.lock();
-        let cpu = live
-            .cpu
-            .clone()
-            .unwrap_or_else(|| format!("`{}` (not yet read)", self.settings.confirm));
-        let what = if live.simulated {
-            "simulated CPU"
-        } else {
-            "live CPU"
-        };
-        format!(
-            "{what} {cpu}, {} variant {}, program {} (mailbox layout {}), {}",
-            self.profile.id,
-            self.settings.variant,
-            self.settings.manifest.hash,
-            mailbox::LAYOUT,
-            self.settings.client.describe()
-        )
-    }
-
-    fn breaker(&self, last: &Fault) -> String {
-        format!(
-            "not run: {} failed {} requests in a row (the last: {}), so its remaining trials \
-             are not run (max_consecutive_faults: {})",
-            self.settings.name,
-            self.settings.max_consecutive_faults,
-            last.kind(),
-            self.settings.max_consecutive_faults
-        )
+    fn disconnect(&mut self) {
+        self.0.disconnect();
     }
 }
 
-impl Backend for SlmpBackend {
-    fn name(&self) -> &str {
-        &self.settings.name
+impl LinkSettings for ClientSettings {
+    fn open(&self) -> Box<dyn Link> {
+        Box::new(SlmpLink(Client::new(self.clone())))
     }
-
-    fn profile(&self) -> &str {
-        &self.profile.id
-    }
-
-    /// What a recording names as the backend's version: the CPU as it reported itself (0101
-    /// type name and model code, once connected), the profile variant, the program (manifest
-    /// hash and mailbox layout) and the transport; both fills of every case are executed.
     fn describe(&self) -> String {
-        format!("{}, both fills", self.what_answers())
+        ClientSettings::describe(self)
+    }
+    fn address(&self) -> &str {
+        &self.address
+    }
+    fn addressing(&self) -> &'static dyn Addressing {
+        &ADDRESSING
+    }
+    fn clone_box(&self) -> Box<dyn LinkSettings> {
+        Box::new(self.clone())
+    }
+}
+
+/// A bench over SLMP, while its link settings may still change.
+pub type SlmpSettings = BenchSettings<ClientSettings>;
+
+/// The keys the SLMP link reads besides the bench's own.
+const LINK_KEYS: [&str; 4] = ["frame", "code", "form", "monitor"];
+
+impl BenchSettings<ClientSettings> {
+    /// Settings with the defaults of the manifest's family: FX5 CPUs get 3E frames, the
+    /// Q-compatible device form (an FX5U refuses the long form) and the monitoring timer 0;
+    /// others 4E, the long form and 2 s. The limits follow the code and the form
+    /// ([`SlmpSettings::fit_limits`]).
+    pub fn new(
+        name: impl Into<String>,
+        address: impl Into<String>,
+        manifest: Manifest,
+        variant: impl Into<String>,
+        confirm: impl Into<String>,
+        sandbox: Vec<WordRange>,
+    ) -> Self {
+        let mut client = ClientSettings::new(address);
+        let family = Family::of_profile(&manifest.profile);
+        if family == Family::Fx5 {
+            client.frame = FrameKind::E3;
+            client.form = DeviceForm::Short;
+        }
+        client.timer = limits::monitoring_timer(family);
+        let mut settings =
+            BenchSettings::with_link(name, client, manifest, variant, confirm, sandbox);
+        settings.fit_limits();
+        settings
     }
 
-    fn version(&self) -> Option<String> {
-        Some(self.what_answers())
+    /// The limits of the port as now configured: to call after changing the code or the form.
+    pub fn fit_limits(&mut self) {
+        let family = Family::of_profile(&self.manifest.profile);
+        self.link.limits = limits::limits(family, self.link.code, self.link.form);
     }
 
-    fn simulated_by(&self) -> Option<String> {
-        self.lock().simulated.then(|| {
-            format!(
-                "the simulated CPU (plc-conformance hil sim) at {}",
-                self.settings.client.address
-            )
-        })
-    }
-
-    fn claims(&self, instruction: &str, variant: &str) -> bool {
-        variant == self.settings.variant
-            && self.instructions.iter().any(|i| i == instruction)
-            && self
-                .variant()
-                .is_some_and(|v| self.profile.has_instruction(v, instruction))
-    }
-
-    fn declines(&self, setting: &Setting<'_>) -> Option<String> {
-        let key = Call::new(setting.operands, setting.indirect).key(setting.instruction);
-        (!self.rungs.contains_key(&key)).then(|| self.no_rung(&key))
-    }
-
-    fn chunk_trials(&self) -> usize {
-        16
-    }
-
-    fn restarts(&self) -> usize {
-        self.reconnects.load(Ordering::Relaxed)
-    }
-
-    fn execute(&self, req: &Request<'_>) -> Result<Response, Fault> {
-        let plan = match self.plan(req) {
-            Ok(p) => p,
-            Err(why) => return Ok(Response::Unsupported(chain(&why))),
+    /// Reads `slmp:NAME=HOST:PORT?key=value&...`; `None` when `text` is not of this form.
+    /// Keys: `manifest` (path), `confirm` (the CPU type name), `sandbox` (ranges such as
+    /// `D0-D4359,D7900-D7999`, where `manifest` stands for the data and link registers of the
+    /// manifest's `writes`: `manifest,SD100-SD167` adds special registers), and optionally
+    /// `variant`, `frame` (3e, 4e), `code` (binary, ascii), `form` (short, long), `timeout`
+    /// (case seconds), `monitor` (monitoring timer, units of 250 ms), `max_faults`, `poll_ms`.
+    pub fn parse(text: &str, base: &Path) -> Result<Option<SlmpSettings>, LiveError> {
+        let Some(spec) = Spec::split(text, "slmp", &LINK_KEYS)? else {
+            return Ok(None);
         };
-        let mut live = self.lock();
-        if let Some(why) = &live.down {
-            return Err(Fault::Unreachable(why.clone()));
+        let (manifest, variant, confirm, sandbox) = spec.parts(base, &ADDRESSING)?;
+        let mut s = SlmpSettings::new(spec.name, spec.address, manifest, variant, confirm, sandbox);
+        if let Some(f) = spec.get("frame") {
+            s.link.frame = match f {
+                "3e" | "3E" => FrameKind::E3,
+                "4e" | "4E" => FrameKind::E4,
+                _ => return Err(refused!("`frame={f}`: give 3e or 4e")),
+            };
         }
-        if closing() {
-            return Err(Fault::Unreachable(
-                "not run: the run was interrupted".into(),
-            ));
+        if let Some(c) = spec.get("code") {
+            s.link.code = match c {
+                "binary" => Code::Binary,
+                "ascii" => Code::Ascii,
+                _ => return Err(refused!("`code={c}`: give binary or ascii")),
+            };
         }
-        match self.run_case(&mut live, req, &plan) {
-            Ok(outcome) => {
-                live.faults_in_a_row = 0;
-                Ok(Response::Done(outcome))
-            }
-            Err(e) => {
-                live.client.disconnect();
-                live.verified = false;
-                let fault = match e {
-                    CaseError::Client(c) => fault_of(&c),
-                    CaseError::Fault(f) => f,
-                    CaseError::Stopped(why) => {
-                        live.down = Some(format!("not run: {why}"));
-                        return Err(Fault::Unreachable(why));
-                    }
-                };
-                live.faults_in_a_row += 1;
-                if live.faults_in_a_row >= self.settings.max_consecutive_faults.max(1) {
-                    live.down = Some(self.breaker(&fault));
+        if let Some(f) = spec.get("form") {
+            s.link.form = match f {
+                "short" => DeviceForm::Short,
+                "long" => DeviceForm::Long,
+                _ => {
+                    return Err(refused!(
+                        "`form={f}`: give short (subcommand 0000) or long (0002)"
+                    ))
                 }
-                Err(fault)
+            };
+        }
+        spec.timings(&mut s)?;
+        s.fit_limits();
+        if let Some(v) = spec.get("monitor") {
+            let units = v.parse::<u16>().ok().filter(|n| *n <= 240).ok_or_else(|| {
+                refused!("`monitor={v}`: give 0 (the FX5 value) to 240 (units of 250 ms)")
+            })?;
+            s.link.timer = units;
+            // With 0 the CPU does not time itself, and the client's default reply time holds.
+            if units > 0 {
+                s.link.reply_timeout =
+                    Duration::from_millis(250 * u64::from(units)) + Duration::from_millis(500);
             }
         }
+        Ok(Some(s))
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::backend::bench::fence::{parse_ranges, sandbox_refuses};
 
     /// A device is addressed when the client has its code and the profile numbers it as MELSEC
     /// does, since the program, the manifest and the frames write its number MELSEC's way.
     #[test]
     fn a_device_is_addressed_when_its_code_and_numbering_agree() {
+        let unaddressable = |d: &Device| ADDRESSING.unaddressable(d);
         assert_eq!(unaddressable(&Device::new("D", 100)), None);
         assert_eq!(unaddressable(&Device::hexadecimal("W", 0x1A)), None);
         assert_eq!(unaddressable(&Device::hexadecimal("SW", 0x0F)), None);
@@ -780,5 +316,30 @@ mod tests {
         assert!(hex_d.contains("MELSEC in decimal"), "{hex_d}");
         let timer = unaddressable(&Device::new("T", 5)).expect("refused");
         assert!(timer.contains("no SLMP device code"), "{timer}");
+    }
+
+    /// Link registers read and print in hexadecimal, as MELSEC numbers them; data registers
+    /// in decimal.
+    #[test]
+    fn a_range_is_numbered_as_melsec_numbers_its_device() {
+        let r: Vec<WordRange> = parse_ranges("W0-W1FF,SW10,D10-D20", &ADDRESSING).expect("ranges");
+        let shown: Vec<String> = r.iter().map(ToString::to_string).collect();
+        assert_eq!(shown, ["W0-W1FF", "SW10", "D10-D20"]);
+        assert_eq!((r[0].first, r[0].last, r[1].first), (0, 0x1FF, 16));
+        assert!(parse_ranges("D1A", &ADDRESSING).is_err(), "D is decimal");
+    }
+
+    #[test]
+    fn a_sandbox_holds_word_devices_only() {
+        for bits in ["Y0-Y17", "M0-M15", "SM0", "B0-BF", "X0"] {
+            let r = WordRange::parse(bits, &ADDRESSING).expect("range");
+            assert!(sandbox_refuses(&r, &ADDRESSING).is_some(), "{bits}");
+        }
+        for words in ["D0-D10", "R5", "W0-W1F", "SD100-SD167", "SW0-SW1"] {
+            let r = WordRange::parse(words, &ADDRESSING).expect("range");
+            assert_eq!(sandbox_refuses(&r, &ADDRESSING), None, "{words}");
+        }
+        assert_eq!(ADDRESSING.kind(&Device::new("SD", 0)), Kind::Special);
+        assert_eq!(ADDRESSING.kind(&Device::hexadecimal("W", 0)), Kind::Data);
     }
 }

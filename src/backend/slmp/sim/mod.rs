@@ -27,15 +27,15 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
-use super::fence::{parse_ranges, WordRange};
 use super::frame::{
     self, decode_body, message_len, Code, Decoded, DeviceForm, DeviceRef, FrameKind, Request,
     Response,
 };
 use super::limits::{Family, Limits};
-use super::mailbox::{self, off, state};
-use super::manifest::{parse_operand, Manifest};
-use crate::backend::slmp::error::{refused, LiveError};
+use crate::backend::bench::error::{refused, LiveError};
+use crate::backend::bench::fence::{parse_ranges, WordRange};
+use crate::backend::bench::mailbox::{self, off, state};
+use crate::backend::bench::manifest::{parse_operand, Manifest};
 use crate::backend::{Backend, Request as ModelRequest, Response as ModelResponse};
 use crate::device::Device;
 use crate::memory::{Fill, Image, Value};
@@ -400,7 +400,7 @@ impl Shared {
         profile: Arc<Profile>,
         model: Arc<dyn Backend>,
     ) -> Result<Arc<Shared>, LiveError> {
-        settings.manifest.validate()?;
+        settings.manifest.validate(&super::ADDRESSING)?;
         if profile.variant(&settings.variant).is_none() {
             return Err(refused!(
                 "`{}` is not a variant of {}",
@@ -408,7 +408,7 @@ impl Shared {
                 profile.id
             ));
         }
-        let mailbox = settings.manifest.mailbox_head()?;
+        let mailbox = settings.manifest.mailbox_head(&super::ADDRESSING)?;
         let rungs = settings
             .manifest
             .rungs
@@ -438,7 +438,7 @@ impl Shared {
                 })
             })
             .collect::<Result<Vec<_>, LiveError>>()?;
-        let mut allowed = parse_ranges(&settings.manifest.writes.join(","))
+        let mut allowed = parse_ranges(&settings.manifest.writes.join(","), &super::ADDRESSING)
             .map_err(|e| LiveError::within("the manifest's `writes`", e))?;
         allowed.extend(mailbox::pc_words(&mailbox));
         let cpu = Cpu {
@@ -1012,7 +1012,10 @@ fn handle(shared: &Shared, request: &Request, decoded: Decoded) -> (u16, Vec<u8>
             let Some(letters) = frame::device_letters(head.code) else {
                 return (0xC05C, Vec::new());
             };
-            let asked = WordRange::new(letters, head.number, head.number + words.len() as u32 - 1);
+            let asked = WordRange {
+                hex: frame::hex_numbered(letters),
+                ..WordRange::new(letters, head.number, head.number + words.len() as u32 - 1)
+            };
             if !shared.allowed.iter().any(|r| r.contains(&asked)) {
                 cpu.audit.stray_writes.push(asked.to_string());
             }

@@ -11,10 +11,10 @@ use std::sync::Arc;
 use std::thread::JoinHandle;
 
 use super::{scan, Audit, Shared, SimSettings};
+use crate::backend::bench::error::LiveError;
+use crate::backend::bench::fence::{parse_ranges, WordRange, WriteFence};
+use crate::backend::bench::mailbox::{self, off, state};
 use crate::backend::slmp::client::{Client, ClientSettings};
-use crate::backend::slmp::error::LiveError;
-use crate::backend::slmp::fence::{parse_ranges, WordRange, WriteFence};
-use crate::backend::slmp::mailbox::{self, off, state};
 use crate::backend::Backend;
 use crate::device::Device;
 use crate::error_chain::chain;
@@ -36,8 +36,11 @@ impl RemoteProgram {
         client: ClientSettings,
     ) -> Result<RemoteProgram, LiveError> {
         let shared = Shared::new(settings, profile, model)?;
-        let writes = parse_ranges(&shared.settings.manifest.writes.join(","))
-            .map_err(|e| LiveError::within("the manifest's `writes`", e))?;
+        let writes = parse_ranges(
+            &shared.settings.manifest.writes.join(","),
+            &super::super::ADDRESSING,
+        )
+        .map_err(|e| LiveError::within("the manifest's `writes`", e))?;
         // Every word of the copy is the program's to write, as a CPU's own memory is.
         let fence = WriteFence::new(
             (shared.lock().words.iter())
@@ -118,7 +121,7 @@ fn remote_scan(
         .into_iter()
         .partition(|(d, _)| ack.is(d.code(), d.index));
     for (head, words) in first.iter().chain(&last) {
-        let built = fence.writes(client.settings().form, limits.batch_words, head, words)?;
+        let built = fence.writes(limits.batch_words, head, words)?;
         for w in built {
             client.write(&w)?;
         }

@@ -1,16 +1,15 @@
-//! The write fence: the only way to build an SLMP write.
+//! The write fence: the only way to build a write to a CPU, over any link.
 //!
 //! A live CPU's memory outside the words a bench user gave the harness may hold anything,
 //! including what a machine depends on. Every batch write is therefore built here, from a
 //! declared set of word ranges (the sandbox the case windows go to, and the mailbox words the PC
 //! owns), and a write that touches one word outside them is refused while it is still a value in
 //! memory: before any byte is encoded, let alone sent. [`FencedWrite`] has no other constructor,
-//! and the client's only write method takes one.
+//! and a link's only write method takes one.
 
 use std::fmt;
-use std::str::FromStr;
 
-use super::frame::{self, Body, DeviceForm, DeviceRef};
+use super::link::Addressing;
 use crate::device::{Device, DeviceSyntaxError};
 
 /// A run of words of one device code, both ends included: `D0-D11999`, or `D12000` alone.
@@ -19,24 +18,44 @@ pub struct WordRange {
     pub code: String,
     pub first: u32,
     pub last: u32,
+    /// The CPU numbers the code in hexadecimal (MELSEC `W1A-W1F`).
+    pub hex: bool,
 }
 
 impl WordRange {
+    /// A range of a decimal-numbered code.
     pub fn new(code: &str, first: u32, last: u32) -> Self {
         WordRange {
             code: code.to_string(),
             first,
             last,
+            hex: false,
+        }
+    }
+
+    /// The words `first` to `last` of `head`'s code, numbered as `head` is.
+    pub fn within(head: &Device, first: u32, last: u32) -> Self {
+        WordRange {
+            hex: head.is_hexadecimal(),
+            ..WordRange::new(head.code(), first, last)
         }
     }
 
     /// The words `count` from `head` (at least one).
     pub fn of(head: &Device, count: u32) -> Self {
-        WordRange::new(
-            head.code(),
+        WordRange::within(
+            head,
             head.index,
             head.index.saturating_add(count.max(1) - 1),
         )
+    }
+
+    /// The first word, as a device.
+    pub fn head(&self) -> Device {
+        match self.hex {
+            true => Device::hexadecimal(&self.code, self.first),
+            false => Device::new(&self.code, self.first),
+        }
     }
 
     pub fn contains(&self, other: &WordRange) -> bool {
@@ -56,11 +75,11 @@ impl WordRange {
     }
 }
 
-/// Numbers as MELSEC writes them: `W1A-W1F` for a hexadecimal-numbered device.
+/// Numbers as the CPU writes them: `W1A-W1F` for a hexadecimal-numbered device.
 impl fmt::Display for WordRange {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let (code, first, last) = (&self.code, self.first, self.last);
-        match (frame::hex_numbered(code), first == last) {
+        match (self.hex, first == last) {
             (true, true) => write!(f, "{code}{first:X}"),
             (true, false) => write!(f, "{code}{first:X}-{code}{last:X}"),
             (false, true) => write!(f, "{code}{first}"),
@@ -111,17 +130,16 @@ impl std::error::Error for RangeError {
     }
 }
 
-impl FromStr for WordRange {
-    type Err = RangeError;
-
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
+impl WordRange {
+    /// Reads `D0-D11999` or `D12000`, numbered as the link's CPU numbers the code.
+    pub fn parse(s: &str, addressing: &dyn Addressing) -> Result<Self, RangeError> {
         let s = s.trim();
         let error = |problem| RangeError {
             text: s.to_string(),
             problem,
         };
         let parse = |t: &str| {
-            Device::parse_numbered(t, frame::hex_numbered)
+            Device::parse_numbered(t, |code: &str| addressing.hex_numbered(code))
                 .map_err(|e| error(RangeProblem::Device(e)))
         };
         let (first, last) = match s.split_once('-') {
@@ -135,48 +153,39 @@ impl FromStr for WordRange {
         if first.index > last.index {
             return Err(error(RangeProblem::Reversed));
         }
-        Ok(WordRange::new(first.code(), first.index, last.index))
+        Ok(WordRange::within(&first, first.index, last.index))
     }
 }
 
-/// What a device is to a sandbox: the harness writes word devices only, and a special one only
-/// when the user names it.
+/// What a word is to a sandbox: the harness writes word devices only, and a special one only
+/// when the user names it. The link's [`Addressing::kind`] says which a device is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Kind {
-    /// Data, file and link registers (D, R, ZR, W): memory a test program may own.
+    /// Data registers and their like: memory a test program may own.
     Data,
-    /// Special and link special registers (SD, SW): the CPU's and the network's own words.
+    /// The CPU's and the network's own words (special registers).
     Special,
-    /// Bit devices (X, Y, M, SM, ...): inputs, outputs and relays, 16 points to a word.
+    /// Bit devices (inputs, outputs, relays), 16 points to a word.
     Bit,
-}
-
-impl Kind {
-    pub fn of(code: &str) -> Kind {
-        match code {
-            "D" | "R" | "ZR" | "W" => Kind::Data,
-            "SD" | "SW" => Kind::Special,
-            _ => Kind::Bit,
-        }
-    }
 }
 
 /// Why a range cannot be part of a sandbox, if it cannot: a bit device (an output, a relay; a
 /// word of one is 16 points) is never written, whatever the sandbox says.
-pub fn sandbox_refuses(range: &WordRange) -> Option<String> {
-    (Kind::of(&range.code) == Kind::Bit).then(|| {
+pub fn sandbox_refuses(range: &WordRange, addressing: &dyn Addressing) -> Option<String> {
+    (addressing.kind(&range.head()) == Kind::Bit).then(|| {
         format!(
-            "{range}: a sandbox holds word devices only (D, R, ZR, W, and SD or SW when named); \
-             the live backend never writes a bit device such as an output or a relay"
+            "{range}: a sandbox holds word devices only ({}); the live backend never writes a \
+             bit device such as an output or a relay",
+            addressing.sandbox_devices()
         )
     })
 }
 
 /// Reads a comma-separated list of ranges.
-pub fn parse_ranges(text: &str) -> Result<Vec<WordRange>, RangeError> {
+pub fn parse_ranges(text: &str, addressing: &dyn Addressing) -> Result<Vec<WordRange>, RangeError> {
     text.split(',')
         .filter(|t| !t.trim().is_empty())
-        .map(str::parse)
+        .map(|t| WordRange::parse(t, addressing))
         .collect()
 }
 
@@ -240,16 +249,21 @@ pub struct WriteFence {
     allowed: Vec<WordRange>,
 }
 
-/// One batch write the fence let through: the request body, and what it writes, for messages.
+/// One write the fence let through: the words and where they go. A link encodes it; nothing
+/// else can make one.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct FencedWrite {
-    body: Body,
+    head: Device,
+    words: Vec<u16>,
     range: WordRange,
 }
 
 impl FencedWrite {
-    pub fn body(&self) -> &Body {
-        &self.body
+    pub fn head(&self) -> &Device {
+        &self.head
+    }
+    pub fn words(&self) -> &[u16] {
+        &self.words
     }
     pub fn range(&self) -> &WordRange {
         &self.range
@@ -280,11 +294,10 @@ impl WriteFence {
         }
     }
 
-    /// The batch writes of `words` from `head`, at most `batch` words each (the port's limit,
-    /// [`super::limits`]), once every word is inside the fence; nothing is built when one is not.
+    /// The writes of `words` from `head`, at most `batch` words each (the link's limit), once
+    /// every word is inside the fence; nothing is built when one is not.
     pub fn writes(
         &self,
-        form: DeviceForm,
         batch: usize,
         head: &Device,
         words: &[u16],
@@ -304,20 +317,19 @@ impl WriteFence {
             return Err(refuse("the range runs past the last device number".into()));
         }
         self.check(&asked)?;
-        let code = frame::device_code(head.code())
-            .ok_or_else(|| refuse(format!("{} has no SLMP device code", head.code())))?;
-        let batch = batch.clamp(1, frame::MAX_BATCH_WORDS);
-        let mut out = Vec::with_capacity(words.len().div_ceil(batch));
-        for (i, chunk) in words.chunks(batch).enumerate() {
-            let number = head.index + (i * batch) as u32;
-            let body = frame::write_words(form, DeviceRef { code, number }, chunk)
-                .map_err(|e| refuse(e.to_string()))?;
-            out.push(FencedWrite {
-                body,
-                range: WordRange::new(head.code(), number, number + chunk.len() as u32 - 1),
-            });
-        }
-        Ok(out)
+        let batch = batch.max(1);
+        Ok(words
+            .chunks(batch)
+            .enumerate()
+            .map(|(i, chunk)| {
+                let at = head.with_index(head.index + (i * batch) as u32);
+                FencedWrite {
+                    range: WordRange::of(&at, chunk.len() as u32),
+                    head: at,
+                    words: chunk.to_vec(),
+                }
+            })
+            .collect())
     }
 }
 
@@ -326,8 +338,12 @@ mod tests {
     use super::*;
     use rstest::rstest;
 
+    use crate::backend::bench::link::Plain;
+
     fn fence() -> WriteFence {
-        WriteFence::new(parse_ranges("D0-D11999, D12008-D12011, D12100-D18431").expect("ranges"))
+        WriteFence::new(
+            parse_ranges("D0-D11999, D12008-D12011, D12100-D18431", &Plain).expect("ranges"),
+        )
     }
 
     #[rstest]
@@ -344,49 +360,31 @@ mod tests {
     #[case("SD0", 1, false)]
     fn allows_only_inside(#[case] head: &str, #[case] count: usize, #[case] ok: bool) {
         let head: Device = head.parse().expect("device");
-        let r = fence().writes(DeviceForm::Short, 960, &head, &vec![0; count]);
+        let r = fence().writes(960, &head, &vec![0; count]);
         assert_eq!(r.is_ok(), ok, "{head} x{count}: {r:?}");
     }
 
     #[test]
     fn touching_ranges_merge_and_long_writes_split() {
-        let f = WriteFence::new(parse_ranges("D0-D99,D100-D2000").expect("ranges"));
+        let f = WriteFence::new(parse_ranges("D0-D99,D100-D2000", &Plain).expect("ranges"));
         assert_eq!(f.allowed(), &[WordRange::new("D", 0, 2000)]);
         let writes = f
-            .writes(DeviceForm::Short, 960, &Device::new("D", 0), &[7; 2001])
+            .writes(960, &Device::new("D", 0), &[7; 2001])
             .expect("inside");
         let ranges: Vec<String> = writes.iter().map(|w| w.range().to_string()).collect();
         assert_eq!(ranges, ["D0-D959", "D960-D1919", "D1920-D2000"]);
         // An FX5 in ASCII code takes 480 words a request.
         let writes = f
-            .writes(DeviceForm::Short, 480, &Device::new("D", 0), &[7; 961])
+            .writes(480, &Device::new("D", 0), &[7; 961])
             .expect("inside");
         let ranges: Vec<String> = writes.iter().map(|w| w.range().to_string()).collect();
         assert_eq!(ranges, ["D0-D479", "D480-D959", "D960"]);
     }
 
-    /// Link registers read and print in hexadecimal, as MELSEC numbers them; data registers
-    /// in decimal.
-    #[test]
-    fn a_range_is_numbered_as_melsec_numbers_its_device() {
-        let r: Vec<WordRange> = parse_ranges("W0-W1FF,SW10,D10-D20").expect("ranges");
-        assert_eq!(
-            r,
-            [
-                WordRange::new("W", 0, 0x1FF),
-                WordRange::new("SW", 16, 16),
-                WordRange::new("D", 10, 20)
-            ]
-        );
-        let shown: Vec<String> = r.iter().map(ToString::to_string).collect();
-        assert_eq!(shown, ["W0-W1FF", "SW10", "D10-D20"]);
-        assert!(parse_ranges("D1A").is_err(), "D is decimal");
-    }
-
     #[test]
     fn a_refusal_names_the_words_and_the_fence() {
         let e = fence()
-            .writes(DeviceForm::Short, 960, &Device::new("D", 11990), &[0; 20])
+            .writes(960, &Device::new("D", 11990), &[0; 20])
             .expect_err("outside");
         assert_eq!(
             e.to_string(),
@@ -397,16 +395,15 @@ mod tests {
 
     #[test]
     fn a_sandbox_holds_word_devices_only() {
-        for bits in ["Y0-Y17", "M0-M15", "SM0", "B0-BF", "X0"] {
-            let r: WordRange = bits.parse().expect("range");
-            assert!(sandbox_refuses(&r).is_some(), "{bits}");
+        for bits in ["Y0-Y17", "M0-M15"] {
+            let r = WordRange::parse(bits, &Plain).expect("range");
+            let why = sandbox_refuses(&r, &Plain).expect("refused");
+            assert!(why.contains("(D, R, W, and SD when named)"), "{why}");
         }
-        for words in ["D0-D10", "R5", "W0-W1F", "SD100-SD167", "SW0-SW1"] {
-            let r: WordRange = words.parse().expect("range");
-            assert_eq!(sandbox_refuses(&r), None, "{words}");
+        for words in ["D0-D10", "R5", "SD100-SD167"] {
+            let r = WordRange::parse(words, &Plain).expect("range");
+            assert_eq!(sandbox_refuses(&r, &Plain), None, "{words}");
         }
-        assert_eq!(Kind::of("SD"), Kind::Special);
-        assert_eq!(Kind::of("W"), Kind::Data);
     }
 
     #[rstest]
@@ -415,7 +412,7 @@ mod tests {
     #[case("D0-R5", "same device")]
     #[case("d0", "not a device name")]
     fn bad_ranges(#[case] text: &str, #[case] message: &str) {
-        let e = crate::error_chain::chain(&parse_ranges(text).expect_err("bad"));
+        let e = crate::error_chain::chain(&parse_ranges(text, &Plain).expect_err("bad"));
         assert!(e.contains(message), "{e}");
     }
 
@@ -430,7 +427,7 @@ mod tests {
             let ranges: Vec<WordRange> = allowed.iter().map(|(a, n)| WordRange::new("D", *a, a + n)).collect();
             let fence = WriteFence::new(ranges.clone());
             let inside = (head..head + count as u32).all(|w| ranges.iter().any(|r| r.first <= w && w <= r.last));
-            let built = fence.writes(DeviceForm::Short, 960, &Device::new("D", head), &vec![0; count]);
+            let built = fence.writes(960, &Device::new("D", head), &vec![0; count]);
             proptest::prop_assert_eq!(built.is_ok(), inside);
         }
     }

@@ -4,11 +4,11 @@
 use std::error::Error;
 use std::fmt;
 
-use super::client::ClientError;
 use super::fence::Refused;
+use super::link::LinkError;
 
 /// An error underneath another: a device that does not parse, a file that cannot be read, the
-/// client's error, or a nested [`LiveError`].
+/// link's error, or a nested [`LiveError`].
 pub(crate) type Cause = Box<dyn Error + Send + Sync>;
 
 /// Why the live path refuses or stops.
@@ -20,7 +20,7 @@ pub enum LiveError {
     /// underneath, returned by `source()`.
     In { part: String, source: Cause },
     /// The CPU could not be reached or answered with an error.
-    Client(ClientError),
+    Link(LinkError),
     /// A write outside the write fence.
     Fence(Refused),
 }
@@ -31,9 +31,9 @@ impl From<Refused> for LiveError {
     }
 }
 
-impl From<ClientError> for LiveError {
-    fn from(e: ClientError) -> Self {
-        LiveError::Client(e)
+impl From<LinkError> for LiveError {
+    fn from(e: LinkError) -> Self {
+        LiveError::Link(e)
     }
 }
 
@@ -52,7 +52,7 @@ impl fmt::Display for LiveError {
         match self {
             LiveError::Refused(why) => f.write_str(why),
             LiveError::In { part, .. } => f.write_str(part),
-            LiveError::Client(e) => write!(f, "{e}"),
+            LiveError::Link(e) => write!(f, "{e}"),
             LiveError::Fence(e) => write!(f, "{e}"),
         }
     }
@@ -63,7 +63,7 @@ impl Error for LiveError {
         match self {
             LiveError::Refused(_) => None,
             LiveError::In { source, .. } => Some(source.as_ref()),
-            LiveError::Client(e) => e.source(),
+            LiveError::Link(e) => e.source(),
             LiveError::Fence(e) => e.source(),
         }
     }
@@ -72,7 +72,7 @@ impl Error for LiveError {
 /// A [`LiveError::Refused`] written as `format!` is.
 macro_rules! refused {
     ($($message:tt)*) => {
-        $crate::backend::slmp::error::LiveError::Refused(format!($($message)*))
+        $crate::backend::bench::error::LiveError::Refused(format!($($message)*))
     };
 }
 pub(crate) use refused;

@@ -1,14 +1,13 @@
-//! A read-only look at a bench: what `plc-conformance hil doctor` prints. It sends only 0101,
-//! 0401 and 0403, so it can be pointed at a CPU before anything is trusted.
+//! A read-only look at a bench: what `plc-conformance hil doctor` prints. It only reads (the
+//! CPU's name, its state, the mailbox), so it can be pointed at a CPU before anything is
+//! trusted.
 
 use std::time::{Duration, Instant};
 
-use super::client::Client;
+use super::link::LinkSettings;
 use super::mailbox::{self, off, Signature};
-use super::settings::SlmpSettings;
-use super::{is_run, status_text};
-use crate::backend::slmp::error::{refused, LiveError};
-use crate::device::Device;
+use super::settings::BenchSettings;
+use crate::backend::bench::error::{refused, LiveError};
 
 /// One finding: what was looked at, and what was found (`Err` when it stops a run).
 #[derive(Debug)]
@@ -19,44 +18,40 @@ pub(crate) struct Finding {
 
 /// Looks at the bench in the order the backend's interlocks do, and stops at the first thing
 /// that makes the rest meaningless (no connection). Returns the findings and the requests sent.
-pub(crate) fn doctor(settings: &SlmpSettings) -> (Vec<Finding>, u64) {
-    let mut client = Client::new(settings.client.clone());
+pub(crate) fn doctor<L: LinkSettings>(settings: &BenchSettings<L>) -> (Vec<Finding>, u64) {
+    let mut link = settings.link.open();
     let mut out = Vec::new();
     let mut push = |what, result| out.push(Finding { what, result });
-    match client.type_name() {
-        Ok(t) if t.name == settings.confirm => push("type name", Ok(format!("{t}, as confirmed"))),
+    match link.identify() {
+        Ok(t) if t.name == settings.confirm => {
+            push("type name", Ok(format!("{}, as confirmed", t.shown)))
+        }
         Ok(t) => push(
             "type name",
-            Err(refused!("{t}, but `confirm` says `{}`", settings.confirm)),
+            Err(refused!(
+                "{}, but `confirm` says `{}`",
+                t.shown,
+                settings.confirm
+            )),
         ),
         Err(e) => {
             push("connection", Err(e.into()));
-            return (out, client.requests);
+            return (out, link.requests());
         }
     }
-    match client.random_read(&[Device::new("SD", 203)]) {
-        Ok(w) => {
-            let v = w.first().copied().unwrap_or(u16::MAX);
-            let text = status_text(v);
-            push(
-                "operating status",
-                if is_run(v) {
-                    Ok(text)
-                } else {
-                    Err(LiveError::Refused(text))
-                },
-            );
-        }
+    match link.run_state() {
+        Ok(state) if state.running => push("operating status", Ok(state.text)),
+        Ok(state) => push("operating status", Err(LiveError::Refused(state.text))),
         Err(e) => push("operating status", Err(e.into())),
     }
-    let Ok(head) = settings.manifest.mailbox_head() else {
+    let Ok(head) = settings.manifest.mailbox_head(settings.link.addressing()) else {
         push(
             "mailbox",
             Err(refused!("the manifest's mailbox is not a device")),
         );
-        return (out, client.requests);
+        return (out, link.requests());
     };
-    match client.read_words(&head, mailbox::WORDS) {
+    match link.read(&head, mailbox::WORDS) {
         Ok(words) => {
             let read = Signature::of(&words);
             let expected = settings.manifest.signature();
@@ -107,7 +102,7 @@ pub(crate) fn doctor(settings: &SlmpSettings) -> (Vec<Finding>, u64) {
             let first = get(off::SCANS);
             let since = Instant::now();
             let moved = loop {
-                match client.read_words(&counter, 1) {
+                match link.read(&counter, 1) {
                     Ok(w) if w.first().copied() != Some(first) => break Ok(()),
                     Ok(_) if since.elapsed() > Duration::from_secs(1) => {
                         break Err(refused!("{counter} did not move in 1 s"))
@@ -123,5 +118,5 @@ pub(crate) fn doctor(settings: &SlmpSettings) -> (Vec<Finding>, u64) {
         }
         Err(e) => push("mailbox", Err(e.into())),
     }
-    (out, client.requests)
+    (out, link.requests())
 }

@@ -13,7 +13,7 @@
 //! says it runs, and the error flag now.
 
 use super::fence::WordRange;
-use super::frame;
+use super::link::Addressing;
 use crate::device::{Device, DeviceSyntaxError};
 
 /// The layout version the program and the PC agree on.
@@ -96,24 +96,20 @@ pub mod state {
 /// the mailbox is in the write fence.
 pub fn pc_words(head: &Device) -> Vec<WordRange> {
     vec![
-        WordRange::new(
-            head.code(),
-            head.index + off::TRIGGER,
-            head.index + off::TRIGGER,
-        ),
-        WordRange::new(head.code(), head.index + off::RUNG, head.index + off::FLAGS),
+        WordRange::within(head, head.index + off::TRIGGER, head.index + off::TRIGGER),
+        WordRange::within(head, head.index + off::RUNG, head.index + off::FLAGS),
     ]
 }
 
 /// The whole mailbox.
 pub fn range(head: &Device) -> WordRange {
-    WordRange::new(head.code(), head.index, head.index + WORDS - 1)
+    WordRange::within(head, head.index, head.index + WORDS - 1)
 }
 
-/// The mailbox head as `--mailbox` and a manifest write it, numbered as MELSEC numbers the code
-/// (`W100` is W 256), as the program and the frames will.
-pub fn head(text: &str) -> Result<Device, DeviceSyntaxError> {
-    Device::parse_numbered(text, frame::hex_numbered)
+/// The mailbox head as `--mailbox` and a manifest write it, numbered as the CPU numbers the code
+/// (MELSEC's `W100` is W 256), as the program and the frames will.
+pub fn head(text: &str, addressing: &dyn Addressing) -> Result<Device, DeviceSyntaxError> {
+    Device::parse_numbered(text, |code| addressing.hex_numbered(code))
 }
 
 /// The device at an offset, numbered as the head is (`W100` + 8 is `W108`).
@@ -191,6 +187,7 @@ pub fn next_trigger(last: u16) -> u16 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::backend::bench::link::Plain;
 
     #[test]
     fn magic_reads_as_pchi() {
@@ -199,14 +196,14 @@ mod tests {
     }
 
     /// A mailbox in link registers is numbered in hexadecimal throughout: its words, its range
-    /// and the words the PC writes read as MELSEC writes them.
+    /// and the words the PC writes read as the CPU writes them.
     #[test]
     fn a_mailbox_keeps_the_numbering_of_its_head() {
-        let w = head("W100").expect("W100");
+        let w = head("W100", &Plain).expect("W100");
         assert_eq!(w.index, 0x100);
         assert_eq!(at(&w, off::TRIGGER).to_string(), "W108");
         assert_eq!(range(&w).to_string(), "W100-W11F");
-        let d = head("D11000").expect("D11000");
+        let d = head("D11000", &Plain).expect("D11000");
         assert_eq!(at(&d, off::FLAGS).to_string(), "D11011");
         assert_eq!(range(&d).to_string(), "D11000-D11031");
     }

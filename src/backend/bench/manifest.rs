@@ -12,8 +12,9 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::fence::{parse_ranges, Kind};
+use super::link::Addressing;
 use super::mailbox;
-use crate::backend::slmp::error::{refused, LiveError};
+use crate::backend::bench::error::{refused, LiveError};
 use crate::device::Device;
 use crate::model::{Indirect, Operand};
 
@@ -214,14 +215,16 @@ impl Manifest {
         u64::from_str_radix(&self.hash, 16).map_or(0, |h| h as u32)
     }
 
-    /// The mailbox head, where a mailbox may be: in a data or link register (where a sandbox
-    /// may be, never a special, bit or timer device), all 32 words within the device numbers.
-    pub fn mailbox_head(&self) -> Result<Device, LiveError> {
-        let head = mailbox::head(&self.mailbox).map_err(|e| LiveError::within("`mailbox`", e))?;
-        if Kind::of(head.code()) != Kind::Data || super::frame::device_code(head.code()).is_none() {
+    /// The mailbox head, where a mailbox may be: in a data register the link reaches (where a
+    /// sandbox may be, never a special, bit or timer device), all 32 words within the device
+    /// numbers.
+    pub fn mailbox_head(&self, addressing: &dyn Addressing) -> Result<Device, LiveError> {
+        let head = mailbox::head(&self.mailbox, addressing)
+            .map_err(|e| LiveError::within("`mailbox`", e))?;
+        if addressing.kind(&head) != Kind::Data || addressing.unaddressable(&head).is_some() {
             return Err(refused!(
-                "`mailbox`: {head} is not a data or link register (D, R, ZR, W): the mailbox \
-                 lies where a sandbox may be"
+                "`mailbox`: {head} is not a {}: the mailbox lies where a sandbox may be",
+                addressing.data_devices()
             ));
         }
         let fits = (head.index.checked_add(mailbox::WORDS - 1)).is_some_and(|l| l <= MAX_NUMBER);
@@ -241,13 +244,16 @@ impl Manifest {
     }
 
     /// The rungs by [`rung_key`].
-    pub fn rung_index(&self) -> Result<HashMap<String, u16>, LiveError> {
+    pub fn rung_index(
+        &self,
+        addressing: &dyn Addressing,
+    ) -> Result<HashMap<String, u16>, LiveError> {
         let mut index = HashMap::new();
         for rung in &self.rungs {
             let texts = (rung.operands.iter())
                 .chain(rung.addresses.iter().flat_map(|(p, t)| [(p, p), (p, t)]));
             for (k, v) in texts {
-                parse_operand(v, &super::frame::hex_numbered)
+                parse_operand(v, &|code| addressing.hex_numbered(code))
                     .map_err(|e| LiveError::within(format!("rung {} operand `{k}`", rung.id), e))?;
             }
             if index.insert(rung.key(), rung.id).is_some() {
@@ -261,7 +267,7 @@ impl Manifest {
     }
 
     /// Checks what the file cannot: the format, the hash, the mailbox, rung ids 1..n in order.
-    pub fn validate(&self) -> Result<(), LiveError> {
+    pub fn validate(&self, addressing: &dyn Addressing) -> Result<(), LiveError> {
         if self.format != FORMAT {
             return Err(refused!(
                 "`format` is {}; this harness reads format {FORMAT}",
@@ -275,7 +281,7 @@ impl Manifest {
                 mailbox::LAYOUT
             ));
         }
-        self.mailbox_head()?;
+        self.mailbox_head(addressing)?;
         for (i, rung) in self.rungs.iter().enumerate() {
             if usize::from(rung.id) != i + 1 {
                 return Err(refused!(
@@ -290,8 +296,8 @@ impl Manifest {
                 "more than 16 flags do not fit the mailbox flag word"
             ));
         }
-        for range in
-            parse_ranges(&self.writes.join(",")).map_err(|e| LiveError::within("`writes`", e))?
+        for range in parse_ranges(&self.writes.join(","), addressing)
+            .map_err(|e| LiveError::within("`writes`", e))?
         {
             if range.last > MAX_NUMBER {
                 return Err(refused!(
@@ -299,11 +305,11 @@ impl Manifest {
                     range.code
                 ));
             }
-            if let Some(why) = super::fence::sandbox_refuses(&range) {
+            if let Some(why) = super::fence::sandbox_refuses(&range, addressing) {
                 return Err(refused!("`writes`: {why}"));
             }
         }
-        self.rung_index()?;
+        self.rung_index(addressing)?;
         let computed = self.compute_hash();
         if computed != self.hash {
             return Err(refused!(
@@ -318,7 +324,7 @@ impl Manifest {
     /// Reads and validates a manifest file; errors name the file. Read as the YAML files are:
     /// a regular file only (a FIFO would block, a device never end), and at most
     /// [`MAX_BYTES`].
-    pub fn load(path: &Path) -> Result<Manifest, LiveError> {
+    pub fn load(path: &Path, addressing: &dyn Addressing) -> Result<Manifest, LiveError> {
         let unreadable = |e| LiveError::within(format!("{}: cannot be read", path.display()), e);
         let size = std::fs::metadata(path).map_err(unreadable)?.len();
         if size > MAX_BYTES {
@@ -341,7 +347,7 @@ impl Manifest {
             )
         })?;
         manifest
-            .validate()
+            .validate(addressing)
             .map_err(|e| LiveError::within(path.display().to_string(), e))?;
         Ok(manifest)
     }
@@ -350,6 +356,7 @@ impl Manifest {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::backend::bench::link::Plain;
 
     pub(super) fn sample() -> Manifest {
         let mut m = Manifest {
@@ -397,8 +404,8 @@ mod tests {
     #[test]
     fn a_generated_manifest_validates_and_finds_its_rungs() {
         let m = sample();
-        m.validate().expect("valid");
-        let index = m.rung_index().expect("index");
+        m.validate(&Plain).expect("valid");
+        let index = m.rung_index(&Plain).expect("index");
         let ops = BTreeMap::from([
             ("s".to_string(), Operand::Constant(-1)),
             ("d".to_string(), Operand::Device(Device::new("D", 200))),
@@ -418,18 +425,18 @@ mod tests {
     fn an_edited_manifest_is_refused() {
         let mut m = sample();
         m.rungs[0].operands.insert("s".into(), "D101".into());
-        let e = crate::error_chain::chain(&m.validate().expect_err("stale hash"));
+        let e = crate::error_chain::chain(&m.validate(&Plain).expect_err("stale hash"));
         assert!(e.contains("changed after it was generated"), "{e}");
         // The words the cases write are under the hash too: a sandbox taken from them cannot
         // be widened by hand.
         let mut m = sample();
         m.writes.push("D0".into());
-        let e = crate::error_chain::chain(&m.validate().expect_err("writes are hashed"));
+        let e = crate::error_chain::chain(&m.validate(&Plain).expect_err("writes are hashed"));
         assert!(e.contains("changed after it was generated"), "{e}");
         // The generator's name is not.
         let mut m = sample();
         m.generator = "another".into();
-        m.validate().expect("the generator is not hashed");
+        m.validate(&Plain).expect("the generator is not hashed");
     }
 
     /// A mailbox lies where a sandbox may be, with its 32 words within the device numbers:
@@ -448,13 +455,13 @@ mod tests {
             let mut m = sample();
             m.mailbox = mailbox.into();
             m.hash = m.compute_hash();
-            let e = crate::error_chain::chain(&m.validate().expect_err(mailbox));
+            let e = crate::error_chain::chain(&m.validate(&Plain).expect_err(mailbox));
             assert!(e.contains(says), "{mailbox}: {e}");
         }
         let mut m = sample();
         m.mailbox = "W100".into();
         m.hash = m.compute_hash();
-        m.validate().expect("link registers take a mailbox");
+        m.validate(&Plain).expect("link registers take a mailbox");
     }
 
     #[test]
@@ -462,7 +469,7 @@ mod tests {
         let mut m = sample();
         m.writes.push("Y0-Y17".into());
         m.hash = m.compute_hash();
-        let e = crate::error_chain::chain(&m.validate().expect_err("a bit device"));
+        let e = crate::error_chain::chain(&m.validate(&Plain).expect_err("a bit device"));
         assert!(e.contains("word devices only"), "{e}");
     }
 
