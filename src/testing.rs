@@ -33,6 +33,18 @@ pub mod backend {
         pub mod manifest {
             pub use crate::backend::bench::manifest::Manifest;
         }
+        pub mod sim {
+            pub use crate::backend::bench::sim::{Audit, FaultAction, FaultRule, SimSettings};
+        }
+    }
+    pub mod modbus {
+        pub use crate::backend::modbus::{ModbusBench, ADDRESSING};
+        pub mod client {
+            pub use crate::backend::modbus::client::{ModbusClient, ModbusError, ModbusSettings};
+        }
+        pub mod sim {
+            pub use crate::backend::modbus::sim::{IdecSimSettings, IdecSimulator};
+        }
     }
     pub mod slmp {
         pub use crate::backend::slmp::{fault_of, limits, SlmpSettings, ADDRESSING};

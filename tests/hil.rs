@@ -431,7 +431,7 @@ fn no_connection_is_unreachable() {
 /// Nothing is written before the type name, the operating status and the program's signature
 /// match: each interlock refuses on its own.
 #[rstest::rstest]
-#[case::another_cpu(|s: &mut SimSettings| s.type_name = "R08CPU".into(), "`confirm` says `R04CPU`")]
+#[case::another_cpu(|s: &mut SimSettings| s.link.type_name = "R08CPU".into(), "`confirm` says `R04CPU`")]
 #[case::cpu_in_stop(|s: &mut SimSettings| s.run = false, "STOP")]
 #[case::no_program(|s: &mut SimSettings| s.program = false, "no test program signature")]
 #[case::another_program(|s: &mut SimSettings| { s.manifest = manifest_for("habin"); }, "another one than the manifest's")]

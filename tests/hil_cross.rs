@@ -234,7 +234,7 @@ fn pymcprotocol_talks_to_the_simulated_cpu() {
         .expect("profile");
     for (plctype, long_form) in [("iQ-R", true), ("Q", false)] {
         let mut s = SimSettings::new(manifest.clone(), "rcpu", "R04CPU");
-        s.long_form = long_form;
+        s.link.long_form = long_form;
         let sim = Simulator::start(s, profile.clone(), reference(&project, "mitsubishi-iqr"))
             .expect("simulator");
         let script = format!(

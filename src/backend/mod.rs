@@ -6,6 +6,7 @@
 //! [`Request`] from the profile.
 
 pub(crate) mod bench;
+mod breaker;
 pub(crate) mod external;
 pub(crate) mod fc4a;
 pub(crate) mod fp;
@@ -13,6 +14,7 @@ pub(crate) mod fx3;
 pub mod fx5;
 pub(crate) mod iqr;
 pub(crate) mod kv;
+pub(crate) mod modbus;
 pub(crate) mod omron;
 pub(crate) mod reference;
 pub(crate) mod s7;
@@ -414,6 +416,30 @@ pub fn reference_backends(profiles: &Profiles) -> Vec<Arc<dyn Backend>> {
 
 /// The reference model of one profile: what a program generated for a CPU, or a simulated CPU,
 /// computes its answers with.
+/// A bench backend's command line, `slmp:...` or `modbus:...`; `None` when `text` is neither.
+pub(crate) fn bench_settings(
+    text: &str,
+    base: &std::path::Path,
+) -> Result<Option<bench::BenchSettings>, bench::error::LiveError> {
+    if let Some(s) = slmp::SlmpSettings::parse(text, base)? {
+        return Ok(Some(s.erased()));
+    }
+    Ok(modbus::ModbusBench::parse(text, base)?.map(bench::BenchSettings::erased))
+}
+
+/// The forms of a bench backend's command line, for messages.
+pub(crate) const BENCH_FORMS: &str =
+    "slmp:NAME=HOST:PORT?manifest=FILE&confirm=TYPE&sandbox=RANGES \
+     or modbus:NAME=HOST:PORT?manifest=FILE&confirm=CODE&sandbox=RANGES";
+
+/// How a bench link reaches a CPU's devices: the one place a link kind meets its module.
+pub(crate) fn addressing(link: crate::model::profile::LinkKind) -> &'static dyn bench::Addressing {
+    match link {
+        crate::model::profile::LinkKind::Slmp => &slmp::ADDRESSING,
+        crate::model::profile::LinkKind::ModbusTcp => &modbus::ADDRESSING,
+    }
+}
+
 pub(crate) fn reference_model(profiles: &Profiles, profile: &str) -> Option<Arc<dyn Backend>> {
     reference_backends(profiles)
         .into_iter()

@@ -5,7 +5,6 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use super::{BackendArgs, Cli, CliError};
-use crate::backend::slmp::SlmpSettings;
 use crate::backend::Backend;
 use crate::load::{
     embedded_files, find_project_root, is_project_root, load_project, locate_project, valid_name,
@@ -195,9 +194,9 @@ fn sources(
         }
     }
     for name in &args.backends {
-        if let Some(settings) = SlmpSettings::parse(name, Path::new("."))? {
+        if let Some(settings) = crate::backend::bench_settings(name, Path::new("."))? {
             chosen.push(settings.name.clone());
-            sources.push(BackendSource::Bench(Box::new(settings.erased())));
+            sources.push(BackendSource::Bench(Box::new(settings)));
             continue;
         } else if let Some(mut settings) = command_line_external(name, args)? {
             settings.known_differences = known_files.remove(settings.name.as_str());
@@ -224,9 +223,9 @@ fn sources(
             known.extend(in_process.iter().map(|b| b.name()));
             known.extend(file.configured.iter().map(|c| c.settings.name.as_str()));
             return Err(CliError::input(format!(
-                "unknown backend `{name}`; expected one of: {}, external:NAME=COMMAND, or \
-                 slmp:NAME=HOST:PORT?manifest=FILE&confirm=TYPE&sandbox=RANGES",
-                known.join(", ")
+                "unknown backend `{name}`; expected one of: {}, external:NAME=COMMAND, {}",
+                known.join(", "),
+                crate::backend::BENCH_FORMS
             )));
         }
     }

@@ -1,6 +1,7 @@
-//! `hil`: what a bench with a real MELSEC CPU needs around the live backend (`slmp:`): the test
-//! program to write to the CPU, a read-only look at the bench, a dry run that opens no socket,
-//! and the simulated CPU that stands in for a bench in tests and demonstrations.
+//! `hil`: what a bench with a real CPU needs around the live backend (`slmp:` for MELSEC,
+//! `modbus:` for IDEC): the test program to write to the CPU, a read-only look at the bench, a
+//! dry run that opens no socket, and the simulated CPU that stands in for a bench in tests and
+//! demonstrations.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -11,18 +12,21 @@ use super::{output, Cli, CliError, Outcome, EXIT_DIFFERENCES, EXIT_OK};
 use crate::backend::bench::doctor::doctor;
 use crate::backend::bench::manifest::Manifest;
 use crate::backend::bench::{fence, mailbox};
+use crate::backend::bench::{Addressing, BenchSettings};
+use crate::backend::modbus::sim::{IdecSimSettings, IdecSimulator};
+use crate::backend::slmp;
 use crate::backend::slmp::limits::Family;
 use crate::backend::slmp::sim::{self, FaultRule, SimSettings, Simulator};
-use crate::backend::slmp::{self, SlmpSettings};
 use crate::hil::{dry_run, generate, pulse_self_test, GenerateOptions};
+use crate::model::profile::LinkKind;
 use crate::session::Session;
 
 #[derive(Debug, clap::Subcommand)]
 pub(crate) enum HilCommand {
-    /// Write the test program (structured text for GX Works3), its manifest and a setup
-    /// checklist for a profile, from the corpus's own operands.
+    /// Write the test program (structured text for GX Works3, a rung list for WindLDR), its
+    /// manifest and a setup checklist for a profile, from the corpus's own operands.
     Generate {
-        /// The profile (mitsubishi-iqr, mitsubishi-fx5).
+        /// The profile (mitsubishi-iqr, mitsubishi-fx5, idec-fc4a).
         #[arg(long, value_name = "ID")]
         profile: String,
         /// Only this variant's trials; repeat for several [default: every variant].
@@ -35,14 +39,16 @@ pub(crate) enum HilCommand {
         /// Only trials whose name contains this text.
         #[arg(long)]
         filter: Option<String>,
-        /// The folder to write executive.st, manifest.json and SETUP.md into.
+        /// The folder to write the program (executive.st or executive.txt), manifest.json and
+        /// SETUP.md into.
         #[arg(long, value_name = "DIR")]
         out: PathBuf,
     },
-    /// Look at a bench without writing anything: type name, operating status, the program's
-    /// signature in the mailbox, its state, and whether its scan counter moves.
+    /// Look at a bench without writing anything: the CPU's name, its operating status, the
+    /// program's signature in the mailbox, its state, and whether its scan counter moves.
     Doctor {
-        /// The live backend: slmp:NAME=HOST:PORT?manifest=FILE&confirm=TYPE&sandbox=RANGES.
+        /// The live backend: slmp:NAME=HOST:PORT?manifest=FILE&confirm=TYPE&sandbox=RANGES, or
+        /// modbus:NAME=HOST:PORT?manifest=FILE&confirm=CODE&sandbox=RANGES.
         #[arg(long, value_name = "SPEC")]
         backend: String,
         /// Then, once every check passed, run one pulse-form case twice and check that both
@@ -54,12 +60,14 @@ pub(crate) enum HilCommand {
     /// Every trial a live backend would run and every word it would write, checked against its
     /// write fence; no socket is opened.
     DryRun {
-        /// The live backend: slmp:NAME=HOST:PORT?manifest=FILE&confirm=TYPE&sandbox=RANGES.
+        /// The live backend: slmp:NAME=HOST:PORT?manifest=FILE&confirm=TYPE&sandbox=RANGES, or
+        /// modbus:NAME=HOST:PORT?manifest=FILE&confirm=CODE&sandbox=RANGES.
         #[arg(long, value_name = "SPEC")]
         backend: String,
     },
     /// Serve a simulated CPU on 127.0.0.1 running the manifest's program with the built-in
-    /// reference model, until interrupted; prints `listening on 127.0.0.1:PORT`.
+    /// reference model, until interrupted, over the link of the manifest's profile (SLMP for
+    /// MELSEC, Modbus TCP for IDEC); prints `listening on 127.0.0.1:PORT`.
     Sim {
         /// The manifest of the generated program.
         #[arg(long, value_name = "FILE")]
@@ -67,24 +75,30 @@ pub(crate) enum HilCommand {
         /// The profile variant the simulated CPU is [default: the manifest's only one].
         #[arg(long, value_name = "ID")]
         variant: Option<String>,
-        /// The type name 0101 answers [default: R04CPU, FX5U-32MT/DS for an FX5 manifest].
+        /// SLMP: the type name 0101 answers [default: R04CPU, FX5U-32MT/DS for an FX5
+        /// manifest].
         #[arg(long, value_name = "NAME")]
         type_name: Option<String>,
-        /// The model code 0101 answers, in hexadecimal [default: the one the manuals give the
-        /// type name].
+        /// SLMP: the model code 0101 answers, in hexadecimal [default: the one the manuals give
+        /// the type name].
         #[arg(long, value_name = "HEX")]
         model_code: Option<String>,
+        /// Modbus TCP (IDEC): the type code the CPU holds in D8002, what `confirm=` names.
+        #[arg(long, value_name = "CODE", default_value_t = 0)]
+        type_code: u16,
         /// The port on 127.0.0.1 [default: any free one].
         #[arg(long, default_value_t = 0)]
         port: u16,
         /// Microseconds between scans.
         #[arg(long, value_name = "US", default_value_t = 200)]
         scan_us: u64,
-        /// Start in STOP (SD203 says so, the program does not scan).
+        /// Start in STOP (SD203 or M8000 says so, the program does not scan).
         #[arg(long)]
         stop: bool,
         /// A port fault, COMMAND:NTH:ACTION: `1401:3:drop` closes the connection on the third
-        /// write; actions drop, delay=MS, end=CODE, garbage, serial, stop. Repeat for several.
+        /// SLMP write (`10:3:drop` on the third Modbus write of several registers); actions
+        /// drop, delay=MS, end=CODE (an end code, or a Modbus exception), garbage, serial
+        /// (another serial or transaction id), stop. Repeat for several.
         #[arg(long = "fault", value_name = "RULE")]
         faults: Vec<String>,
     },
@@ -99,14 +113,20 @@ pub(super) fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
             filter,
             out,
         } => {
+            let project = load(&paths(cli, &[], "--vectors")?)?;
+            // The mailbox is numbered as the profile's link numbers its code.
+            let addressing = (project.profiles.get(profile))
+                .and_then(|p| p.bench.as_ref())
+                .map_or(&slmp::ADDRESSING as &dyn Addressing, |b| {
+                    crate::backend::addressing(b.link)
+                });
             let mailbox = mailbox
                 .as_deref()
                 .map(|m| {
-                    mailbox::head(m, &slmp::ADDRESSING)
+                    mailbox::head(m, addressing)
                         .map_err(|e| CliError::within(format!("--mailbox {m}"), e))
                 })
                 .transpose()?;
-            let project = load(&paths(cli, &[], "--vectors")?)?;
             let generated = generate(
                 &project,
                 &GenerateOptions {
@@ -120,7 +140,7 @@ pub(super) fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
                 .map_err(|e| CliError::within("the manifest does not serialize", e))?;
             std::fs::create_dir_all(out).map_err(|e| CliError::write(Some(out), e))?;
             let files = [
-                (out.join("executive.st"), generated.program.clone()),
+                (out.join(generated.program_file), generated.program.clone()),
                 (out.join("manifest.json"), manifest + "\n"),
                 (out.join("SETUP.md"), generated.setup.clone()),
             ];
@@ -221,17 +241,35 @@ pub(super) fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
             variant,
             type_name,
             model_code,
+            type_code,
             port,
             scan_us,
             stop,
             faults,
         } => {
+            let project = load(&paths(cli, &[], "--vectors")?)?;
+            let m = Manifest::read(manifest)?;
+            let profile =
+                project.profiles.get(&m.profile).cloned().ok_or_else(|| {
+                    CliError::input(format!("profile `{}` is not loaded", m.profile))
+                })?;
+            let link = (profile.bench.as_ref().map(|b| b.link)).ok_or_else(|| {
+                CliError::input(format!(
+                    "{} has no `bench` section in its profile: no simulated CPU runs its program",
+                    profile.id
+                ))
+            })?;
+            let fault = match link {
+                LinkKind::Slmp => FaultRule::slmp,
+                LinkKind::ModbusTcp => FaultRule::modbus,
+            };
             let faults = faults
                 .iter()
-                .map(|f| FaultRule::parse(f).map_err(|e| CliError::within("--fault", e)))
+                .map(|f| fault(f).map_err(|e| CliError::within("--fault", e)))
                 .collect::<Result<Vec<_>, _>>()?;
-            let project = load(&paths(cli, &[], "--vectors")?)?;
-            let m = Manifest::load(manifest, &slmp::ADDRESSING)?;
+            let m = m
+                .validated(crate::backend::addressing(link))
+                .map_err(|e| CliError::within(manifest.display().to_string(), e))?;
             let variant = match variant {
                 Some(v) => v.clone(),
                 None if m.variants.len() == 1 => m.variants[0].clone(),
@@ -242,38 +280,53 @@ pub(super) fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
                     )))
                 }
             };
-            let profile =
-                project.profiles.get(&m.profile).cloned().ok_or_else(|| {
-                    CliError::input(format!("profile `{}` is not loaded", m.profile))
-                })?;
             let model = crate::backend::reference_model(&project.profiles, &m.profile).ok_or_else(
                 || CliError::input(format!("no built-in reference model for {}", m.profile)),
             )?;
-            let type_name =
-                type_name
-                    .clone()
-                    .unwrap_or_else(|| match Family::of_profile(&m.profile) {
-                        Family::Fx5 => "FX5U-32MT/DS".into(),
-                        Family::Iqr => "R04CPU".into(),
-                    });
-            let model_code = match model_code {
-                Some(hex) => u16::from_str_radix(hex.trim_end_matches('H'), 16).map_err(|_| {
-                    CliError::input(format!("--model-code {hex}: give four hexadecimal digits"))
-                })?,
-                None => sim::model_code(&type_name).ok_or_else(|| {
-                    CliError::input(format!(
-                        "no model code is known for `{type_name}`: give --model-code"
-                    ))
-                })?,
+            // The simulator serves until the process is ended.
+            let (address, _serving) = match link {
+                LinkKind::Slmp => {
+                    let type_name =
+                        type_name
+                            .clone()
+                            .unwrap_or_else(|| match Family::of_profile(&m.profile) {
+                                Family::Fx5 => "FX5U-32MT/DS".into(),
+                                Family::Iqr => "R04CPU".into(),
+                            });
+                    let model_code = match model_code {
+                        Some(hex) => {
+                            u16::from_str_radix(hex.trim_end_matches('H'), 16).map_err(|_| {
+                                CliError::input(format!(
+                                    "--model-code {hex}: give four hexadecimal digits"
+                                ))
+                            })?
+                        }
+                        None => sim::model_code(&type_name).ok_or_else(|| {
+                            CliError::input(format!(
+                                "no model code is known for `{type_name}`: give --model-code"
+                            ))
+                        })?,
+                    };
+                    let mut settings = SimSettings::new(m, variant, type_name);
+                    settings.link.model_code = model_code;
+                    settings.port = *port;
+                    settings.scan = Duration::from_micros(*scan_us);
+                    settings.run = !*stop;
+                    settings.faults = faults;
+                    let sim = Simulator::start(settings, profile, model)?;
+                    (sim.address(), Box::new(sim) as Box<dyn std::any::Any>)
+                }
+                LinkKind::ModbusTcp => {
+                    let mut settings = IdecSimSettings::idec(m, variant, *type_code);
+                    settings.port = *port;
+                    settings.scan = Duration::from_micros(*scan_us);
+                    settings.run = !*stop;
+                    settings.faults = faults;
+                    let sim = IdecSimulator::start(settings, profile, model)?;
+                    (sim.address(), Box::new(sim) as Box<dyn std::any::Any>)
+                }
             };
-            let mut settings = SimSettings::new(m, variant, type_name);
-            settings.model_code = model_code;
-            settings.port = *port;
-            settings.scan = Duration::from_micros(*scan_us);
-            settings.run = !*stop;
-            settings.faults = faults;
-            let sim = Simulator::start(settings, profile, model)?;
-            output::write(None, &format!("listening on {}", sim.address()))?;
+            output::write(None, &format!("listening on {address}"))?;
             loop {
                 std::thread::sleep(Duration::from_secs(3600));
             }
@@ -281,11 +334,11 @@ pub(super) fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
     }
 }
 
-fn live_settings(spec: &str) -> Result<SlmpSettings, CliError> {
-    SlmpSettings::parse(spec, Path::new("."))?.ok_or_else(|| {
+fn live_settings(spec: &str) -> Result<BenchSettings, CliError> {
+    crate::backend::bench_settings(spec, Path::new("."))?.ok_or_else(|| {
         CliError::input(format!(
-            "`{spec}` is not a live backend: give \
-                 slmp:NAME=HOST:PORT?manifest=FILE&confirm=TYPE&sandbox=RANGES"
+            "`{spec}` is not a live backend: give {}",
+            crate::backend::BENCH_FORMS
         ))
     })
 }

@@ -41,7 +41,8 @@ pub(crate) use crate::report::document::Format;
                   of ten families (MELSEC iQ-R, MELSEC iQ-F FX5, MELSEC FX3, IDEC MicroSmart \
                   FC4A, Siemens S7-1200/S7-1500, Siemens S7-200/S7-200 SMART, Delta DVP, \
                   Panasonic FP, KEYENCE KV and Omron CS/CJ/CP), against emulators and libraries \
-                  plugged in from outside, and against a live MELSEC CPU, and reports every \
+                  plugged in from outside, and against a live CPU on a bench (MELSEC over SLMP, \
+                  IDEC over Modbus TCP), and reports every \
                   semantic difference as a diff.\n\n\
                   Exit status: 0 conforms / valid, 1 differences found, 2 bad input or usage."
 )]
@@ -156,8 +157,9 @@ pub(crate) enum Command {
         #[command(subcommand)]
         command: init::InitCommand,
     },
-    /// A real MELSEC CPU on a bench: generate its test program, look at the bench read-only,
-    /// dry-run a live backend, or serve a simulated CPU on 127.0.0.1.
+    /// A real CPU on a bench (MELSEC over SLMP, IDEC over Modbus TCP): generate its test program,
+    /// look at the bench read-only, dry-run a live backend, or serve a simulated CPU on
+    /// 127.0.0.1.
     Hil {
         #[command(subcommand)]
         command: hil::HilCommand,

@@ -1,5 +1,5 @@
-//! Hardware in the loop: what a bench with a real MELSEC CPU needs around the live backend
-//! ([`crate::backend::slmp`]).
+//! Hardware in the loop: what a bench with a real CPU needs around the bench backend
+//! (`backend::bench`, over the link the profile's `bench` section names).
 //!
 //! - [`generate`]: the test program the CPU runs, from the corpus's own operands: one rung per
 //!   instruction and operand tuple the trials use, the manifest (rung table, mailbox, hash, the
@@ -7,6 +7,7 @@
 //! - [`dry_run`]: every trial a live backend would run, with what it would write, checked
 //!   against its write fence, without a socket.
 
+mod ladder;
 mod program;
 
 use std::collections::BTreeMap;
@@ -18,11 +19,10 @@ use crate::backend::bench::mailbox;
 use crate::backend::bench::manifest::{self, Call, ErrorDevices, Manifest, Rung, Unrealisable};
 use crate::backend::bench::{Addressing, BenchBackend};
 use crate::backend::external::window;
-use crate::backend::slmp;
 use crate::backend::Backend;
 use crate::device::Device;
 use crate::execute::{images, requests};
-use crate::model::profile::Profile;
+use crate::model::profile::{Bench, Profile, ProgramForm};
 use crate::model::Operand;
 use crate::project::Project;
 
@@ -46,13 +46,12 @@ pub struct GenerateOptions {
 pub struct Generated {
     pub manifest: Manifest,
     pub program: String,
+    /// The program's file name: `executive.st` (structured text), `executive.txt` (a rung list).
+    pub program_file: &'static str,
     pub setup: String,
     /// Trials the rung table covers.
     pub trials: usize,
 }
-
-/// The flag whose rising edge resets a MELSEC CPU's error state (SM50, "error reset").
-pub(crate) const ERROR_RESET: &str = "SM50";
 
 /// Why a constant cannot be written into the program: it must fit the operand as a signed
 /// decimal constant of its width (16 bits, or 32 for the data operand of a D-prefixed form).
@@ -73,8 +72,8 @@ pub(crate) fn unrealisable(instruction: &str, operand: &str, value: i64) -> Opti
 
 /// Why a device operand cannot be part of a live case (the link's `unaddressable`): the case's
 /// memory could be neither set nor read back.
-pub(crate) fn unaddressable(operand: &str, device: &Device) -> Option<String> {
-    slmp::ADDRESSING.unaddressable(device).map(|why| {
+fn unaddressable(addressing: &dyn Addressing, operand: &str, device: &Device) -> Option<String> {
+    addressing.unaddressable(device).map(|why| {
         format!("operand {operand} = {device}: {why}, so no program can hold it as written")
     })
 }
@@ -92,7 +91,20 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
                 project.profiles.ids().join(", ")
             )
         })?;
-    let errors = error_devices(&profile)?;
+    let bench = profile.bench.clone().ok_or_else(|| {
+        refused!(
+            "{} has no `bench` section in its profile: no bench runs its corpus on a CPU \
+             (profiles with one: {})",
+            profile.id,
+            (project.profiles.iter())
+                .filter(|p| p.bench.is_some())
+                .map(|p| p.id.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    })?;
+    let addressing = crate::backend::addressing(bench.link);
+    let errors = error_devices(&profile, &bench)?;
     for v in &options.variants {
         if profile.variant(v).is_none() {
             return Err(refused!("`{v}` is not a variant of {}", profile.id));
@@ -137,11 +149,12 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
                 .iter()
                 .find_map(|(name, o)| match o {
                     Operand::Constant(k) => unrealisable(&input.instruction, name, *k),
-                    Operand::Device(d) => unaddressable(name, d),
+                    Operand::Device(d) => unaddressable(addressing, name, d),
                 })
                 .or_else(|| {
-                    (input.indirect.iter())
-                        .find_map(|(name, p)| unaddressable(&format!("{name}'s pointer"), p))
+                    (input.indirect.iter()).find_map(|(name, p)| {
+                        unaddressable(addressing, &format!("{name}'s pointer"), p)
+                    })
                 });
             seen.insert(key.clone(), why.is_none());
             let Call {
@@ -174,7 +187,7 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
             windows.extend(
                 window::ranges(&req)
                     .into_iter()
-                    .filter(|(head, _)| slmp::ADDRESSING.unaddressable(head).is_none())
+                    .filter(|(head, _)| addressing.unaddressable(head).is_none())
                     .map(|(head, last)| WordRange::within(&head, head.index, last)),
             );
         }
@@ -190,7 +203,7 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
         Some(m) => m.clone(),
         None => choose_mailbox(&profile, &variants, &writes)?,
     };
-    if let Some(why) = slmp::ADDRESSING.unaddressable(&mailbox) {
+    if let Some(why) = addressing.unaddressable(&mailbox) {
         return Err(refused!("the mailbox cannot be at {mailbox}: {why}"));
     }
     let whole = mailbox::range(&mailbox);
@@ -234,44 +247,43 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
         hash: String::new(),
     };
     manifest.hash = manifest.compute_hash();
-    manifest.validate(&slmp::ADDRESSING)?;
-    let program = structured_text(&manifest, &profile)?;
-    let setup = setup_text(&manifest, &profile, trials.len());
+    manifest.validate(addressing)?;
+    let (program, setup, program_file) = match bench.program {
+        ProgramForm::StructuredText => (
+            structured_text(&manifest, &profile)?,
+            setup_text(&manifest, &profile, trials.len()),
+            "executive.st",
+        ),
+        ProgramForm::Ladder => (
+            ladder::ladder(&manifest, &profile)?,
+            ladder::ladder_setup(&manifest, &profile, trials.len()),
+            ladder::PROGRAM_FILE,
+        ),
+    };
     Ok(Generated {
         manifest,
         program,
+        program_file,
         setup,
         trials: trials.len(),
     })
 }
 
-/// Where a MELSEC profile's program finds an error: the error flag and register of the profile,
-/// its first further register, and the error reset flag.
-fn error_devices(profile: &Profile) -> Result<ErrorDevices, LiveError> {
+/// Where the program finds an error: the profile's error flag, its register and first further
+/// register where it has them, and the bench's error reset.
+fn error_devices(profile: &Profile, bench: &Bench) -> Result<ErrorDevices, LiveError> {
     let errors = &profile.errors;
-    let register = errors.register.as_ref().ok_or_else(|| {
+    let flag = errors.flag.as_ref().ok_or_else(|| {
         refused!(
-            "{} signals errors with a flag only; the test program is generated for CPUs that \
-             store an error code (MELSEC)",
+            "{} signals errors without a flag; the test program reads an error flag",
             profile.id
         )
     })?;
-    let flag =
-        match &errors.flag {
-            Some(f) if f.code() == "SM" => f,
-            other => {
-                return Err(refused!(
-                "{}'s error flag is {}; the test program is generated for MELSEC CPUs (SM0, SD0)",
-                profile.id,
-                other.as_ref().map_or("none".to_string(), ToString::to_string)
-            ))
-            }
-        };
     Ok(ErrorDevices {
         flag: flag.to_string(),
-        register: register.to_string(),
+        register: errors.register.as_ref().map(ToString::to_string),
         extra: errors.also.first().map(ToString::to_string),
-        reset: ERROR_RESET.into(),
+        reset: bench.error_reset.clone(),
     })
 }
 

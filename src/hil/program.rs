@@ -208,7 +208,8 @@ pub(crate) fn structured_text(manifest: &Manifest, profile: &Profile) -> Result<
         w(off::FLAG_AFTER),
         w(off::FLAG_AFTER)
     );
-    let _ = writeln!(t, "  {} := {};", w(off::CODE), e.register);
+    let register = e.register.as_deref().unwrap_or("0");
+    let _ = writeln!(t, "  {} := {};", w(off::CODE), register);
     match &e.extra {
         Some(extra) => {
             let _ = writeln!(t, "  {} := {};", w(off::CODE_EXTRA), extra);
@@ -222,7 +223,7 @@ pub(crate) fn structured_text(manifest: &Manifest, profile: &Profile) -> Result<
     }
     let _ = writeln!(t, "  {} := {};", w(off::STATE), state::DONE);
     let _ = writeln!(t, "ELSIF {} = {} THEN", w(off::STATE), state::DONE);
-    let _ = writeln!(t, "  {} := {};", w(off::CODE_NEXT), e.register);
+    let _ = writeln!(t, "  {} := {};", w(off::CODE_NEXT), register);
     let _ = writeln!(t, "  {} := {};", w(off::STATE), state::IDLE);
     let _ = writeln!(t, "  {} := {};", w(off::ACK), w(off::TRIGGER));
     t.push_str("END_IF;\n");

@@ -87,6 +87,7 @@ pub fn parse_profile(file: &Path, text: &str, errors: &mut Vec<LoadError>) -> Op
         variants: spec.variants,
         cross_vendor,
         calls,
+        bench: spec.bench,
     })
 }
 

@@ -13,6 +13,7 @@ use super::cross_vendor::CrossVendorSection;
 use super::ErrorSignal;
 use crate::device::{code_matches, Device, DeviceSyntaxError};
 use crate::memory::Unit;
+pub(crate) use crate::spec::profile::{Bench, LinkKind, ProgramForm};
 pub(crate) use crate::spec::profile::{
     CallBasis, DeviceDef, FlagDef, InstructionDef, Manual, Numbering, SignalKind,
 };
@@ -39,6 +40,8 @@ pub struct Profile {
     /// The structured-text call of each instruction a program on the CPU writes, by
     /// instruction.
     pub calls: BTreeMap<String, CallForm>,
+    /// How a bench runs the corpus on one of the family's CPUs, if it can.
+    pub(crate) bench: Option<Bench>,
 }
 
 /// An instruction's structured-text call, read from the form the manual prints

@@ -54,6 +54,44 @@ pub(crate) struct ProfileSpec {
     /// program that passed (n) where the manual has (d) would convert the wrong words.
     #[serde(default)]
     pub structured_text: BTreeMap<String, CallFormSpec>,
+    /// How a bench with one of the family's CPUs runs the corpus (`plc-conformance hil`): the
+    /// link the PC reaches the CPU by, the form of the test program, and how the program
+    /// resets the error flag. A family without it has no bench support.
+    #[serde(default)]
+    pub bench: Option<Bench>,
+}
+
+/// How a bench reaches a family's CPUs and what program they run.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct Bench {
+    /// `slmp` (MELSEC SLMP, `slmp:` backends) or `modbus-tcp` (IDEC's Modbus TCP map,
+    /// `modbus:` backends).
+    pub link: LinkKind,
+    /// `structured-text` (the calls of `structured_text`, for GX Works3) or `ladder` (a rung
+    /// list entered by hand, for WindLDR).
+    pub program: ProgramForm,
+    /// The flag whose rising edge resets the error state (`SM50`), or the error flag itself
+    /// where the program resets it directly (`M8004`, reset by `RST`).
+    pub error_reset: String,
+    /// The evidence for the reset: the manual page, or why it is inferred.
+    pub source: String,
+}
+
+/// The link a bench reaches a CPU by.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub(crate) enum LinkKind {
+    Slmp,
+    ModbusTcp,
+}
+
+/// The form of a bench's test program.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub(crate) enum ProgramForm {
+    StructuredText,
+    Ladder,
 }
 
 /// One instruction's structured-text call and the evidence for its operand order.

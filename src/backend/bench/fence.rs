@@ -9,7 +9,8 @@
 
 use std::fmt;
 
-use super::link::Addressing;
+use super::addressing::Addressing;
+pub use super::addressing::Kind;
 use crate::device::{Device, DeviceSyntaxError};
 
 /// A run of words of one device code, both ends included: `D0-D11999`, or `D12000` alone.
@@ -157,18 +158,6 @@ impl WordRange {
     }
 }
 
-/// What a word is to a sandbox: the harness writes word devices only, and a special one only
-/// when the user names it. The link's [`Addressing::kind`] says which a device is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Kind {
-    /// Data registers and their like: memory a test program may own.
-    Data,
-    /// The CPU's and the network's own words (special registers).
-    Special,
-    /// Bit devices (inputs, outputs, relays), 16 points to a word.
-    Bit,
-}
-
 /// Why a range cannot be part of a sandbox, if it cannot: a bit device (an output, a relay; a
 /// word of one is 16 points) is never written, whatever the sandbox says.
 pub fn sandbox_refuses(range: &WordRange, addressing: &dyn Addressing) -> Option<String> {
@@ -211,7 +200,7 @@ pub struct Refused {
     pub asked: WordRange,
     /// What the fence allows.
     pub allowed: Vec<WordRange>,
-    /// Why, when it is not "outside" (a device with no SLMP code, an encoding limit).
+    /// Why, when it is not "outside" (a device the link cannot address, an encoding limit).
     pub detail: Option<String>,
 }
 
@@ -338,7 +327,7 @@ mod tests {
     use super::*;
     use rstest::rstest;
 
-    use crate::backend::bench::link::Plain;
+    use crate::backend::bench::addressing::Plain;
 
     fn fence() -> WriteFence {
         WriteFence::new(

@@ -6,7 +6,8 @@
 use std::error::Error;
 use std::fmt;
 
-use super::fence::{FencedWrite, Kind};
+use super::addressing::Addressing;
+use super::fence::FencedWrite;
 use crate::backend::Fault;
 use crate::device::Device;
 
@@ -76,22 +77,6 @@ pub struct RunState {
     pub text: String,
 }
 
-/// How a protocol reaches a CPU's devices; a fact of the protocol and the CPU family, known
-/// without a connection (a dry run, `hil generate` and the settings use it).
-pub trait Addressing: Send + Sync {
-    /// Whether the CPU numbers a device code in hexadecimal (MELSEC `W1A`); the program, the
-    /// manifest and the sandbox write numbers as the CPU does.
-    fn hex_numbered(&self, code: &str) -> bool;
-    /// What a word is to a sandbox.
-    fn kind(&self, device: &Device) -> Kind;
-    /// Why the link can neither set nor read a device's words, if it cannot.
-    fn unaddressable(&self, device: &Device) -> Option<String>;
-    /// The devices a sandbox may hold, for messages: `D, R, ZR, W, and SD or SW when named`.
-    fn sandbox_devices(&self) -> &'static str;
-    /// Where a mailbox may be, for messages: `data or link register (D, R, ZR, W)`.
-    fn data_devices(&self) -> &'static str;
-}
-
 /// One connection to a CPU, opened on its first request and opened again after a fault.
 pub trait Link: Send {
     /// The CPU as it names itself: compared with `confirm`.
@@ -101,21 +86,28 @@ pub trait Link: Send {
     /// `count` words from `head`, split at the link's limits.
     fn read(&mut self, head: &Device, count: u32) -> Result<Vec<u16>, LinkError>;
     /// The words of scattered devices, in order, with the CPU's state: what a status poll
-    /// reads. The default reads each run of consecutive words, then the state.
+    /// reads. The default reads the span that holds them all in one request (the status words
+    /// of the mailbox lie within its 32 words; reading a word twice changes nothing), then the
+    /// state.
     fn poll(&mut self, devices: &[Device]) -> Result<(Vec<u16>, RunState), LinkError> {
         let mut out = Vec::with_capacity(devices.len());
-        let mut i = 0;
-        while i < devices.len() {
-            let head = &devices[i];
-            let mut n = 1;
-            while devices
-                .get(i + n)
-                .is_some_and(|d| d.code() == head.code() && d.index == head.index + n as u32)
-            {
-                n += 1;
+        if let Some(head) = devices.iter().min_by_key(|d| d.index) {
+            let last = devices.iter().map(|d| d.index).max().unwrap_or(head.index);
+            let same_code = devices.iter().all(|d| d.code() == head.code());
+            if same_code && (last - head.index) as usize <= self.batch_words() {
+                let span = self.read(head, last - head.index + 1)?;
+                for d in devices {
+                    out.push(
+                        span.get((d.index - head.index) as usize)
+                            .copied()
+                            .unwrap_or(0),
+                    );
+                }
+            } else {
+                for d in devices {
+                    out.extend(self.read(d, 1)?);
+                }
             }
-            out.extend(self.read(head, n as u32)?);
-            i += n;
         }
         Ok((out, self.run_state()?))
     }
@@ -173,33 +165,5 @@ impl LinkSettings for Box<dyn LinkSettings> {
     }
     fn clone_box(&self) -> Box<dyn LinkSettings> {
         self.as_ref().clone_box()
-    }
-}
-
-/// A CPU for the bench layer's own tests: data registers D, R and W (W numbered in hexadecimal),
-/// special registers SD, and bits.
-#[cfg(test)]
-pub(crate) struct Plain;
-
-#[cfg(test)]
-impl Addressing for Plain {
-    fn hex_numbered(&self, code: &str) -> bool {
-        code == "W"
-    }
-    fn kind(&self, device: &Device) -> Kind {
-        match device.code() {
-            "D" | "R" | "W" => Kind::Data,
-            "SD" => Kind::Special,
-            _ => Kind::Bit,
-        }
-    }
-    fn unaddressable(&self, _: &Device) -> Option<String> {
-        None
-    }
-    fn sandbox_devices(&self) -> &'static str {
-        "D, R, W, and SD when named"
-    }
-    fn data_devices(&self) -> &'static str {
-        "data or link register (D, R, W)"
     }
 }

@@ -12,8 +12,8 @@
 //! rung count) that says which program runs, whether a simulator runs it, the scan counter that
 //! says it runs, and the error flag now.
 
+use super::addressing::Addressing;
 use super::fence::WordRange;
-use super::link::Addressing;
 use crate::device::{Device, DeviceSyntaxError};
 
 /// The layout version the program and the PC agree on.
@@ -187,7 +187,7 @@ pub fn next_trigger(last: u16) -> u16 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::backend::bench::link::Plain;
+    use crate::backend::bench::addressing::Plain;
 
     #[test]
     fn magic_reads_as_pchi() {

@@ -11,8 +11,8 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+use super::addressing::Addressing;
 use super::fence::{parse_ranges, Kind};
-use super::link::Addressing;
 use super::mailbox;
 use crate::backend::bench::error::{refused, LiveError};
 use crate::device::Device;
@@ -51,14 +51,17 @@ pub struct Unrealisable {
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ErrorDevices {
-    /// The flag an error turns on (SM0).
+    /// The flag an error turns on (SM0, M8004).
     pub flag: String,
-    /// The register with the code (SD0).
-    pub register: String,
+    /// The register with the code (SD0); none where the profile signals errors with the flag
+    /// alone (IDEC).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub register: Option<String>,
     /// A further register the profile says receives the code (FX5: SD8067).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub extra: Option<String>,
-    /// The flag that resets the error state on its rising edge (SM50).
+    /// The flag that resets the error state on its rising edge (SM50); the error flag itself
+    /// where the program resets it directly (IDEC's `RST M8004`).
     pub reset: String,
 }
 
@@ -175,7 +178,7 @@ impl Unrealisable {
 }
 
 /// Reads an operand as the manifest writes it; `hexadecimal` says which codes are numbered in
-/// hexadecimal (a rung's devices as MELSEC numbers them, an unrealisable one's as the profile
+/// hexadecimal (a rung's devices as the CPU numbers them, an unrealisable one's as the profile
 /// does).
 pub(crate) fn parse_operand(
     text: &str,
@@ -325,6 +328,20 @@ impl Manifest {
     /// a regular file only (a FIFO would block, a device never end), and at most
     /// [`MAX_BYTES`].
     pub fn load(path: &Path, addressing: &dyn Addressing) -> Result<Manifest, LiveError> {
+        Manifest::read(path)?
+            .validated(addressing)
+            .map_err(|e| LiveError::within(path.display().to_string(), e))
+    }
+
+    /// The manifest, once [`Manifest::validate`] passed.
+    pub fn validated(self, addressing: &dyn Addressing) -> Result<Manifest, LiveError> {
+        self.validate(addressing)?;
+        Ok(self)
+    }
+
+    /// Reads a manifest file without validating it: for a caller that learns from its profile
+    /// which link's addressing validates it.
+    pub fn read(path: &Path) -> Result<Manifest, LiveError> {
         let unreadable = |e| LiveError::within(format!("{}: cannot be read", path.display()), e);
         let size = std::fs::metadata(path).map_err(unreadable)?.len();
         if size > MAX_BYTES {
@@ -346,9 +363,6 @@ impl Manifest {
                 e,
             )
         })?;
-        manifest
-            .validate(addressing)
-            .map_err(|e| LiveError::within(path.display().to_string(), e))?;
         Ok(manifest)
     }
 }
@@ -356,7 +370,7 @@ impl Manifest {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::backend::bench::link::Plain;
+    use crate::backend::bench::addressing::Plain;
 
     pub(super) fn sample() -> Manifest {
         let mut m = Manifest {
@@ -369,7 +383,7 @@ mod tests {
             flags: vec!["SM701".into(), "SM705".into()],
             error: ErrorDevices {
                 flag: "SM0".into(),
-                register: "SD0".into(),
+                register: Some("SD0".into()),
                 extra: None,
                 reset: "SM50".into(),
             },

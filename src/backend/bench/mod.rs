@@ -9,7 +9,7 @@
 //!
 //! Everything here holds for any word-addressed CPU; what differs per protocol is a [`Link`]
 //! (read and write words, name the CPU, say whether it runs) and its [`Addressing`] (which
-//! devices it reaches, how it numbers them). SLMP (`backend::slmp`) is one link.
+//! devices it reaches, how it numbers them); each link is a folder of its own under `backend`.
 //!
 //! Safety comes first, because the other end is a CPU that might be wired to something:
 //! - every write is built by the [`fence::WriteFence`] from the declared sandbox and the
@@ -27,6 +27,7 @@
 //! inconsistent capture a protocol error, and a CPU that cannot be reached or leaves RUN is
 //! unreachable. After `max_consecutive_faults` faults in a row the remaining trials are not run.
 
+mod addressing;
 pub(crate) mod doctor;
 pub(crate) mod error;
 pub mod fence;
@@ -34,17 +35,20 @@ mod link;
 pub mod mailbox;
 pub(crate) mod manifest;
 pub(crate) mod settings;
+pub(crate) mod sim;
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+pub use addressing::Addressing;
 use fence::{WordRange, WriteFence};
-pub use link::{Addressing, Failure, Identity, Link, LinkError, LinkSettings, RunState};
+pub use link::{Failure, Identity, Link, LinkError, LinkSettings, RunState};
 use mailbox::{off, state, Signature};
 pub use settings::BenchSettings;
 
+use super::breaker::Breaker;
 use super::external::{closing, window};
 use super::{Backend, Fault, Outcome, Request, Response, Setting};
 use crate::backend::bench::error::{refused, LiveError};
@@ -87,7 +91,7 @@ struct Live {
     not_executed: Option<u16>,
     /// Set when the circuit breaker trips or the CPU left RUN: every later case gets this.
     down: Option<String>,
-    faults_in_a_row: usize,
+    breaker: Breaker,
 }
 
 /// One case's capture from the mailbox.
@@ -217,7 +221,7 @@ impl BenchBackend {
                 simulated: false,
                 not_executed: None,
                 down: None,
-                faults_in_a_row: 0,
+                breaker: Breaker::new(settings.max_consecutive_faults),
             }),
             fence: WriteFence::new(allowed),
             addressing,
@@ -514,14 +518,14 @@ impl BenchBackend {
             wait = (wait * 2).min(self.settings.max_poll);
         };
         if status.state == state::RESET_FAILED || status.flag_before != 0 {
+            let errors = &self.settings.manifest.error;
+            let code = (errors.register.as_ref())
+                .map(|r| format!(" ({r}={:04X}H)", status.code))
+                .unwrap_or_default();
             return Err(CaseError::Fault(Fault::Unreachable(format!(
                 "the error flag {} stayed on after the error reset ({}), so case {} was not \
-                 executed ({}={:04X}H)",
-                self.settings.manifest.error.flag,
-                self.settings.manifest.error.reset,
-                req.case_id,
-                self.settings.manifest.error.register,
-                status.code
+                 executed{code}",
+                errors.flag, errors.reset, req.case_id,
             ))));
         }
         // The proof of execution: the rung itself says it ran for this trigger, and executed.
@@ -564,14 +568,17 @@ impl BenchBackend {
                 return Err(CaseError::Fault(Fault::Protocol(format!(
                     "{} changed after the scan of case {}: {:04X}H right after the instruction, \
                      {:04X}H one scan later",
-                    errors.register, req.case_id, status.code, status.next
+                    errors.register.as_deref().unwrap_or("the error register"),
+                    req.case_id,
+                    status.code,
+                    status.next
                 ))));
             }
             // The code is the error register as read; the registers go to the judge, which
             // holds each one (a family's further register beside the first) to the code.
             outcome.error = Some(req.error(status.code));
             let read = [
-                (Some(&errors.register), status.code),
+                (errors.register.as_ref(), status.code),
                 (errors.extra.as_ref(), status.extra),
             ];
             for (name, value) in read {
@@ -605,17 +612,6 @@ impl BenchBackend {
             self.settings.link.describe()
         )
     }
-
-    fn breaker(&self, last: &Fault) -> String {
-        format!(
-            "not run: {} failed {} requests in a row (the last: {}), so its remaining trials \
-             are not run (max_consecutive_faults: {})",
-            self.settings.name,
-            self.settings.max_consecutive_faults,
-            last.kind(),
-            self.settings.max_consecutive_faults
-        )
-    }
 }
 
 impl Backend for BenchBackend {
@@ -627,8 +623,8 @@ impl Backend for BenchBackend {
         &self.profile.id
     }
 
-    /// What a recording names as the backend's version: the CPU as it reported itself (0101
-    /// type name and model code, once connected), the profile variant, the program (manifest
+    /// What a recording names as the backend's version: the CPU as it reported itself (its
+    /// name as the link reads it, once connected), the profile variant, the program (manifest
     /// hash and mailbox layout) and the transport; both fills of every case are executed.
     fn describe(&self) -> String {
         format!("{}, both fills", self.what_answers())
@@ -684,7 +680,7 @@ impl Backend for BenchBackend {
         }
         match self.run_case(&mut live, req, &plan) {
             Ok(outcome) => {
-                live.faults_in_a_row = 0;
+                live.breaker.answered();
                 Ok(Response::Done(outcome))
             }
             Err(e) => {
@@ -698,9 +694,8 @@ impl Backend for BenchBackend {
                         return Err(Fault::Unreachable(why));
                     }
                 };
-                live.faults_in_a_row += 1;
-                if live.faults_in_a_row >= self.settings.max_consecutive_faults.max(1) {
-                    live.down = Some(self.breaker(&fault));
+                if let Some(why) = live.breaker.trips(&self.settings.name, &fault) {
+                    live.down = Some(why);
                 }
                 Err(fault)
             }

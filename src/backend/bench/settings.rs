@@ -5,8 +5,9 @@
 use std::path::Path;
 use std::time::Duration;
 
+use super::addressing::Addressing;
 use super::fence::{parse_ranges, Kind};
-use super::link::{Addressing, LinkSettings};
+use super::link::LinkSettings;
 use super::manifest::Manifest;
 use crate::backend::bench::error::{refused, LiveError};
 use crate::backend::bench::fence::WordRange;

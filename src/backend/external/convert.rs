@@ -80,7 +80,7 @@ impl ExternalBackend {
             };
             match exchange {
                 Exchange::Answered(answers) => {
-                    state.faults_in_a_row = 0;
+                    state.breaker.answered();
                     out.extend(answers);
                     answered(out.len());
                 }

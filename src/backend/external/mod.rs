@@ -30,6 +30,7 @@ use protocol::{
     PROTOCOL_VERSION, SUPPORTED_VERSIONS,
 };
 
+use super::breaker::Breaker;
 use super::{Backend, Fault, Outcome, Question, Request, Response, Setting};
 use crate::device::Device;
 use crate::memory::{Fill, Unit, Value};
@@ -111,7 +112,7 @@ struct State {
     /// this as its fault without another attempt.
     down: Option<String>,
     /// Cases that ended in a fault since the last one answered.
-    faults_in_a_row: usize,
+    breaker: Breaker,
 }
 
 /// Why the remaining trials of an interrupted run are not run.
@@ -152,6 +153,7 @@ impl ExternalBackend {
             process.shutdown(shutdown_message());
             None
         };
+        let breaker = Breaker::new(spec.max_consecutive_faults);
         Ok(ExternalBackend {
             settings: spec,
             info,
@@ -165,7 +167,7 @@ impl ExternalBackend {
                 process,
                 next_id: 1,
                 down: None,
-                faults_in_a_row: 0,
+                breaker,
             }),
         })
     }
@@ -232,7 +234,7 @@ impl ExternalBackend {
                     Ok(response) => {
                         results.push(Ok(response));
                         answered(results.len());
-                        state.faults_in_a_row = 0;
+                        state.breaker.answered();
                         deadline = Instant::now() + self.settings.timeout;
                     }
                     Err(fault) => {
@@ -242,11 +244,11 @@ impl ExternalBackend {
                             p.stderr_since(mark, Duration::from_millis(300))
                         });
                         ahead_sent = false;
-                        state.faults_in_a_row += 1;
+                        let tripped = state.breaker.trips(&self.settings.name, &fault);
                         if closing() {
                             state.down = Some(INTERRUPTED.into());
-                        } else if state.faults_in_a_row >= self.settings.max_consecutive_faults {
-                            state.down = Some(self.breaker(&fault));
+                        } else if tripped.is_some() {
+                            state.down = tripped;
                         }
                         results.push(Err(with_stderr(fault, &stderr)));
                         answered(results.len());
@@ -290,19 +292,6 @@ impl ExternalBackend {
                 ));
             }
         }
-    }
-
-    /// Why the rest of the trials are not run once the circuit breaker trips: a backend that
-    /// hangs or crashes on every case would otherwise cost each case its time limit.
-    fn breaker(&self, last: &Fault) -> String {
-        format!(
-            "not run: {} failed {} requests in a row (the last: {}), so its remaining trials \
-             are not run (max_consecutive_faults: {})",
-            self.settings.name,
-            self.settings.max_consecutive_faults,
-            last.kind(),
-            self.settings.max_consecutive_faults
-        )
     }
 
     /// Reads the answer to one case.

@@ -10,10 +10,11 @@ use std::sync::atomic::Ordering;
 use std::sync::Arc;
 use std::thread::JoinHandle;
 
-use super::{scan, Audit, Shared, SimSettings};
+use super::{program, Audit, SimSettings, SlmpSim};
 use crate::backend::bench::error::LiveError;
 use crate::backend::bench::fence::{parse_ranges, WordRange, WriteFence};
 use crate::backend::bench::mailbox::{self, off, state};
+use crate::backend::bench::sim::{scan, Program};
 use crate::backend::slmp::client::{Client, ClientSettings};
 use crate::backend::Backend;
 use crate::device::Device;
@@ -22,7 +23,7 @@ use crate::model::profile::Profile;
 
 /// The program running on a remote server's memory; dropping it stops it.
 pub struct RemoteProgram {
-    shared: Arc<Shared>,
+    shared: Arc<Program<SlmpSim>>,
     thread: Option<JoinHandle<()>>,
 }
 
@@ -35,7 +36,7 @@ impl RemoteProgram {
         model: Arc<dyn Backend>,
         client: ClientSettings,
     ) -> Result<RemoteProgram, LiveError> {
-        let shared = Shared::new(settings, profile, model)?;
+        let shared = program(settings, profile, model)?;
         let writes = parse_ranges(
             &shared.settings.manifest.writes.join(","),
             &super::super::ADDRESSING,
@@ -81,7 +82,7 @@ impl Drop for RemoteProgram {
 
 /// One scan: memory in, the program, changed words out.
 fn remote_scan(
-    shared: &Shared,
+    shared: &Program<SlmpSim>,
     client: &mut Client,
     writes: &[WordRange],
     fence: &WriteFence,

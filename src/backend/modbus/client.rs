@@ -1,0 +1,699 @@
+//! A Modbus TCP client over one TCP connection, one request in flight.
+//!
+//! One request at a time, though MBAP's transaction id would allow more: many PLC Ethernet
+//! modules serve one request per connection at a time and queue, drop or misanswer the rest,
+//! and a conformance run must know which request each value answers. Every reply is read by the
+//! length its MBAP header declares, since it may arrive in several segments, and never past it.
+//! A timeout, a lost connection or a reply that does not decode (another transaction id
+//! included) drops the connection: a late reply must never be read as the answer to the next
+//! request. An exception is a whole, well-formed reply and keeps it. Reads are sent again (on a
+//! new connection) up to `read_retries` times, since reading twice changes nothing; writes never
+//! are, so that no write can land twice or late without the caller knowing.
+
+use std::fmt;
+use std::io::{Read, Write};
+use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
+use std::time::{Duration, Instant};
+
+use super::frame::{
+    self, decode_response, encode_request, exception_meaning, hex, message_len, Request, Response,
+};
+
+/// How much one request may carry on this link; every batch is split at these.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ModbusLimits {
+    pub read_registers: usize,
+    pub write_registers: usize,
+    pub read_coils: usize,
+}
+
+impl Default for ModbusLimits {
+    /// The specification's limits (125, 123, 2000); a CPU's manual may give less.
+    fn default() -> Self {
+        ModbusLimits {
+            read_registers: frame::MAX_READ_REGISTERS,
+            write_registers: frame::MAX_WRITE_REGISTERS,
+            read_coils: frame::MAX_READ_COILS,
+        }
+    }
+}
+
+/// How to reach and talk to one Modbus TCP server.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ModbusSettings {
+    /// `host:port`.
+    pub address: String,
+    pub unit: u8,
+    /// How long to wait for one whole reply.
+    pub reply_timeout: Duration,
+    /// How long to wait for a connection.
+    pub connect_timeout: Duration,
+    /// How many times a read is sent again after a timeout or a lost connection.
+    pub read_retries: u32,
+    pub limits: ModbusLimits,
+}
+
+impl ModbusSettings {
+    /// Defaults: unit 1, a reply timeout of 1 s, a connect timeout of 3 s, 2 read retries.
+    /// Unit 1 is a plain default, not the Messaging guide's 0xFF: a server that is the device
+    /// itself ignores the field or answers only the station it is configured as, commonly 1,
+    /// and a gateway needs the address of the device behind it; set it for either.
+    pub fn new(address: impl Into<String>) -> Self {
+        ModbusSettings {
+            address: address.into(),
+            unit: 1,
+            reply_timeout: Duration::from_secs(1),
+            connect_timeout: Duration::from_secs(3),
+            read_retries: 2,
+            limits: ModbusLimits::default(),
+        }
+    }
+
+    /// The transport as provenance names it: `Modbus TCP 127.0.0.1:502 unit 1`.
+    pub fn describe(&self) -> String {
+        format!("Modbus TCP {} unit {}", self.address, self.unit)
+    }
+}
+
+/// Why a request got no usable answer.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ModbusError {
+    /// No connection could be made.
+    Connect { address: String, error: String },
+    /// No (whole) reply within the reply timeout.
+    Timeout { what: String, waited: Duration },
+    /// The server closed the connection, or the socket failed.
+    Closed { what: String, error: String },
+    /// A reply that does not decode, or answers another request.
+    Frame { what: String, detail: String },
+    /// The server answered with an exception; `function` is the one requested.
+    Exception {
+        what: String,
+        function: u8,
+        code: u8,
+    },
+    /// A request this client refuses to build (a limit of the protocol); nothing was sent.
+    Request { what: String, detail: String },
+}
+
+impl fmt::Display for ModbusError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ModbusError::Connect { address, error } => {
+                write!(f, "no connection to {address}: {error}")
+            }
+            ModbusError::Timeout { what, waited } => write!(
+                f,
+                "no reply to {what} within {} s; a gateway may stay silent when no device answers \
+                 at the unit id, and a server may ignore a unit id it does not serve",
+                waited.as_secs_f64()
+            ),
+            ModbusError::Closed { what, error } => {
+                write!(f, "the connection was lost during {what}: {error}")
+            }
+            ModbusError::Frame { what, detail } => write!(
+                f,
+                "the reply to {what} is not a valid Modbus TCP response: {detail}"
+            ),
+            ModbusError::Exception { what, code, .. } => {
+                write!(f, "the server answered {what} with exception {code:02X}")?;
+                if let Some(meaning) = exception_meaning(*code) {
+                    write!(f, " ({meaning})")?;
+                }
+                Ok(())
+            }
+            ModbusError::Request { what, detail } => write!(f, "{what}: {detail}"),
+        }
+    }
+}
+
+impl std::error::Error for ModbusError {}
+
+/// One connection to a server (made on first use, dropped after a fault).
+pub struct ModbusClient {
+    settings: ModbusSettings,
+    stream: Option<TcpStream>,
+    tid: u16,
+    /// Requests sent and connections made, for a run's figures.
+    pub requests: u64,
+    pub connections: u64,
+}
+
+impl ModbusClient {
+    /// A client that has not connected yet: nothing is opened until the first request.
+    pub fn new(settings: ModbusSettings) -> Self {
+        ModbusClient {
+            settings,
+            stream: None,
+            tid: 0,
+            requests: 0,
+            connections: 0,
+        }
+    }
+
+    pub fn settings(&self) -> &ModbusSettings {
+        &self.settings
+    }
+
+    pub fn is_connected(&self) -> bool {
+        self.stream.is_some()
+    }
+
+    /// Drops the connection; the next request makes a new one.
+    pub fn disconnect(&mut self) {
+        self.stream = None;
+    }
+
+    fn connect(&mut self) -> Result<&mut TcpStream, ModbusError> {
+        if self.stream.is_none() {
+            let address = self.settings.address.clone();
+            let fail = |error: String| ModbusError::Connect {
+                address: address.clone(),
+                error,
+            };
+            let addrs: Vec<SocketAddr> = address
+                .to_socket_addrs()
+                .map_err(|e| fail(e.to_string()))?
+                .collect();
+            let mut last = String::from("the address resolves to nothing");
+            let mut stream = None;
+            for a in addrs {
+                match TcpStream::connect_timeout(&a, self.settings.connect_timeout) {
+                    Ok(s) => {
+                        stream = Some(s);
+                        break;
+                    }
+                    Err(e) => last = e.to_string(),
+                }
+            }
+            let stream = stream.ok_or_else(|| fail(last))?;
+            // A request is one small write; Nagle would hold it back waiting for an ACK.
+            let _ = stream.set_nodelay(true);
+            self.connections += 1;
+            self.stream = Some(stream);
+        }
+        self.stream.as_mut().ok_or_else(|| ModbusError::Connect {
+            address: self.settings.address.clone(),
+            error: "not connected".into(),
+        })
+    }
+
+    /// Sends one request and reads its reply; drops the connection on any fault but an
+    /// exception.
+    fn exchange(&mut self, what: &str, request: &Request) -> Result<Response, ModbusError> {
+        self.tid = self.tid.wrapping_add(1);
+        let (tid, unit) = (self.tid, self.settings.unit);
+        let bytes = encode_request(tid, unit, request).map_err(|e| ModbusError::Request {
+            what: what.into(),
+            detail: e.to_string(),
+        })?;
+        let timeout = self.settings.reply_timeout;
+        let result = (|| {
+            self.connect()?;
+            self.requests += 1;
+            let stream = self.stream.as_mut().ok_or_else(|| ModbusError::Closed {
+                what: what.into(),
+                error: "not connected".into(),
+            })?;
+            let deadline = Instant::now() + timeout;
+            stream.write_all(&bytes).map_err(|e| ModbusError::Closed {
+                what: what.into(),
+                error: e.to_string(),
+            })?;
+            let reply = read_reply(stream, deadline, what, timeout)?;
+            match decode_response(tid, unit, request, &reply) {
+                Ok(Response::Exception { function, code }) => Err(ModbusError::Exception {
+                    what: what.into(),
+                    function,
+                    code,
+                }),
+                Ok(response) => Ok(response),
+                Err(e) => Err(ModbusError::Frame {
+                    what: what.into(),
+                    detail: with_bytes(&e, &reply),
+                }),
+            }
+        })();
+        if let Err(e) = &result {
+            if !matches!(e, ModbusError::Exception { .. }) {
+                self.stream = None;
+            }
+        }
+        result
+    }
+
+    /// A read, sent again on a new connection after a timeout or a lost connection.
+    fn read_exchange(&mut self, what: &str, request: &Request) -> Result<Response, ModbusError> {
+        let mut attempt = 0;
+        loop {
+            match self.exchange(what, request) {
+                Err(ModbusError::Timeout { .. } | ModbusError::Closed { .. })
+                    if attempt < self.settings.read_retries =>
+                {
+                    attempt += 1;
+                    std::thread::sleep(Duration::from_millis(20 * u64::from(attempt)));
+                }
+                other => return other,
+            }
+        }
+    }
+
+    /// FC03: `count` holding registers from wire address `address`, in batches of at most the
+    /// link's limit. A range past 0xFFFF is refused before anything is sent.
+    pub fn read_holding(&mut self, address: u16, count: usize) -> Result<Vec<u16>, ModbusError> {
+        let mut out = Vec::with_capacity(count);
+        let batch = self.settings.limits.read_registers.max(1);
+        for (at, n) in batches(address, count, batch, "FC03 read", "registers")? {
+            let what = describe("FC03 read", n, "registers", at);
+            let request = Request::ReadHolding {
+                address: at,
+                count: n as u16,
+            };
+            match self.read_exchange(&what, &request)? {
+                Response::Registers(values) => out.extend(values),
+                other => return Err(unexpected(what, &other)),
+            }
+        }
+        Ok(out)
+    }
+
+    /// FC01: `count` coils from wire address `address`, in batches of at most the link's limit.
+    pub fn read_coils(&mut self, address: u16, count: usize) -> Result<Vec<bool>, ModbusError> {
+        let mut out = Vec::with_capacity(count);
+        let batch = self.settings.limits.read_coils.max(1);
+        for (at, n) in batches(address, count, batch, "FC01 read", "coils")? {
+            let what = describe("FC01 read", n, "coils", at);
+            let request = Request::ReadCoils {
+                address: at,
+                count: n as u16,
+            };
+            match self.read_exchange(&what, &request)? {
+                Response::Coils(values) => out.extend(values),
+                other => return Err(unexpected(what, &other)),
+            }
+        }
+        Ok(out)
+    }
+
+    /// One value: FC06; more: FC16 in batches of at most the link's limit. Never sent twice; if
+    /// a later batch fails, the earlier ones have landed and the error names the one that did
+    /// not.
+    pub fn write_registers(&mut self, address: u16, values: &[u16]) -> Result<(), ModbusError> {
+        if let [value] = values {
+            let what = describe("FC06 write", 1, "register", address);
+            let request = Request::WriteSingle {
+                address,
+                value: *value,
+            };
+            return self.exchange(&what, &request).map(drop);
+        }
+        let batch = self.settings.limits.write_registers.max(1);
+        let mut done = 0;
+        for (at, n) in batches(address, values.len(), batch, "FC16 write", "registers")? {
+            let what = describe("FC16 write", n, "registers", at);
+            let request = Request::WriteMultiple {
+                address: at,
+                values: values[done..done + n].to_vec(),
+            };
+            self.exchange(&what, &request)?;
+            done += n;
+        }
+        Ok(())
+    }
+}
+
+/// `FC03 read of 100 registers at 0x0064`: the function and the wire address, as a capture shows.
+fn describe(action: &str, n: usize, unit: &str, at: u16) -> String {
+    format!("{action} of {n} {unit} at 0x{at:04X}")
+}
+
+/// The (address, count) of each request, all checked before the first is sent.
+fn batches(
+    address: u16,
+    count: usize,
+    batch: usize,
+    action: &str,
+    unit: &str,
+) -> Result<Vec<(u16, usize)>, ModbusError> {
+    if usize::from(address) + count > 0x1_0000 {
+        return Err(ModbusError::Request {
+            what: describe(action, count, unit, address),
+            detail: "the range runs past address 0xFFFF".into(),
+        });
+    }
+    Ok((0..count)
+        .step_by(batch)
+        .map(|done| {
+            (
+                (usize::from(address) + done) as u16,
+                batch.min(count - done),
+            )
+        })
+        .collect())
+}
+
+fn unexpected(what: String, response: &Response) -> ModbusError {
+    ModbusError::Frame {
+        what,
+        detail: format!("decoded as {response:?}"),
+    }
+}
+
+fn with_bytes(e: &frame::FrameError, bytes: &[u8]) -> String {
+    let shown = &bytes[..bytes.len().min(32)];
+    let more = if bytes.len() > shown.len() {
+        " ..."
+    } else {
+        ""
+    };
+    format!("{e}; received: {}{more}", hex(shown))
+}
+
+/// Reads one whole ADU: the MBAP header's first six bytes, then as many as they declare.
+fn read_reply(
+    stream: &mut TcpStream,
+    deadline: Instant,
+    what: &str,
+    waited: Duration,
+) -> Result<Vec<u8>, ModbusError> {
+    let mut header = [0u8; 6];
+    read_full(stream, &mut header, deadline, what, waited)?;
+    let total = message_len(&header).map_err(|e| ModbusError::Frame {
+        what: what.into(),
+        detail: with_bytes(&e, &header),
+    })?;
+    let mut buf = header.to_vec();
+    buf.resize(total, 0);
+    read_full(stream, &mut buf[6..], deadline, what, waited)?;
+    Ok(buf)
+}
+
+fn read_full(
+    stream: &mut TcpStream,
+    buf: &mut [u8],
+    deadline: Instant,
+    what: &str,
+    waited: Duration,
+) -> Result<(), ModbusError> {
+    let timeout = || ModbusError::Timeout {
+        what: what.into(),
+        waited,
+    };
+    let mut at = 0;
+    while at < buf.len() {
+        let left = deadline.saturating_duration_since(Instant::now());
+        if left.is_zero() {
+            return Err(timeout());
+        }
+        let _ = stream.set_read_timeout(Some(left));
+        match stream.read(&mut buf[at..]) {
+            Ok(0) => {
+                return Err(ModbusError::Closed {
+                    what: what.into(),
+                    error: format!("closed by the other side after {at} of {} bytes", buf.len()),
+                })
+            }
+            Ok(n) => at += n,
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                ) =>
+            {
+                return Err(timeout())
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => {
+                return Err(ModbusError::Closed {
+                    what: what.into(),
+                    error: e.to_string(),
+                })
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use frame::{bytes_of, encode_response};
+    use std::net::TcpListener;
+    use std::thread::JoinHandle;
+
+    /// What the scripted server does after reading one request.
+    enum Act {
+        /// Sends these chunks, pausing between them.
+        Reply(Vec<Vec<u8>>),
+        /// Answers nothing.
+        Silent,
+        /// Closes the connection without answering.
+        Close,
+    }
+
+    fn reply(tid: u16, response: Response) -> Act {
+        Act::Reply(vec![encode_response(tid, 1, &response)])
+    }
+
+    /// A server that follows one script per connection it accepts, and returns every request
+    /// it read, as hex. After a script that does not close, it holds the connection until the
+    /// client lets it go, as a silent server would.
+    fn scripted(connections: Vec<Vec<Act>>) -> (String, JoinHandle<Vec<String>>) {
+        let listener = TcpListener::bind("127.0.0.1:0").expect("bind");
+        let address = listener.local_addr().expect("addr").to_string();
+        let handle = std::thread::spawn(move || {
+            let mut received = Vec::new();
+            for script in connections {
+                let Ok((mut s, _)) = listener.accept() else {
+                    break;
+                };
+                let mut closed = false;
+                for act in script {
+                    let mut header = [0u8; 6];
+                    let Ok(()) = s.read_exact(&mut header) else {
+                        break;
+                    };
+                    let total = message_len(&header).unwrap_or(6);
+                    let mut adu = header.to_vec();
+                    adu.resize(total, 0);
+                    let _ = s.read_exact(&mut adu[6..]);
+                    received.push(hex(&adu));
+                    match act {
+                        Act::Reply(chunks) => {
+                            for c in chunks {
+                                let _ = s.write_all(&c);
+                                std::thread::sleep(Duration::from_millis(30));
+                            }
+                        }
+                        Act::Silent => {}
+                        Act::Close => {
+                            closed = true;
+                            break;
+                        }
+                    }
+                }
+                if !closed {
+                    let _ = s.read_to_end(&mut Vec::new());
+                }
+            }
+            received
+        });
+        (address, handle)
+    }
+
+    fn settings(address: &str) -> ModbusSettings {
+        let mut s = ModbusSettings::new(address);
+        s.reply_timeout = Duration::from_millis(200);
+        s.read_retries = 0;
+        s
+    }
+
+    #[test]
+    fn a_reply_in_several_segments_is_read_whole() {
+        let r = bytes_of("00 01 00 00 00 09 01 03 06 02 2B 00 00 00 64");
+        let chunks = vec![r[..3].to_vec(), r[3..8].to_vec(), r[8..].to_vec()];
+        let (address, server) = scripted(vec![vec![Act::Reply(chunks)]]);
+        let mut c = ModbusClient::new(settings(&address));
+        assert_eq!(c.read_holding(0x6B, 3), Ok(vec![0x022B, 0, 0x64]));
+        drop(c);
+        let sent = server.join().expect("server");
+        assert_eq!(sent, ["00 01 00 00 00 06 01 03 00 6B 00 03"]);
+    }
+
+    #[test]
+    fn garbage_is_a_frame_error_quoting_the_bytes() {
+        let (address, _server) = scripted(vec![vec![Act::Reply(vec![
+            b"HTTP/1.1 400 Bad Request\r\n".to_vec(),
+        ])]]);
+        let mut c = ModbusClient::new(settings(&address));
+        let e = c.read_holding(0, 1).expect_err("garbage");
+        assert!(matches!(e, ModbusError::Frame { .. }), "{e}");
+        assert!(e.to_string().contains("received: 48 54 54 50"), "{e}");
+        assert!(!c.is_connected(), "the connection is dropped after garbage");
+    }
+
+    #[test]
+    fn silence_is_a_timeout_and_drops_the_connection() {
+        let (address, _server) = scripted(vec![vec![Act::Silent]]);
+        let mut c = ModbusClient::new(settings(&address));
+        let e = c.read_coils(0x13, 19).expect_err("silent");
+        assert_eq!(
+            e,
+            ModbusError::Timeout {
+                what: "FC01 read of 19 coils at 0x0013".into(),
+                waited: Duration::from_millis(200),
+            }
+        );
+        assert!(!c.is_connected());
+    }
+
+    #[test]
+    fn an_exception_keeps_the_connection() {
+        let exception = Response::Exception {
+            function: 3,
+            code: 2,
+        };
+        let (address, _server) = scripted(vec![vec![
+            reply(1, exception),
+            reply(2, Response::Registers(vec![7])),
+        ]]);
+        let mut c = ModbusClient::new(settings(&address));
+        let e = c.read_holding(100, 10).expect_err("exception");
+        assert_eq!(
+            e.to_string(),
+            "the server answered FC03 read of 10 registers at 0x0064 with exception 02 \
+             (ILLEGAL DATA ADDRESS)"
+        );
+        assert!(c.is_connected());
+        assert_eq!(c.read_holding(0, 1), Ok(vec![7]));
+        assert_eq!((c.connections, c.requests), (1, 2));
+    }
+
+    #[test]
+    fn a_read_after_a_dropped_connection_is_sent_again() {
+        let (address, server) = scripted(vec![
+            vec![Act::Close],
+            vec![reply(2, Response::Registers(vec![0x1234]))],
+        ]);
+        let mut s = settings(&address);
+        s.read_retries = 1;
+        let mut c = ModbusClient::new(s);
+        assert_eq!(c.read_holding(5, 1), Ok(vec![0x1234]));
+        assert_eq!((c.connections, c.requests), (2, 2));
+        drop(c);
+        let sent = server.join().expect("server");
+        assert_eq!(
+            sent,
+            [
+                "00 01 00 00 00 06 01 03 00 05 00 01",
+                "00 02 00 00 00 06 01 03 00 05 00 01"
+            ]
+        );
+    }
+
+    #[test]
+    fn a_write_after_a_dropped_connection_is_not_sent_again() {
+        let (address, server) = scripted(vec![vec![Act::Close]]);
+        let mut s = settings(&address);
+        s.read_retries = 3;
+        let mut c = ModbusClient::new(s);
+        let e = c.write_registers(1, &[3]).expect_err("closed");
+        assert!(matches!(e, ModbusError::Closed { .. }), "{e}");
+        assert_eq!((c.connections, c.requests), (1, 1));
+        let sent = server.join().expect("server");
+        assert_eq!(sent, ["00 01 00 00 00 06 01 06 00 01 00 03"]);
+    }
+
+    #[test]
+    fn a_300_register_read_is_split_at_the_limit() {
+        let (address, server) = scripted(vec![vec![
+            reply(1, Response::Registers((0..125).collect())),
+            reply(2, Response::Registers((125..250).collect())),
+            reply(3, Response::Registers((250..300).collect())),
+        ]]);
+        let mut c = ModbusClient::new(settings(&address));
+        assert_eq!(c.read_holding(0, 300), Ok((0..300).collect()));
+        drop(c);
+        let sent = server.join().expect("server");
+        assert_eq!(
+            sent,
+            [
+                "00 01 00 00 00 06 01 03 00 00 00 7D",
+                "00 02 00 00 00 06 01 03 00 7D 00 7D",
+                "00 03 00 00 00 06 01 03 00 FA 00 32"
+            ]
+        );
+    }
+
+    #[test]
+    fn one_word_is_fc06_and_two_are_fc16() {
+        let (address, server) = scripted(vec![vec![
+            reply(
+                1,
+                Response::WroteSingle {
+                    address: 1,
+                    value: 3,
+                },
+            ),
+            reply(
+                2,
+                Response::WroteMultiple {
+                    address: 1,
+                    count: 2,
+                },
+            ),
+        ]]);
+        let mut c = ModbusClient::new(settings(&address));
+        assert_eq!(c.write_registers(1, &[3]), Ok(()));
+        assert_eq!(c.write_registers(1, &[0x000A, 0x0102]), Ok(()));
+        drop(c);
+        let sent = server.join().expect("server");
+        assert_eq!(
+            sent,
+            [
+                "00 01 00 00 00 06 01 06 00 01 00 03",
+                "00 02 00 00 00 0B 01 10 00 01 00 02 04 00 0A 01 02"
+            ]
+        );
+    }
+
+    #[test]
+    fn a_reply_with_another_transaction_id_drops_the_connection() {
+        let (address, _server) = scripted(vec![vec![reply(9, Response::Registers(vec![1]))]]);
+        let mut c = ModbusClient::new(settings(&address));
+        let e = c.read_holding(0, 1).expect_err("another tid");
+        assert!(matches!(e, ModbusError::Frame { .. }), "{e}");
+        assert!(
+            e.to_string()
+                .contains("transaction id 0x0009 where 0x0001 was sent"),
+            "{e}"
+        );
+        assert!(!c.is_connected());
+    }
+
+    #[test]
+    fn a_range_past_the_last_address_sends_nothing() {
+        let (address, server) = scripted(vec![]);
+        let mut c = ModbusClient::new(settings(&address));
+        let e = c
+            .write_registers(0xFFF0, &[0; 200])
+            .expect_err("past 0xFFFF");
+        assert!(matches!(e, ModbusError::Request { .. }), "{e}");
+        assert!(!c.is_connected(), "a client connects only when it sends");
+        assert!(server.join().expect("server").is_empty());
+    }
+
+    #[test]
+    fn settings_describe_the_transport() {
+        let s = ModbusSettings::new("127.0.0.1:502");
+        assert_eq!(s.describe(), "Modbus TCP 127.0.0.1:502 unit 1");
+        assert_eq!(
+            (
+                s.limits.read_registers,
+                s.limits.write_registers,
+                s.limits.read_coils
+            ),
+            (125, 123, 2000)
+        );
+    }
+}
