@@ -38,7 +38,7 @@ pub mod backend {
         }
     }
     pub mod modbus {
-        pub use crate::backend::modbus::{ModbusBench, ADDRESSING};
+        pub use crate::backend::modbus::{Map, ModbusBench, ModbusLinkSettings};
         pub mod client {
             pub use crate::backend::modbus::client::{ModbusClient, ModbusError, ModbusSettings};
         }

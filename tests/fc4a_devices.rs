@@ -156,3 +156,52 @@ variants: [{{id: v, description: d}}]
     let all: Vec<String> = errors.iter().map(ToString::to_string).collect();
     assert!(all.iter().any(|e| e.contains(message)), "{all:?}");
 }
+
+/// A bench section is checked when the profile loads: a Modbus TCP link needs its map, the map's
+/// ranges are in the profile's numbering and in order, and its identity register and running
+/// relay lie in it.
+#[rstest::rstest]
+#[case::no_map("", "a `modbus-tcp` link needs the CPU's Modbus map")]
+#[case::unknown_code(
+    "modbus: {registers: [{device: W, first: 0, last: 9, address: 0}], coils: [{device: M, first: 8000, last: 8017, address: 9000}], identity: D8002, running: M8000, source: s}",
+    "`W` is not a device code of the profile"
+)]
+#[case::reversed(
+    "modbus: {registers: [{device: D, first: 9, last: 0, address: 0}], coils: [{device: M, first: 8000, last: 8017, address: 9000}], identity: D8002, running: M8000, source: s}",
+    "the first must come before the last"
+)]
+#[case::octal(
+    "modbus: {registers: [{device: D, first: 0, last: 8499, address: 0}], coils: [{device: M, first: 8000, last: 8018, address: 9000}], identity: D8002, running: M8000, source: s}",
+    "the last digit is octal"
+)]
+#[case::identity_outside(
+    "modbus: {registers: [{device: D, first: 0, last: 7999, address: 0}], coils: [{device: M, first: 8000, last: 8017, address: 9000}], identity: D8002, running: M8000, source: s}",
+    "D8002 lies in none of the map's ranges"
+)]
+fn a_bench_section_is_checked_when_the_profile_loads(#[case] map: &str, #[case] message: &str) {
+    let text = format!(
+        r#"
+id: probe
+name: probe
+short: probe
+manuals: {{m: {{title: t}}}}
+errors: {{signal: flag, flag: M8004}}
+devices:
+  M: {{first: 0, last: 1277, numbering: octal-last-digit, points_per_word: 16}}
+  D: {{first: 0, last: 1299}}
+instructions: {{}}
+variants: [{{id: v, description: d}}]
+bench:
+  link: modbus-tcp
+  program: ladder
+  error_reset: M8004
+  source: s
+  {map}
+"#
+    );
+    let mut errors = Vec::new();
+    let parsed = parse_profile(Path::new("probe.yaml"), &text, &mut errors);
+    let all: Vec<String> = errors.iter().map(ToString::to_string).collect();
+    assert!(parsed.is_none(), "accepted: {all:?}");
+    assert!(all.iter().any(|e| e.contains(message)), "{all:?}");
+}

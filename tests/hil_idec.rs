@@ -16,7 +16,7 @@ use plc_conformance::testing::backend::bench::manifest::Manifest;
 use plc_conformance::testing::backend::bench::sim::{FaultAction, FaultRule};
 use plc_conformance::testing::backend::bench::BenchBackend;
 use plc_conformance::testing::backend::modbus::sim::{IdecSimSettings, IdecSimulator};
-use plc_conformance::testing::backend::modbus::{ModbusBench, ADDRESSING};
+use plc_conformance::testing::backend::modbus::{Map, ModbusBench};
 use plc_conformance::testing::backend::{Backend, Fault};
 use plc_conformance::testing::error_chain::chain;
 use plc_conformance::testing::execute::{images, requests};
@@ -66,12 +66,20 @@ fn idec_sim(project: &Session, change: impl FnOnce(&mut IdecSimSettings)) -> Ide
     IdecSimulator::start(s, profile, reference(project, PROFILE)).expect("simulator")
 }
 
+/// The FC4A profile's Modbus map.
+fn map() -> Arc<Map> {
+    let project = session();
+    Arc::new(Map::of(project.profiles.get(PROFILE).expect("profile")).expect("a Modbus map"))
+}
+
 fn settings(address: String) -> ModbusBench {
     let m = idec_manifest();
-    let sandbox = parse_ranges(&m.writes.join(","), &ADDRESSING).expect("writes");
+    let map = map();
+    let sandbox = parse_ranges(&m.writes.join(","), map.as_ref()).expect("writes");
     let mut s = ModbusBench::modbus(
         "live",
         address,
+        map,
         m.clone(),
         VARIANT,
         TYPE_CODE.to_string(),
@@ -79,7 +87,7 @@ fn settings(address: String) -> ModbusBench {
     );
     s.first_poll = Duration::from_micros(300);
     s.max_poll = Duration::from_millis(2);
-    s.link.reply_timeout = Duration::from_millis(500);
+    s.link.client.reply_timeout = Duration::from_millis(500);
     s.case_timeout = Duration::from_millis(800);
     s
 }
@@ -265,7 +273,7 @@ fn no_connection_is_unreachable() {
         l.local_addr().expect("addr").to_string()
     };
     let mut s = settings(address);
-    s.link.read_retries = 0;
+    s.link.client.read_retries = 0;
     let backend = Arc::new(BenchBackend::new(s, &project.profiles).expect("backend"));
     assert!(chain(&backend.connect().expect_err("refused")).contains("no connection to"));
     let trial = first_trial(&project, &backend, "ATOH");
@@ -462,7 +470,7 @@ fn the_hil_commands_through_the_binary() {
     );
     assert!(program.contains("RST M8004"), "{program}");
     let manifest_file = out_dir.join("manifest.json");
-    let m = Manifest::load(&manifest_file, &ADDRESSING).expect("the written manifest loads");
+    let m = Manifest::load(&manifest_file, map().as_ref()).expect("the written manifest loads");
     assert_eq!(m.hash, idec_manifest().hash, "generate is deterministic");
     let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin!("plc-conformance"))
         .args([

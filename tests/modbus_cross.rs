@@ -20,6 +20,7 @@ use plc_conformance::testing::backend::modbus::client::{
     ModbusClient, ModbusError, ModbusSettings,
 };
 use plc_conformance::testing::backend::modbus::sim::{IdecSimSettings, IdecSimulator};
+use plc_conformance::testing::backend::modbus::{Map, ModbusLinkSettings};
 use plc_conformance::testing::device::Device;
 use plc_conformance::testing::hil::{generate, GenerateOptions};
 
@@ -166,7 +167,12 @@ fn the_idec_link_names_the_cpu_and_writes_through_the_fence_on_pymodbus() {
             "9000",
         ],
     );
-    let settings = ModbusSettings::new(server.address.clone());
+    let project = session();
+    let map = Map::of(project.profiles.get("idec-fc4a").expect("profile")).expect("map");
+    let settings = ModbusLinkSettings {
+        client: ModbusSettings::new(server.address.clone()),
+        map: std::sync::Arc::new(map),
+    };
     let mut link = settings.open();
     let identity = link.identify().expect("identify");
     assert_eq!(identity.name, "6");
@@ -181,7 +187,7 @@ fn the_idec_link_names_the_cpu_and_writes_through_the_fence_on_pymodbus() {
         link.write(&w).expect("written");
     }
     assert_eq!(link.read(&Device::new("D", 550), 200).expect("read"), words);
-    let mut c = ModbusClient::new(settings);
+    let mut c = ModbusClient::new(settings.client.clone());
     assert_eq!(c.read_holding(550, 3).expect("read"), [0, 1, 2]);
     let e = link
         .read(&Device::new("D", 9000), 1)

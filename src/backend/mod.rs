@@ -420,11 +420,12 @@ pub fn reference_backends(profiles: &Profiles) -> Vec<Arc<dyn Backend>> {
 pub(crate) fn bench_settings(
     text: &str,
     base: &std::path::Path,
+    profiles: &Profiles,
 ) -> Result<Option<bench::BenchSettings>, bench::error::LiveError> {
     if let Some(s) = slmp::SlmpSettings::parse(text, base)? {
         return Ok(Some(s.erased()));
     }
-    Ok(modbus::ModbusBench::parse(text, base)?.map(bench::BenchSettings::erased))
+    Ok(modbus::ModbusBench::parse(text, base, profiles)?.map(bench::BenchSettings::erased))
 }
 
 /// The forms of a bench backend's command line, for messages.
@@ -432,12 +433,22 @@ pub(crate) const BENCH_FORMS: &str =
     "slmp:NAME=HOST:PORT?manifest=FILE&confirm=TYPE&sandbox=RANGES \
      or modbus:NAME=HOST:PORT?manifest=FILE&confirm=CODE&sandbox=RANGES";
 
-/// How a bench link reaches a CPU's devices: the one place a link kind meets its module.
-pub(crate) fn addressing(link: crate::model::profile::LinkKind) -> &'static dyn bench::Addressing {
-    match link {
-        crate::model::profile::LinkKind::Slmp => &slmp::ADDRESSING,
-        crate::model::profile::LinkKind::ModbusTcp => &modbus::ADDRESSING,
-    }
+/// How the link of a profile's bench reaches its CPUs' devices: the one place a link kind
+/// meets its module.
+pub(crate) fn addressing(
+    profile: &crate::model::profile::Profile,
+) -> Result<Box<dyn bench::Addressing>, bench::error::LiveError> {
+    use crate::model::profile::LinkKind;
+    let bench = profile.bench.as_ref().ok_or_else(|| {
+        bench::error::LiveError::Refused(format!(
+            "{} has no `bench` section in its profile: no bench runs its corpus on a CPU",
+            profile.id
+        ))
+    })?;
+    Ok(match bench.link {
+        LinkKind::Slmp => Box::new(slmp::Slmp),
+        LinkKind::ModbusTcp => Box::new(modbus::Map::of(profile)?),
+    })
 }
 
 pub(crate) fn reference_model(profiles: &Profiles, profile: &str) -> Option<Arc<dyn Backend>> {

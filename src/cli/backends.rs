@@ -194,7 +194,9 @@ fn sources(
         }
     }
     for name in &args.backends {
-        if let Some(settings) = crate::backend::bench_settings(name, Path::new("."))? {
+        if let Some(settings) =
+            crate::backend::bench_settings(name, Path::new("."), &session.profiles)?
+        {
             chosen.push(settings.name.clone());
             sources.push(BackendSource::Bench(Box::new(settings)));
             continue;

@@ -114,16 +114,16 @@ pub(super) fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
             out,
         } => {
             let project = load(&paths(cli, &[], "--vectors")?)?;
-            // The mailbox is numbered as the profile's link numbers its code.
-            let addressing = (project.profiles.get(profile))
-                .and_then(|p| p.bench.as_ref())
-                .map_or(&slmp::ADDRESSING as &dyn Addressing, |b| {
-                    crate::backend::addressing(b.link)
-                });
+            // The mailbox is numbered as the profile's link numbers its code (`generate`
+            // refuses a profile with no bench).
+            let addressing: Box<dyn Addressing> = match project.profiles.get(profile) {
+                Some(p) if p.bench.is_some() => crate::backend::addressing(p)?,
+                _ => Box::new(slmp::Slmp),
+            };
             let mailbox = mailbox
                 .as_deref()
                 .map(|m| {
-                    mailbox::head(m, addressing)
+                    mailbox::head(m, addressing.as_ref())
                         .map_err(|e| CliError::within(format!("--mailbox {m}"), e))
                 })
                 .transpose()?;
@@ -166,7 +166,8 @@ pub(super) fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
             Ok(EXIT_OK)
         }
         HilCommand::Doctor { backend, self_test } => {
-            let settings = live_settings(backend)?;
+            let project = load(&paths(cli, &[], "--vectors")?)?;
+            let settings = live_settings(backend, &project.profiles)?;
             let (findings, requests) = doctor(&settings);
             let mut text = String::new();
             for f in &findings {
@@ -178,7 +179,7 @@ pub(super) fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
             let _ = write!(text, "{requests} read requests sent, nothing written");
             let mut ok = findings.iter().all(|f| f.result.is_ok());
             if *self_test && ok {
-                let session = Session::new(load(&paths(cli, &[], "--vectors")?)?);
+                let session = Session::new(project);
                 let live = session.live(settings)?;
                 live.connect()?;
                 let _ = writeln!(text);
@@ -210,8 +211,8 @@ pub(super) fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
             Ok(if ok { EXIT_OK } else { EXIT_DIFFERENCES })
         }
         HilCommand::DryRun { backend } => {
-            let settings = live_settings(backend)?;
             let session = Session::new(load(&paths(cli, &[], "--vectors")?)?);
+            let settings = live_settings(backend, &session.profiles)?;
             let live = session.live(settings)?;
             let found = dry_run(&session, &live);
             let mut text = String::new();
@@ -268,7 +269,7 @@ pub(super) fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
                 .map(|f| fault(f).map_err(|e| CliError::within("--fault", e)))
                 .collect::<Result<Vec<_>, _>>()?;
             let m = m
-                .validated(crate::backend::addressing(link))
+                .validated(crate::backend::addressing(&profile)?.as_ref())
                 .map_err(|e| CliError::within(manifest.display().to_string(), e))?;
             let variant = match variant {
                 Some(v) => v.clone(),
@@ -334,8 +335,12 @@ pub(super) fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
     }
 }
 
-fn live_settings(spec: &str) -> Result<BenchSettings, CliError> {
-    crate::backend::bench_settings(spec, Path::new("."))?.ok_or_else(|| {
+/// A live backend's settings; the project's profiles give a link its map.
+fn live_settings(
+    spec: &str,
+    profiles: &crate::model::profile::Profiles,
+) -> Result<BenchSettings, CliError> {
+    crate::backend::bench_settings(spec, Path::new("."), profiles)?.ok_or_else(|| {
         CliError::input(format!(
             "`{spec}` is not a live backend: give {}",
             crate::backend::BENCH_FORMS

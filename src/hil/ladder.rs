@@ -22,7 +22,7 @@ use crate::backend::bench::fence::{self, Kind};
 use crate::backend::bench::mailbox::{self, off, state};
 use crate::backend::bench::manifest::{parse_operand, Manifest, Rung};
 use crate::backend::bench::Addressing;
-use crate::backend::modbus::ADDRESSING;
+use crate::backend::modbus::Map;
 use crate::device::Device;
 use crate::model::profile::Profile;
 use crate::model::Operand;
@@ -199,7 +199,8 @@ fn rung_list(manifest: &Manifest, profile: &Profile) -> Result<List, LiveError> 
             manifest.flags.join(", ")
         ));
     }
-    let mb = manifest.mailbox_head(&ADDRESSING)?;
+    let map = Map::of(profile)?;
+    let mb = manifest.mailbox_head(&map)?;
     let w = |o| mailbox::at(&mb, o);
     let e = &manifest.error;
     let hash = manifest.hash32();
@@ -409,7 +410,12 @@ fn operands_text(operands: &BTreeMap<String, String>) -> String {
 }
 
 /// The setup checklist (`SETUP.md`) for WindLDR and Modbus TCP.
-pub(crate) fn ladder_setup(manifest: &Manifest, profile: &Profile, trials: usize) -> String {
+pub(crate) fn ladder_setup(
+    manifest: &Manifest,
+    profile: &Profile,
+    map: &Map,
+    trials: usize,
+) -> String {
     let mut t = String::new();
     let _ = writeln!(t, "# Test program for {} ({})\n", profile.name, profile.id);
     let _ = writeln!(
@@ -539,10 +545,10 @@ pub(crate) fn ladder_setup(manifest: &Manifest, profile: &Profile, trials: usize
          words the harness may write besides the mailbox's three PC words.\n\n",
     );
     t.push_str("## What the run writes\n\n");
-    let ranges = fence::parse_ranges(&manifest.writes.join(","), &ADDRESSING).unwrap_or_default();
+    let ranges = fence::parse_ranges(&manifest.writes.join(","), map).unwrap_or_default();
     let (data, special): (Vec<_>, Vec<_>) = ranges
         .iter()
-        .partition(|r| ADDRESSING.kind(&r.head()) == Kind::Data);
+        .partition(|r| map.kind(&r.head()) == Kind::Data);
     let names = |rs: &[&fence::WordRange]| rs.iter().map(ToString::to_string).collect::<Vec<_>>();
     if !data.is_empty() {
         let _ = writeln!(
@@ -560,7 +566,7 @@ pub(crate) fn ladder_setup(manifest: &Manifest, profile: &Profile, trials: usize
             names(&special).join(", ")
         );
     }
-    if let Ok(head) = manifest.mailbox_head(&ADDRESSING) {
+    if let Ok(head) = manifest.mailbox_head(map) {
         let pc = mailbox::pc_words(&head);
         let _ =
             writeln!(
@@ -756,7 +762,9 @@ mod tests {
     #[test]
     fn the_setup_lists_the_rungs_and_the_commands() {
         let m = sample();
-        let setup = ladder_setup(&m, &profile(), 7);
+        let profile = profile();
+        let map = Map::of(&profile).expect("a Modbus map");
+        let setup = ladder_setup(&m, &profile, &map, 7);
         assert!(
             setup.contains("| 1 | ATOH | S1=D100 S2=K4 D1=D200 |"),
             "{setup}"

@@ -103,7 +103,8 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
                 .join(", ")
         )
     })?;
-    let addressing = crate::backend::addressing(bench.link);
+    let addressing = crate::backend::addressing(&profile)?;
+    let addressing = addressing.as_ref();
     let errors = error_devices(&profile, &bench)?;
     for v in &options.variants {
         if profile.variant(v).is_none() {
@@ -256,7 +257,12 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
         ),
         ProgramForm::Ladder => (
             ladder::ladder(&manifest, &profile)?,
-            ladder::ladder_setup(&manifest, &profile, trials.len()),
+            ladder::ladder_setup(
+                &manifest,
+                &profile,
+                &crate::backend::modbus::Map::of(&profile)?,
+                trials.len(),
+            ),
             ladder::PROGRAM_FILE,
         ),
     };

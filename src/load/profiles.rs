@@ -63,6 +63,7 @@ pub fn parse_profile(file: &Path, text: &str, errors: &mut Vec<LoadError>) -> Op
     check_profile(&spec, &devices, &mut cx);
     let cross_vendor = super::cross_vendor::read_section(&spec, &devices, &mut cx);
     let calls = read_calls(&spec, &mut cx);
+    check_bench(&spec, &devices, &mut cx);
     if cx.errors.len() != before {
         return None;
     }
@@ -89,6 +90,93 @@ pub fn parse_profile(file: &Path, text: &str, errors: &mut Vec<LoadError>) -> Op
         calls,
         bench: spec.bench,
     })
+}
+
+/// The bench section: a Modbus TCP link needs its map, whose devices are the profile's codes
+/// numbered as it numbers them, whose ranges are in order, and whose identity register and
+/// running relay lie in the map.
+fn check_bench(p: &ProfileSpec, table: &DeviceTable, cx: &mut FileContext<'_>) {
+    let Some(bench) = &p.bench else {
+        return;
+    };
+    if let Err(e) = table.parse(&bench.error_reset) {
+        cx.error("bench.error_reset", LoadErrorKind::Device(e));
+    }
+    let map = match (&bench.link, &bench.modbus) {
+        (crate::spec::profile::LinkKind::ModbusTcp, Some(map)) => map,
+        (crate::spec::profile::LinkKind::ModbusTcp, None) => {
+            cx.error(
+                "bench",
+                LoadErrorKind::Missing("modbus: a `modbus-tcp` link needs the CPU's Modbus map"),
+            );
+            return;
+        }
+        (_, Some(_)) => {
+            cx.error(
+                "bench.modbus",
+                LoadErrorKind::Invalid("a Modbus map is for a `modbus-tcp` link".into()),
+            );
+            return;
+        }
+        (_, None) => return,
+    };
+    let mut check = |key: String, r: &crate::spec::profile::ModbusRange| -> bool {
+        let Some(def) = table.get(&r.device) else {
+            cx.error(
+                format!("{key}.device"),
+                LoadErrorKind::Invalid(format!(
+                    "`{}` is not a device code of the profile",
+                    r.device
+                )),
+            );
+            return false;
+        };
+        let span = (def.numbering.point(r.first), def.numbering.point(r.last));
+        let fits = match span {
+            (Some(a), Some(b)) => a <= b && b - a + u64::from(r.address) <= 0xFFFF,
+            _ => false,
+        };
+        if !fits {
+            cx.error(
+                key,
+                LoadErrorKind::Invalid(format!(
+                    "{}{}-{}{} at {}: the first must come before the last ({}) and the range \
+                     end below wire address 65536",
+                    r.device,
+                    r.first,
+                    r.device,
+                    r.last,
+                    r.address,
+                    def.numbering.rule()
+                )),
+            );
+        }
+        fits
+    };
+    let registers_ok = (map.registers.iter().enumerate())
+        .all(|(i, r)| check(format!("bench.modbus.registers[{i}]"), r));
+    let coils_ok =
+        (map.coils.iter().enumerate()).all(|(i, r)| check(format!("bench.modbus.coils[{i}]"), r));
+    for (key, name, ranges, ok) in [
+        ("identity", &map.identity, &map.registers, registers_ok),
+        ("running", &map.running, &map.coils, coils_ok),
+    ] {
+        match table.parse(name) {
+            Err(e) => cx.error(format!("bench.modbus.{key}"), LoadErrorKind::Device(e)),
+            Ok(d)
+                if ok
+                    && !ranges
+                        .iter()
+                        .any(|r| r.device == d.code() && (r.first..=r.last).contains(&d.index)) =>
+            {
+                cx.error(
+                    format!("bench.modbus.{key}"),
+                    LoadErrorKind::Invalid(format!("{name} lies in none of the map's ranges")),
+                )
+            }
+            Ok(_) => {}
+        }
+    }
 }
 
 /// The structured-text call table: each form read, named after its key, and holding exactly

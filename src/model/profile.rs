@@ -13,7 +13,7 @@ use super::cross_vendor::CrossVendorSection;
 use super::ErrorSignal;
 use crate::device::{code_matches, Device, DeviceSyntaxError};
 use crate::memory::Unit;
-pub(crate) use crate::spec::profile::{Bench, LinkKind, ProgramForm};
+pub(crate) use crate::spec::profile::{Bench, LinkKind, ModbusRange, ProgramForm};
 pub(crate) use crate::spec::profile::{
     CallBasis, DeviceDef, FlagDef, InstructionDef, Manual, Numbering, SignalKind,
 };

@@ -76,6 +76,41 @@ pub(crate) struct Bench {
     pub error_reset: String,
     /// The evidence for the reset: the manual page, or why it is inferred.
     pub source: String,
+    /// For `modbus-tcp`: where the CPU's Modbus TCP server puts its devices.
+    #[serde(default)]
+    pub modbus: Option<ModbusMap>,
+}
+
+/// A CPU's Modbus map, as its communication manual gives it.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ModbusMap {
+    /// Word devices as holding registers (read with function 03, written with 16, or 06 for a
+    /// word alone).
+    pub registers: Vec<ModbusRange>,
+    /// Bit devices as coils (read with function 01; never written), counted in points of the
+    /// device's numbering (M8000-M8317 with an octal last digit are 256 coils).
+    pub coils: Vec<ModbusRange>,
+    /// The register whose value names the CPU: what a backend's `confirm=` is compared with.
+    pub identity: String,
+    /// The relay that is on while the CPU runs.
+    pub running: String,
+    /// The manual pages the map comes from, and what is unconfirmed.
+    pub source: String,
+}
+
+/// Devices `first` to `last` of one code at wire addresses `address` on.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ModbusRange {
+    pub device: String,
+    pub first: u32,
+    pub last: u32,
+    /// The wire address (0-based, as in the frame) of `first`.
+    pub address: u16,
+    /// The CPU's own words (special registers): a sandbox holds them only where named.
+    #[serde(default)]
+    pub special: bool,
 }
 
 /// The link a bench reaches a CPU by.
@@ -254,6 +289,15 @@ impl Numbering {
             Numbering::OctalLastDigit => {
                 (number % 10 < 8).then(|| u64::from(number / 10) * 8 + u64::from(number % 10))
             }
+        }
+    }
+
+    /// The device number at a position counted in points from 0: the inverse of
+    /// [`Numbering::point`].
+    pub fn number(self, point: u64) -> Option<u32> {
+        match self {
+            Numbering::Decimal | Numbering::Hexadecimal => u32::try_from(point).ok(),
+            Numbering::OctalLastDigit => u32::try_from(point / 8 * 10 + point % 8).ok(),
         }
     }
 }

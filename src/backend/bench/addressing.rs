@@ -18,7 +18,7 @@ pub enum Kind {
 /// How a protocol reaches a CPU's devices; a fact of the protocol and the CPU family, known
 /// without a connection (a dry run, `hil generate` and the settings use it).
 pub trait Addressing: Send + Sync {
-    /// Whether the CPU numbers a device code in hexadecimal (MELSEC `W1A`); the program, the
+    /// Whether the CPU numbers a device code in hexadecimal (`W1A` is W 26); the program, the
     /// manifest and the sandbox write numbers as the CPU does.
     fn hex_numbered(&self, code: &str) -> bool;
     /// What a word is to a sandbox.

@@ -19,7 +19,7 @@ pub struct WordRange {
     pub code: String,
     pub first: u32,
     pub last: u32,
-    /// The CPU numbers the code in hexadecimal (MELSEC `W1A-W1F`).
+    /// The CPU numbers the code in hexadecimal (`W1A-W1F`).
     pub hex: bool,
 }
 
@@ -362,7 +362,7 @@ mod tests {
             .expect("inside");
         let ranges: Vec<String> = writes.iter().map(|w| w.range().to_string()).collect();
         assert_eq!(ranges, ["D0-D959", "D960-D1919", "D1920-D2000"]);
-        // An FX5 in ASCII code takes 480 words a request.
+        // A link that takes 480 words a request.
         let writes = f
             .writes(480, &Device::new("D", 0), &[7; 961])
             .expect("inside");

@@ -73,7 +73,7 @@ impl Error for LinkError {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct RunState {
     pub running: bool,
-    /// `RUN (SD203=0000H)`, `STOP (M8000 off)`.
+    /// The state with where it was read: `STOP (M8000 off)`.
     pub text: String,
 }
 
@@ -136,11 +136,11 @@ pub struct Identity {
 pub trait LinkSettings: fmt::Debug + Send + Sync {
     /// A link, not yet connected.
     fn open(&self) -> Box<dyn Link>;
-    /// The transport as provenance names it: `SLMP 4E binary TCP 192.0.2.10:5007`.
+    /// The transport as provenance names it: the protocol, its options and the address.
     fn describe(&self) -> String;
     /// `host:port`.
     fn address(&self) -> &str;
-    fn addressing(&self) -> &'static dyn Addressing;
+    fn addressing(&self) -> &dyn Addressing;
     fn clone_box(&self) -> Box<dyn LinkSettings>;
 }
 
@@ -160,7 +160,7 @@ impl LinkSettings for Box<dyn LinkSettings> {
     fn address(&self) -> &str {
         self.as_ref().address()
     }
-    fn addressing(&self) -> &'static dyn Addressing {
+    fn addressing(&self) -> &dyn Addressing {
         self.as_ref().addressing()
     }
     fn clone_box(&self) -> Box<dyn LinkSettings> {

@@ -58,7 +58,7 @@ pub mod off {
     pub const FLAG_AFTER: u32 = 17;
     /// The error register right after the instruction (program).
     pub const CODE: u32 = 18;
-    /// The profile's further error register (FX5 SD8067), same scan (program).
+    /// The profile's further error register, same scan (program).
     pub const CODE_EXTRA: u32 = 19;
     /// The error register one scan later (program).
     pub const CODE_NEXT: u32 = 20;
@@ -107,7 +107,7 @@ pub fn range(head: &Device) -> WordRange {
 }
 
 /// The mailbox head as `--mailbox` and a manifest write it, numbered as the CPU numbers the code
-/// (MELSEC's `W100` is W 256), as the program and the frames will.
+/// (`W100` is W 256 where W is numbered in hexadecimal), as the program and the frames will.
 pub fn head(text: &str, addressing: &dyn Addressing) -> Result<Device, DeviceSyntaxError> {
     Device::parse_numbered(text, |code| addressing.hex_numbered(code))
 }

@@ -51,17 +51,17 @@ pub struct Unrealisable {
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ErrorDevices {
-    /// The flag an error turns on (SM0, M8004).
+    /// The flag an error turns on.
     pub flag: String,
-    /// The register with the code (SD0); none where the profile signals errors with the flag
+    /// The register with the code; none where the profile signals errors with the flag
     /// alone (IDEC).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub register: Option<String>,
-    /// A further register the profile says receives the code (FX5: SD8067).
+    /// A further register the profile says receives the code.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub extra: Option<String>,
-    /// The flag that resets the error state on its rising edge (SM50); the error flag itself
-    /// where the program resets it directly (IDEC's `RST M8004`).
+    /// The flag that resets the error state on its rising edge; the error flag itself where
+    /// the program resets it directly (the profile's `bench.error_reset`).
     pub reset: String,
 }
 

@@ -68,7 +68,6 @@ pub struct BenchBackend {
     instructions: Vec<String>,
     mailbox: Device,
     fence: WriteFence,
-    addressing: &'static dyn Addressing,
     signature: Signature,
     state: Mutex<Live>,
     reconnects: AtomicUsize,
@@ -224,7 +223,6 @@ impl BenchBackend {
                 breaker: Breaker::new(settings.max_consecutive_faults),
             }),
             fence: WriteFence::new(allowed),
-            addressing,
             settings,
             profile,
             rungs,
@@ -301,13 +299,12 @@ impl BenchBackend {
         let mut window = Vec::new();
         for (head, last) in window::ranges(req) {
             let (code, first) = (head.code(), head.index);
-            if let Some(why) = self.addressing.unaddressable(&head) {
+            if let Some(why) = self.settings.link.addressing().unaddressable(&head) {
                 return Err(refused!("not run: the case sets {code} words: {why}"));
             }
             let range = WordRange::within(&head, first, last);
-            self.fence
-                .check(&range)
-                .map_err(|e| match self.addressing.kind(&head) {
+            self.fence.check(&range).map_err(|e| {
+                match self.settings.link.addressing().kind(&head) {
                     fence::Kind::Special => refused!(
                         "not run: {e}; {code} is a special register, which `sandbox=manifest` \
                      leaves out: name it to let the harness write it (sandbox=manifest,{range})"
@@ -315,7 +312,8 @@ impl BenchBackend {
                     _ => refused!(
                         "not run: {e}; declare a sandbox that covers the manifest's `writes`"
                     ),
-                })?;
+                }
+            })?;
             let words = (first..=last)
                 .step_by(head.points() as usize)
                 .map(|i| req.memory.word(&head.with_index(i)))

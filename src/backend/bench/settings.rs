@@ -179,16 +179,22 @@ impl<'a> Spec<'a> {
             .transpose()
     }
 
-    /// The manifest, the variant, the confirmation and the sandbox: `manifest` in the sandbox
-    /// stands for the data registers of the manifest's `writes` (special registers are written
-    /// only where the user names them).
-    pub(crate) fn parts(
+    /// The manifest, the variant, the confirmation, the sandbox and the link's addressing
+    /// (`addressing` makes it from the manifest, whose profile it may need): `manifest` in the
+    /// sandbox stands for the data registers of the manifest's `writes` (special registers are
+    /// written only where the user names them).
+    pub(crate) fn parts<A: Addressing>(
         &self,
         base: &Path,
-        addressing: &dyn Addressing,
-    ) -> Result<(Manifest, String, String, Vec<WordRange>), LiveError> {
+        addressing: impl FnOnce(&Manifest) -> Result<A, LiveError>,
+    ) -> Result<(Manifest, String, String, Vec<WordRange>, A), LiveError> {
         let manifest_path = base.join(self.need("manifest")?);
-        let manifest = Manifest::load(&manifest_path, addressing)?;
+        let manifest = Manifest::read(&manifest_path)?;
+        let owned = addressing(&manifest)?;
+        let manifest = manifest
+            .validated(&owned)
+            .map_err(|e| LiveError::within(manifest_path.display().to_string(), e))?;
+        let addressing = &owned;
         let variant = match self.get("variant") {
             Some(v) => v.to_string(),
             None if manifest.variants.len() == 1 => manifest.variants[0].clone(),
@@ -219,7 +225,7 @@ impl<'a> Spec<'a> {
             }
         }
         let confirm = self.need("confirm")?.to_string();
-        Ok((manifest, variant, confirm, sandbox))
+        Ok((manifest, variant, confirm, sandbox, owned))
     }
 
     /// The common timings and the breaker, read onto settings built from [`Spec::parts`].

@@ -41,19 +41,19 @@ pub enum FaultAction {
     Drop,
     /// Process the request, answer after this long.
     Delay(Duration),
-    /// Answer with this error (an SLMP end code, a Modbus exception code) without processing
+    /// Answer with this error code (the protocol's end code or exception) without processing
     /// the request.
     EndCode(u16),
     /// Answer with bytes that are not a response of the protocol, without processing the request.
     Garbage,
-    /// Process the request, answer with another serial number (SLMP 4E) or transaction id
-    /// (Modbus).
+    /// Process the request, answer with another serial number or transaction id than the
+    /// request's.
     WrongSerial,
     /// Process the request, then go to STOP and stop scanning.
     Stop,
 }
 
-/// A fault on the `nth` request (from 1) of a command (an SLMP command, a Modbus function
+/// A fault on the `nth` request (from 1) of a command (the protocol's command or function
 /// code), optionally only requests whose first device is `head`; it fires once.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct FaultRule {
@@ -64,13 +64,25 @@ pub struct FaultRule {
 }
 
 impl FaultRule {
-    /// Reads `COMMAND:NTH:ACTION` as `hil sim --fault` takes it: `1401:3:drop` closes the
-    /// connection on the third SLMP write; actions `drop`, `delay=MS`, `end=C051` (an error
-    /// code in hexadecimal), `garbage`, `serial` (another serial or transaction id), `stop` (go
-    /// to STOP). `commands` are the ones the server answers (in hexadecimal in messages).
+    /// Reads `COMMAND:NTH:ACTION` as `hil sim --fault` takes it: `CMD:3:drop` closes the
+    /// connection on the third request of command CMD; actions `drop`, `delay=MS`, `end=C051`
+    /// (an error code in hexadecimal), `garbage`, `serial` (another serial or transaction id),
+    /// `stop` (go to STOP). `commands` are the ones the server answers (in hexadecimal in
+    /// messages).
     pub fn parse(text: &str, commands: &[u16]) -> Result<FaultRule, LiveError> {
-        let usage = "a fault is COMMAND:NTH:ACTION, e.g. 1401:3:drop, 0403:2:delay=3000, \
-                     0401:1:end=C051; actions: drop, delay=MS, end=CODE, garbage, serial, stop";
+        // Codes as protocols write them: two hexadecimal digits below 100H, four from there.
+        let known: Vec<String> = (commands.iter())
+            .map(|c| match c {
+                0..=0xFF => format!("{c:02X}"),
+                _ => format!("{c:04X}"),
+            })
+            .collect();
+        let usage = format!(
+            "a fault is COMMAND:NTH:ACTION, COMMAND one of {} (hexadecimal), e.g. {}:1:drop; \
+             actions: drop, delay=MS, end=CODE, garbage, serial, stop",
+            known.join(", "),
+            known.last().map_or("10", String::as_str)
+        );
         let mut parts = text.split(':');
         let (Some(command), Some(nth), Some(action), None) =
             (parts.next(), parts.next(), parts.next(), parts.next())
@@ -80,10 +92,7 @@ impl FaultRule {
         let command = u16::from_str_radix(command, 16)
             .ok()
             .filter(|c| commands.contains(c))
-            .ok_or_else(|| {
-                let known: Vec<String> = commands.iter().map(|c| format!("{c:04X}")).collect();
-                refused!("`{text}`: the command is one of {}", known.join(", "))
-            })?;
+            .ok_or_else(|| refused!("`{text}`: the command is one of {}", known.join(", ")))?;
         let nth = nth
             .parse::<usize>()
             .ok()
@@ -137,7 +146,8 @@ pub struct SimSettings<L> {
     /// corpus catches one.
     pub rungs_in_case: bool,
     /// Error registers the CPU leaves alone on an error (a firmware that does not copy the
-    /// code to SD8067): tests use this to show that the judge holds every register to the code.
+    /// code to its second register): tests use this to show that the judge holds every
+    /// register to the code.
     pub untouched_registers: Vec<Device>,
     /// Rungs missing from the program on the CPU: neither the call nor its proof of execution
     /// is there, while the program still acknowledges every trigger.
@@ -157,6 +167,26 @@ pub struct SimSettings<L> {
 }
 
 impl<L> SimSettings<L> {
+    /// The same CPU with what another server adds.
+    pub(crate) fn relink<M>(self, link: M) -> SimSettings<M> {
+        SimSettings {
+            manifest: self.manifest,
+            variant: self.variant,
+            scan: self.scan,
+            program: self.program,
+            run: self.run,
+            port: self.port,
+            rungs_in_case: self.rungs_in_case,
+            untouched_registers: self.untouched_registers,
+            missing_rungs: self.missing_rungs,
+            disabled_rungs: self.disabled_rungs,
+            identifies: self.identifies,
+            premature_ack: self.premature_ack,
+            faults: self.faults,
+            link,
+        }
+    }
+
     /// A CPU in RUN with the program, scanning every 200 µs.
     pub fn with_link(manifest: Manifest, variant: impl Into<String>, link: L) -> Self {
         SimSettings {
@@ -237,8 +267,9 @@ pub(crate) struct Program<L> {
     pub(crate) mailbox: Device,
     rungs: Vec<SimRung>,
     allowed: Vec<WordRange>,
-    /// Where the link's server shows whether the CPU runs (SD203, M8000), set on every change.
-    show_state: fn(&mut Cpu),
+    /// Where the link's server shows whether the CPU runs (a status register, a relay), set on
+    /// every change.
+    show_state: fn(&SimSettings<L>, &mut Cpu),
 }
 
 /// Word devices the CPU holds, with their sizes: the profile's for the variant, and `more`.
@@ -283,7 +314,7 @@ impl<L> Program<L> {
         model: Arc<dyn Backend>,
         addressing: &dyn Addressing,
         more: &[(&str, usize)],
-        show_state: fn(&mut Cpu),
+        show_state: fn(&SimSettings<L>, &mut Cpu),
     ) -> Result<Arc<Program<L>>, LiveError> {
         settings.manifest.validate(addressing)?;
         if profile.variant(&settings.variant).is_none() {
@@ -340,7 +371,7 @@ impl<L> Program<L> {
             held: BTreeSet::new(),
         };
         let mut cpu = cpu;
-        show_state(&mut cpu);
+        show_state(&settings, &mut cpu);
         Ok(Arc::new(Program {
             cpu: Mutex::new(cpu),
             stop: AtomicBool::new(false),
@@ -364,7 +395,7 @@ impl<L> Program<L> {
     /// Puts the CPU in RUN or STOP.
     pub(crate) fn set_running(&self, cpu: &mut Cpu, run: bool) {
         cpu.running = run;
-        (self.show_state)(cpu);
+        (self.show_state)(&self.settings, cpu);
     }
 
     /// A write from the PC, as the CPU takes it: audited against the manifest's words, and
@@ -638,7 +669,7 @@ pub(crate) fn scan<L>(shared: &Program<L>, cpu: &mut Cpu) {
         match st {
             state::IDLE | state::RESET_FAILED => {
                 // A program that resets the flag itself (`RST M8004`) clears it in this scan;
-                // a reset flag (SM50) clears it at the end of the scan it rises in.
+                // a reset flag clears it at the end of the scan it rises in.
                 cpu.set_bit(&m.error.reset, !resets_itself);
                 for o in [off::RAN, off::RAN_FOR, off::ENO] {
                     cpu.set_word(&at(o), 0);

@@ -1,11 +1,12 @@
-//! A simulated IDEC MicroSmart CPU: a Modbus TCP server on 127.0.0.1 over the simulated
-//! program ([`crate::backend::bench::sim`]), which runs the generated test program's behaviour
-//! with the reference model.
+//! A simulated CPU over Modbus TCP (IDEC MicroSmart): a Modbus TCP server on 127.0.0.1 over
+//! the simulated program ([`crate::backend::bench::sim`]), which runs the generated test
+//! program's behaviour with the reference model, at the addresses of the profile's map.
 //!
-//! The server answers function codes 01 (coils M8000-M8317), 03, 06 and 16 (data registers
-//! D0-D8499) for any unit id, as a CPU that is the server itself does; M8000 says whether the
-//! CPU runs and D8002 holds its type code. Anything else is answered with exception 01 (an
-//! unknown function) or 02 (an address the map does not have).
+//! The server answers function codes 01 (the map's coils), 03, 06 and 16 (the data registers of
+//! the map up to its special ones, D0-D8499 on IDEC) for any unit id, as a CPU that is the server
+//! itself does; the map's running relay says whether the CPU runs and its identity register
+//! holds the type code. Anything else is answered with exception 01 (an unknown function) or 02
+//! (an address the map does not have).
 
 use std::io::Write;
 use std::net::{SocketAddr, TcpStream};
@@ -14,10 +15,10 @@ use std::sync::Arc;
 use std::thread::JoinHandle;
 
 use super::frame::{self, Decoded, Request, Response};
-use super::{coil, START_CONTROL, TYPE_CODE};
+use super::Map;
 use crate::backend::bench::error::LiveError;
 use crate::backend::bench::manifest::Manifest;
-use crate::backend::bench::sim::{Audit, Cpu, FaultAction, FaultRule, Program};
+use crate::backend::bench::sim::{Audit, Cpu, FaultAction, FaultRule, Program, SimSettings};
 use crate::backend::Backend;
 use crate::device::Device;
 use crate::model::profile::Profile;
@@ -25,8 +26,14 @@ use crate::model::profile::Profile;
 /// What the Modbus server adds to the simulated CPU.
 #[derive(Debug, Clone)]
 pub struct IdecSim {
-    /// What D8002 holds.
+    /// What the map's identity register (D8002) holds.
     pub type_code: u16,
+}
+
+/// The simulated CPU as served: the profile's map.
+#[derive(Debug, Clone)]
+pub(crate) struct Served {
+    map: Arc<Map>,
 }
 
 /// How the simulated IDEC CPU is set up.
@@ -39,9 +46,6 @@ pub(crate) const FUNCTIONS: [u16; 4] = [
     frame::WRITE_SINGLE as u16,
     frame::WRITE_MULTIPLE as u16,
 ];
-
-/// The data registers the simulated CPU holds: D0-D8499, the special data registers included.
-const REGISTERS: usize = 8500;
 
 impl crate::backend::bench::sim::SimSettings<IdecSim> {
     /// A CPU that holds `type_code` in D8002.
@@ -58,16 +62,16 @@ impl FaultRule {
     }
 }
 
-/// M8000 on while the CPU runs.
-fn show_state(cpu: &mut Cpu) {
+/// The map's running relay (M8000) on while the CPU runs.
+fn show_state(settings: &SimSettings<Served>, cpu: &mut Cpu) {
     let running = cpu.running;
-    cpu.set_bit(&format!("M{START_CONTROL}"), running);
+    cpu.set_bit(&settings.link.map.running().to_string(), running);
 }
 
 /// A running simulated IDEC CPU; dropping it stops it.
 pub struct IdecSimulator {
     address: SocketAddr,
-    shared: Arc<Program<IdecSim>>,
+    shared: Arc<Program<Served>>,
     threads: Vec<JoinHandle<()>>,
 }
 
@@ -78,18 +82,14 @@ impl IdecSimulator {
         profile: Arc<Profile>,
         model: Arc<dyn Backend>,
     ) -> Result<IdecSimulator, LiveError> {
+        let map = Arc::new(Map::of(&profile)?);
         let type_code = settings.link.type_code;
-        let shared = Program::new(
-            settings,
-            profile,
-            model,
-            &super::ADDRESSING,
-            &[("D", REGISTERS)],
-            show_state,
-        )?;
-        shared
-            .lock()
-            .set_word(&Device::new("D", TYPE_CODE), type_code);
+        let identity = map.identity().clone();
+        let held = map.through_special();
+        let more: Vec<(&str, usize)> = held.iter().map(|(c, n)| (c.as_str(), *n)).collect();
+        let settings = settings.relink(Served { map: map.clone() });
+        let shared = Program::new(settings, profile, model, map.as_ref(), &more, show_state)?;
+        shared.lock().set_word(&identity, type_code);
         let (address, threads) = shared.start(serve)?;
         Ok(IdecSimulator {
             address,
@@ -142,7 +142,7 @@ impl Drop for IdecSimulator {
 
 /// Reads one whole request by its MBAP length; `None` when the connection ends or the header
 /// is not Modbus TCP (a server drops such a connection).
-fn read_request(shared: &Program<IdecSim>, stream: &mut TcpStream) -> Option<Vec<u8>> {
+fn read_request(shared: &Program<Served>, stream: &mut TcpStream) -> Option<Vec<u8>> {
     let mut header = [0u8; 6];
     shared.fill(stream, &mut header, 0)?;
     let total = frame::message_len(&header).ok()?;
@@ -152,13 +152,13 @@ fn read_request(shared: &Program<IdecSim>, stream: &mut TcpStream) -> Option<Vec
     Some(buf)
 }
 
-fn serve(shared: &Program<IdecSim>, mut stream: TcpStream) {
+fn serve(shared: &Program<Served>, mut stream: TcpStream) {
     while let Some(bytes) = read_request(shared, &mut stream) {
         let Ok((tid, unit, decoded)) = frame::decode_request(&bytes) else {
             return;
         };
         let (function, head) = match &decoded {
-            Decoded::Request(r) => (r.function(), first_device(r)),
+            Decoded::Request(r) => (r.function(), first_device(&shared.settings.link.map, r)),
             Decoded::Unsupported { function } | Decoded::Illegal { function, .. } => {
                 (*function, None)
             }
@@ -203,87 +203,77 @@ fn serve(shared: &Program<IdecSim>, mut stream: TcpStream) {
     }
 }
 
-/// The data register a register request starts at.
-fn first_device(request: &Request) -> Option<Device> {
+/// The register a request starts at, as the map names it.
+fn first_device(map: &Map, request: &Request) -> Option<Device> {
     match request {
         Request::ReadHolding { address, .. }
         | Request::WriteSingle { address, .. }
-        | Request::WriteMultiple { address, .. } => Some(Device::new("D", u32::from(*address))),
+        | Request::WriteMultiple { address, .. } => map.device_at(*address),
         Request::ReadCoils { .. } => None,
     }
 }
 
-/// The special internal relay at a coil's wire address, if the map has one there.
-fn relay(wire: u32) -> Option<u32> {
-    let offset = wire.checked_sub(9000)?;
-    let relay = 8000 + offset / 8 * 10 + offset % 8;
-    (coil(relay) == Some(wire as u16)).then_some(relay)
-}
-
 /// Answers one request.
-fn handle(shared: &Program<IdecSim>, request: &Request) -> Response {
-    let illegal_address = |function: u8| Response::Exception { function, code: 2 };
+fn handle(shared: &Program<Served>, request: &Request) -> Response {
+    let map = &shared.settings.link.map;
     let function = request.function();
+    let illegal_address = Response::Exception { function, code: 2 };
     let mut cpu = shared.lock();
+    // The registers from `address` on, each as the map names it and held by this CPU.
+    let registers = |address: u16, count: usize| -> Option<Vec<Device>> {
+        (0..count)
+            .map(|i| {
+                let wire = u16::try_from(usize::from(address) + i).ok()?;
+                map.device_at(wire)
+            })
+            .collect()
+    };
     match request {
         Request::ReadCoils { address, count } => {
-            let first = u32::from(*address);
-            let relays: Option<Vec<u32>> = (first..first + u32::from(*count)).map(relay).collect();
+            let relays: Option<Vec<Device>> = (0..*count)
+                .map(|i| map.relay(address.checked_add(i)?))
+                .collect();
             match relays {
                 Some(relays) => {
-                    Response::Coils(relays.iter().map(|r| cpu.bit(&format!("M{r}"))).collect())
+                    Response::Coils(relays.iter().map(|r| cpu.bit(&r.to_string())).collect())
                 }
-                None => illegal_address(function),
+                None => illegal_address,
             }
         }
         Request::ReadHolding { address, count } => {
-            let first = usize::from(*address);
-            let words: Option<Vec<u16>> = (first..first + usize::from(*count))
-                .map(|i| shared.read(&cpu, &Device::new("D", i as u32)))
-                .collect();
+            let words: Option<Vec<u16>> = registers(*address, usize::from(*count))
+                .and_then(|ds| ds.iter().map(|d| shared.read(&cpu, d)).collect());
             match words {
-                Some(words) if first + usize::from(*count) <= REGISTERS => {
-                    Response::Registers(words)
+                Some(words) => Response::Registers(words),
+                None => illegal_address,
+            }
+        }
+        Request::WriteSingle { address, value } => match registers(*address, 1) {
+            Some(ds) if ds.iter().all(|d| cpu.word(d).is_some()) => {
+                shared.write(&mut cpu, &ds[0], &[*value]);
+                Response::WroteSingle {
+                    address: *address,
+                    value: *value,
                 }
-                _ => illegal_address(function),
             }
-        }
-        Request::WriteSingle { address, value } => {
-            if usize::from(*address) >= REGISTERS {
-                return illegal_address(function);
+            _ => illegal_address,
+        },
+        Request::WriteMultiple { address, values } => match registers(*address, values.len()) {
+            Some(ds) if ds.iter().all(|d| cpu.word(d).is_some()) => {
+                shared.write(&mut cpu, &ds[0], values);
+                Response::WroteMultiple {
+                    address: *address,
+                    count: values.len() as u16,
+                }
             }
-            shared.write(&mut cpu, &Device::new("D", u32::from(*address)), &[*value]);
-            Response::WroteSingle {
-                address: *address,
-                value: *value,
-            }
-        }
-        Request::WriteMultiple { address, values } => {
-            if usize::from(*address) + values.len() > REGISTERS {
-                return illegal_address(function);
-            }
-            shared.write(&mut cpu, &Device::new("D", u32::from(*address)), values);
-            Response::WroteMultiple {
-                address: *address,
-                count: values.len() as u16,
-            }
-        }
+            _ => illegal_address,
+        },
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn a_coils_wire_address_is_its_relay() {
-        assert_eq!(relay(9000), Some(8000));
-        assert_eq!(relay(9004), Some(8004));
-        assert_eq!(relay(9008), Some(8010));
-        assert_eq!(relay(9255), Some(8317));
-        assert_eq!(relay(9256), None);
-        assert_eq!(relay(8999), None);
-    }
 
     #[test]
     fn fault_rules_name_function_codes() {

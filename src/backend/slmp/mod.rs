@@ -31,7 +31,7 @@ use crate::device::Device;
 /// How SLMP reaches a MELSEC CPU's devices.
 pub struct Slmp;
 
-/// The one [`Slmp`] addressing.
+/// The one SLMP addressing.
 pub static ADDRESSING: Slmp = Slmp;
 
 /// The special register that holds the CPU's operating status.
@@ -197,7 +197,7 @@ impl LinkSettings for ClientSettings {
     fn address(&self) -> &str {
         &self.address
     }
-    fn addressing(&self) -> &'static dyn Addressing {
+    fn addressing(&self) -> &dyn Addressing {
         &ADDRESSING
     }
     fn clone_box(&self) -> Box<dyn LinkSettings> {
@@ -253,7 +253,7 @@ impl BenchSettings<ClientSettings> {
         let Some(spec) = Spec::split(text, "slmp", &LINK_KEYS)? else {
             return Ok(None);
         };
-        let (manifest, variant, confirm, sandbox) = spec.parts(base, &ADDRESSING)?;
+        let (manifest, variant, confirm, sandbox, _) = spec.parts(base, |_| Ok(Slmp))?;
         let mut s = SlmpSettings::new(spec.name, spec.address, manifest, variant, confirm, sandbox);
         if let Some(f) = spec.get("frame") {
             s.link.frame = match f {

@@ -103,7 +103,7 @@ pub(crate) fn model_code(type_name: &str) -> Option<u16> {
 }
 
 /// SD203: 0 in the low four bits for RUN, 2 for STOP.
-fn show_state(cpu: &mut Cpu) {
+fn show_state(_: &SimSettings, cpu: &mut Cpu) {
     let v = if cpu.running { 0x0000 } else { 0x0002 };
     cpu.set_word(&Device::new("SD", 203), v);
 }
