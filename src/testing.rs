@@ -34,7 +34,9 @@ pub mod backend {
             pub use crate::backend::bench::manifest::Manifest;
         }
         pub mod sim {
-            pub use crate::backend::bench::sim::{Audit, FaultAction, FaultRule, SimSettings};
+            pub use crate::backend::bench::sim::{
+                Audit, FaultAction, FaultRule, Running, SimSettings,
+            };
         }
     }
     pub mod modbus {
@@ -43,7 +45,9 @@ pub mod backend {
             pub use crate::backend::modbus::client::{ModbusClient, ModbusError, ModbusSettings};
         }
         pub mod sim {
-            pub use crate::backend::modbus::sim::{IdecSimSettings, IdecSimulator};
+            pub use crate::backend::modbus::sim::{
+                IdecSim, IdecSimSettings, IdecSimulator, Served,
+            };
         }
     }
     pub mod slmp {

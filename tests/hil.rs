@@ -19,7 +19,7 @@ use plc_conformance::testing::backend::slmp::sim::{
     FaultAction, FaultRule, SimSettings, Simulator,
 };
 use plc_conformance::testing::backend::slmp::{SlmpSettings, ADDRESSING};
-use plc_conformance::testing::backend::{Backend, Fault};
+use plc_conformance::testing::backend::Backend;
 use plc_conformance::testing::device::Device;
 use plc_conformance::testing::error_chain::chain;
 use plc_conformance::testing::hil::{dry_run, generate, GenerateOptions};
@@ -28,6 +28,7 @@ use plc_conformance::testing::plan::Trial;
 use plc_conformance::testing::session::{BackendSource, Session};
 use plc_conformance::verdicts;
 
+use common::bench::{execute_once, first_trial, key, rule};
 use common::{reference, session};
 use plc_conformance::testing::execute::{images, requests};
 
@@ -90,15 +91,6 @@ fn live(project: &mut Session, settings: SlmpSettings) -> Arc<dyn Backend> {
         .add(BackendSource::Bench(Box::new(settings.erased())), true)
         .unwrap_or_else(|e| panic!("interlocks: {}", chain(&e)))[0]
         .clone()
-}
-
-/// A trial's identity across backends.
-fn key(t: &Trial) -> (String, String, String) {
-    (
-        t.check_name().to_string(),
-        t.case_id().to_string(),
-        t.variant.clone(),
-    )
 }
 
 /// Runs every trial of one variant through the live backend and compares each verdict with the
@@ -252,27 +244,6 @@ fn iqr_sim(project: &Session, change: impl FnOnce(&mut SimSettings)) -> Simulato
     Simulator::start(s, profile, reference(project, &m.profile)).expect("simulator")
 }
 
-/// The first trial the live backend would run whose instruction is `instruction`, and the
-/// backend itself (not connected).
-fn first_trial(project: &Session, backend: &Arc<BenchBackend>, instruction: &str) -> Trial {
-    let b: Arc<dyn Backend> = backend.clone();
-    project
-        .plan(&[b])
-        .into_iter()
-        .find(|t| t.skip.is_none() && t.input.instruction == instruction)
-        .unwrap_or_else(|| panic!("no {instruction} trial"))
-}
-
-/// Executes the trial's first request (fill A) once.
-fn execute_once(
-    backend: &BenchBackend,
-    trial: &Trial,
-) -> Result<plc_conformance::testing::backend::Response, Fault> {
-    let imgs = images(trial);
-    let reqs = requests(trial, &imgs);
-    backend.execute(&reqs[0])
-}
-
 fn iqr_backend(
     project: &Session,
     sim: &Simulator,
@@ -281,15 +252,6 @@ fn iqr_backend(
     let mut s = settings(iqr_manifest(), "rcpu", sim);
     change(&mut s);
     Arc::new(BenchBackend::new(s, &project.profiles).expect("backend"))
-}
-
-fn rule(command: u16, nth: usize, action: FaultAction) -> FaultRule {
-    FaultRule {
-        command,
-        head: None,
-        nth,
-        action,
-    }
 }
 
 fn writes_sent(sim: &Simulator) -> usize {

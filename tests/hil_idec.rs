@@ -17,15 +17,14 @@ use plc_conformance::testing::backend::bench::sim::{FaultAction, FaultRule};
 use plc_conformance::testing::backend::bench::BenchBackend;
 use plc_conformance::testing::backend::modbus::sim::{IdecSimSettings, IdecSimulator};
 use plc_conformance::testing::backend::modbus::{Map, ModbusBench};
-use plc_conformance::testing::backend::{Backend, Fault};
 use plc_conformance::testing::error_chain::chain;
-use plc_conformance::testing::execute::{images, requests};
 use plc_conformance::testing::hil::{dry_run, generate, GenerateOptions};
 use plc_conformance::testing::judge::Verdict;
 use plc_conformance::testing::plan::{Check, Trial};
 use plc_conformance::testing::session::{BackendSource, Session};
 use plc_conformance::verdicts;
 
+use common::bench::{execute_once, first_trial, key, rule};
 use common::{reference, session};
 
 const PROFILE: &str = "idec-fc4a";
@@ -102,33 +101,6 @@ fn idec_backend(
     Arc::new(BenchBackend::new(s, &project.profiles).expect("backend"))
 }
 
-fn first_trial(project: &Session, backend: &Arc<BenchBackend>, instruction: &str) -> Trial {
-    let b: Arc<dyn Backend> = backend.clone();
-    project
-        .plan(&[b])
-        .into_iter()
-        .find(|t| t.skip.is_none() && t.input.instruction == instruction)
-        .unwrap_or_else(|| panic!("no {instruction} trial"))
-}
-
-fn execute_once(
-    backend: &BenchBackend,
-    trial: &Trial,
-) -> Result<plc_conformance::testing::backend::Response, Fault> {
-    let imgs = images(trial);
-    let reqs = requests(trial, &imgs);
-    backend.execute(&reqs[0])
-}
-
-fn rule(command: u16, nth: usize, action: FaultAction) -> FaultRule {
-    FaultRule {
-        command,
-        head: None,
-        nth,
-        action,
-    }
-}
-
 fn writes_sent(sim: &IdecSimulator) -> usize {
     let commands = sim.audit().commands;
     [WRITE_SINGLE, WRITE_MULTIPLE]
@@ -143,14 +115,6 @@ fn expects_an_error(t: &Trial) -> bool {
         Check::Native { case, .. } => case.expect.as_ref().is_some_and(|e| e.error.is_some()),
         _ => false,
     }
-}
-
-fn key(t: &Trial) -> (String, String, String) {
-    (
-        t.check_name().to_string(),
-        t.case_id().to_string(),
-        t.variant.clone(),
-    )
 }
 
 /// Every FC4A trial of the variant through the Modbus link and the simulated CPU gets the

@@ -36,6 +36,7 @@ pub mod mailbox;
 pub(crate) mod manifest;
 pub(crate) mod settings;
 pub(crate) mod sim;
+pub(crate) mod tcp;
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicUsize, Ordering};

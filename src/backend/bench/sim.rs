@@ -272,6 +272,74 @@ pub(crate) struct Program<L> {
     show_state: fn(&SimSettings<L>, &mut Cpu),
 }
 
+/// A simulated CPU serving on 127.0.0.1; dropping it stops it. `L` is its link's server.
+pub struct Running<L> {
+    address: SocketAddr,
+    program: Arc<Program<L>>,
+    threads: Vec<JoinHandle<()>>,
+}
+
+impl<L: Send + Sync + 'static> Running<L> {
+    /// Starts `program`'s scan thread and a server whose connections `serve` answers.
+    pub(crate) fn serve(
+        program: Arc<Program<L>>,
+        serve: fn(&Program<L>, TcpStream),
+    ) -> Result<Running<L>, LiveError> {
+        let (address, threads) = program.start(serve)?;
+        Ok(Running {
+            address,
+            program,
+            threads,
+        })
+    }
+
+    /// `127.0.0.1:PORT`.
+    pub fn address(&self) -> SocketAddr {
+        self.address
+    }
+
+    pub fn audit(&self) -> Audit {
+        self.program.lock().audit.clone()
+    }
+
+    /// Puts the CPU in RUN or STOP.
+    pub fn set_running(&self, run: bool) {
+        let mut cpu = self.program.lock();
+        self.program.set_running(&mut cpu, run);
+    }
+
+    /// Adds a fault rule while running.
+    pub fn add_fault(&self, rule: FaultRule) {
+        self.program.lock().add_fault(rule);
+    }
+
+    /// A word of device memory (0 for one the CPU does not have).
+    pub fn read(&self, device: &Device) -> u16 {
+        self.program.lock().word(device).unwrap_or(0)
+    }
+
+    /// Sets a word of device memory, as a program or an operator would (not audited).
+    pub fn poke(&self, device: &Device, value: u16) {
+        self.program.lock().set_word(device, value);
+    }
+
+    /// Keeps the error flag on whatever the program does, as a CPU on which the program cannot
+    /// reset it would.
+    pub fn hold_error_flag(&self, held: bool) {
+        let flag = self.program.settings.manifest.error.flag.clone();
+        self.program.lock().hold(&flag, held);
+    }
+}
+
+impl<L> Drop for Running<L> {
+    fn drop(&mut self) {
+        self.program.stop.store(true, Ordering::SeqCst);
+        for t in self.threads.drain(..) {
+            let _ = t.join();
+        }
+    }
+}
+
 /// Word devices the CPU holds, with their sizes: the profile's for the variant, and `more`.
 fn word_devices(
     profile: &Profile,

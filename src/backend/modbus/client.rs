@@ -11,9 +11,11 @@
 //! are, so that no write can land twice or late without the caller knowing.
 
 use std::fmt;
-use std::io::{Read, Write};
-use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
+use std::io::Write;
+use std::net::TcpStream;
 use std::time::{Duration, Instant};
+
+use crate::backend::bench::tcp::{self, Short};
 
 use super::frame::{
     self, decode_response, encode_request, exception_meaning, hex, message_len, Request, Response,
@@ -166,29 +168,11 @@ impl ModbusClient {
 
     fn connect(&mut self) -> Result<&mut TcpStream, ModbusError> {
         if self.stream.is_none() {
-            let address = self.settings.address.clone();
-            let fail = |error: String| ModbusError::Connect {
-                address: address.clone(),
-                error,
-            };
-            let addrs: Vec<SocketAddr> = address
-                .to_socket_addrs()
-                .map_err(|e| fail(e.to_string()))?
-                .collect();
-            let mut last = String::from("the address resolves to nothing");
-            let mut stream = None;
-            for a in addrs {
-                match TcpStream::connect_timeout(&a, self.settings.connect_timeout) {
-                    Ok(s) => {
-                        stream = Some(s);
-                        break;
-                    }
-                    Err(e) => last = e.to_string(),
-                }
-            }
-            let stream = stream.ok_or_else(|| fail(last))?;
-            // A request is one small write; Nagle would hold it back waiting for an ACK.
-            let _ = stream.set_nodelay(true);
+            let stream = tcp::connect(&self.settings.address, self.settings.connect_timeout)
+                .map_err(|error| ModbusError::Connect {
+                    address: self.settings.address.clone(),
+                    error,
+                })?;
             self.connections += 1;
             self.stream = Some(stream);
         }
@@ -388,6 +372,7 @@ fn read_reply(
     Ok(buf)
 }
 
+/// [`tcp::read_full`] with the client's errors.
 fn read_full(
     stream: &mut TcpStream,
     buf: &mut [u8],
@@ -395,49 +380,23 @@ fn read_full(
     what: &str,
     waited: Duration,
 ) -> Result<(), ModbusError> {
-    let timeout = || ModbusError::Timeout {
-        what: what.into(),
-        waited,
-    };
-    let mut at = 0;
-    while at < buf.len() {
-        let left = deadline.saturating_duration_since(Instant::now());
-        if left.is_zero() {
-            return Err(timeout());
-        }
-        let _ = stream.set_read_timeout(Some(left));
-        match stream.read(&mut buf[at..]) {
-            Ok(0) => {
-                return Err(ModbusError::Closed {
-                    what: what.into(),
-                    error: format!("closed by the other side after {at} of {} bytes", buf.len()),
-                })
-            }
-            Ok(n) => at += n,
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
-                ) =>
-            {
-                return Err(timeout())
-            }
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-            Err(e) => {
-                return Err(ModbusError::Closed {
-                    what: what.into(),
-                    error: e.to_string(),
-                })
-            }
-        }
-    }
-    Ok(())
+    tcp::read_full(stream, buf, deadline).map_err(|short| match short {
+        Short::Timeout => ModbusError::Timeout {
+            what: what.into(),
+            waited,
+        },
+        Short::Closed(error) => ModbusError::Closed {
+            what: what.into(),
+            error,
+        },
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use frame::{bytes_of, encode_response};
+    use std::io::Read;
     use std::net::TcpListener;
     use std::thread::JoinHandle;
 

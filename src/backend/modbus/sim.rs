@@ -9,16 +9,14 @@
 //! (an address the map does not have).
 
 use std::io::Write;
-use std::net::{SocketAddr, TcpStream};
-use std::sync::atomic::Ordering;
+use std::net::TcpStream;
 use std::sync::Arc;
-use std::thread::JoinHandle;
 
 use super::frame::{self, Decoded, Request, Response};
 use super::Map;
 use crate::backend::bench::error::LiveError;
 use crate::backend::bench::manifest::Manifest;
-use crate::backend::bench::sim::{Audit, Cpu, FaultAction, FaultRule, Program, SimSettings};
+use crate::backend::bench::sim::{Cpu, FaultAction, FaultRule, Program, Running, SimSettings};
 use crate::backend::Backend;
 use crate::device::Device;
 use crate::model::profile::Profile;
@@ -32,7 +30,7 @@ pub struct IdecSim {
 
 /// The simulated CPU as served: the profile's map.
 #[derive(Debug, Clone)]
-pub(crate) struct Served {
+pub struct Served {
     map: Arc<Map>,
 }
 
@@ -69,13 +67,9 @@ fn show_state(settings: &SimSettings<Served>, cpu: &mut Cpu) {
 }
 
 /// A running simulated IDEC CPU; dropping it stops it.
-pub struct IdecSimulator {
-    address: SocketAddr,
-    shared: Arc<Program<Served>>,
-    threads: Vec<JoinHandle<()>>,
-}
+pub type IdecSimulator = Running<Served>;
 
-impl IdecSimulator {
+impl Running<Served> {
     /// Starts the server and the scan thread.
     pub fn start(
         settings: IdecSimSettings,
@@ -90,53 +84,7 @@ impl IdecSimulator {
         let settings = settings.relink(Served { map: map.clone() });
         let shared = Program::new(settings, profile, model, map.as_ref(), &more, show_state)?;
         shared.lock().set_word(&identity, type_code);
-        let (address, threads) = shared.start(serve)?;
-        Ok(IdecSimulator {
-            address,
-            shared,
-            threads,
-        })
-    }
-
-    /// `127.0.0.1:PORT`.
-    pub fn address(&self) -> SocketAddr {
-        self.address
-    }
-
-    pub fn audit(&self) -> Audit {
-        self.shared.lock().audit.clone()
-    }
-
-    /// Puts the CPU in RUN or STOP.
-    pub fn set_running(&self, run: bool) {
-        let mut cpu = self.shared.lock();
-        self.shared.set_running(&mut cpu, run);
-    }
-
-    /// A word of device memory (0 for one the CPU does not have).
-    pub fn read(&self, device: &Device) -> u16 {
-        self.shared.lock().word(device).unwrap_or(0)
-    }
-
-    /// Adds a fault rule while running.
-    pub fn add_fault(&self, rule: FaultRule) {
-        self.shared.lock().add_fault(rule);
-    }
-
-    /// Keeps the error flag on whatever the program does, as a CPU on which a user program
-    /// cannot reset it would (whether the FC4A's can is unconfirmed).
-    pub fn hold_error_flag(&self, held: bool) {
-        let flag = self.shared.settings.manifest.error.flag.clone();
-        self.shared.lock().hold(&flag, held);
-    }
-}
-
-impl Drop for IdecSimulator {
-    fn drop(&mut self) {
-        self.shared.stop.store(true, Ordering::SeqCst);
-        for t in self.threads.drain(..) {
-            let _ = t.join();
-        }
+        Running::serve(shared, serve)
     }
 }
 

@@ -10,9 +10,11 @@
 //! without the caller knowing.
 
 use std::fmt;
-use std::io::{Read, Write};
-use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
+use std::io::Write;
+use std::net::TcpStream;
 use std::time::{Duration, Instant};
+
+use crate::backend::bench::tcp::{self, Short};
 
 use super::ascii;
 pub use super::frame::Code;
@@ -200,28 +202,11 @@ impl Client {
 
     fn connect(&mut self) -> Result<&mut TcpStream, ClientError> {
         if self.stream.is_none() {
-            let address = self.settings.address.clone();
-            let fail = |error: String| ClientError::Connect {
-                address: address.clone(),
-                error,
-            };
-            let addrs: Vec<SocketAddr> = address
-                .to_socket_addrs()
-                .map_err(|e| fail(e.to_string()))?
-                .collect();
-            let mut last = String::from("the address resolves to nothing");
-            let mut stream = None;
-            for a in addrs {
-                match TcpStream::connect_timeout(&a, self.settings.connect_timeout) {
-                    Ok(s) => {
-                        stream = Some(s);
-                        break;
-                    }
-                    Err(e) => last = e.to_string(),
-                }
-            }
-            let stream = stream.ok_or_else(|| fail(last))?;
-            let _ = stream.set_nodelay(true);
+            let stream = tcp::connect(&self.settings.address, self.settings.connect_timeout)
+                .map_err(|error| ClientError::Connect {
+                    address: self.settings.address.clone(),
+                    error,
+                })?;
             self.connections += 1;
             self.stream = Some(stream);
         }
@@ -480,6 +465,7 @@ fn read_reply(
     Ok(buf)
 }
 
+/// [`tcp::read_full`] with the client's errors.
 fn read_full(
     stream: &mut TcpStream,
     buf: &mut [u8],
@@ -487,51 +473,23 @@ fn read_full(
     what: &str,
     waited: Duration,
 ) -> Result<(), ClientError> {
-    let mut at = 0;
-    while at < buf.len() {
-        let left = deadline.saturating_duration_since(Instant::now());
-        if left.is_zero() {
-            return Err(ClientError::Timeout {
-                what: what.into(),
-                waited,
-            });
-        }
-        let _ = stream.set_read_timeout(Some(left));
-        match stream.read(&mut buf[at..]) {
-            Ok(0) => {
-                return Err(ClientError::Closed {
-                    what: what.into(),
-                    error: format!("closed by the other side after {at} of {} bytes", buf.len()),
-                })
-            }
-            Ok(n) => at += n,
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
-                ) =>
-            {
-                return Err(ClientError::Timeout {
-                    what: what.into(),
-                    waited,
-                })
-            }
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-            Err(e) => {
-                return Err(ClientError::Closed {
-                    what: what.into(),
-                    error: e.to_string(),
-                })
-            }
-        }
-    }
-    Ok(())
+    tcp::read_full(stream, buf, deadline).map_err(|short| match short {
+        Short::Timeout => ClientError::Timeout {
+            what: what.into(),
+            waited,
+        },
+        Short::Closed(error) => ClientError::Closed {
+            what: what.into(),
+            error,
+        },
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::backend::bench::fence::{WordRange, WriteFence};
+    use std::io::Read;
     use std::net::TcpListener;
 
     /// A server that answers each request with the given byte chunks (with a pause between

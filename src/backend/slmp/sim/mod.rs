@@ -10,10 +10,8 @@ mod remote;
 pub use remote::RemoteProgram;
 
 use std::io::Write;
-use std::net::{SocketAddr, TcpStream};
-use std::sync::atomic::Ordering;
+use std::net::TcpStream;
 use std::sync::Arc;
-use std::thread::JoinHandle;
 
 use super::frame::{
     self, decode_body, message_len, Code, Decoded, DeviceForm, DeviceRef, FrameKind, Request,
@@ -21,8 +19,7 @@ use super::frame::{
 };
 use super::limits::{Family, Limits};
 use crate::backend::bench::error::LiveError;
-use crate::backend::bench::sim::Audit;
-use crate::backend::bench::sim::{Cpu, Program};
+use crate::backend::bench::sim::{Cpu, Program, Running};
 pub use crate::backend::bench::sim::{FaultAction, FaultRule};
 use crate::backend::Backend;
 use crate::device::Device;
@@ -108,66 +105,17 @@ fn show_state(_: &SimSettings, cpu: &mut Cpu) {
     cpu.set_word(&Device::new("SD", 203), v);
 }
 
-/// A running simulator; dropping it stops it.
-pub struct Simulator {
-    address: SocketAddr,
-    shared: Arc<Program<SlmpSim>>,
-    threads: Vec<JoinHandle<()>>,
-}
+/// A running simulated MELSEC CPU; dropping it stops it.
+pub type Simulator = Running<SlmpSim>;
 
-impl Simulator {
+impl Running<SlmpSim> {
     /// Starts the server and the scan thread.
     pub fn start(
         settings: SimSettings,
         profile: Arc<Profile>,
         model: Arc<dyn Backend>,
     ) -> Result<Simulator, LiveError> {
-        let shared = program(settings, profile, model)?;
-        let (address, threads) = shared.start(serve)?;
-        Ok(Simulator {
-            address,
-            shared,
-            threads,
-        })
-    }
-
-    /// `127.0.0.1:PORT`.
-    pub fn address(&self) -> SocketAddr {
-        self.address
-    }
-
-    pub fn audit(&self) -> Audit {
-        self.shared.lock().audit.clone()
-    }
-
-    /// Puts the CPU in RUN or STOP.
-    pub fn set_running(&self, run: bool) {
-        let mut cpu = self.shared.lock();
-        self.shared.set_running(&mut cpu, run);
-    }
-
-    /// Adds a fault rule while running.
-    pub fn add_fault(&self, rule: FaultRule) {
-        self.shared.lock().add_fault(rule);
-    }
-
-    /// A word of device memory (0 for one the CPU does not have).
-    pub fn read(&self, device: &Device) -> u16 {
-        self.shared.lock().word(device).unwrap_or(0)
-    }
-
-    /// Sets a word of device memory, as a program or an operator would (not audited).
-    pub fn poke(&self, device: &Device, value: u16) {
-        self.shared.lock().set_word(device, value);
-    }
-}
-
-impl Drop for Simulator {
-    fn drop(&mut self) {
-        self.shared.stop.store(true, Ordering::SeqCst);
-        for t in self.threads.drain(..) {
-            let _ = t.join();
-        }
+        Running::serve(program(settings, profile, model)?, serve)
     }
 }
 

@@ -10,11 +10,11 @@ use std::sync::atomic::Ordering;
 use std::sync::Arc;
 use std::thread::JoinHandle;
 
-use super::{program, Audit, SimSettings, SlmpSim};
+use super::{program, SimSettings, SlmpSim};
 use crate::backend::bench::error::LiveError;
 use crate::backend::bench::fence::{parse_ranges, WordRange, WriteFence};
 use crate::backend::bench::mailbox::{self, off, state};
-use crate::backend::bench::sim::{scan, Program};
+use crate::backend::bench::sim::{scan, Audit, Program};
 use crate::backend::slmp::client::{Client, ClientSettings};
 use crate::backend::Backend;
 use crate::device::Device;

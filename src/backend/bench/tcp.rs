@@ -1,0 +1,72 @@
+//! TCP as every link's client uses it: one connection tried on each address a host resolves
+//! to, within a time limit and without Nagle's delay (a request is one small write, which Nagle
+//! would hold back waiting for an acknowledgement); and a reply read whole by a deadline, since
+//! a reply may arrive in several segments and must never be read past.
+
+use std::io::Read;
+use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
+use std::time::{Duration, Instant};
+
+/// A connection to `address` (`host:port`), or why none could be made.
+pub(crate) fn connect(address: &str, timeout: Duration) -> Result<TcpStream, String> {
+    let addrs: Vec<SocketAddr> = address
+        .to_socket_addrs()
+        .map_err(|e| e.to_string())?
+        .collect();
+    let mut last = String::from("the address resolves to nothing");
+    for a in addrs {
+        match TcpStream::connect_timeout(&a, timeout) {
+            Ok(stream) => {
+                let _ = stream.set_nodelay(true);
+                return Ok(stream);
+            }
+            Err(e) => last = e.to_string(),
+        }
+    }
+    Err(last)
+}
+
+/// Why a buffer was not filled.
+#[derive(Debug)]
+pub(crate) enum Short {
+    /// The deadline passed first.
+    Timeout,
+    /// The connection ended or failed, as said.
+    Closed(String),
+}
+
+/// Fills `buf` from the stream before `deadline`.
+pub(crate) fn read_full(
+    stream: &mut TcpStream,
+    buf: &mut [u8],
+    deadline: Instant,
+) -> Result<(), Short> {
+    let mut at = 0;
+    while at < buf.len() {
+        let left = deadline.saturating_duration_since(Instant::now());
+        if left.is_zero() {
+            return Err(Short::Timeout);
+        }
+        let _ = stream.set_read_timeout(Some(left));
+        match stream.read(&mut buf[at..]) {
+            Ok(0) => {
+                return Err(Short::Closed(format!(
+                    "closed by the other side after {at} of {} bytes",
+                    buf.len()
+                )))
+            }
+            Ok(n) => at += n,
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                ) =>
+            {
+                return Err(Short::Timeout)
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(Short::Closed(e.to_string())),
+        }
+    }
+    Ok(())
+}
