@@ -27,29 +27,14 @@ use plc_conformance::testing::plan::Trial;
 use plc_conformance::verdicts;
 use std::sync::Arc;
 
-use common::{reference, root, session};
+use common::{reference, session};
 
-/// The Python of `.venv-adapters`, or `None` (with a note) when it is not installed.
+/// The Python of `.venv-adapters` with virtual-plc, pymcprotocol, aslmp and plc-comm-slmp, or `None` (with a note).
 fn venv_python() -> Option<PathBuf> {
-    let python = root().join(".venv-adapters/bin/python");
-    let ok = python.exists()
-        && Command::new(&python)
-            .args(["-c", "import virtual_plc, pymcprotocol, aslmp, slmp"])
-            .output()
-            .is_ok_and(|o| o.status.success());
-    assert!(
-        ok || std::env::var_os("PLC_CONFORMANCE_REQUIRE_BACKENDS").is_none(),
-        "virtual-plc, pymcprotocol, aslmp and plc-comm-slmp are required (.venv-adapters)"
-    );
-    if !ok {
-        eprintln!(
-            "skipped: virtual-plc, pymcprotocol, aslmp or plc-comm-slmp is not installed; install \
-             them with \
-             `python3 -m venv .venv-adapters && .venv-adapters/bin/pip install -r \
-             adapters/python/requirements.txt`"
-        );
-    }
-    ok.then_some(python)
+    common::adapters_python(
+        "virtual_plc, pymcprotocol, aslmp, slmp",
+        "virtual-plc, pymcprotocol, aslmp and plc-comm-slmp",
+    )
 }
 
 /// A virtual-plc server on 127.0.0.1, killed when dropped.

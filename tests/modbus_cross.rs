@@ -26,25 +26,9 @@ use plc_conformance::testing::hil::{generate, GenerateOptions};
 
 use common::{reference, root, session};
 
-/// The Python of `.venv-adapters` with pymodbus, or `None` (with a note) when it is not there.
+/// The Python of `.venv-adapters` with pymodbus, or `None` (with a note).
 fn venv_python() -> Option<PathBuf> {
-    let python = root().join(".venv-adapters/bin/python");
-    let ok = python.exists()
-        && Command::new(&python)
-            .args(["-c", "import pymodbus"])
-            .output()
-            .is_ok_and(|o| o.status.success());
-    assert!(
-        ok || std::env::var_os("PLC_CONFORMANCE_REQUIRE_BACKENDS").is_none(),
-        "pymodbus is required (.venv-adapters)"
-    );
-    if !ok {
-        eprintln!(
-            "skipped: pymodbus is not installed; install it with `python3 -m venv .venv-adapters \
-             && .venv-adapters/bin/pip install -r adapters/python/requirements.txt`"
-        );
-    }
-    ok.then_some(python)
+    common::adapters_python("pymodbus", "pymodbus")
 }
 
 /// pymodbus's Modbus TCP server on 127.0.0.1; it ends when its stdin closes (on drop).

@@ -18,10 +18,8 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use crate::backend::bench::error::{refused, LiveError};
-use crate::backend::bench::fence::{self, Kind};
 use crate::backend::bench::mailbox::{self, off, state};
 use crate::backend::bench::manifest::{parse_operand, Manifest, Rung};
-use crate::backend::bench::Addressing;
 use crate::backend::modbus::Map;
 use crate::device::Device;
 use crate::model::profile::Profile;
@@ -187,20 +185,27 @@ fn instruction(profile: &Profile, rung: &Rung) -> Result<String, LiveError> {
     Ok(format!("{}(W) {}", rung.instruction, fields.join(" ")))
 }
 
-/// The rung list of the test program; `Err` when a rung cannot be written in IDEC ladder.
-pub(crate) fn ladder(manifest: &Manifest, profile: &Profile) -> Result<String, LiveError> {
-    rung_list(manifest, profile).map(|l| l.text)
+/// The rung list of the test program and its setup checklist (for `trials` trials); `Err` when
+/// a rung cannot be written in IDEC ladder.
+pub(crate) fn ladder(
+    manifest: &Manifest,
+    profile: &Profile,
+    trials: usize,
+) -> Result<(String, String), LiveError> {
+    let map = Map::of(profile)?;
+    let list = rung_list(manifest, profile, &map)?;
+    let setup = ladder_setup(manifest, profile, &map, trials, list.rungs);
+    Ok((list.text, setup))
 }
 
-fn rung_list(manifest: &Manifest, profile: &Profile) -> Result<List, LiveError> {
+fn rung_list(manifest: &Manifest, profile: &Profile, map: &Map) -> Result<List, LiveError> {
     if !manifest.flags.is_empty() {
         return Err(refused!(
             "the manifest sets mode flags ({}); the IDEC program sets none",
             manifest.flags.join(", ")
         ));
     }
-    let map = Map::of(profile)?;
-    let mb = manifest.mailbox_head(&map)?;
+    let mb = manifest.mailbox_head(map)?;
     let w = |o| mailbox::at(&mb, o);
     let e = &manifest.error;
     let hash = manifest.hash32();
@@ -410,11 +415,12 @@ fn operands_text(operands: &BTreeMap<String, String>) -> String {
 }
 
 /// The setup checklist (`SETUP.md`) for WindLDR and Modbus TCP.
-pub(crate) fn ladder_setup(
+fn ladder_setup(
     manifest: &Manifest,
     profile: &Profile,
     map: &Map,
     trials: usize,
+    rungs: usize,
 ) -> String {
     let mut t = String::new();
     let _ = writeln!(t, "# Test program for {} ({})\n", profile.name, profile.id);
@@ -527,7 +533,7 @@ pub(crate) fn ladder_setup(
         "   The program has {} SOTU instructions and {} rungs in all: *check* both against \
          the CPU's limits (WindLDR says when a program does not fit).",
         manifest.rungs.len(),
-        rung_list(manifest, profile).map_or("?".into(), |l| l.rungs.to_string())
+        rungs
     );
     t.push_str("5. Download the program to the CPU; switch to RUN.\n\n");
     t.push_str("## From the PC\n\n");
@@ -544,39 +550,13 @@ pub(crate) fn ladder_setup(
          with `plc-conformance hil doctor` and confirm it yourself. `sandbox` is the set of \
          words the harness may write besides the mailbox's three PC words.\n\n",
     );
-    t.push_str("## What the run writes\n\n");
-    let ranges = fence::parse_ranges(&manifest.writes.join(","), map).unwrap_or_default();
-    let (data, special): (Vec<_>, Vec<_>) = ranges
-        .iter()
-        .partition(|r| map.kind(&r.head()) == Kind::Data);
-    let names = |rs: &[&fence::WordRange]| rs.iter().map(ToString::to_string).collect::<Vec<_>>();
-    if !data.is_empty() {
-        let _ = writeln!(
-            t,
-            "- **Data registers** the case windows write (`sandbox=manifest` covers them): {}.",
-            names(&data).join(", ")
-        );
-    }
-    if !special.is_empty() {
-        let _ = writeln!(
-            t,
-            "- **Special data registers** the case windows write, only when you name them \
-             (`sandbox=manifest,{}`); their cases are not run otherwise: {}.",
-            names(&special).join(","),
-            names(&special).join(", ")
-        );
-    }
-    if let Ok(head) = manifest.mailbox_head(map) {
-        let pc = mailbox::pc_words(&head);
-        let _ =
-            writeln!(
-            t,
-            "- **The mailbox** {}: the PC writes {} (trigger, rung, flags); the program writes \
-             the rest.",
-            mailbox::range(&head),
-            pc.iter().map(ToString::to_string).collect::<Vec<_>>().join(", ")
-        );
-    }
+    super::setup::run_writes(
+        &mut t,
+        manifest,
+        map,
+        "Data registers",
+        "Special data registers",
+    );
     let _ = writeln!(
         t,
         "- **The program** also resets the error flag {} before each case and writes its \
@@ -680,7 +660,7 @@ mod tests {
     /// is followed by its proof of execution under the same pulse.
     #[test]
     fn every_rung_takes_its_operands_in_the_manuals_order_and_proves_it_ran() {
-        let text = ladder(&sample(), &profile()).expect("ladder");
+        let (text, _) = ladder(&sample(), &profile(), 7).expect("ladder");
         for (id, call) in [
             (1, "ATOH(W) S1=D100 S2=4 D1=D200"),
             (2, "HTOA(W) S1=D100 S2=2 D1=D210"),
@@ -723,7 +703,7 @@ mod tests {
     #[test]
     fn the_reset_step_clears_m8004_and_the_signature_holds_the_hash() {
         let m = sample();
-        let text = ladder(&m, &profile()).expect("ladder");
+        let (text, _) = ladder(&m, &profile(), 7).expect("ladder");
         let reset = format!("LOD {IDLE} / OR {FAILED} / AND {NEW} / RST M8004");
         assert!(text.contains(&reset), "{reset}\n{text}");
         assert!(!text.contains("SET M8004"), "the flag is only ever reset");
@@ -744,27 +724,26 @@ mod tests {
         let profile = profile();
         let mut m = sample();
         m.rungs[0] = rung(1, "ATOH", [("s", "D100"), ("S2", "K4"), ("D1", "D200")]);
-        let e = ladder(&m, &profile)
+        let e = ladder(&m, &profile, 7)
             .expect_err("an operand named s")
             .to_string();
         assert!(e.contains("S1, S2, D1"), "{e}");
         let mut m = sample();
         m.rungs[0] = rung(1, "ATOH", [("S1", "D100"), ("S2", "K4"), ("D1", "M1260")]);
-        let e = ladder(&m, &profile)
+        let e = ladder(&m, &profile, 7)
             .expect_err("M1260 is M1260-M1277")
             .to_string();
         assert!(e.contains("relays"), "{e}");
         let mut m = sample();
         m.flags = vec!["M8005".into()];
-        assert!(ladder(&m, &profile).is_err(), "no mode flags on IDEC");
+        assert!(ladder(&m, &profile, 7).is_err(), "no mode flags on IDEC");
     }
 
     #[test]
     fn the_setup_lists_the_rungs_and_the_commands() {
         let m = sample();
         let profile = profile();
-        let map = Map::of(&profile).expect("a Modbus map");
-        let setup = ladder_setup(&m, &profile, &map, 7);
+        let (_, setup) = ladder(&m, &profile, 7).expect("ladder");
         assert!(
             setup.contains("| 1 | ATOH | S1=D100 S2=K4 D1=D200 |"),
             "{setup}"

@@ -9,6 +9,7 @@
 
 mod ladder;
 mod program;
+mod setup;
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -255,16 +256,10 @@ pub fn generate(project: &Project, options: &GenerateOptions) -> Result<Generate
             setup_text(&manifest, &profile, trials.len()),
             "executive.st",
         ),
-        ProgramForm::Ladder => (
-            ladder::ladder(&manifest, &profile)?,
-            ladder::ladder_setup(
-                &manifest,
-                &profile,
-                &crate::backend::modbus::Map::of(&profile)?,
-                trials.len(),
-            ),
-            ladder::PROGRAM_FILE,
-        ),
+        ProgramForm::Ladder => {
+            let (program, setup) = ladder::ladder(&manifest, &profile, trials.len())?;
+            (program, setup, ladder::PROGRAM_FILE)
+        }
     };
     Ok(Generated {
         manifest,

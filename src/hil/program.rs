@@ -13,10 +13,8 @@ use std::collections::BTreeMap;
 use std::fmt::Write;
 
 use crate::backend::bench::error::{refused, LiveError};
-use crate::backend::bench::fence;
 use crate::backend::bench::mailbox::{self, off, state};
 use crate::backend::bench::manifest::{parse_operand, Manifest};
-use crate::backend::bench::Addressing;
 use crate::backend::slmp;
 use crate::device::Device;
 use crate::model::profile::Profile;
@@ -340,50 +338,13 @@ pub(crate) fn setup_text(manifest: &Manifest, profile: &Profile, trials: usize) 
          unless it matches. `sandbox` is the set of words the harness may write besides the \
          mailbox's three PC words.\n\n",
     );
-    t.push_str("## What the run writes\n\n");
-    let ranges =
-        fence::parse_ranges(&manifest.writes.join(","), &slmp::ADDRESSING).unwrap_or_default();
-    let (data, special): (Vec<_>, Vec<_>) = ranges
-        .iter()
-        .partition(|r| slmp::ADDRESSING.kind(&r.head()) == fence::Kind::Data);
-    let list = |rs: &[&fence::WordRange]| {
-        rs.iter()
-            .map(ToString::to_string)
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    if !data.is_empty() {
-        let _ = writeln!(
-            t,
-            "- **Data and link registers** the case windows write (`sandbox=manifest` covers \
-             them): {}.",
-            list(&data)
-        );
-    }
-    if !special.is_empty() {
-        let _ = writeln!(
-            t,
-            "- **Special registers** the case windows write, only when you name them \
-             (`sandbox=manifest,{}`); their cases are not run otherwise: {}.",
-            special
-                .iter()
-                .map(ToString::to_string)
-                .collect::<Vec<_>>()
-                .join(","),
-            list(&special)
-        );
-    }
-    if let Ok(head) = manifest.mailbox_head(&slmp::ADDRESSING) {
-        let pc = mailbox::pc_words(&head);
-        let _ =
-            writeln!(
-            t,
-            "- **The mailbox** {}: the PC writes {} (trigger, rung, flags); the program writes \
-             the rest.",
-            mailbox::range(&head),
-            pc.iter().map(ToString::to_string).collect::<Vec<_>>().join(", ")
-        );
-    }
+    super::setup::run_writes(
+        &mut t,
+        manifest,
+        &slmp::ADDRESSING,
+        "Data and link registers",
+        "Special registers",
+    );
     let _ = writeln!(
         t,
         "- **The program** also sets the error reset {} and the mode flags {} for the scan of \

@@ -330,3 +330,26 @@ pub fn copy_dir(from: &Path, to: &Path) {
         }
     }
 }
+
+/// The Python of `.venv-adapters` when it imports `modules` (an import list, `a, b`), or `None`
+/// with a note saying how to install `packages`; with PLC_CONFORMANCE_REQUIRE_BACKENDS set (as
+/// in CI) a missing one fails the test instead of skipping it.
+pub fn adapters_python(modules: &str, packages: &str) -> Option<std::path::PathBuf> {
+    let python = root().join(".venv-adapters/bin/python");
+    let ok = python.exists()
+        && Command::new(&python)
+            .args(["-c", &format!("import {modules}")])
+            .output()
+            .is_ok_and(|o| o.status.success());
+    assert!(
+        ok || std::env::var_os("PLC_CONFORMANCE_REQUIRE_BACKENDS").is_none(),
+        "required from .venv-adapters: {packages}"
+    );
+    if !ok {
+        eprintln!(
+            "skipped: not installed: {packages}; install them with `python3 -m venv \
+             .venv-adapters && .venv-adapters/bin/pip install -r adapters/python/requirements.txt`"
+        );
+    }
+    ok.then_some(python)
+}

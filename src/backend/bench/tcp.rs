@@ -3,6 +3,7 @@
 //! would hold back waiting for an acknowledgement); and a reply read whole by a deadline, since
 //! a reply may arrive in several segments and must never be read past.
 
+use std::fmt::Display;
 use std::io::Read;
 use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
 use std::time::{Duration, Instant};
@@ -69,4 +70,24 @@ pub(crate) fn read_full(
         }
     }
     Ok(())
+}
+
+/// Bytes as the protocols' manuals print them: `50 00 00 FF`.
+pub(crate) fn hex(bytes: &[u8]) -> String {
+    bytes
+        .iter()
+        .map(|b| format!("{b:02X}"))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// A reply's decoding error with the bytes received (the first 32), for the message.
+pub(crate) fn received(error: &dyn Display, bytes: &[u8]) -> String {
+    let shown = &bytes[..bytes.len().min(32)];
+    let more = if bytes.len() > shown.len() {
+        " ..."
+    } else {
+        ""
+    };
+    format!("{error}; received: {}{more}", hex(shown))
 }

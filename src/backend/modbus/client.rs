@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 use crate::backend::bench::tcp::{self, Short};
 
 use super::frame::{
-    self, decode_response, encode_request, exception_meaning, hex, message_len, Request, Response,
+    self, decode_response, encode_request, exception_meaning, message_len, Request, Response,
 };
 
 /// How much one request may carry on this link; every batch is split at these.
@@ -214,7 +214,7 @@ impl ModbusClient {
                 Ok(response) => Ok(response),
                 Err(e) => Err(ModbusError::Frame {
                     what: what.into(),
-                    detail: with_bytes(&e, &reply),
+                    detail: tcp::received(&e, &reply),
                 }),
             }
         })();
@@ -343,16 +343,6 @@ fn unexpected(what: String, response: &Response) -> ModbusError {
     }
 }
 
-fn with_bytes(e: &frame::FrameError, bytes: &[u8]) -> String {
-    let shown = &bytes[..bytes.len().min(32)];
-    let more = if bytes.len() > shown.len() {
-        " ..."
-    } else {
-        ""
-    };
-    format!("{e}; received: {}{more}", hex(shown))
-}
-
 /// Reads one whole ADU: the MBAP header's first six bytes, then as many as they declare.
 fn read_reply(
     stream: &mut TcpStream,
@@ -364,7 +354,7 @@ fn read_reply(
     read_full(stream, &mut header, deadline, what, waited)?;
     let total = message_len(&header).map_err(|e| ModbusError::Frame {
         what: what.into(),
-        detail: with_bytes(&e, &header),
+        detail: tcp::received(&e, &header),
     })?;
     let mut buf = header.to_vec();
     buf.resize(total, 0);
@@ -395,6 +385,7 @@ fn read_full(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::backend::bench::tcp::hex;
     use frame::{bytes_of, encode_response};
     use std::io::Read;
     use std::net::TcpListener;

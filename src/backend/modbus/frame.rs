@@ -116,15 +116,6 @@ pub(crate) enum Decoded {
     Illegal { function: u8, code: u8 },
 }
 
-/// Bytes as the specification prints them: `03 00 6B`.
-pub(crate) fn hex(bytes: &[u8]) -> String {
-    bytes
-        .iter()
-        .map(|b| format!("{b:02X}"))
-        .collect::<Vec<_>>()
-        .join(" ")
-}
-
 fn word(bytes: &[u8], at: usize) -> u16 {
     u16::from_be_bytes([bytes[at], bytes[at + 1]])
 }
@@ -449,6 +440,7 @@ pub(crate) fn bytes_of(hex: &str) -> Vec<u8> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::backend::bench::tcp::hex;
     use rstest::rstest;
 
     const TID: u16 = 0x1234;

@@ -14,12 +14,12 @@ use std::io::Write;
 use std::net::TcpStream;
 use std::time::{Duration, Instant};
 
-use crate::backend::bench::tcp::{self, Short};
+use crate::backend::bench::tcp::{self, hex, Short};
 
 use super::ascii;
 pub use super::frame::Code;
 use super::frame::{
-    self, hex, message_len, DeviceForm, DeviceRef, FrameError, FrameKind, Request, Response, Route,
+    self, message_len, DeviceForm, DeviceRef, FrameError, FrameKind, Request, Response, Route,
     TypeName,
 };
 use super::limits::{limits, Family, Limits};
@@ -264,7 +264,7 @@ impl Client {
             }
             .map_err(|e| ClientError::Frame {
                 what: what.into(),
-                detail: with_bytes(&e, &bytes),
+                detail: tcp::received(&e, &bytes),
             })?;
             if response.serial != serial {
                 return Err(ClientError::Frame {
@@ -398,16 +398,6 @@ fn address_of(settings: &ClientSettings) -> String {
     settings.address.clone()
 }
 
-fn with_bytes(e: &FrameError, bytes: &[u8]) -> String {
-    let shown = &bytes[..bytes.len().min(32)];
-    let more = if bytes.len() > shown.len() {
-        " ..."
-    } else {
-        ""
-    };
-    format!("{e}; received: {}{more}", hex(shown))
-}
-
 /// Reads one whole reply: the header, then as many bytes as it declares.
 fn read_reply(
     stream: &mut TcpStream,
@@ -431,7 +421,7 @@ fn read_reply(
             })
             .map_err(|e| ClientError::Frame {
                 what: what.into(),
-                detail: with_bytes(&e, &buf),
+                detail: tcp::received(&e, &buf),
             })?;
         buf.resize(total, 0);
         read_full(stream, &mut buf[header..], deadline, what, waited)?;
@@ -458,7 +448,7 @@ fn read_reply(
     }
     let total = message_len(frame_kind, &buf).map_err(|e| ClientError::Frame {
         what: what.into(),
-        detail: with_bytes(&e, &buf),
+        detail: tcp::received(&e, &buf),
     })?;
     buf.resize(total, 0);
     read_full(stream, &mut buf[header..], deadline, what, waited)?;

@@ -9,6 +9,8 @@
 
 use std::fmt;
 
+use crate::backend::bench::tcp::hex;
+
 /// Which frame a message uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum FrameKind {
@@ -245,15 +247,6 @@ impl fmt::Display for FrameError {
 }
 
 impl std::error::Error for FrameError {}
-
-/// Bytes as the manuals print them: `50 00 00 FF`.
-pub(crate) fn hex(bytes: &[u8]) -> String {
-    bytes
-        .iter()
-        .map(|b| format!("{b:02X}"))
-        .collect::<Vec<_>>()
-        .join(" ")
-}
 
 /// A request message.
 #[derive(Debug, Clone, PartialEq, Eq)]
