@@ -22,14 +22,19 @@ use std::sync::Arc;
 
 use libtest_mimic::{Arguments, Completion, Failed, Trial as Test};
 
+use crate::backend::external::ExternalBackend;
 use crate::backend::Backend;
 use crate::judge::{Status, Verdict};
 use crate::load::{load_project, locate_project};
+use crate::model::project::ExternalSettings;
 use crate::plan::Trial;
 use crate::project::{Paths, Project};
 use crate::report::console;
 use crate::report::text::{render, Palette};
-use crate::session::{run_one, BackendSource, LazyStart, Session, SetupError};
+use crate::session::{run_one, BackendSource, HelloCache, LazyStart, Session, SetupError};
+
+/// Names the file of [`Harness::hello_cache`] instead of the one the harness gives; empty, none.
+const ENV_HELLO_CACHE: &str = "PLC_CONFORMANCE_HELLO_CACHE";
 
 /// Runs the corpus under `root` as libtest trials: the built-in reference models, the project
 /// file's external backends, and `extra` backends. `binary` is the plc-conformance executable
@@ -66,6 +71,7 @@ pub struct Harness {
     project_file: Option<PathBuf>,
     builtin: bool,
     extra: Vec<(Arc<dyn Backend>, Option<PathBuf>)>,
+    hello_cache: Option<PathBuf>,
 }
 
 impl Harness {
@@ -77,6 +83,7 @@ impl Harness {
             project_file: None,
             builtin: true,
             extra: Vec::new(),
+            hello_cache: None,
         }
     }
 
@@ -84,6 +91,16 @@ impl Harness {
     /// their commands see as `$PLC_CONFORMANCE`.
     pub fn project_file(mut self, binary: &Path) -> Self {
         self.project_file = Some(binary.to_path_buf());
+        self
+    }
+
+    /// Keeps the project file's backends' answers to `hello` in `file` between processes, so
+    /// that listing the trials (`--list`, which nextest runs before every run) plans with them
+    /// instead of starting every backend; a trial run alone starts its backend and fails if the
+    /// answer changed since (see `docs/performance.md`, "Start-up of the test binary").
+    /// `PLC_CONFORMANCE_HELLO_CACHE` names another file, or, empty, none.
+    pub fn hello_cache(mut self, file: impl Into<PathBuf>) -> Self {
+        self.hello_cache = Some(file.into());
         self
     }
 
@@ -124,6 +141,14 @@ impl Harness {
         };
         let mut tests = Vec::new();
         let mut sources = Vec::new();
+        // The environment may name another file, or none (empty: every backend is started).
+        let cache_file = match std::env::var_os(ENV_HELLO_CACHE) {
+            Some(file) if file.is_empty() => None,
+            Some(file) => Some(PathBuf::from(file)),
+            None => self.hello_cache,
+        };
+        let mut cache = cache_file.as_deref().map(HelloCache::load);
+        let mut by_settings = BTreeMap::new();
         if self.builtin {
             sources.push(BackendSource::References);
         }
@@ -161,14 +186,28 @@ impl Harness {
             for c in configured.configured.into_iter().filter(|c| !c.on_request) {
                 let declared = c.settings.profile.is_some() || c.settings.codec;
                 let now = args.list || alone == Some(c.settings.name.as_str());
-                sources.push(if declared && !now {
-                    BackendSource::ProcessOnFirstUse(c.settings)
-                } else {
-                    BackendSource::Process(c.settings)
+                // Listing plans a backend from its cached answer to `hello` when it has one.
+                let planned = (args.list.then_some(cache.as_ref()).flatten())
+                    .and_then(|cache| cache.get(&c.settings))
+                    .and_then(|hello| {
+                        ExternalBackend::planned(c.settings.clone(), hello, &project.profiles).ok()
+                    });
+                by_settings.insert(c.settings.name.clone(), c.settings.clone());
+                sources.push(match planned {
+                    Some(planned) => BackendSource::InProcess(
+                        Arc::new(planned),
+                        c.settings.known_differences.clone(),
+                    ),
+                    None if declared && !now => BackendSource::ProcessOnFirstUse(c.settings),
+                    None => BackendSource::Process(c.settings),
                 });
             }
         }
         let (session, failed) = Session::assemble(project, sources, whole_corpus);
+        let changed = match &mut cache {
+            Some(cache) => remember(cache, &session, &by_settings, args.exact),
+            None => BTreeMap::new(),
+        };
         for (name, error) in failed {
             let (what, message) = match error {
                 SetupError::Load(e) => ("known-differences", e.to_string()),
@@ -195,6 +234,10 @@ impl Harness {
             .collect();
         let trials = session.plan(&session.backends);
         tests.extend(trials.into_iter().map(|t| {
+            if let Some(why) = changed.get(t.backend.name()) {
+                let why = why.clone();
+                return Test::test(t.name(), move || Err(Failed::from(why)));
+            }
             let lazy = by_name.get(t.backend.name()).cloned();
             test(t, lazy, &args)
         }));
@@ -204,6 +247,44 @@ impl Harness {
         drop(session);
         conclusion.exit_code()
     }
+}
+
+/// Records the answers to `hello` of the processes the session started. Run alone (`exact`, as
+/// nextest runs each trial after listing them), a backend whose answer differs from the one
+/// cached under the same key fails its trials: the listing may have marked them by the old
+/// answer. Returns why, by backend name.
+fn remember(
+    cache: &mut HelloCache,
+    session: &Session,
+    settings: &BTreeMap<String, ExternalSettings>,
+    exact: bool,
+) -> BTreeMap<String, String> {
+    let mut changed = BTreeMap::new();
+    for (name, hello) in &session.hellos {
+        let Some(s) = settings.get(name) else {
+            continue;
+        };
+        if let Some(old) = cache.put(s, hello).filter(|_| exact) {
+            changed.insert(
+                name.clone(),
+                format!(
+                    "the external backend `{name}` now answers hello differently from the answer \
+                     cached in {}, which listing the trials planned with, so this trial may \
+                     have been listed wrongly; the cache now holds the new answer: run again\n\
+                     cached: {old}\nnow:    {}",
+                    cache.path().display(),
+                    String::from_utf8_lossy(hello)
+                ),
+            );
+        }
+    }
+    if let Err(e) = cache.save() {
+        console::warning(&format!(
+            "the answers to hello are not kept in {}: {e}",
+            cache.path().display()
+        ));
+    }
+    changed
 }
 
 /// The backend of a trial's name: `backend::...`, or `cross-vendor::backend::...`.

@@ -988,6 +988,65 @@ fn trials_a_backend_declines_are_listed_ignored_and_never_pass_alone() {
     assert!(stdout.contains("1 failed"), "{stdout}");
 }
 
+/// Listing plans each external backend from its answer to hello kept in the cache file, without
+/// starting it, and marks what that answer declines; a trial run alone then starts its backend,
+/// and fails when the answer differs from the cached one (the listing may have marked it
+/// wrongly), putting the new answer in the cache so that the next listing is right.
+#[test]
+fn listing_plans_from_cached_hellos_and_a_changed_answer_fails_the_trial() {
+    let project = load_project(&root().join(FILE_NAME), true, Path::new(BIN)).expect("loads");
+    if !project
+        .configured
+        .iter()
+        .any(|c| c.settings.name == "aslmp")
+    {
+        eprintln!("skipped: aslmp is not installed (.ci/run installs it)");
+        return;
+    }
+    let Some(binary) = conformance_binary() else {
+        panic!("the conformance test binary is built with the tests");
+    };
+    let dir = tempfile::tempdir().expect("tempdir");
+    let cache = dir.path().join("hellos.json");
+    let run = |args: &[&str], cache: &Path| {
+        let out = std::process::Command::new(&binary)
+            .args(args)
+            .env("PLC_CONFORMANCE_HELLO_CACHE", cache)
+            .output()
+            .expect("the test binary runs");
+        (
+            out.status.success(),
+            String::from_utf8_lossy(&out.stdout).into_owned(),
+        )
+    };
+    let ignored = |cache: &Path| run(&["--list", "--format", "terse", "--ignored"], cache).1;
+    let started = ignored(Path::new(""));
+    assert_eq!(
+        ignored(&cache),
+        started,
+        "a listing that starts every backend"
+    );
+    let text = std::fs::read_to_string(&cache).expect("the listing wrote the cache");
+    assert!(text.contains("\"aslmp\""), "{text}");
+    // A cached aslmp that reads 2 and 8 digits, not 4: the listing believes it.
+    let trial = "cross-vendor::aslmp::codec::xv-h2v-4-digits";
+    assert!(!started.contains(&format!("{trial}: test")), "{started}");
+    let before = r#"\"hex-to-value\":{\"width\":32,\"digits\":[2,4,8]}"#;
+    assert!(text.contains(before), "{text}");
+    let after = r#"\"hex-to-value\":{\"width\":32,\"digits\":[2,8]}"#;
+    std::fs::write(&cache, text.replace(before, after)).expect("write");
+    assert!(ignored(&cache).contains(&format!("{trial}: test")));
+    // Run alone, the trial starts aslmp, sees the answer changed, and fails.
+    let (passed, stdout) = run(&["--exact", trial], &cache);
+    assert!(!passed, "{stdout}");
+    assert!(stdout.contains("now answers hello differently"), "{stdout}");
+    // The cache holds the real answer again: the listing is the one that starts everything.
+    assert_eq!(ignored(&cache), started);
+    let (passed, stdout) = run(&["--exact", trial], &cache);
+    assert!(passed, "{stdout}");
+    assert!(stdout.contains("1 passed"), "{stdout}");
+}
+
 /// A backend that answers slowly is seen working while it answers its batch: the executor
 /// reports how many of the batch's requests are answered, several times before the batch's
 /// first trial is judged, and the live progress line shows it.

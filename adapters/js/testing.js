@@ -3,12 +3,14 @@
 //
 //   // test/conformance.test.js
 //   const path = require('node:path');
+const { findBinary } = require('./binary');
 //   const { codecCases } = require('plc-conformance-adapter/testing');
 //   codecCases({ name: 'mylib', adapter: path.join(__dirname, '../mylib_codec.js'),
 //                knownDifferences: path.join(__dirname, '../mylib.known.yaml') });
 //
 // The adapter is the script serveCodec runs (docs/check-your-library.md). The `plc-conformance`
-// command — $PLC_CONFORMANCE, else the one on PATH (the Python wheel installs one) — runs the
+// command — $PLC_CONFORMANCE, else the one this package carries (a package made by
+// tools/pack.js), else the one on PATH (the Python wheel installs one) — runs the
 // cross-vendor corpus against it once, when the test file loads; each case is then a test:
 // passing, failing with the harness's diff, skipped with the reason, or a todo where the
 // known-differences file names the case. A harness that cannot run the adapter at all is an
@@ -32,7 +34,11 @@ function codecCases({ name, adapter, knownDifferences, binary, timeout = 5 }) {
   const { test } = require('node:test');
   if (!name || !adapter) throw new TypeError('codecCases: give name and adapter (a script path)');
   const command = [process.execPath, path.resolve(adapter)].map(quote).join(' ');
-  const bin = binary || process.env.PLC_CONFORMANCE || 'plc-conformance';
+  const bin = binary || findBinary();
+  if (!bin) {
+    throw new Error('codecCases: no plc-conformance command: this package carries none for '
+      + `${process.platform}-${process.arch}, PLC_CONFORMANCE is not set and none is on PATH`);
+  }
   const folder = fs.mkdtempSync(path.join(os.tmpdir(), 'plc-conformance-'));
   let records;
   try {

@@ -123,28 +123,37 @@ pub(crate) struct FileContext<'a> {
     pub file: PathBuf,
     pub index: LineIndex,
     pub errors: &'a mut Vec<LoadError>,
-    /// The text holds what no parser may see (see [`check_text`]): nothing more is read.
+    /// The text holds what no parser may see (see [`LineIndex::checked`]): nothing more is
+    /// read.
     refused: bool,
 }
 
 impl<'a> FileContext<'a> {
-    /// Starts reading a file: first what no parser may see ([`check_text`]: a forbidden
-    /// character, a second document, nesting past [`locate::MAX_DEPTH`]), before anything walks
-    /// or builds the document, since a pathological nesting holds either for minutes; then the
-    /// keys repeated within a mapping.
+    /// Starts reading a file: first what no parser may see ([`LineIndex::checked`]: a
+    /// forbidden character, a second document, nesting past [`locate::MAX_DEPTH`]), before
+    /// anything builds the document, since a pathological nesting holds the deserializer for
+    /// minutes; then the keys repeated within a mapping.
     pub(crate) fn new(file: &Path, text: &str, errors: &'a mut Vec<LoadError>) -> Self {
-        if let Err(e) = check_text(file, text) {
-            errors.push(e);
-            return FileContext {
-                file: file.to_path_buf(),
-                index: LineIndex::new(""),
-                errors,
-                refused: true,
-            };
-        }
+        let index = match LineIndex::checked(text) {
+            Ok(index) => index,
+            Err((line, message)) => {
+                errors.push(LoadError {
+                    file: file.to_path_buf(),
+                    line: Some(line),
+                    key: None,
+                    kind: LoadErrorKind::Invalid(message).into(),
+                });
+                return FileContext {
+                    file: file.to_path_buf(),
+                    index: LineIndex::default(),
+                    errors,
+                    refused: true,
+                };
+            }
+        };
         let cx = FileContext {
             file: file.to_path_buf(),
-            index: LineIndex::new(text),
+            index,
             errors,
             refused: false,
         };
@@ -214,13 +223,18 @@ pub(crate) fn parse_document<T: DeserializeOwned + schemars::JsonSchema + 'stati
         if !shape::check(&doc, &schema_once::<T>(), cx) {
             return None;
         }
+        // The document parsed once builds the type; only one it refuses is parsed again, for
+        // the line the deserializer reports.
+        if let Ok(value) = serde_yaml::from_value(doc) {
+            return Some(value);
+        }
     }
     deserialize(&cx.file.clone(), text)
         .map_err(|e| cx.errors.push(e))
         .ok()
 }
 
-/// Deserializes one YAML document already checked ([`check_text`]), turning the
+/// Deserializes one YAML document already checked ([`LineIndex::checked`]), turning the
 /// deserializer's error into a [`LoadError`] with the line and key path it reports.
 fn deserialize<T: DeserializeOwned>(file: &Path, text: &str) -> Result<T, LoadError> {
     serde_yaml::from_str(text).map_err(|e| {
@@ -245,18 +259,6 @@ fn deserialize<T: DeserializeOwned>(file: &Path, text: &str) -> Result<T, LoadEr
             key,
             kind: LoadErrorKind::Shape(message).into(),
         }
-    })
-}
-
-/// What the deserializer must never see: characters YAML forbids, a second document, nesting
-/// deeper than [`locate::MAX_DEPTH`] (which the deserializer takes quadratic time over). Found
-/// in one pass that stops at the first problem, with its line.
-fn check_text(file: &Path, text: &str) -> Result<(), LoadError> {
-    locate::check_text(text).map_err(|(line, message)| LoadError {
-        file: file.to_path_buf(),
-        line: Some(line),
-        key: None,
-        kind: LoadErrorKind::Invalid(message).into(),
     })
 }
 

@@ -16,28 +16,114 @@ use crate::spec::vectors::{
 use crate::value::{parse_bits, parse_number, parse_word, to_bits};
 
 /// Loads every vector file under the given paths (files or folders).
+///
+/// Files are read side by side, each on its own (a file's cases depend only on its text and the
+/// profiles), and their cases are then taken in file order, so that a repeated id is reported at
+/// the same place however the reading went: `--list`, which nextest runs before every run,
+/// loads the whole corpus (docs/performance.md, "Start-up of the test binary").
 pub fn load_corpus(paths: &[PathBuf], profiles: &Profiles) -> Result<Corpus, LoadErrors> {
     let mut builder = CorpusBuilder::default();
+    let mut files = Vec::new();
     for path in paths {
         match yaml_files(path) {
-            Ok(files) if files.is_empty() => builder.errors.push(LoadError {
+            Ok(found) if found.is_empty() => builder.errors.push(LoadError {
                 file: path.clone(),
                 line: None,
                 key: None,
                 kind: LoadErrorKind::Invalid("no vector file (*.yaml) found".into()).into(),
             }),
-            Ok(files) => {
-                for file in files {
-                    match read_file(&file) {
-                        Ok(text) => builder.add_file(&file, &text, profiles),
-                        Err(e) => builder.errors.push(e),
-                    }
-                }
-            }
+            Ok(found) => files.extend(found),
             Err(e) => builder.errors.push(e),
         }
     }
+    for read in read_side_by_side(&files, profiles) {
+        builder.take(read);
+    }
     builder.finish()
+}
+
+/// Reads the files on as many threads as the machine has cores (at most one per file), each
+/// taking the next unread file; the results come back in the files' order.
+fn read_side_by_side(files: &[PathBuf], profiles: &Profiles) -> Vec<FileRead> {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Mutex;
+    let read_one = |file: &PathBuf| match read_file(file) {
+        Ok(text) => FileRead::new(file, &text, profiles),
+        Err(e) => FileRead {
+            errors: vec![e],
+            ..FileRead::default()
+        },
+    };
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(files.len());
+    if threads <= 1 {
+        return files.iter().map(read_one).collect();
+    }
+    let next = AtomicUsize::new(0);
+    let slots: Vec<Mutex<Option<FileRead>>> = files.iter().map(|_| Mutex::new(None)).collect();
+    std::thread::scope(|scope| {
+        for _ in 0..threads {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, Ordering::Relaxed);
+                let (Some(file), Some(slot)) = (files.get(i), slots.get(i)) else {
+                    break;
+                };
+                let read = read_one(file);
+                *slot.lock().unwrap_or_else(|poisoned| poisoned.into_inner()) = Some(read);
+            });
+        }
+    });
+    slots
+        .into_iter()
+        .map(|slot| {
+            slot.into_inner()
+                .unwrap_or_else(|poisoned| poisoned.into_inner())
+                .unwrap_or_default()
+        })
+        .collect()
+}
+
+/// One file's cases and problems, before their ids are checked against the other files'.
+#[derive(Default)]
+struct FileRead {
+    cases: Vec<(String, Case)>,
+    cross_vendor: Vec<(String, crate::model::cross_vendor::CrossVendorCase)>,
+    errors: Vec<LoadError>,
+}
+
+impl FileRead {
+    fn new(file: &Path, text: &str, profiles: &Profiles) -> Self {
+        let mut read = FileRead::default();
+        // One context for either kind of file: the text checked and its lines indexed once
+        // (a text refused by the check has no lines, and reads as no document).
+        let mut cx = FileContext::new(file, text, &mut read.errors);
+        if super::cross_vendor::is_cross_vendor(&cx.index) {
+            read.cross_vendor = super::cross_vendor::read_file(text, profiles, &mut cx);
+            return read;
+        }
+        let Some(spec) = super::parse_document::<VectorFileSpec>(text, &mut cx) else {
+            return read;
+        };
+        let Some(header) = read_header(&spec, profiles, &mut cx) else {
+            return read;
+        };
+        if spec.cases.is_empty() {
+            cx.error(
+                "cases",
+                LoadErrorKind::Missing("case: a vector file holds at least one"),
+            );
+        }
+        let mut cases = Vec::new();
+        for (i, case) in spec.cases.iter().enumerate() {
+            let key = format!("cases[{i}]");
+            if let Some(case) = read_case(&key, case, &header, &mut cx) {
+                cases.push((key, case));
+            }
+        }
+        read.cases = cases;
+        read
+    }
 }
 
 /// Accumulates cases from vector files, checking ids across the whole corpus.
@@ -52,38 +138,17 @@ pub struct CorpusBuilder {
 impl CorpusBuilder {
     /// Adds one vector file given as text; `file` is the name errors will show.
     pub fn add_file(&mut self, file: &Path, text: &str, profiles: &Profiles) {
-        // One context for either kind of file: the text checked and its lines indexed once
-        // (a text refused by the check has no lines, and reads as no document).
-        let mut cx = FileContext::new(file, text, &mut self.errors);
-        if super::cross_vendor::is_cross_vendor(&cx.index) {
-            let cases = super::cross_vendor::read_file(text, profiles, &mut cx);
-            for (key, case) in cases {
-                if self.claim_id(&key, &case.id, &case.location) {
-                    self.cross_vendor.push(Arc::new(case));
-                }
-            }
-            return;
-        }
-        let Some(spec) = super::parse_document::<VectorFileSpec>(text, &mut cx) else {
-            return;
-        };
-        let Some(header) = read_header(&spec, profiles, &mut cx) else {
-            return;
-        };
-        if spec.cases.is_empty() {
-            cx.error(
-                "cases",
-                LoadErrorKind::Missing("case: a vector file holds at least one"),
-            );
-        }
-        let mut cases = Vec::new();
-        for (i, case) in spec.cases.iter().enumerate() {
-            let key = format!("cases[{i}]");
-            if let Some(read) = read_case(&key, case, &header, &mut cx) {
-                cases.push((key, read));
+        self.take(FileRead::new(file, text, profiles));
+    }
+
+    fn take(&mut self, read: FileRead) {
+        self.errors.extend(read.errors);
+        for (key, case) in read.cross_vendor {
+            if self.claim_id(&key, &case.id, &case.location) {
+                self.cross_vendor.push(Arc::new(case));
             }
         }
-        for (key, case) in cases {
+        for (key, case) in read.cases {
             if self.claim_id(&key, &case.id, &case.location) {
                 self.cases.push(Arc::new(case));
             }

@@ -12,6 +12,7 @@
 
 mod against;
 mod first_use;
+mod hello_cache;
 mod run;
 
 use std::fmt;
@@ -22,6 +23,7 @@ use std::sync::Arc;
 pub(crate) use against::Against;
 pub(crate) use first_use::LazyStart;
 use first_use::Placeholder;
+pub(crate) use hello_cache::HelloCache;
 pub(crate) use run::{observe, run_trials, RunOptions, RunOutcome};
 pub use run::{run_one, verdicts};
 
@@ -101,6 +103,8 @@ pub struct Session {
     pub backends: Vec<Arc<dyn Backend>>,
     /// The backends started on first use: their trials start them through these.
     pub(crate) on_first_use: Vec<Arc<LazyStart>>,
+    /// The processes started while setting up, by backend name, with their answers to `hello`.
+    pub(crate) hellos: Vec<(String, Vec<u8>)>,
     /// The backends named by their source (all but [`BackendSource::References`]): a run they
     /// were asked for must run a trial on each.
     asked: Vec<String>,
@@ -121,6 +125,7 @@ impl Session {
             project,
             backends: Vec::new(),
             on_first_use: Vec::new(),
+            hellos: Vec::new(),
             asked: Vec::new(),
         }
     }
@@ -256,6 +261,8 @@ impl Session {
     ) -> Result<(), SetupError> {
         self.check_name(&settings.name)?;
         let started = started.map_err(SetupError::External)?;
+        self.hellos
+            .push((settings.name.clone(), started.hello().to_vec()));
         // The backend's profile was checked when it started; a codec-level one has none.
         if let Some(file) = &settings.known_differences {
             self.project

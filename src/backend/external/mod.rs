@@ -86,6 +86,16 @@ impl fmt::Display for ExternalError {
 
 impl std::error::Error for ExternalError {}
 
+impl ExternalError {
+    fn of(spec: &ExternalSettings, kind: ExternalErrorKind) -> Self {
+        ExternalError {
+            backend: spec.name.clone(),
+            command: spec.launch.to_string(),
+            kind,
+        }
+    }
+}
+
 /// A backend in another process.
 pub struct ExternalBackend {
     settings: ExternalSettings,
@@ -98,6 +108,8 @@ pub struct ExternalBackend {
     codec: Option<CodecAbilities>,
     /// The protocol version the handshake agreed.
     version: u32,
+    /// The answer to `hello`, as the backend wrote it.
+    hello: Vec<u8>,
     /// Codec questions still travel in `convert` messages (version 5); cleared when one hangs
     /// or crashes the process.
     converting: std::sync::atomic::AtomicBool,
@@ -125,43 +137,85 @@ impl ExternalBackend {
         spec: ExternalSettings,
         profiles: &Profiles,
     ) -> Result<ExternalBackend, ExternalError> {
-        let error = |kind| ExternalError {
-            backend: spec.name.clone(),
-            command: spec.launch.to_string(),
-            kind,
-        };
-        let (process, version, info, capabilities) = handshake(&spec).map_err(error)?;
-        if spec.codec && capabilities.codec.is_none() {
-            return Err(error(ExternalErrorKind::Capabilities(
-                "is configured as codec-level but its handshake claims the instruction level"
-                    .into(),
-            )));
+        match handshake(&spec) {
+            Ok((process, greeting)) => Self::greeted(spec, Some(process), greeting, profiles),
+            Err(kind) => Err(ExternalError::of(&spec, kind)),
         }
-        let (profile, codec) = match &capabilities.codec {
-            Some(codec) => (
-                None,
-                Some(check_codec(&spec, &capabilities, codec, profiles).map_err(error)?),
-            ),
-            None => (
-                Some(check_capabilities(&spec, &capabilities, profiles, version).map_err(error)?),
-                None,
-            ),
+    }
+
+    /// A backend planned from the answer to `hello` it gave another time (`hello`, as
+    /// [`ExternalBackend::hello`] returned it), checked as a live one is, without a process:
+    /// what listing trials needs (the cases it declines), never started, every case
+    /// unreachable.
+    pub(crate) fn planned(
+        spec: ExternalSettings,
+        hello: &[u8],
+        profiles: &Profiles,
+    ) -> Result<ExternalBackend, ExternalError> {
+        let greeting = read_hello(hello.to_vec()).map_err(|kind| ExternalError::of(&spec, kind))?;
+        let backend = Self::greeted(spec, None, greeting, profiles)?;
+        if let Ok(mut state) = backend.state.lock() {
+            state.down = Some("planned from an earlier handshake, not started".into());
+        }
+        Ok(backend)
+    }
+
+    fn greeted(
+        spec: ExternalSettings,
+        process: Option<Process>,
+        greeting: Greeting,
+        profiles: &Profiles,
+    ) -> Result<ExternalBackend, ExternalError> {
+        let checked = (|| {
+            let capabilities = &greeting.capabilities;
+            if spec.codec && capabilities.codec.is_none() {
+                return Err(ExternalErrorKind::Capabilities(
+                    "is configured as codec-level but its handshake claims the instruction level"
+                        .into(),
+                ));
+            }
+            Ok(match &capabilities.codec {
+                Some(codec) => (
+                    None,
+                    Some(check_codec(&spec, capabilities, codec, profiles)?),
+                ),
+                None => (
+                    Some(check_capabilities(
+                        &spec,
+                        capabilities,
+                        profiles,
+                        greeting.protocol,
+                    )?),
+                    None,
+                ),
+            })
+        })();
+        let (profile, codec) = match checked {
+            Ok(checked) => checked,
+            Err(kind) => {
+                if let Some(mut process) = process {
+                    process.kill();
+                }
+                return Err(ExternalError::of(&spec, kind));
+            }
         };
-        let process = if spec.persistent {
-            Some(process)
-        } else {
-            process.shutdown(shutdown_message());
-            None
+        let process = match process {
+            Some(process) if !spec.persistent => {
+                process.shutdown(shutdown_message());
+                None
+            }
+            process => process,
         };
         let breaker = Breaker::new(spec.max_consecutive_faults);
         Ok(ExternalBackend {
             settings: spec,
-            info,
+            info: greeting.info,
             restarts: std::sync::atomic::AtomicUsize::new(0),
-            capabilities,
+            capabilities: greeting.capabilities,
             profile,
             codec,
-            version,
+            version: greeting.protocol,
+            hello: greeting.line,
             converting: std::sync::atomic::AtomicBool::new(true),
             state: Mutex::new(State {
                 process,
@@ -170,6 +224,12 @@ impl ExternalBackend {
                 breaker,
             }),
         })
+    }
+
+    /// The backend's answer to `hello`, as it wrote it: what [`ExternalBackend::planned`]
+    /// plans from another time.
+    pub(crate) fn hello(&self) -> &[u8] {
+        &self.hello
     }
 
     pub fn settings(&self) -> &ExternalSettings {
@@ -273,7 +333,7 @@ impl ExternalBackend {
             return;
         }
         match handshake(&self.settings) {
-            Ok((p, _, _, _)) => {
+            Ok((p, _)) => {
                 if self.settings.persistent {
                     self.restarts
                         .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
@@ -284,11 +344,7 @@ impl ExternalBackend {
             Err(kind) => {
                 state.down = Some(format!(
                     "could not be started again: {}",
-                    ExternalError {
-                        backend: self.settings.name.clone(),
-                        command: self.settings.launch.to_string(),
-                        kind,
-                    }
+                    ExternalError::of(&self.settings, kind)
                 ));
             }
         }
@@ -582,9 +638,7 @@ impl ExternalBackend {
 }
 
 /// Starts the process and exchanges `hello`.
-fn handshake(
-    spec: &ExternalSettings,
-) -> Result<(Process, u32, BackendInfo, Capabilities), ExternalErrorKind> {
+fn handshake(spec: &ExternalSettings) -> Result<(Process, Greeting), ExternalErrorKind> {
     let mut process = Process::spawn(&spec.launch, spec.cwd.as_ref(), &spec.env)
         .map_err(|e| ExternalErrorKind::Spawn(e.to_string()))?;
     let hello = HarnessMessage::Hello {
@@ -640,6 +694,27 @@ fn handshake(
             ));
         }
     };
+    match read_hello(line) {
+        Ok(greeting) => Ok((process, greeting)),
+        Err(ExternalErrorKind::Handshake(what)) => Err(failed(&mut process, what)),
+        Err(kind) => {
+            process.kill();
+            Err(kind)
+        }
+    }
+}
+
+/// What a backend's answer to `hello` says.
+struct Greeting {
+    protocol: u32,
+    info: BackendInfo,
+    capabilities: Capabilities,
+    /// The answer as the backend wrote it.
+    line: Vec<u8>,
+}
+
+/// Reads an answer to `hello`.
+fn read_hello(line: Vec<u8>) -> Result<Greeting, ExternalErrorKind> {
     // The version is read on its own first, so that a backend of a later protocol version
     // whose hello has other fields is told apart from a broken one.
     let version = serde_json::from_slice::<serde_json::Value>(&line)
@@ -648,7 +723,6 @@ fn handshake(
     if let Some(theirs) =
         version.filter(|v| !SUPPORTED_VERSIONS.iter().any(|s| u64::from(*s) == *v))
     {
-        process.kill();
         return Err(ExternalErrorKind::Version {
             theirs: u32::try_from(theirs).unwrap_or(u32::MAX),
         });
@@ -658,8 +732,7 @@ fn handshake(
             protocol: 1,
             capabilities: Capabilities { codec: Some(_), .. },
             ..
-        }) => Err(failed(
-            &mut process,
+        }) => Err(ExternalErrorKind::Handshake(
             "answers hello with protocol version 1 but claims the codec level, which is version 2"
                 .into(),
         )),
@@ -667,18 +740,20 @@ fn handshake(
             protocol,
             backend,
             capabilities,
-        }) => Ok((process, protocol, backend, capabilities)),
-        Ok(_) => Err(failed(
-            &mut process,
-            format!("expected a hello, got: {}", quote(&line)),
-        )),
-        Err(e) => Err(failed(
-            &mut process,
-            format!(
-                "the answer to hello is not a hello message ({e}): {}",
-                quote(&line)
-            ),
-        )),
+        }) => Ok(Greeting {
+            protocol,
+            info: backend,
+            capabilities,
+            line,
+        }),
+        Ok(_) => Err(ExternalErrorKind::Handshake(format!(
+            "expected a hello, got: {}",
+            quote(&line)
+        ))),
+        Err(e) => Err(ExternalErrorKind::Handshake(format!(
+            "the answer to hello is not a hello message ({e}): {}",
+            quote(&line)
+        ))),
     }
 }
 
