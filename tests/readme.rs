@@ -181,7 +181,7 @@ fn readme_examples_show_the_real_output() {
     assert!(examples.len() >= 3, "the README has its examples");
     let adapters = root().join(".venv-adapters/bin/python").exists();
     let required = std::env::var_os("PLC_CONFORMANCE_REQUIRE_BACKENDS").is_some();
-    let mut stale = Vec::new();
+    let mut runnable = Vec::new();
     for (file, example) in &examples {
         let Some(rest) = example.command.strip_prefix("cargo run -q -- ") else {
             panic!(
@@ -197,21 +197,42 @@ fn readme_examples_show_the_real_output() {
             );
             continue;
         }
-        let out = bin()
-            .current_dir(root())
-            .env_remove("COLUMNS")
-            .args(&args)
-            .output()
-            .expect("the binary runs");
-        let stdout = String::from_utf8_lossy(&out.stdout);
-        let actual: Vec<&str> = stdout.trim_end_matches('\n').lines().collect();
-        if !matches(&example.expected, &actual) {
-            stale.push(format!(
-                "{file}:{}: `{}` now prints:\n{stdout}",
-                example.line, example.command
-            ));
-        }
+        runnable.push((*file, example, args));
     }
+    // The examples run side by side, each taking the next: two of them are sweeps of seconds.
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let stale = std::sync::Mutex::new(Vec::new());
+    let workers = std::thread::available_parallelism().map_or(1, |n| n.get());
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let Some((file, example, args)) = runnable.get(i) else {
+                    break;
+                };
+                let out = bin()
+                    .current_dir(root())
+                    .env_remove("COLUMNS")
+                    .args(args)
+                    .output()
+                    .expect("the binary runs");
+                let stdout = String::from_utf8_lossy(&out.stdout);
+                let actual: Vec<&str> = stdout.trim_end_matches('\n').lines().collect();
+                if !matches(&example.expected, &actual) {
+                    stale.lock().expect("not poisoned").push((
+                        i,
+                        format!(
+                            "{file}:{}: `{}` now prints:\n{stdout}",
+                            example.line, example.command
+                        ),
+                    ));
+                }
+            });
+        }
+    });
+    let mut stale = stale.into_inner().expect("not poisoned");
+    stale.sort();
+    let stale: Vec<String> = stale.into_iter().map(|(_, s)| s).collect();
     assert!(
         stale.is_empty(),
         "README examples differ from the real output:\n\n{}",

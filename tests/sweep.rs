@@ -501,7 +501,7 @@ fn a_sweep_finds_every_known_difference_of_pymcprotocol() {
         .expect("known differences")
         .clone();
     let mut shrunk: Vec<Point> = Vec::new();
-    for (name, count) in [("HABIN", 60_000), ("DHABIN", 20_000)] {
+    for (name, count) in [("HABIN", 10_000), ("DHABIN", 4_000)] {
         let mut s = Settings::new(
             instruction("mitsubishi-iqr", name),
             Generator::Random { count, max_len: 9 },
