@@ -148,7 +148,9 @@ impl Fill {
 /// Memory before execution: the vector's units over a fill.
 #[derive(Debug, Clone)]
 pub struct Image {
-    words: BTreeMap<Device, Value>,
+    /// Shared, so that a simulated CPU can give its whole memory to each execution without
+    /// copying it.
+    words: std::sync::Arc<BTreeMap<Device, Value>>,
     fill: Fill,
     unit: Unit,
 }
@@ -160,7 +162,20 @@ impl Image {
     }
 
     pub fn of_units(words: BTreeMap<Device, Value>, fill: Fill, unit: Unit) -> Self {
-        Image { words, fill, unit }
+        Image {
+            words: std::sync::Arc::new(words),
+            fill,
+            unit,
+        }
+    }
+
+    /// Word-addressed memory held elsewhere too (a simulated CPU's).
+    pub(crate) fn shared(words: std::sync::Arc<BTreeMap<Device, Value>>, fill: Fill) -> Self {
+        Image {
+            words,
+            fill,
+            unit: Unit::Word,
+        }
     }
 
     pub fn read(&self, device: &Device) -> Value {

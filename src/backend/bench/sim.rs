@@ -224,6 +224,10 @@ pub struct Audit {
 
 pub(crate) struct Cpu {
     pub(crate) words: BTreeMap<String, Vec<u16>>,
+    /// `words` as the models read them, each device named as the profile numbers it (`W1A`):
+    /// built at the first execution, then kept up by [`Cpu::set_word`]. Building it for each
+    /// execution cost most of a simulated run.
+    image: Option<Arc<BTreeMap<Device, Value>>>,
     bits: BTreeMap<Device, bool>,
     pub(crate) running: bool,
     prev: Vec<bool>,
@@ -427,6 +431,7 @@ impl<L> Program<L> {
         allowed.extend(mailbox::pc_words(&mailbox));
         let cpu = Cpu {
             words: word_devices(&profile, &settings.variant, more),
+            image: None,
             bits: BTreeMap::new(),
             running: settings.run,
             prev: vec![false; rungs.len() + 1],
@@ -633,7 +638,45 @@ impl Cpu {
             .and_then(|w| w.get_mut(d.index as usize))
         {
             *w = value;
+            if let Some(image) = &mut self.image {
+                // In place: no execution holds the image between scans.
+                let image = Arc::make_mut(image);
+                let named = [
+                    Device::new(d.code(), d.index),
+                    Device::hexadecimal(d.code(), d.index),
+                ];
+                if let Some(n) = named.iter().find(|n| image.contains_key(n)) {
+                    image.insert(n.clone(), Value::from(value));
+                }
+            }
         }
+    }
+
+    /// The image of every word device (see [`Cpu::image`]'s field).
+    fn image(
+        &mut self,
+        devices: &crate::model::profile::DeviceTable,
+    ) -> Arc<BTreeMap<Device, Value>> {
+        let words = &self.words;
+        self.image
+            .get_or_insert_with(|| {
+                Arc::new(
+                    words
+                        .iter()
+                        .flat_map(|(code, words)| {
+                            let hexadecimal = devices.is_hexadecimal(code);
+                            words.iter().enumerate().map(move |(i, w)| {
+                                let device = match hexadecimal {
+                                    true => Device::hexadecimal(code, i as u32),
+                                    false => Device::new(code, i as u32),
+                                };
+                                (device, Value::from(*w))
+                            })
+                        })
+                        .collect(),
+                )
+            })
+            .clone()
     }
 
     pub(crate) fn bit(&self, name: &str) -> bool {
@@ -858,24 +901,9 @@ fn execute<L>(
         .iter()
         .map(|f| (f.clone(), cpu.bit(f)))
         .collect();
-    // The whole of every word device, so that the model reads what the CPU holds, each named
-    // as the profile numbers it (`W1A`).
-    let devices = &shared.profile.devices;
-    let image: BTreeMap<Device, Value> = cpu
-        .words
-        .iter()
-        .flat_map(|(code, words)| {
-            let hexadecimal = devices.is_hexadecimal(code);
-            words.iter().enumerate().map(move |(i, w)| {
-                let device = match hexadecimal {
-                    true => Device::hexadecimal(code, i as u32),
-                    false => Device::new(code, i as u32),
-                };
-                (device, Value::from(*w))
-            })
-        })
-        .collect();
-    let image = Image::new(image, Fill::A);
+    // The whole of every word device, so that the model reads what the CPU holds; dropped
+    // before the writes, which then update the kept image in place.
+    let image = Image::shared(cpu.image(&shared.profile.devices), Fill::A);
     let request = ModelRequest {
         profile: &shared.profile,
         variant,
@@ -886,7 +914,9 @@ fn execute<L>(
         indirect: crate::model::DIRECT,
         memory: &image,
     };
-    match shared.model.execute(&request) {
+    let answer = shared.model.execute(&request);
+    drop(image);
+    match answer {
         Ok(ModelResponse::Done(outcome)) => {
             // A word of a 16-bit family: its model writes no more.
             for (d, v) in &outcome.writes {
@@ -924,6 +954,7 @@ mod tests {
     fn cpu() -> Cpu {
         Cpu {
             words: BTreeMap::from([("D".to_string(), vec![0; 400])]),
+            image: None,
             bits: BTreeMap::new(),
             running: true,
             prev: Vec::new(),
