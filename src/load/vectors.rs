@@ -74,6 +74,7 @@ fn read_side_by_side(files: &[PathBuf], profiles: &Profiles) -> Vec<FileRead> {
             });
         }
     });
+    // Every slot is filled: a reader that panicked has ended the scope with its panic.
     slots
         .into_iter()
         .map(|slot| {
