@@ -137,6 +137,14 @@ fn words_exist(
     "devices.M.also[0]: first 20 is after last 19"
 )]
 fn profile_ranges_are_checked(#[case] m: &str, #[case] message: &str) {
+    let (parsed, all) = probe_profile(&format!("  M: {m}"), "");
+    assert!(!parsed);
+    assert!(all.iter().any(|e| e.contains(message)), "{all:?}");
+}
+
+/// A profile `probe` with these device lines and more top-level text, as `parse_profile` reads
+/// it: whether it was accepted, and its errors.
+fn probe_profile(devices: &str, more: &str) -> (bool, Vec<String>) {
     let text = format!(
         r#"
 id: probe
@@ -145,16 +153,17 @@ short: probe
 manuals: {{m: {{title: t}}}}
 errors: {{signal: flag, flag: M8004}}
 devices:
-  M: {m}
+{devices}
 instructions: {{}}
 variants: [{{id: v, description: d}}]
-"#
+{more}"#
     );
     let mut errors = Vec::new();
     let parsed = parse_profile(Path::new("probe.yaml"), &text, &mut errors);
-    assert!(parsed.is_none());
-    let all: Vec<String> = errors.iter().map(ToString::to_string).collect();
-    assert!(all.iter().any(|e| e.contains(message)), "{all:?}");
+    (
+        parsed.is_some(),
+        errors.iter().map(ToString::to_string).collect(),
+    )
 }
 
 /// A bench section is checked when the profile loads: a Modbus TCP link needs its map, the map's
@@ -179,18 +188,11 @@ variants: [{{id: v, description: d}}]
     "D8002 lies in none of the map's ranges"
 )]
 fn a_bench_section_is_checked_when_the_profile_loads(#[case] map: &str, #[case] message: &str) {
-    let text = format!(
+    let devices = r#"
+  M: {first: 0, last: 1277, numbering: octal-last-digit, points_per_word: 16}
+  D: {first: 0, last: 1299}"#;
+    let bench = format!(
         r#"
-id: probe
-name: probe
-short: probe
-manuals: {{m: {{title: t}}}}
-errors: {{signal: flag, flag: M8004}}
-devices:
-  M: {{first: 0, last: 1277, numbering: octal-last-digit, points_per_word: 16}}
-  D: {{first: 0, last: 1299}}
-instructions: {{}}
-variants: [{{id: v, description: d}}]
 bench:
   link: modbus-tcp
   program: ladder
@@ -199,9 +201,7 @@ bench:
   {map}
 "#
     );
-    let mut errors = Vec::new();
-    let parsed = parse_profile(Path::new("probe.yaml"), &text, &mut errors);
-    let all: Vec<String> = errors.iter().map(ToString::to_string).collect();
-    assert!(parsed.is_none(), "accepted: {all:?}");
+    let (parsed, all) = probe_profile(devices, &bench);
+    assert!(!parsed, "accepted: {all:?}");
     assert!(all.iter().any(|e| e.contains(message)), "{all:?}");
 }

@@ -79,7 +79,9 @@ impl HelloCache {
         partial.push(format!(".{}", std::process::id()));
         let bytes = serde_json::to_vec_pretty(self).map_err(std::io::Error::other)?;
         std::fs::write(&partial, bytes)?;
-        std::fs::rename(&partial, &self.path)
+        std::fs::rename(&partial, &self.path).inspect_err(|_| {
+            let _ = std::fs::remove_file(&partial);
+        })
     }
 
     pub(crate) fn path(&self) -> &Path {

@@ -641,12 +641,15 @@ impl Cpu {
             if let Some(image) = &mut self.image {
                 // In place: no execution holds the image between scans.
                 let image = Arc::make_mut(image);
-                let named = [
+                // The image names the word as the profile numbers its code.
+                for named in [
                     Device::new(d.code(), d.index),
                     Device::hexadecimal(d.code(), d.index),
-                ];
-                if let Some(n) = named.iter().find(|n| image.contains_key(n)) {
-                    image.insert(n.clone(), Value::from(value));
+                ] {
+                    if let Some(v) = image.get_mut(&named) {
+                        *v = Value::from(value);
+                        break;
+                    }
                 }
             }
         }

@@ -166,39 +166,9 @@ impl ExternalBackend {
         greeting: Greeting,
         profiles: &Profiles,
     ) -> Result<ExternalBackend, ExternalError> {
-        let checked = (|| {
-            let capabilities = &greeting.capabilities;
-            if spec.codec && capabilities.codec.is_none() {
-                return Err(ExternalErrorKind::Capabilities(
-                    "is configured as codec-level but its handshake claims the instruction level"
-                        .into(),
-                ));
-            }
-            Ok(match &capabilities.codec {
-                Some(codec) => (
-                    None,
-                    Some(check_codec(&spec, capabilities, codec, profiles)?),
-                ),
-                None => (
-                    Some(check_capabilities(
-                        &spec,
-                        capabilities,
-                        profiles,
-                        greeting.protocol,
-                    )?),
-                    None,
-                ),
-            })
-        })();
-        let (profile, codec) = match checked {
-            Ok(checked) => checked,
-            Err(kind) => {
-                if let Some(mut process) = process {
-                    process.kill();
-                }
-                return Err(ExternalError::of(&spec, kind));
-            }
-        };
+        // A process whose capabilities are refused is dropped, which kills it.
+        let (profile, codec) = check_greeting(&spec, &greeting, profiles)
+            .map_err(|kind| ExternalError::of(&spec, kind))?;
         let process = match process {
             Some(process) if !spec.persistent => {
                 process.shutdown(shutdown_message());
@@ -697,11 +667,39 @@ fn handshake(spec: &ExternalSettings) -> Result<(Process, Greeting), ExternalErr
     match read_hello(line) {
         Ok(greeting) => Ok((process, greeting)),
         Err(ExternalErrorKind::Handshake(what)) => Err(failed(&mut process, what)),
-        Err(kind) => {
-            process.kill();
-            Err(kind)
-        }
+        // The process is dropped, which kills it.
+        Err(kind) => Err(kind),
     }
+}
+
+/// Checks a handshake's capabilities against the configuration and the profiles: the profile an
+/// instruction-level backend implements, or what a codec-level one does.
+fn check_greeting(
+    spec: &ExternalSettings,
+    greeting: &Greeting,
+    profiles: &Profiles,
+) -> Result<(Option<Arc<Profile>>, Option<CodecAbilities>), ExternalErrorKind> {
+    let capabilities = &greeting.capabilities;
+    if spec.codec && capabilities.codec.is_none() {
+        return Err(ExternalErrorKind::Capabilities(
+            "is configured as codec-level but its handshake claims the instruction level".into(),
+        ));
+    }
+    Ok(match &capabilities.codec {
+        Some(codec) => (
+            None,
+            Some(check_codec(spec, capabilities, codec, profiles)?),
+        ),
+        None => (
+            Some(check_capabilities(
+                spec,
+                capabilities,
+                profiles,
+                greeting.protocol,
+            )?),
+            None,
+        ),
+    })
 }
 
 /// What a backend's answer to `hello` says.
