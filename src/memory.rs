@@ -171,11 +171,16 @@ impl Image {
 
     /// Word-addressed memory held elsewhere too (a simulated CPU's).
     pub(crate) fn shared(words: std::sync::Arc<BTreeMap<Device, Value>>, fill: Fill) -> Self {
-        Image {
-            words,
-            fill,
-            unit: Unit::Word,
-        }
+        Image::sharing(words, fill, Unit::Word)
+    }
+
+    /// Memory whose words are held elsewhere too: one input's words under both fills.
+    pub(crate) fn sharing(
+        words: std::sync::Arc<BTreeMap<Device, Value>>,
+        fill: Fill,
+        unit: Unit,
+    ) -> Self {
+        Image { words, fill, unit }
     }
 
     pub fn read(&self, device: &Device) -> Value {

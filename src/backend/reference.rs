@@ -23,9 +23,13 @@ pub(crate) trait Model: Send + Sync + 'static {
 /// A 16-bit constant operand as the CPU holds it (`K-1` is FFFFH); one past 16 bits is not
 /// programmable, so a model declines it.
 pub(crate) fn constant_word(name: &str, k: i64) -> Result<u16, Unsupported> {
-    to_bits(&format!("K{k}"), k, 16)
-        .map(|w| w as u16)
-        .map_err(|e| Unsupported(format!("operand `{name}`: {e}")))
+    // Asked once per execution: the constant's text is written only for the refusal.
+    match u16::try_from(k).or_else(|_| i16::try_from(k).map(|w| w as u16)) {
+        Ok(w) => Ok(w),
+        Err(_) => to_bits(&format!("K{k}"), k, 16)
+            .map(|w| w as u16)
+            .map_err(|e| Unsupported(format!("operand `{name}`: {e}"))),
+    }
 }
 
 /// Why an instruction stopped short.

@@ -312,11 +312,15 @@ pub(crate) fn words_exist(
     let Some((key, def)) = devices.entry(head.code()) else {
         return false;
     };
-    let ranges = variant
-        .devices
-        .get(key)
-        .cloned()
-        .unwrap_or_else(|| def.ranges());
+    // Asked for every operand of every execution: the ranges are borrowed, not copied.
+    let own;
+    let ranges = match variant.devices.get(key) {
+        Some(ranges) => ranges,
+        None => {
+            own = def.ranges();
+            &own
+        }
+    };
     let Some(first) = def.numbering.point(head.index) else {
         return false;
     };

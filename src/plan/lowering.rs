@@ -2,7 +2,10 @@
 //! that ask the vendor's instruction the case's question. (Lifting the answer back is the
 //! judge's part.)
 
+use std::collections::BTreeMap;
+
 use super::Input;
+use crate::device::Device;
 use crate::memory::{Unit, Value};
 use crate::model::cross_vendor::{CrossVendorCase, Lowering, Operation, ValueOrder};
 use crate::model::{Indirect, Operand};
@@ -63,22 +66,55 @@ pub(crate) fn units_for(digits: u32, needed: u32, unit: Unit) -> u32 {
 
 /// The input that runs `case` through `lowering`.
 pub(crate) fn input(lowering: &Lowering, case: &CrossVendorCase) -> Input {
-    let mut operands = lowering.operands.clone();
-    let mut count_word = None;
-    if let Some(count) = &lowering.count {
-        let digits = i64::from(case.digits);
-        // A count the instruction cannot take as a constant is read from a register, as a
-        // program would have to give it.
-        match (&lowering.count_register, lowering.count_constants) {
-            (Some(register), Some(range)) if !range.contains(digits) => {
-                operands.insert(count.clone(), Operand::Device(register.clone()));
-                count_word = Some((register.clone(), case.digits as Value));
-            }
-            _ => {
-                operands.insert(count.clone(), Operand::Constant(digits));
-            }
-        }
+    Input {
+        instruction: lowering.instruction.clone(),
+        flags: lowering.flags.clone(),
+        operands: operands(lowering, case.digits),
+        indirect: Indirect::new(),
+        before: memory(lowering, case),
     }
+}
+
+/// Where the count of a lowering that takes one comes from for a number of digits.
+struct Count<'l> {
+    /// The operand that takes it.
+    name: &'l String,
+    /// A constant, or, when the instruction cannot take the count as a constant, a register
+    /// holding it, as a program would have to give it.
+    operand: Operand,
+    /// The register and the count it holds, for a count given in one.
+    word: Option<(Device, Value)>,
+}
+
+fn count(lowering: &Lowering, digits: u32) -> Option<Count<'_>> {
+    let name = lowering.count.as_ref()?;
+    Some(match (&lowering.count_register, lowering.count_constants) {
+        (Some(register), Some(range)) if !range.contains(i64::from(digits)) => Count {
+            name,
+            operand: Operand::Device(register.clone()),
+            word: Some((register.clone(), digits as Value)),
+        },
+        _ => Count {
+            name,
+            operand: Operand::Constant(i64::from(digits)),
+            word: None,
+        },
+    })
+}
+
+/// The operands of `lowering` for a case of `digits` digits: the same for every case of that
+/// count, so a sweep makes them once.
+pub(crate) fn operands(lowering: &Lowering, digits: u32) -> BTreeMap<String, Operand> {
+    let mut operands = lowering.operands.clone();
+    if let Some(count) = count(lowering, digits) {
+        operands.insert(count.name.clone(), count.operand);
+    }
+    operands
+}
+
+/// The memory `lowering` sets for `case`: the text or the value at the source, and the count's
+/// register when the count is given in one.
+pub(crate) fn memory(lowering: &Lowering, case: &CrossVendorCase) -> BTreeMap<Device, Value> {
     let words: Vec<Value> = match lowering.operation {
         Operation::HexToValue => lowering.text.units(lowering.unit, &case.text),
         Operation::ValueToHex => {
@@ -86,17 +122,14 @@ pub(crate) fn input(lowering: &Lowering, case: &CrossVendorCase) -> Input {
             value_memory(case.value, digits, 1, lowering.unit, lowering.order)
         }
     };
-    let mut before: std::collections::BTreeMap<_, _> = words
-        .into_iter()
-        .enumerate()
-        .filter_map(|(i, w)| lowering.source.offset(i as u32).map(|d| (d, w)))
-        .collect();
-    before.extend(count_word);
-    Input {
-        instruction: lowering.instruction.clone(),
-        flags: lowering.flags.clone(),
-        operands,
-        indirect: Indirect::new(),
-        before,
+    let mut before = BTreeMap::new();
+    for (i, w) in words.into_iter().enumerate() {
+        if let Some(d) = lowering.source.offset(i as u32) {
+            before.insert(d, w);
+        }
     }
+    if let Some((register, value)) = count(lowering, case.digits).and_then(|c| c.word) {
+        before.insert(register, value);
+    }
+    before
 }

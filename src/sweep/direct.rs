@@ -2,20 +2,26 @@
 //! would make for a trial (the plan's lowering, both fills), answered by the model's
 //! `Backend::execute`, and recorded as the judge records an `unspecified` case — without
 //! building a trial per input. An instruction's memory images are built once per input and
-//! shared by every variant. `tests/sweep.rs` checks that this gives exactly the replies of the
+//! shared by every variant; a lowering's operands once per digit count, its two images share
+//! one set of words. `tests/sweep.rs` checks that this gives exactly the replies of the
 //! trial path (`runner::run_one`).
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
 
 use super::group::Reply;
 use super::input::{Data, Point};
 use super::target::{case_id, Ask, Cases, Column};
 use crate::backend::{Fault, Request, Response};
+use crate::device::Device;
 use crate::judge::lift::lift;
 use crate::judge::Effect;
-use crate::memory::{Fill, Image, Unit};
-use crate::model::cross_vendor::Operation;
-use crate::plan::{declined, lowered_input, Input};
+use crate::memory::{Fill, Image, Unit, Value};
+use crate::model::cross_vendor::{Lowering, Operation};
+use crate::model::{Operand, DIRECT};
+use crate::plan::{declined, lowering, Input};
 
-/// The memory of one input under both fills.
+/// The memory of one input under both fills, sharing its words.
 pub(crate) struct Images([Image; 2]);
 
 impl Images {
@@ -23,61 +29,93 @@ impl Images {
         Images::from_words(input.before.clone(), unit)
     }
 
-    fn from_words(
-        words: std::collections::BTreeMap<crate::device::Device, crate::memory::Value>,
-        unit: Unit,
-    ) -> Images {
+    fn from_words(words: BTreeMap<Device, Value>, unit: Unit) -> Images {
+        let words = Arc::new(words);
         Images([
-            Image::of_units(words.clone(), Fill::A, unit),
-            Image::of_units(words, Fill::B, unit),
+            Image::sharing(words.clone(), Fill::A, unit),
+            Image::sharing(words, Fill::B, unit),
         ])
     }
 }
 
+/// A lowering column's operands by digit count: the same for every text of a count, so a
+/// worker makes them once per count rather than per input.
+#[derive(Default)]
+pub(crate) struct Lowered(Vec<(u32, BTreeMap<String, Operand>)>);
+
+impl Lowered {
+    fn operands(&mut self, lowering: &Lowering, digits: u32) -> &BTreeMap<String, Operand> {
+        let at = match self.0.iter().position(|(d, _)| *d == digits) {
+            Some(at) => at,
+            None => {
+                self.0.push((digits, lowering::operands(lowering, digits)));
+                self.0.len() - 1
+            }
+        };
+        &self.0[at].1
+    }
+}
+
 /// One column's reply to one input. `native` is the instruction input and its images for an
-/// instruction sweep; a lowering makes its own.
+/// instruction sweep; a lowering makes its own, with its operands from `lowered`.
 pub(crate) fn reply(
     column: &Column,
     cases: &Cases,
     native: Option<&(Input, Images)>,
+    lowered: &mut Lowered,
 ) -> Option<Reply> {
     let profile = column.profile.as_ref()?;
     let variant = profile.variant(&column.variant)?;
-    let lowered;
     let own_images;
-    let (input, images, lowering, digits) = match (&column.ask, native) {
-        (Ask::Lowering(l), _) => {
-            let case = cases.cross_vendor.as_ref()?;
-            if let Some(why) = &column.lowering_skip {
-                return Some(Reply::Skipped {
-                    reason: why.clone(),
-                });
+    let (instruction, flags, operands, indirect, images, lowering, digits) =
+        match (&column.ask, native) {
+            (Ask::Lowering(l), _) => {
+                let case = cases.cross_vendor.as_ref()?;
+                if let Some(why) = &column.lowering_skip {
+                    return Some(Reply::Skipped {
+                        reason: why.clone(),
+                    });
+                }
+                // The request reads memory from the images only.
+                own_images = Images::from_words(lowering::memory(l, case), profile.unit);
+                (
+                    &l.instruction,
+                    &l.flags,
+                    lowered.operands(l, case.digits),
+                    DIRECT,
+                    &own_images,
+                    Some(l),
+                    case.digits,
+                )
             }
-            let mut input = lowered_input(l, case);
-            // The request reads memory from the images only.
-            own_images = Images::from_words(std::mem::take(&mut input.before), profile.unit);
-            lowered = input;
-            (&lowered, &own_images, Some(l), case.digits)
-        }
-        (Ask::Instruction, Some((input, images))) => {
-            if let Some(reason) = declined(column.backend.as_ref(), profile, &column.variant, input)
-            {
-                return Some(Reply::Skipped { reason });
+            (Ask::Instruction, Some((input, images))) => {
+                if let Some(reason) =
+                    declined(column.backend.as_ref(), profile, &column.variant, input)
+                {
+                    return Some(Reply::Skipped { reason });
+                }
+                (
+                    &input.instruction,
+                    &input.flags,
+                    &input.operands,
+                    &input.indirect,
+                    images,
+                    None,
+                    0,
+                )
             }
-            (input, images, None, 0)
-        }
-        _ => return None,
-    };
+            _ => return None,
+        };
     let mut outcomes = Vec::with_capacity(2);
     for image in &images.0 {
         let request = Request {
             profile,
             variant,
-            instruction: &input.instruction,
+            instruction,
             case_id: "sweep",
-            flags: &input.flags,
-            operands: &input.operands,
-            indirect: &input.indirect,
+            flags,
+            operands,
+            indirect,
             memory: image,
         };
         match column.backend.execute(&request) {

@@ -349,6 +349,8 @@ impl Sweep {
                     let columns = &self.columns;
                     let in_process = &in_process;
                     scope.spawn(move || {
+                        let mut lowered: Vec<direct::Lowered> =
+                            (0..n).map(|_| direct::Lowered::default()).collect();
                         for (row, (i, point)) in rows.iter_mut().zip(points) {
                             // An instruction asked directly needs only its input, made once for
                             // every variant; the other ways need the point's cases.
@@ -366,7 +368,12 @@ impl Sweep {
                             };
                             for &c in in_process {
                                 row[c] = if self.settings.direct {
-                                    direct::reply(&columns[c], &cases, native.as_ref())
+                                    direct::reply(
+                                        &columns[c],
+                                        &cases,
+                                        native.as_ref(),
+                                        &mut lowered[c],
+                                    )
                                 } else {
                                     cases
                                         .trial(&columns[c])
