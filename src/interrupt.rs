@@ -50,17 +50,30 @@ pub(crate) fn interrupt(signal: i32) {
     external::kill_all();
 }
 
+/// Wraps the panic hook: a codec's panic, caught as its case's crash
+/// (`backend::convert_or_panic`), is kept with where it happened and not printed; any other
+/// panic, with `kill`, first kills every backend process group.
+pub fn install_panic_hook(kill: bool) {
+    let previous = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        if crate::backend::asking_codec() {
+            if let Some(at) = info.location() {
+                crate::backend::codec_panicked_at(at.to_string());
+            }
+            return;
+        }
+        if kill {
+            external::kill_all();
+        }
+        previous(info);
+    }));
+}
+
 /// Handles SIGINT and SIGTERM on a thread of their own from now on. With
 /// [`OnSignal::Finish`] (a command, which a panic ends) a panic also kills every backend
 /// process group; a test harness, which turns a panic into one failed test, keeps them.
 pub(crate) fn install(on_signal: OnSignal) -> std::io::Result<()> {
-    if on_signal == OnSignal::Finish {
-        let previous = std::panic::take_hook();
-        std::panic::set_hook(Box::new(move |info| {
-            external::kill_all();
-            previous(info);
-        }));
-    }
+    install_panic_hook(on_signal == OnSignal::Finish);
     #[cfg(unix)]
     {
         use signal_hook::consts::{SIGINT, SIGTERM};

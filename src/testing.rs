@@ -71,6 +71,9 @@ pub mod device {
 pub mod error_chain {
     pub use crate::error_chain::chain;
 }
+pub mod interrupt {
+    pub use crate::interrupt::install_panic_hook;
+}
 pub mod execute {
     pub use crate::execute::{execute_all, images, requests, Pace, Progress};
 }

@@ -2162,3 +2162,125 @@ fn a_codec_in_process_that_panics_has_crashed_on_that_case() {
         .collect();
     assert_eq!(replies, ["Some(\"0002H\")", "crashed", "Some(\"0003H\")"]);
 }
+
+/// A codec in process that panics on texts holding a `Z`.
+struct PanicsOnZ;
+
+impl plc_conformance::Codec for PanicsOnZ {
+    fn name(&self) -> &str {
+        "panics-on-z"
+    }
+    fn abilities(&self) -> plc_conformance::CodecAbilities {
+        let field = plc_conformance::OperationAbilities {
+            digits: Some(vec![4]),
+            ..Default::default()
+        };
+        plc_conformance::CodecAbilities {
+            hex_to_value: Some(field),
+            value_to_hex: None,
+        }
+    }
+    fn convert(
+        &self,
+        q: &plc_conformance::Question<'_>,
+    ) -> Result<plc_conformance::Answer, plc_conformance::Unsupported> {
+        assert!(!q.text.contains(&b'Z'), "no Z here");
+        Ok(
+            u16::from_str_radix(std::str::from_utf8(q.text).unwrap_or("?"), 16).map_or(
+                plc_conformance::Answer::Error(plc_conformance::ErrorClass::InvalidDigit),
+                |v| plc_conformance::Answer::Value(u64::from(v)),
+            ),
+        )
+    }
+}
+
+/// A codec in process that panics is that case's crash, with where it panicked, and nothing
+/// else: the panic hook a command installs prints nothing for it (a codec that panics on many
+/// texts would flood the terminal) and kills no backend process (an external backend asked
+/// afterwards still answers). The hook is process-wide, so the check runs in a child process of
+/// this test binary.
+#[test]
+fn a_codec_panic_is_its_cases_crash_and_nothing_else() {
+    use plc_conformance::testing::model::project::{ExternalSettings, Launch};
+    use plc_conformance::testing::sweep::group::Reply;
+    const CHILD: &str = "PLC_CONFORMANCE_PANIC_CHILD";
+    const NAME: &str = "a_codec_panic_is_its_cases_crash_and_nothing_else";
+    if !common::python() {
+        return;
+    }
+    if std::env::var_os(CHILD).is_none() {
+        let out = std::process::Command::new(std::env::current_exe().expect("this test binary"))
+            .args(["--exact", NAME, "--nocapture", "--test-threads=1"])
+            .env(CHILD, "1")
+            .output()
+            .expect("the child runs");
+        let (stdout, stderr) = (
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr),
+        );
+        assert!(out.status.success(), "{stdout}\n{stderr}");
+        assert!(stdout.contains("child: checked"), "{stdout}\n{stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        return;
+    }
+    plc_conformance::testing::interrupt::install_panic_hook(true);
+    let mut project = session();
+    let script = root().join("tests/fixtures/external/faulty_codec.py");
+    let settings = ExternalSettings::new(
+        "strict",
+        Launch::Exec(vec![
+            "python3".into(),
+            script.display().to_string(),
+            "crash-on-g".into(),
+        ]),
+    );
+    // Started before the panics: a hook that killed every backend would kill it.
+    let external = project
+        .add(BackendSource::Process(settings), false)
+        .expect("the codec starts")[0]
+        .clone();
+    let texts: [&[u8]; 4] = [b"5A8D", b"Z000", b"0000", b"1Z34"];
+    let ask = |backend: Arc<dyn plc_conformance::Backend>| {
+        let sweep = Sweep::new(
+            random(Operation::HexToValue, 10, 4, 1),
+            &project.profiles,
+            &[backend],
+        )
+        .expect("sweep");
+        let points: Vec<(u64, Point)> = texts
+            .iter()
+            .enumerate()
+            .map(|(i, t)| {
+                let mut p = sweep.space.point(0);
+                p.data = Data::Text(t.to_vec());
+                p.digits = 4;
+                (i as u64, p)
+            })
+            .collect();
+        sweep
+            .answers(&points, &no_stop())
+            .into_iter()
+            .map(|r| r.and_then(|r| r.last().cloned()).expect("answered"))
+            .collect::<Vec<Reply>>()
+    };
+    for (text, reply) in texts
+        .iter()
+        .zip(ask(plc_conformance::codec_backend(PanicsOnZ)))
+    {
+        match &reply {
+            Reply::Failed { label, detail } if text.contains(&b'Z') => {
+                assert_eq!(label, "crashed", "{reply}");
+                assert!(detail.contains("no Z here"), "{detail}");
+                assert!(detail.contains("tests/sweep.rs:"), "{detail}");
+            }
+            _ => assert!(
+                !text.contains(&b'Z') && !matches!(reply, Reply::Failed { .. }),
+                "{reply}"
+            ),
+        }
+    }
+    for reply in ask(external) {
+        assert!(!matches!(reply, Reply::Failed { .. }), "{reply}");
+    }
+    println!("child: checked");
+}

@@ -375,20 +375,47 @@ impl<C: Codec> Backend for CodecBackend<C> {
     }
 }
 
+thread_local! {
+    /// Set while this thread asks a codec in process a question.
+    static ASKING_CODEC: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    /// Where the codec asked on this thread panicked, as the panic hook saw it.
+    static CODEC_PANICKED_AT: std::cell::RefCell<Option<String>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Whether a panic on this thread is a codec's, caught by [`convert_or_panic`] and reported as
+/// its case's crash: the panic hook then neither prints it (a codec that panics on many texts
+/// would flood the terminal) nor ends the run's backends.
+pub(crate) fn asking_codec() -> bool {
+    ASKING_CODEC.with(std::cell::Cell::get)
+}
+
+/// Keeps where the codec asked on this thread panicked, for its case's crash to say.
+pub(crate) fn codec_panicked_at(location: String) {
+    CODEC_PANICKED_AT.with(|at| *at.borrow_mut() = Some(location));
+}
+
 /// A codec's answer, or what it panicked with: a codec in process that panics on a question has
 /// crashed on that case, as a process that exits would have, and the run goes on.
 pub(crate) fn convert_or_panic(
     codec: &dyn Codec,
     question: &Question<'_>,
 ) -> Result<Result<Answer, Unsupported>, String> {
-    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| codec.convert(question))).map_err(
-        |panic| {
-            let message = (panic.downcast_ref::<&str>().map(|s| s.to_string()))
-                .or_else(|| panic.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "a panic".into());
-            format!("the codec panicked on case {}: {message}", question.case_id)
-        },
-    )
+    ASKING_CODEC.with(|a| a.set(true));
+    let answer = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| codec.convert(question)));
+    ASKING_CODEC.with(|a| a.set(false));
+    answer.map_err(|panic| {
+        let message = (panic.downcast_ref::<&str>().map(|s| s.to_string()))
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "a panic".into());
+        let at = CODEC_PANICKED_AT
+            .with(|at| at.borrow_mut().take())
+            .map(|at| format!(" (at {at})"))
+            .unwrap_or_default();
+        format!(
+            "the codec panicked on case {}: {message}{at}",
+            question.case_id
+        )
+    })
 }
 
 /// Makes a reference model's backend when its profile is loaded.

@@ -345,3 +345,64 @@ fn special_kind(kind: &std::fs::FileType) -> &'static str {
 fn special_kind(_: &std::fs::FileType) -> &'static str {
     "not a file"
 }
+
+#[cfg(test)]
+mod tests {
+    use std::path::{Path, PathBuf};
+
+    use serde::de::DeserializeOwned;
+
+    use crate::spec::cross_vendor::CrossVendorFileSpec;
+    use crate::spec::profile::ProfileSpec;
+    use crate::spec::project::ProjectFileSpec;
+    use crate::spec::vectors::VectorFileSpec;
+
+    fn yaml_files(dir: &Path) -> Vec<PathBuf> {
+        let mut out = Vec::new();
+        for entry in std::fs::read_dir(dir).expect("a shipped folder") {
+            let path = entry.expect("an entry").path();
+            if path.is_dir() {
+                out.extend(yaml_files(&path));
+            } else if path.extension().is_some_and(|e| e == "yaml") {
+                out.push(path);
+            }
+        }
+        out
+    }
+
+    /// Why a shipped file would be parsed twice: the type refuses the document parsed once
+    /// (a number where the schema asks for a string, say), so [`super::parse_document`] falls
+    /// back to reading the text again.
+    fn refused<T: DeserializeOwned>(path: &Path) -> Option<String> {
+        let text = std::fs::read_to_string(path).expect("readable");
+        let doc: serde_yaml::Value = serde_yaml::from_str(&text).expect("YAML");
+        serde_yaml::from_value::<T>(doc)
+            .err()
+            .map(|e| format!("{}: {e}", path.display()))
+    }
+
+    /// Every shipped profile, vector file and the project file builds its type from the
+    /// document parsed once: a listing reads each file one time.
+    #[test]
+    fn every_shipped_file_builds_from_the_document_parsed_once() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let mut refusals = Vec::new();
+        let profiles = yaml_files(&root.join("vendors"));
+        assert!(profiles.len() >= 10, "{profiles:?}");
+        refusals.extend(profiles.iter().filter_map(|p| refused::<ProfileSpec>(p)));
+        let vectors = yaml_files(&root.join("vectors"));
+        assert!(vectors.len() >= 20, "{vectors:?}");
+        for path in &vectors {
+            let cross_vendor = path.parent().is_some_and(|d| d.ends_with("cross-vendor"));
+            refusals.extend(if cross_vendor {
+                refused::<CrossVendorFileSpec>(path)
+            } else {
+                refused::<VectorFileSpec>(path)
+            });
+        }
+        refusals.extend(refused::<ProjectFileSpec>(
+            &root.join("plc-conformance.yaml"),
+        ));
+        assert!(refusals.is_empty(), "{}", refusals.join("\n"));
+    }
+}

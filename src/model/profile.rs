@@ -312,15 +312,6 @@ pub(crate) fn words_exist(
     let Some((key, def)) = devices.entry(head.code()) else {
         return false;
     };
-    // Asked for every operand of every execution: the ranges are borrowed, not copied.
-    let own;
-    let ranges = match variant.devices.get(key) {
-        Some(ranges) => ranges,
-        None => {
-            own = def.ranges();
-            &own
-        }
-    };
     let Some(first) = def.numbering.point(head.index) else {
         return false;
     };
@@ -328,14 +319,21 @@ pub(crate) fn words_exist(
         return true;
     }
     let last = first + u64::from(count) * u64::from(def.points_per_word.max(1)) - 1;
-    let fits =
-        ranges.iter().any(
-            |r| match (def.numbering.point(r.first), def.numbering.point(r.last)) {
-                (Some(lo), Some(hi)) => lo <= first && last <= hi,
-                _ => false,
-            },
-        );
-    fits
+    let holds = |r: DeviceRange| match (def.numbering.point(r.first), def.numbering.point(r.last)) {
+        (Some(lo), Some(hi)) => lo <= first && last <= hi,
+        _ => false,
+    };
+    // Asked for every operand of every execution: the ranges are read where they are, not
+    // copied.
+    match variant.devices.get(key) {
+        Some(ranges) => ranges.iter().any(holds),
+        None => std::iter::once(DeviceRange {
+            first: def.first,
+            last: def.last,
+        })
+        .chain(def.also.iter().copied())
+        .any(holds),
+    }
 }
 
 /// The loaded profiles, by id.
