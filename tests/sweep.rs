@@ -1968,6 +1968,36 @@ fn a_merge_refuses_what_is_not_the_whole_sweep() {
     }
 }
 
+/// The reply of `backend`, alone in a hex-to-value sweep, to each text with a count of 4,
+/// asked directly.
+fn replies_to(
+    project: &Session,
+    backend: Arc<dyn Backend>,
+    texts: &[&[u8]],
+) -> Vec<plc_conformance::testing::sweep::group::Reply> {
+    let sweep = Sweep::new(
+        random(Operation::HexToValue, 10, 4, 1),
+        &project.profiles,
+        &[backend],
+    )
+    .expect("sweep");
+    let points: Vec<(u64, Point)> = texts
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let mut p = sweep.space.point(0);
+            p.data = Data::Text(t.to_vec());
+            p.digits = 4;
+            (i as u64, p)
+        })
+        .collect();
+    sweep
+        .answers(&points, &no_stop())
+        .into_iter()
+        .map(|r| r.and_then(|r| r.last().cloned()).expect("answered"))
+        .collect()
+}
+
 /// A codec that crashes or hangs on one text of a bulk `convert` message faults on that text
 /// alone: the message's questions are asked again one case at a time, so every other text is
 /// answered and the fault is the outcome of the text that caused it.
@@ -1996,25 +2026,8 @@ fn a_codec_that_crashes_or_hangs_on_one_text_of_a_bulk_message_faults_that_text_
             .add(BackendSource::Process(settings), false)
             .expect("the codec starts")[0]
             .clone();
-        let sweep = Sweep::new(
-            random(Operation::HexToValue, 10, 4, 1),
-            &project.profiles,
-            &[codec],
-        )
-        .expect("sweep");
-        let points: Vec<(u64, Point)> = texts
-            .iter()
-            .enumerate()
-            .map(|(i, t)| {
-                let mut p = sweep.space.point(0);
-                p.data = Data::Text(t.to_vec());
-                p.digits = 4;
-                (i as u64, p)
-            })
-            .collect();
-        let answers = sweep.answers(&points, &no_stop());
-        for (text, replies) in texts.iter().zip(&answers) {
-            let reply = replies.as_ref().and_then(|r| r.last()).expect("answered");
+        let replies = replies_to(&project, codec, &texts);
+        for (text, reply) in texts.iter().zip(&replies) {
             let shown = String::from_utf8_lossy(text);
             match reply {
                 Reply::Failed { label: l, .. } => {
@@ -2026,15 +2039,7 @@ fn a_codec_that_crashes_or_hangs_on_one_text_of_a_bulk_message_faults_that_text_
                 _ => assert!(!text.contains(&b'G'), "{mode}: {shown}: {reply}"),
             }
         }
-        let shown: Vec<String> = answers
-            .iter()
-            .map(|r| {
-                r.as_ref()
-                    .and_then(|r| r.last())
-                    .map(ToString::to_string)
-                    .unwrap_or_default()
-            })
-            .collect();
+        let shown: Vec<String> = replies.iter().map(ToString::to_string).collect();
         assert_eq!(
             shown,
             ["5A8DH", label, "0000H", "invalid-digit", label, "FFFFH"],
@@ -2240,33 +2245,8 @@ fn a_codec_panic_is_its_cases_crash_and_nothing_else() {
         .expect("the codec starts")[0]
         .clone();
     let texts: [&[u8]; 4] = [b"5A8D", b"Z000", b"0000", b"1Z34"];
-    let ask = |backend: Arc<dyn plc_conformance::Backend>| {
-        let sweep = Sweep::new(
-            random(Operation::HexToValue, 10, 4, 1),
-            &project.profiles,
-            &[backend],
-        )
-        .expect("sweep");
-        let points: Vec<(u64, Point)> = texts
-            .iter()
-            .enumerate()
-            .map(|(i, t)| {
-                let mut p = sweep.space.point(0);
-                p.data = Data::Text(t.to_vec());
-                p.digits = 4;
-                (i as u64, p)
-            })
-            .collect();
-        sweep
-            .answers(&points, &no_stop())
-            .into_iter()
-            .map(|r| r.and_then(|r| r.last().cloned()).expect("answered"))
-            .collect::<Vec<Reply>>()
-    };
-    for (text, reply) in texts
-        .iter()
-        .zip(ask(plc_conformance::codec_backend(PanicsOnZ)))
-    {
+    let panics = plc_conformance::codec_backend(PanicsOnZ);
+    for (text, reply) in texts.iter().zip(replies_to(&project, panics, &texts)) {
         match &reply {
             Reply::Failed { label, detail } if text.contains(&b'Z') => {
                 assert_eq!(label, "crashed", "{reply}");
@@ -2279,7 +2259,7 @@ fn a_codec_panic_is_its_cases_crash_and_nothing_else() {
             ),
         }
     }
-    for reply in ask(external) {
+    for reply in replies_to(&project, external, &texts) {
         assert!(!matches!(reply, Reply::Failed { .. }), "{reply}");
     }
     println!("child: checked");
