@@ -162,19 +162,11 @@ impl Image {
     }
 
     pub fn of_units(words: BTreeMap<Device, Value>, fill: Fill, unit: Unit) -> Self {
-        Image {
-            words: std::sync::Arc::new(words),
-            fill,
-            unit,
-        }
+        Image::sharing(std::sync::Arc::new(words), fill, unit)
     }
 
-    /// Word-addressed memory held elsewhere too (a simulated CPU's).
-    pub(crate) fn shared(words: std::sync::Arc<BTreeMap<Device, Value>>, fill: Fill) -> Self {
-        Image::sharing(words, fill, Unit::Word)
-    }
-
-    /// Memory whose words are held elsewhere too: one input's words under both fills.
+    /// Memory whose words are held elsewhere too: a simulated CPU's whole memory, or one
+    /// input's words under both fills.
     pub(crate) fn sharing(
         words: std::sync::Arc<BTreeMap<Device, Value>>,
         fill: Fill,

@@ -105,16 +105,20 @@ fn parse_wide(text: &str) -> Result<i128, ValueError> {
 /// Narrows a number to a word. Negative numbers down to the signed minimum are stored as two's
 /// complement, as a PLC stores `K-1`.
 pub(crate) fn to_bits(text: &str, value: i64, bits: u32) -> Result<u64, ValueError> {
+    narrow(value, bits).ok_or_else(|| ValueError::TooWide {
+        text: text.to_string(),
+        bits,
+    })
+}
+
+/// [`to_bits`] without the text for its error, for a caller that asks it on every execution.
+pub(crate) fn narrow(value: i64, bits: u32) -> Option<u64> {
     let min = -(1i64 << (bits - 1));
     let max = (1i64 << bits) - 1;
-    if value < min || value > max {
-        return Err(ValueError::TooWide {
-            text: text.to_string(),
-            bits,
-        });
-    }
     let mask = (1u64 << bits) - 1;
-    Ok((value as u64) & mask)
+    (min..=max)
+        .contains(&value)
+        .then_some((value as u64) & mask)
 }
 
 /// Reads a 16-bit word.

@@ -8,7 +8,7 @@ use super::{Backend, Fault, Outcome, Request, Response, Unsupported};
 use crate::memory::Value;
 use crate::model::profile::{Profile, Profiles};
 use crate::model::ErrorSignal;
-use crate::value::to_bits;
+use crate::value::{narrow, to_bits};
 
 /// One vendor family's reference model.
 pub(crate) trait Model: Send + Sync + 'static {
@@ -24,9 +24,9 @@ pub(crate) trait Model: Send + Sync + 'static {
 /// programmable, so a model declines it.
 pub(crate) fn constant_word(name: &str, k: i64) -> Result<u16, Unsupported> {
     // Asked once per execution: the constant's text is written only for the refusal.
-    match u16::try_from(k).or_else(|_| i16::try_from(k).map(|w| w as u16)) {
-        Ok(w) => Ok(w),
-        Err(_) => to_bits(&format!("K{k}"), k, 16)
+    match narrow(k, 16) {
+        Some(w) => Ok(w as u16),
+        None => to_bits(&format!("K{k}"), k, 16)
             .map(|w| w as u16)
             .map_err(|e| Unsupported(format!("operand `{name}`: {e}"))),
     }

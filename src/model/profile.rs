@@ -327,12 +327,7 @@ pub(crate) fn words_exist(
     // copied.
     match variant.devices.get(key) {
         Some(ranges) => ranges.iter().any(holds),
-        None => std::iter::once(DeviceRange {
-            first: def.first,
-            last: def.last,
-        })
-        .chain(def.also.iter().copied())
-        .any(holds),
+        None => def.iter_ranges().any(holds),
     }
 }
 

@@ -234,12 +234,17 @@ pub struct DeviceRanges {
 impl DeviceRanges {
     /// Every range, the first one first.
     pub fn iter(&self) -> impl Iterator<Item = DeviceRange> + '_ {
-        std::iter::once(DeviceRange {
-            first: self.first,
-            last: self.last,
-        })
-        .chain(self.also.iter().copied())
+        every_range(self.first, self.last, &self.also)
     }
+}
+
+/// The ranges of a code, the first one first.
+fn every_range(
+    first: u32,
+    last: u32,
+    also: &[DeviceRange],
+) -> impl Iterator<Item = DeviceRange> + '_ {
+    std::iter::once(DeviceRange { first, last }).chain(also.iter().copied())
 }
 
 /// How a device code's numbers are written.
@@ -333,6 +338,11 @@ pub struct DeviceDef {
 }
 
 impl DeviceDef {
+    /// Every range of the code, the first one first, as [`DeviceRanges::iter`] gives them.
+    pub fn iter_ranges(&self) -> impl Iterator<Item = DeviceRange> + '_ {
+        every_range(self.first, self.last, &self.also)
+    }
+
     pub fn ranges(&self) -> DeviceRanges {
         DeviceRanges {
             first: self.first,

@@ -30,7 +30,7 @@ use super::mailbox::{self, off, state};
 use super::manifest::{parse_operand, Manifest};
 use crate::backend::{Backend, Request as ModelRequest, Response as ModelResponse};
 use crate::device::Device;
-use crate::memory::{Fill, Image, Value};
+use crate::memory::{Fill, Image, Unit, Value};
 use crate::model::profile::Profile;
 use crate::model::{ErrorSignal, Operand};
 
@@ -906,7 +906,7 @@ fn execute<L>(
         .collect();
     // The whole of every word device, so that the model reads what the CPU holds; dropped
     // before the writes, which then update the kept image in place.
-    let image = Image::shared(cpu.image(&shared.profile.devices), Fill::A);
+    let image = Image::sharing(cpu.image(&shared.profile.devices), Fill::A, Unit::Word);
     let request = ModelRequest {
         profile: &shared.profile,
         variant,
