@@ -4,6 +4,9 @@
 //! block stands for any number of lines, so a block may show an excerpt, and `[..]` within a
 //! line for any text (a time, say).
 //!
+//! The exhaustive examples (a sweep of the whole space, or of ten thousand inputs or more) are a
+//! test of their own, ignored under a plain `cargo test`: CI runs it with `-- --ignored`.
+//!
 //! Blocks that run the project's third-party backends need their installs (`.ci/run` makes
 //! them); without `.venv-adapters` they are skipped with a note, unless
 //! PLC_CONFORMANCE_REQUIRE_BACKENDS is set (as on CI).
@@ -171,14 +174,38 @@ fn documents() -> Vec<(String, String)> {
         .collect()
 }
 
+/// Whether an example's command is one of the exhaustive ones: a sweep of the whole space, or
+/// of ten thousand inputs or more (tens of seconds of CPU in the debug build).
+fn exhaustive(args: &[String]) -> bool {
+    let value = |flag: &str| {
+        args.windows(2)
+            .find(|w| w[0] == flag)
+            .map(|w| w[1].as_str())
+    };
+    value("--generator") == Some("full")
+        || value("--count").and_then(|c| c.parse::<u64>().ok()) >= Some(10_000)
+}
+
 #[test]
 fn readme_examples_show_the_real_output() {
+    check_examples(false);
+}
+
+#[test]
+#[ignore = "exhaustive: the docs' whole-space and 20,000-input sweeps (CI runs it: -- --ignored)"]
+fn the_exhaustive_examples_show_the_real_output() {
+    check_examples(true);
+}
+
+/// Runs the examples that are `exhaustive` (or the others) and compares their output.
+fn check_examples(exhaustive_ones: bool) {
     let documents = documents();
     let examples: Vec<(&str, Example)> = documents
         .iter()
         .flat_map(|(file, text)| examples(text).into_iter().map(move |e| (file.as_str(), e)))
         .collect();
     assert!(examples.len() >= 3, "the README has its examples");
+
     let adapters = root().join(".venv-adapters/bin/python").exists();
     let required = std::env::var_os("PLC_CONFORMANCE_REQUIRE_BACKENDS").is_some();
     let mut runnable = Vec::new();
@@ -190,6 +217,9 @@ fn readme_examples_show_the_real_output() {
             );
         };
         let args = words(rest);
+        if exhaustive(&args) != exhaustive_ones {
+            continue;
+        }
         if needs_adapters(&args) && !adapters && !required {
             eprintln!(
                 "skipped {file}:{} (`{}`): .venv-adapters is missing (.ci/run creates it)",
@@ -199,6 +229,10 @@ fn readme_examples_show_the_real_output() {
         }
         runnable.push((*file, example, args));
     }
+    assert!(
+        !runnable.is_empty(),
+        "no example to run (exhaustive: {exhaustive_ones})"
+    );
     // The examples run side by side, each taking the next: two of them are sweeps of seconds.
     let next = std::sync::atomic::AtomicUsize::new(0);
     let stale = std::sync::Mutex::new(Vec::new());

@@ -16,7 +16,7 @@ use super::{FileContext, LoadErrorKind};
 /// Reports every shape problem of `doc` against `schema`; true when there is none.
 pub(crate) fn check(doc: &Yaml, schema: &Json, cx: &mut FileContext<'_>) -> bool {
     let before = cx.errors.len();
-    walk(doc, schema, schema, "", cx);
+    walk(doc, schema, schema, &Path::Root, cx);
     cx.errors.len() == before
 }
 
@@ -46,15 +46,26 @@ fn types(schema: &Json) -> Vec<&str> {
     }
 }
 
-fn join(path: &str, key: &str) -> String {
-    if path.is_empty() {
-        key.to_string()
-    } else {
-        format!("{path}.{key}")
+/// Where a node is (`cases[3].before`), written out only for an error: most documents have
+/// none, and a path made for every node was most of the walk.
+enum Path<'a> {
+    Root,
+    Key(&'a Path<'a>, &'a str),
+    Index(&'a Path<'a>, usize),
+}
+
+impl Path<'_> {
+    fn render(&self) -> String {
+        match self {
+            Path::Root => String::new(),
+            Path::Key(Path::Root, key) => key.to_string(),
+            Path::Key(parent, key) => format!("{}.{key}", parent.render()),
+            Path::Index(parent, i) => format!("{}[{i}]", parent.render()),
+        }
     }
 }
 
-fn walk(doc: &Yaml, schema: &Json, root: &Json, path: &str, cx: &mut FileContext<'_>) {
+fn walk(doc: &Yaml, schema: &Json, root: &Json, path: &Path<'_>, cx: &mut FileContext<'_>) {
     let schema = resolve(schema, root);
     if let Some(branches) = schema
         .get("anyOf")
@@ -65,7 +76,7 @@ fn walk(doc: &Yaml, schema: &Json, root: &Json, path: &str, cx: &mut FileContext
         // Real alternatives are the deserializer's to decide.
         let others: Vec<&Json> = branches
             .iter()
-            .filter(|b| resolve(b, root).get("type") != Some(&Json::String("null".into())))
+            .filter(|b| resolve(b, root).get("type").and_then(Json::as_str) != Some("null"))
             .collect();
         if let ([only], false) = (others.as_slice(), doc.is_null()) {
             walk(doc, only, root, path, cx);
@@ -80,14 +91,14 @@ fn walk(doc: &Yaml, schema: &Json, root: &Json, path: &str, cx: &mut FileContext
             let extra = schema.get("additionalProperties").filter(|a| a.is_object());
             for (k, v) in map {
                 let key = yaml_key(k);
-                let here = join(path, &key);
-                match properties.and_then(|p| p.get(&key)) {
+                let here = Path::Key(path, &key);
+                match properties.and_then(|p| p.get(key.as_ref())) {
                     Some(sub) => walk(v, sub, root, &here, cx),
                     None if closed => {
                         let known: Vec<&str> = properties
                             .map(|p| p.keys().map(String::as_str).collect())
                             .unwrap_or_default();
-                        cx.error(here, unknown_key(&key, &known));
+                        cx.error(here.render(), unknown_key(&key, &known));
                     }
                     None => {
                         if let Some(sub) = extra {
@@ -106,7 +117,7 @@ fn walk(doc: &Yaml, schema: &Json, root: &Json, path: &str, cx: &mut FileContext
                 let present = map.keys().any(|k| yaml_key(k) == required);
                 if !present {
                     cx.error(
-                        path.to_string(),
+                        path.render(),
                         LoadErrorKind::Shape(format!("missing field `{required}`")),
                     );
                 }
@@ -115,7 +126,7 @@ fn walk(doc: &Yaml, schema: &Json, root: &Json, path: &str, cx: &mut FileContext
         Yaml::Sequence(items) if kinds.is_empty() || kinds.contains(&"array") => {
             if let Some(item) = schema.get("items") {
                 for (i, v) in items.iter().enumerate() {
-                    walk(v, item, root, &format!("{path}[{i}]"), cx);
+                    walk(v, item, root, &Path::Index(path, i), cx);
                 }
             }
         }
@@ -142,7 +153,7 @@ fn walk(doc: &Yaml, schema: &Json, root: &Json, path: &str, cx: &mut FileContext
             };
             if let (Some(wanted), Some(got)) = (wanted, got) {
                 cx.error(
-                    path.to_string(),
+                    path.render(),
                     LoadErrorKind::Shape(format!("expected {wanted}, found {got}")),
                 );
             }
@@ -150,15 +161,16 @@ fn walk(doc: &Yaml, schema: &Json, root: &Json, path: &str, cx: &mut FileContext
     }
 }
 
-fn yaml_key(k: &Yaml) -> String {
+fn yaml_key(k: &Yaml) -> std::borrow::Cow<'_, str> {
     match k {
-        Yaml::String(s) => s.clone(),
-        Yaml::Number(n) => n.to_string(),
-        Yaml::Bool(b) => b.to_string(),
+        Yaml::String(s) => s.as_str().into(),
+        Yaml::Number(n) => n.to_string().into(),
+        Yaml::Bool(b) => b.to_string().into(),
         other => serde_yaml::to_string(other)
             .unwrap_or_default()
             .trim()
-            .to_string(),
+            .to_string()
+            .into(),
     }
 }
 

@@ -4,17 +4,20 @@
 //! simplest forms differ (a blank before the digits, a blank after them) stay apart. "Simpler" is [`Point::simplicity`]: the shortest text, then the
 //! fewest characters other than '0', then the lowest bytes; the value with the fewest set bits,
 //! then the lowest; then the smallest count, the fewest flags on, operands in their usual place.
-//! Every step asks all candidates in one batch, so an external backend answers a step in one
-//! exchange.
+//! A step asks its candidates simplest first, in batches that double from [`FIRST_BATCH`]: the
+//! first that behaves the same is the step (the simplest of all that do), and an external
+//! backend answers a batch in one exchange.
 
 use std::sync::atomic::AtomicBool;
 
-use super::group::{labels_read, Found, Key};
+use super::group::{labels_read, Found, Key, Reply};
 use super::input::{Data, Point};
 use super::{Results, Shrunk, Sweep};
 
 /// The most steps one input takes.
 const MAX_STEPS: usize = 64;
+/// Candidates asked in a step's first batch; each next batch is twice the last.
+const FIRST_BATCH: usize = 8;
 /// Numbers given to candidates (their case ids), apart from any generator's.
 const CANDIDATE_BASE: u64 = 1 << 63;
 
@@ -58,29 +61,37 @@ pub(crate) fn shrink(sweep: &Sweep, found: &Found, stop: &AtomicBool) -> Found {
         signature: labels_read(&sweep.columns, found.point.digits, &found.replies),
         features: found.point.features(counted),
     };
+    let keeps = |p: &Point, replies: &[Reply]| {
+        labels_read(&sweep.columns, p.digits, replies) == key.signature
+            && p.features(counted) == key.features
+    };
     let mut current = found.clone();
     for _ in 0..MAX_STEPS {
         let here = current.point.simplicity();
-        let candidates: Vec<(u64, Point)> = candidates(&current.point, counted)
+        let mut candidates: Vec<(u64, Point)> = candidates(&current.point, counted)
             .into_iter()
             .filter(|p| p.simplicity() < here)
             .enumerate()
             .map(|(k, p)| (CANDIDATE_BASE + k as u64, p))
             .collect();
-        if candidates.is_empty() {
-            break;
+        // The simplest first (stable: of equals, the first made), so the first that keeps the
+        // behaviour is the step. They are asked in batches that double, and the step ends at
+        // the first batch that holds one: most steps are found among the first few.
+        candidates.sort_by_cached_key(|(_, p)| p.simplicity());
+        let mut step = None;
+        let mut rest = &candidates[..];
+        let mut batch = FIRST_BATCH;
+        while step.is_none() && !rest.is_empty() {
+            let (asked, later) = rest.split_at(batch.min(rest.len()));
+            let answers = sweep.answers(asked, stop);
+            step = (asked.iter().zip(answers))
+                .filter_map(|((_, p), r)| r.map(|r| (p, r)))
+                .find(|(p, r)| keeps(p, r))
+                .map(|(p, r)| (p.clone(), r));
+            rest = later;
+            batch *= 2;
         }
-        let answers = sweep.answers(&candidates, stop);
-        let best = candidates
-            .into_iter()
-            .zip(answers)
-            .filter_map(|((_, p), r)| r.map(|r| (p, r)))
-            .filter(|(p, r)| {
-                labels_read(&sweep.columns, p.digits, r) == key.signature
-                    && p.features(counted) == key.features
-            })
-            .min_by(|a, b| a.0.simplicity().cmp(&b.0.simplicity()));
-        match best {
+        match step {
             Some((point, replies)) => {
                 current = Found {
                     index: found.index,
