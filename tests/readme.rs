@@ -205,7 +205,6 @@ fn check_examples(exhaustive_ones: bool) {
         .flat_map(|(file, text)| examples(text).into_iter().map(move |e| (file.as_str(), e)))
         .collect();
     assert!(examples.len() >= 3, "the README has its examples");
-
     let adapters = root().join(".venv-adapters/bin/python").exists();
     let required = std::env::var_os("PLC_CONFORMANCE_REQUIRE_BACKENDS").is_some();
     let mut runnable = Vec::new();
@@ -233,7 +232,8 @@ fn check_examples(exhaustive_ones: bool) {
         !runnable.is_empty(),
         "no example to run (exhaustive: {exhaustive_ones})"
     );
-    // The examples run side by side, each taking the next: two of them are sweeps of seconds.
+    // The examples run side by side, each taking the next: the exhaustive ones are sweeps of
+    // seconds.
     let next = std::sync::atomic::AtomicUsize::new(0);
     let stale = std::sync::Mutex::new(Vec::new());
     let workers = std::thread::available_parallelism().map_or(1, |n| n.get());
