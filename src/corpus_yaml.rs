@@ -43,6 +43,7 @@ pub(crate) fn answer(a: &Answer) -> String {
         Answer::Error(c) => format!("error: {c}"),
         Answer::ErrorAndValue(c, v) => format!("error: {c}, value: {}", hex_value(*v)),
         Answer::OtherError(e) => format!("error: {e}"),
+        Answer::Accepted => "accepted: true".to_string(),
     }
 }
 

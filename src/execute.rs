@@ -125,6 +125,7 @@ pub(crate) fn question(trial: &Trial) -> Option<Question<'_>> {
         text: &case.text,
         value: case.value,
         digits: case.digits,
+        field: case.protocol.as_ref().map_or("", |p| p.field.as_str()),
     })
 }
 

@@ -116,7 +116,9 @@ pub use libtest::Harness;
 pub use load::LoadErrors;
 pub use memory::{Fill, Image, Unit, Value};
 pub use model::cross_vendor::CrossVendorCase;
-pub use model::cross_vendor::{Answer, CodecAbilities, ErrorClass, Operation, OperationAbilities};
+pub use model::cross_vendor::{
+    Answer, CodecAbilities, ErrorClass, Operation, OperationAbilities, ProtocolClaim,
+};
 pub use model::known::{KnownDifferences, Subject};
 pub use model::profile::{Profile, Variant};
 pub use model::{Basis, Case, Corpus, ErrorSignal, Indirect, Operand};

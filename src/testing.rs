@@ -116,6 +116,9 @@ pub mod model {
     pub mod project {
         pub use crate::model::project::{ExternalSettings, Launch};
     }
+    pub mod protocol {
+        pub use crate::model::protocol::{Field, Protocol, Rule};
+    }
 }
 pub mod plan {
     pub use crate::plan::{Check, Input, Trial};

@@ -158,6 +158,8 @@ pub struct Question<'a> {
     pub value: u64,
     /// The digit count (FX5 n, IDEC S2).
     pub digits: u32,
+    /// The protocol field asked (`word`, `lrc`); empty for a cross-vendor question.
+    pub field: &'a str,
 }
 
 /// A backend's answer to a request it understood.

@@ -37,7 +37,8 @@ pub(crate) fn lift(
     let destination = &lowering.destination;
     let digits = lowering.width.unwrap_or(digits);
     match lowering.operation {
-        Operation::HexToValue => {
+        // The text inputs; a lowering of a check operation is refused when its profile loads.
+        Operation::HexToValue | Operation::Check | Operation::Verify => {
             let units = units_for(digits, 1, lowering.unit);
             let values = (0..units)
                 .filter_map(|i| destination.offset(i))

@@ -282,13 +282,18 @@ fn judge_unlisted(trial: &Trial, observations: &[Observation]) -> Verdict {
             // A codec answers the case's plain reading: it has no vendor's exceptions.
             // Read as the codec's field writes it (its byte order, its leading zeros).
             Ok(Response::Answer(a)) => {
-                let ability = trial.backend.codec().and_then(|c| match case.operation {
-                    crate::model::cross_vendor::Operation::HexToValue => c.hex_to_value.as_ref(),
-                    crate::model::cross_vendor::Operation::ValueToHex => c.value_to_hex.as_ref(),
-                });
-                let expected = match (ability, &case.expect) {
-                    (Some(ab), Some(e)) => Some(ab.shaped(case.operation, case.digits, e)),
-                    (_, e) => e.clone(),
+                let ability = trial.backend.codec().and_then(|c| c.of(case.operation));
+                // A protocol's field is the protocol's: its order and width are not the codec's
+                // to declare.
+                let expected = match (ability, &case.expect, &case.protocol) {
+                    (Some(ab), Some(e), None) => Some(ab.shaped(case.operation, case.digits, e)),
+                    (_, e, _) => e.clone(),
+                };
+                // A protocol names one answer to data it refuses (C050H, NAK 07H, no response):
+                // which class a codec gives its refusal is its own.
+                let expected = match (&case.protocol, expected, a) {
+                    (Some(_), Some(Answer::Error(_)), Answer::Error(_)) => Some(a.clone()),
+                    (_, e, _) => e,
                 };
                 compare_answers(case.basis, expected.as_ref(), vec![a.clone()])
             }

@@ -69,6 +69,17 @@ fn read_case(
         );
     }
     let (text, value) = match file.operation {
+        Operation::Check | Operation::Verify => {
+            cx.error(
+                "operation",
+                LoadErrorKind::Invalid(format!(
+                    "a cross-vendor file asks hex-to-value or value-to-hex; {} is a protocol's \
+                     (vectors/protocols/)",
+                    file.operation
+                )),
+            );
+            return None;
+        }
         Operation::HexToValue => {
             if spec.value.is_some() {
                 cx.error(
@@ -176,6 +187,7 @@ fn read_case(
         expect,
         except,
         note: spec.note.clone(),
+        protocol: None,
     })
 }
 
@@ -296,6 +308,16 @@ pub(crate) fn read_section(
                 format!("{key}.name"),
                 LoadErrorKind::Invalid(format!("lowering `{}` is defined twice", l.name)),
             );
+        }
+        if matches!(l.operation, Operation::Check | Operation::Verify) {
+            cx.error(
+                format!("{key}.operation"),
+                LoadErrorKind::Invalid(format!(
+                    "a lowering answers hex-to-value or value-to-hex, not {}",
+                    l.operation
+                )),
+            );
+            continue;
         }
         let Some(def) = p.instructions.get(&l.instruction) else {
             let known: Vec<String> = p.instructions.keys().cloned().collect();

@@ -13,6 +13,7 @@ mod locate;
 mod open_questions;
 mod profiles;
 mod project;
+mod protocols;
 mod shape;
 mod source;
 mod vectors;

@@ -12,6 +12,7 @@ use crate::spec::profile::{CallBasis, DeviceDef, DeviceRanges, ProfileSpec, Sign
 pub fn load_profiles(dir: &Path) -> Result<Profiles, LoadErrors> {
     let mut errors = Vec::new();
     let mut profiles: Vec<Profile> = Vec::new();
+    let mut protocols: Vec<crate::model::protocol::Protocol> = Vec::new();
     let files = yaml_files(dir).map_err(|e| LoadErrors(vec![e]))?;
     for file in files {
         let text = match read_file(&file) {
@@ -21,6 +22,24 @@ pub fn load_profiles(dir: &Path) -> Result<Profiles, LoadErrors> {
                 continue;
             }
         };
+        if super::protocols::is_protocol_profile(&text) {
+            if let Some(p) = super::protocols::parse_protocol(&file, &text, &mut errors) {
+                if protocols.iter().any(|q| q.id == p.id) {
+                    errors.push(LoadError {
+                        file: file.clone(),
+                        line: LineIndex::new(&text).line("protocol"),
+                        key: Some("protocol".into()),
+                        kind: LoadErrorKind::Invalid(format!(
+                            "protocol id `{}` is also used by another protocol profile",
+                            p.id
+                        ))
+                        .into(),
+                    });
+                }
+                protocols.push(p);
+            }
+            continue;
+        }
         if let Some(profile) = parse_profile(&file, &text, &mut errors) {
             if let Some(other) = profiles.iter().find(|p| p.id == profile.id) {
                 errors.push(LoadError {
@@ -46,7 +65,9 @@ pub fn load_profiles(dir: &Path) -> Result<Profiles, LoadErrors> {
         });
     }
     if errors.is_empty() {
-        Ok(Profiles::new(profiles))
+        let mut loaded = Profiles::new(profiles);
+        loaded.protocols = crate::model::protocol::Protocols::new(protocols);
+        Ok(loaded)
     } else {
         Err(LoadErrors(errors))
     }

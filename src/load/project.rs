@@ -179,8 +179,28 @@ fn read_project(file: &Path, plc_conformance: &Path) -> Result<Vec<Configured>, 
                 ),
             );
         }
+        if b.protocol.is_some() && b.profile.is_some() {
+            cx.error(
+                key("protocol"),
+                LoadErrorKind::Invalid(
+                    "a protocol's codec has no profile: give `protocol` or `profile`".into(),
+                ),
+            );
+        }
+        if b.cross_vendor && b.protocol.is_none() {
+            cx.error(
+                key("cross_vendor"),
+                LoadErrorKind::Invalid(
+                    "`cross_vendor` adds the cross-vendor view to a protocol's codec: give \
+                     `protocol` too (a codec of no protocol runs that corpus already)"
+                        .into(),
+                ),
+            );
+        }
         settings.profile = b.profile;
-        settings.codec = b.codec;
+        settings.codec = b.codec || b.protocol.is_some();
+        settings.protocol = b.protocol;
+        settings.cross_vendor = b.cross_vendor;
         settings.timeout = timeout;
         settings.startup_timeout = startup_timeout;
         settings.known_differences = b.known_differences.map(|p| dir.join(p));

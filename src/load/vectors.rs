@@ -90,6 +90,7 @@ fn read_side_by_side(files: &[PathBuf], profiles: &Profiles) -> Vec<FileRead> {
 struct FileRead {
     cases: Vec<(String, Case)>,
     cross_vendor: Vec<(String, crate::model::cross_vendor::CrossVendorCase)>,
+    protocol_fields: Vec<(String, crate::model::cross_vendor::CrossVendorCase)>,
     errors: Vec<LoadError>,
 }
 
@@ -99,6 +100,10 @@ impl FileRead {
         // One context for either kind of file: the text checked and its lines indexed once
         // (a text refused by the check has no lines, and reads as no document).
         let mut cx = FileContext::new(file, text, &mut read.errors);
+        if super::protocols::is_protocol_file(&cx.index) {
+            read.protocol_fields = super::protocols::read_file(text, profiles, &mut cx);
+            return read;
+        }
         if super::cross_vendor::is_cross_vendor(&cx.index) {
             read.cross_vendor = super::cross_vendor::read_file(text, profiles, &mut cx);
             return read;
@@ -132,6 +137,7 @@ impl FileRead {
 pub struct CorpusBuilder {
     cases: Vec<Arc<Case>>,
     cross_vendor: Vec<Arc<crate::model::cross_vendor::CrossVendorCase>>,
+    protocol_fields: Vec<Arc<crate::model::cross_vendor::CrossVendorCase>>,
     ids: HashMap<String, Location>,
     errors: Vec<LoadError>,
 }
@@ -147,6 +153,11 @@ impl CorpusBuilder {
         for (key, case) in read.cross_vendor {
             if self.claim_id(&key, &case.id, &case.location) {
                 self.cross_vendor.push(Arc::new(case));
+            }
+        }
+        for (key, case) in read.protocol_fields {
+            if self.claim_id(&key, &case.id, &case.location) {
+                self.protocol_fields.push(Arc::new(case));
             }
         }
         for (key, case) in read.cases {
@@ -184,6 +195,7 @@ impl CorpusBuilder {
             Ok(Corpus {
                 cases: self.cases,
                 cross_vendor: self.cross_vendor,
+                protocol_fields: self.protocol_fields,
             })
         } else {
             Err(LoadErrors(self.errors))

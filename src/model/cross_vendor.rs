@@ -13,6 +13,7 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
+use super::protocol::FieldRule;
 use super::{Basis, Citation, ErrorSignal, Location, Operand};
 use crate::device::Device;
 use crate::memory::{Image, Unit, Value};
@@ -96,6 +97,8 @@ pub enum Answer {
     ErrorAndValue(ErrorClass, u64),
     /// An error signal the profile does not classify (shown as the vendor wrote it).
     OtherError(String),
+    /// Check characters found to match their span (a protocol's `verify`).
+    Accepted,
 }
 
 impl fmt::Display for Answer {
@@ -115,6 +118,7 @@ impl fmt::Display for Answer {
             Answer::Error(c) => write!(f, "{c}"),
             Answer::ErrorAndValue(c, v) => write!(f, "{c} and {v:04X}H"),
             Answer::OtherError(e) => write!(f, "error {e}"),
+            Answer::Accepted => write!(f, "accepted"),
         }
     }
 }
@@ -197,6 +201,9 @@ pub struct CrossVendorCase {
     /// `None` where no rule fixes the lowering's answer (recorded, never judged).
     pub except: BTreeMap<String, (Option<Answer>, String)>,
     pub note: Option<String>,
+    /// The protocol, field and rule of a protocol-field case; `None` for a cross-vendor one.
+    #[serde(skip)]
+    pub protocol: Option<FieldRule>,
 }
 
 impl CrossVendorCase {
@@ -223,6 +230,41 @@ impl CrossVendorCase {
 pub struct CodecAbilities {
     pub hex_to_value: Option<OperationAbilities>,
     pub value_to_hex: Option<OperationAbilities>,
+    /// A protocol's check characters computed over a span.
+    pub check: Option<OperationAbilities>,
+    /// A protocol's check characters verified.
+    pub verify: Option<OperationAbilities>,
+    /// The protocol whose fields the codec implements: it is judged by that protocol's corpus.
+    pub protocol: Option<ProtocolClaim>,
+}
+
+/// Which protocol's fields a codec implements, and which views judge it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ProtocolClaim {
+    /// The protocol profile's id (`modbus-ascii`).
+    pub id: String,
+    /// The fields implemented, by the profile's names; `None` for every field.
+    pub fields: Option<Vec<String>>,
+    /// Also run the cross-vendor (instruction) corpus, the second view.
+    pub cross_vendor: bool,
+}
+
+impl CodecAbilities {
+    /// The abilities of one operation.
+    pub fn of(&self, operation: Operation) -> Option<&OperationAbilities> {
+        match operation {
+            Operation::HexToValue => self.hex_to_value.as_ref(),
+            Operation::ValueToHex => self.value_to_hex.as_ref(),
+            Operation::Check => self.check.as_ref(),
+            Operation::Verify => self.verify.as_ref(),
+        }
+    }
+
+    /// Whether the cross-vendor corpus asks this codec: a codec of no protocol, or one that
+    /// asks for that view too.
+    pub fn takes_cross_vendor(&self) -> bool {
+        self.protocol.as_ref().is_none_or(|p| p.cross_vendor)
+    }
 }
 
 /// What one operation of a codec takes.
@@ -339,6 +381,18 @@ impl CodecAbilities {
     /// Why a case is outside what the codec implements, if it is: it is then skipped with this
     /// reason, never failed.
     pub fn declines(&self, case: &CrossVendorCase) -> Option<String> {
+        if let Some(from) = &case.protocol {
+            let fields = match &self.protocol {
+                Some(claim) if claim.id == from.protocol => claim.fields.as_ref(),
+                _ => return Some(format!("implements no {} field", from.protocol)),
+            };
+            if fields.is_some_and(|f| !f.contains(&from.field)) {
+                return Some(format!(
+                    "implements no {} field of {}",
+                    from.field, from.protocol
+                ));
+            }
+        }
         self.declines_asking(
             case.operation,
             &case.text,
@@ -358,11 +412,7 @@ impl CodecAbilities {
         digits: u32,
         expect: Option<&Answer>,
     ) -> Option<String> {
-        let ability = match operation {
-            Operation::HexToValue => &self.hex_to_value,
-            Operation::ValueToHex => &self.value_to_hex,
-        };
-        let Some(ability) = ability else {
+        let Some(ability) = self.of(operation) else {
             return Some(format!("implements no {}", operation));
         };
         let digits_ok = match (&ability.digits, ability.shape.widths.is_empty()) {
@@ -504,6 +554,7 @@ mod shape_tests {
             expect: Some(Answer::Value(value)),
             except: BTreeMap::new(),
             note: None,
+            protocol: None,
         }
     }
 

@@ -8,6 +8,7 @@ pub(crate) mod known;
 pub(crate) mod open_questions;
 pub(crate) mod profile;
 pub(crate) mod project;
+pub(crate) mod protocol;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt;
@@ -162,4 +163,6 @@ pub struct Corpus {
     pub cases: Vec<Arc<Case>>,
     /// Cross-vendor cases (`vectors/cross-vendor/`).
     pub cross_vendor: Vec<Arc<cross_vendor::CrossVendorCase>>,
+    /// Protocol-field cases (`vectors/protocols/`): codec questions a protocol's manual answers.
+    pub protocol_fields: Vec<Arc<cross_vendor::CrossVendorCase>>,
 }

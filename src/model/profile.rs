@@ -335,6 +335,8 @@ pub(crate) fn words_exist(
 #[derive(Debug, Clone, Default)]
 pub struct Profiles {
     by_id: BTreeMap<String, Arc<Profile>>,
+    /// The protocol profiles found beside them (`vendors/protocols/`).
+    pub protocols: super::protocol::Protocols,
 }
 
 impl Profiles {
@@ -344,6 +346,7 @@ impl Profiles {
                 .into_iter()
                 .map(|p| (p.id.clone(), Arc::new(p)))
                 .collect(),
+            protocols: Default::default(),
         }
     }
     pub fn get(&self, id: &str) -> Option<&Arc<Profile>> {

@@ -45,6 +45,11 @@ pub struct ExternalSettings {
     pub profile: Option<String>,
     /// Whether the configuration says the backend is codec-level; the handshake must agree.
     pub codec: bool,
+    /// The protocol a codec-level backend is configured as implementing; the handshake must
+    /// agree. `None` takes the handshake's word (not for a backend planned before it starts).
+    pub protocol: Option<String>,
+    /// With `protocol`: the configuration asks for the cross-vendor view too.
+    pub cross_vendor: bool,
     /// The limit for one case's answer.
     pub timeout: Duration,
     /// The limit for starting and answering `hello`.
@@ -73,6 +78,8 @@ impl ExternalSettings {
             launch,
             profile: None,
             codec: false,
+            protocol: None,
+            cross_vendor: false,
             timeout: DEFAULT_TIMEOUT,
             startup_timeout: DEFAULT_STARTUP_TIMEOUT,
             known_differences: None,

@@ -116,7 +116,10 @@ pub(crate) fn operands(lowering: &Lowering, digits: u32) -> BTreeMap<String, Ope
 /// register when the count is given in one.
 pub(crate) fn memory(lowering: &Lowering, case: &CrossVendorCase) -> BTreeMap<Device, Value> {
     let words: Vec<Value> = match lowering.operation {
-        Operation::HexToValue => lowering.text.units(lowering.unit, &case.text),
+        // A lowering of a check operation is refused when its profile loads.
+        Operation::HexToValue | Operation::Check | Operation::Verify => {
+            lowering.text.units(lowering.unit, &case.text)
+        }
         Operation::ValueToHex => {
             let digits = lowering.width.unwrap_or(case.digits);
             value_memory(case.value, digits, 1, lowering.unit, lowering.order)

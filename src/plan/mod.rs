@@ -216,8 +216,16 @@ pub(crate) fn plan(
     }
     for backend in backends {
         let list = known.get(backend.name());
-        if backend.codec().is_some() {
-            for case in &corpus.cross_vendor {
+        if let Some(abilities) = backend.codec() {
+            // A protocol's codec is judged by its protocol's cases, and by the cross-vendor
+            // (instruction) view only when it asks; a codec of no protocol by the latter.
+            let protocol = abilities.protocol.as_ref();
+            let fields = (corpus.protocol_fields.iter()).filter(|c| {
+                protocol.is_some_and(|p| c.protocol.as_ref().is_some_and(|f| f.protocol == p.id))
+            });
+            let cross_vendor =
+                (corpus.cross_vendor.iter()).filter(|_| abilities.takes_cross_vendor());
+            for case in fields.chain(cross_vendor) {
                 let mut t = Trial {
                     backend: backend.clone(),
                     profile: None,

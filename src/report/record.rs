@@ -273,6 +273,7 @@ fn behaviour(trial: &Trial, verdict: &Verdict) -> Behaviour {
                 a if Some(a) == case.expect.as_ref() => AnswerClass::Plain,
                 Answer::Value(_) => AnswerClass::OtherValue,
                 Answer::Text(_) => AnswerClass::OtherText,
+                Answer::Accepted => AnswerClass::OtherValue,
             };
             return Behaviour::Answer { class };
         }

@@ -69,7 +69,7 @@ pub fn describe_setting(trial: &Trial) -> String {
     );
     if let Some(case) = trial.cross_vendor_case() {
         let question = match case.operation {
-            Operation::HexToValue => format!(
+            Operation::HexToValue | Operation::Check | Operation::Verify => format!(
                 "{} {}, {} digit(s)",
                 case.operation,
                 crate::model::cross_vendor::Answer::Text(case.text.clone()),
@@ -83,6 +83,20 @@ pub fn describe_setting(trial: &Trial) -> String {
             ),
         };
         let _ = writeln!(out, "  question:    {question}");
+        if let Some(from) = &case.protocol {
+            let _ = writeln!(
+                out,
+                "  field:       {} of {}\n  rule:        {}",
+                from.field, from.protocol, from.rule
+            );
+        } else if let Some(p) = (trial.backend.codec()).and_then(|c| c.protocol.as_ref()) {
+            let _ = writeln!(
+                out,
+                "  view:        cross-vendor: an instruction manual decides this case, no rule \
+                 of {}",
+                p.id
+            );
+        }
         match &trial.check {
             Check::CrossVendor { lowering, .. } => {
                 let _ = writeln!(

@@ -6,7 +6,7 @@ use std::sync::{Arc, OnceLock};
 
 use crate::backend::external::{ExternalBackend, ExternalError};
 use crate::backend::{Backend, Fault, Request, Response};
-use crate::model::cross_vendor::{CodecAbilities, OperationAbilities};
+use crate::model::cross_vendor::{CodecAbilities, OperationAbilities, ProtocolClaim};
 use crate::model::profile::Profiles;
 use crate::model::project::ExternalSettings;
 use crate::plan::Trial;
@@ -63,7 +63,14 @@ pub(super) struct Placeholder {
 }
 
 impl Placeholder {
-    pub(super) fn new(name: String, profile: Option<String>, lazy: Arc<LazyStart>) -> Self {
+    /// `protocol` is a codec's declared protocol and whether it asks for the cross-vendor view
+    /// too.
+    pub(super) fn new(
+        name: String,
+        profile: Option<String>,
+        protocol: Option<(String, bool)>,
+        lazy: Arc<LazyStart>,
+    ) -> Self {
         Placeholder {
             name,
             // Planned as able to answer anything; the started backend's own capabilities
@@ -77,7 +84,14 @@ impl Placeholder {
                 };
                 CodecAbilities {
                     hex_to_value: Some(any.clone()),
-                    value_to_hex: Some(any),
+                    value_to_hex: Some(any.clone()),
+                    check: Some(any.clone()),
+                    verify: Some(any),
+                    protocol: protocol.map(|(id, cross_vendor)| ProtocolClaim {
+                        id,
+                        fields: None,
+                        cross_vendor,
+                    }),
                 }
             }),
             profile: profile.unwrap_or_default(),

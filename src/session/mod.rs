@@ -67,6 +67,12 @@ pub enum SetupError {
     Duplicate(String),
     /// No built-in reference model has this name.
     NoModel(String),
+    /// A codec configured as implementing a protocol no profile defines.
+    NoProtocol {
+        backend: String,
+        protocol: String,
+        known: Vec<String>,
+    },
     /// A live CPU backend whose settings, program manifest or interlocks (type name, RUN, the
     /// program's signature) refused it before anything was written: the backend and why.
     Live { backend: String, source: LiveError },
@@ -79,6 +85,16 @@ impl fmt::Display for SetupError {
             SetupError::External(e) => write!(f, "{e}"),
             SetupError::Duplicate(name) => write!(f, "there are two backends named `{name}`"),
             SetupError::NoModel(name) => write!(f, "no built-in reference model named `{name}`"),
+            SetupError::NoProtocol {
+                backend,
+                protocol,
+                known,
+            } => write!(
+                f,
+                "backend `{backend}` is configured as implementing protocol `{protocol}`, which \
+                 no protocol profile defines; the protocols are: {}",
+                known.join(", ")
+            ),
             SetupError::Live { backend, .. } => {
                 write!(f, "live CPU backend `{backend}` not started")
             }
@@ -91,7 +107,9 @@ impl std::error::Error for SetupError {
         match self {
             SetupError::Load(e) => e.source(),
             SetupError::External(e) => e.source(),
-            SetupError::Duplicate(_) | SetupError::NoModel(_) => None,
+            SetupError::Duplicate(_) | SetupError::NoModel(_) | SetupError::NoProtocol { .. } => {
+                None
+            }
             SetupError::Live { source, .. } => Some(source),
         }
     }
@@ -219,6 +237,19 @@ impl Session {
             }
             BackendSource::ProcessOnFirstUse(settings) => {
                 let profile = settings.profile.clone();
+                let protocol = match &settings.protocol {
+                    None => None,
+                    Some(id) if self.project.profiles.protocols.get(id).is_some() => {
+                        Some((id.clone(), settings.cross_vendor))
+                    }
+                    Some(id) => {
+                        return Err(SetupError::NoProtocol {
+                            backend: name.clone(),
+                            protocol: id.clone(),
+                            known: self.project.profiles.protocols.ids(),
+                        })
+                    }
+                };
                 if let Some(file) = &settings.known_differences {
                     let p = profile.as_deref().unwrap_or("");
                     self.project
@@ -227,7 +258,7 @@ impl Session {
                 }
                 let lazy = Arc::new(LazyStart::new(settings, self.project.profiles.clone()));
                 self.on_first_use.push(lazy.clone());
-                Arc::new(Placeholder::new(name.clone(), profile, lazy))
+                Arc::new(Placeholder::new(name.clone(), profile, protocol, lazy))
             }
             BackendSource::Bench(settings) => {
                 let live = self.live(*settings)?;

@@ -18,6 +18,12 @@ pub enum Operation {
     HexToValue,
     /// Binary value -> hex ASCII text (BINHA, FX5 ASCI, HTOA).
     ValueToHex,
+    /// A protocol's check character: the checked span -> its check characters (the Modbus
+    /// ASCII LRC, the MC sum check, the MEWTOCOL BCC). Protocol-field cases only.
+    Check,
+    /// A protocol's check character verified: the span followed by its check characters ->
+    /// accepted, or `bad-check`. Protocol-field cases only.
+    Verify,
 }
 
 impl fmt::Display for Operation {
@@ -25,6 +31,8 @@ impl fmt::Display for Operation {
         f.write_str(match self {
             Operation::HexToValue => "hex-to-value",
             Operation::ValueToHex => "value-to-hex",
+            Operation::Check => "check",
+            Operation::Verify => "verify",
         })
     }
 }
@@ -43,6 +51,9 @@ pub enum ErrorClass {
     DeviceRange,
     /// An error whose kind the vendor does not tell (IDEC M8004).
     Error,
+    /// Check characters that do not match the span they check (a protocol's LRC, sum check,
+    /// BCC or FCS).
+    BadCheck,
 }
 
 impl fmt::Display for ErrorClass {
@@ -52,6 +63,7 @@ impl fmt::Display for ErrorClass {
             ErrorClass::InvalidCount => "invalid-count",
             ErrorClass::DeviceRange => "device-range",
             ErrorClass::Error => "error",
+            ErrorClass::BadCheck => "bad-check",
         })
     }
 }

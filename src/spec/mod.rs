@@ -11,6 +11,7 @@ pub(crate) mod known;
 pub(crate) mod open_questions;
 pub(crate) mod profile;
 pub(crate) mod project;
+pub(crate) mod protocol;
 pub(crate) mod vectors;
 
 pub use vectors::Basis;
@@ -31,6 +32,10 @@ pub enum SchemaKind {
     Known,
     /// The open-questions file, `docs/open-questions.yaml`.
     OpenQuestions,
+    /// Protocol profiles (`vendors/protocols/*.yaml`).
+    Protocol,
+    /// Protocol-field vector files (`vectors/protocols/*.yaml`).
+    ProtocolFields,
 }
 
 /// The JSON Schema (draft-07) of one on-disk format.
@@ -42,6 +47,8 @@ pub fn schema(kind: SchemaKind) -> serde_json::Value {
         SchemaKind::Project => schema_of::<project::ProjectFileSpec>(),
         SchemaKind::Known => schema_of::<known::KnownFileSpec>(),
         SchemaKind::OpenQuestions => schema_of::<open_questions::OpenQuestionsSpec>(),
+        SchemaKind::Protocol => schema_of::<protocol::ProtocolSpec>(),
+        SchemaKind::ProtocolFields => schema_of::<protocol::ProtocolFileSpec>(),
     }
 }
 

@@ -29,6 +29,13 @@ pub(crate) struct BackendSpec {
     /// instruction-level backend, it lets `cargo test` plan its trials without starting it.
     #[serde(default)]
     pub codec: bool,
+    /// A codec-level backend that implements a protocol's fields (`mc-ascii`, `modbus-ascii`):
+    /// it is judged by that protocol's corpus, and its handshake must name the same protocol.
+    #[serde(default)]
+    pub protocol: Option<String>,
+    /// With `protocol`: also run the cross-vendor (instruction) corpus.
+    #[serde(default)]
+    pub cross_vendor: bool,
     /// Seconds to wait for one case's answer.
     #[serde(default)]
     pub timeout: Option<f64>,

@@ -200,6 +200,7 @@ pub(crate) fn codec_replies(
                     text,
                     value,
                     digits: point.digits,
+                    field: "",
                 });
             }
         }

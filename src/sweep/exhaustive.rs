@@ -181,7 +181,7 @@ pub fn agrees(code: u32, reply: &Reply) -> bool {
             Answer::ErrorAndValue(_, v) => {
                 code & WITH_ERROR != 0 && u64::from(code & !WITH_ERROR) == *v
             }
-            Answer::Text(_) => false,
+            Answer::Text(_) | Answer::Accepted => false,
         },
         _ => false,
     }
@@ -273,6 +273,7 @@ fn class_code(c: &crate::model::cross_vendor::ErrorClass) -> u64 {
             ErrorClass::InvalidCount => 1,
             ErrorClass::DeviceRange => 2,
             ErrorClass::Error => 3,
+            ErrorClass::BadCheck => 4,
         }
 }
 
@@ -300,6 +301,7 @@ impl InProcess<'_> {
             text: &text,
             value: 0,
             digits: 4,
+            field: "",
         };
         // A panic is kept apart too: the general path asks the text and records the crash.
         match crate::backend::convert_or_panic(self.codec, &question) {
@@ -358,7 +360,7 @@ pub fn plan(sweep: &Sweep) -> Option<Plan<'_>> {
                 codec,
                 abilities: crate::model::cross_vendor::CodecAbilities {
                     hex_to_value: Some(field.1.clone()),
-                    value_to_hex: None,
+                    ..Default::default()
                 },
                 declined: Declined::Some,
             };

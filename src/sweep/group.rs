@@ -100,6 +100,7 @@ impl Reply {
                 Answer::Error(c) => (Cow::Owned(c.to_string()), false),
                 Answer::ErrorAndValue(c, _) => (Cow::Owned(format!("{c} and value")), true),
                 Answer::OtherError(e) => (Cow::Owned(format!("error {e}")), false),
+                Answer::Accepted => (Cow::Borrowed("accepted"), true),
             },
             Reply::Memory { effect, .. } => match (&effect.error, effect.changed.is_empty()) {
                 (Some(e), true) => (Cow::Owned(format!("error {e}")), false),

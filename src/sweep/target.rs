@@ -298,10 +298,7 @@ fn codec_oracles(
         let declared = out[i]
             .backend
             .codec()
-            .and_then(|c| match operation {
-                Operation::HexToValue => c.hex_to_value.as_ref(),
-                Operation::ValueToHex => c.value_to_hex.as_ref(),
-            })
+            .and_then(|c| c.of(operation))
             .and_then(|a| a.reading.clone());
         let (name, from) = match (oracle, declared) {
             (Oracle::None, _) | (Oracle::Declared, None) => continue,
@@ -341,10 +338,7 @@ pub(crate) fn columns(
         match target {
             Target::Operation { operation } => {
                 if let Some(abilities) = backend.codec() {
-                    let implemented = match operation {
-                        Operation::HexToValue => abilities.hex_to_value.is_some(),
-                        Operation::ValueToHex => abilities.value_to_hex.is_some(),
-                    };
+                    let implemented = abilities.of(*operation).is_some();
                     if implemented {
                         out.push(Column {
                             name: backend.name().to_string(),
@@ -355,11 +349,7 @@ pub(crate) fn columns(
                             oracle: None,
                             in_process: false,
                             lowering_skip: None,
-                            field: match operation {
-                                Operation::HexToValue => abilities.hex_to_value.clone(),
-                                Operation::ValueToHex => abilities.value_to_hex.clone(),
-                            }
-                            .map(|a| (*operation, a)),
+                            field: abilities.of(*operation).cloned().map(|a| (*operation, a)),
                         });
                     }
                     continue;
@@ -538,6 +528,7 @@ impl Cases {
                         expect: None,
                         except: BTreeMap::new(),
                         note: None,
+                        protocol: None,
                     })),
                     native: None,
                 }

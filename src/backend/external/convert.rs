@@ -258,11 +258,11 @@ fn read_answers(
                 (_, Converted::Unsupported(ConvertedUnsupported { unsupported })) => {
                     Response::Unsupported(unsupported)
                 }
-                (Operation::HexToValue, Converted::Text(_)) => {
-                    return Err(format!("a text answers {} (hex-to-value)", q.case_id))
-                }
-                (Operation::ValueToHex, Converted::Value(_)) => {
-                    return Err(format!("a value answers {} (value-to-hex)", q.case_id))
+                (operation, Converted::Text(_) | Converted::Value(_)) => {
+                    return Err(format!(
+                        "the wrong kind of answer to {} ({operation})",
+                        q.case_id
+                    ))
                 }
             }))
         })
@@ -275,9 +275,10 @@ pub(super) fn codec_case(q: &Question<'_>, id: u64) -> RunCase {
         id,
         case: q.case_id.to_string(),
         operation: q.operation,
-        text: (q.operation == Operation::HexToValue).then(|| q.text.to_vec()),
+        text: (q.operation != Operation::ValueToHex).then(|| q.text.to_vec()),
         value: (q.operation == Operation::ValueToHex).then_some(q.value),
         digits: q.digits,
+        field: (!q.field.is_empty()).then(|| q.field.to_string()),
     })
 }
 
@@ -292,6 +293,7 @@ mod tests {
             text: b"5A8D",
             value: 0x5A8D,
             digits: 4,
+            field: "",
         }
     }
 

@@ -35,7 +35,7 @@ use super::{Backend, Fault, Outcome, Question, Request, Response, Setting};
 use crate::device::Device;
 use crate::memory::{Fill, Unit, Value};
 use crate::model::cross_vendor::{
-    Answer, CodecAbilities, FieldShape, Operation, OperationAbilities,
+    Answer, CodecAbilities, FieldShape, Operation, OperationAbilities, ProtocolClaim,
 };
 use crate::model::profile::{Profile, Profiles};
 use crate::model::project::ExternalSettings;
@@ -381,8 +381,11 @@ impl ExternalBackend {
                 error,
                 value,
                 text,
+                accepted,
             } if id == case.id() => match case {
-                RunCase::Instruction(case) if value.is_none() && text.is_none() => {
+                RunCase::Instruction(case)
+                    if value.is_none() && text.is_none() && accepted.is_none() =>
+                {
                     let unit = self.profile.as_ref().map_or(Unit::Word, |p| p.unit);
                     let registers = self
                         .profile
@@ -393,9 +396,10 @@ impl ExternalBackend {
                         .map_err(|e| unexpected(e.0))
                 }
                 RunCase::Instruction(_) => Err(unexpected(
-                    "a codec answer (`value` or `text`) to an instruction request".into(),
+                    "a codec answer (`value`, `text` or `accepted`) to an instruction request"
+                        .into(),
                 )),
-                RunCase::Codec(_) => codec_answer(memory, writes, error, value, text)
+                RunCase::Codec(_) => codec_answer(memory, writes, error, value, text, accepted)
                     .map(Response::Answer)
                     .map_err(|e| unexpected(e.0)),
             },
@@ -445,7 +449,9 @@ impl Backend for ExternalBackend {
         questions: &[Question<'_>],
         answered: &mut dyn FnMut(usize),
     ) -> Vec<Result<Response, Fault>> {
-        if self.converts() {
+        // A `convert` message carries conversions only: a protocol field's question (its
+        // field, a check) travels in `run` messages.
+        if self.converts() && questions.iter().all(|q| q.field.is_empty()) {
             return self.convert_all(questions, answered);
         }
         self.send_all(questions.len(), answered, |i, id| {
@@ -883,13 +889,115 @@ fn check_codec(
     let abilities = CodecAbilities {
         hex_to_value: ability(Operation::HexToValue, &codec.hex_to_value)?,
         value_to_hex: ability(Operation::ValueToHex, &codec.value_to_hex)?,
+        check: ability(Operation::Check, &codec.check)?,
+        verify: ability(Operation::Verify, &codec.verify)?,
+        protocol: protocol_claim(spec, codec, profiles)?,
     };
-    if abilities.hex_to_value.is_none() && abilities.value_to_hex.is_none() {
+    if [
+        Operation::HexToValue,
+        Operation::ValueToHex,
+        Operation::Check,
+        Operation::Verify,
+    ]
+    .iter()
+    .all(|o| abilities.of(*o).is_none())
+    {
         return Err(ExternalErrorKind::Capabilities(
             "claims the codec level but no operation".into(),
         ));
     }
     Ok(abilities)
+}
+
+/// Checks a codec's protocol: one a protocol profile defines, the one its configuration names
+/// (a backend planned before it starts is planned by that), with fields the profile has.
+fn protocol_claim(
+    spec: &ExternalSettings,
+    codec: &protocol::CodecCapabilities,
+    profiles: &Profiles,
+) -> Result<Option<ProtocolClaim>, ExternalErrorKind> {
+    let refuse = |why: String| Err(ExternalErrorKind::Capabilities(why));
+    let Some(id) = &codec.protocol else {
+        if codec.fields.is_some() || codec.cross_vendor.is_some() {
+            return refuse(
+                "gives `fields` or `cross-vendor` but no `protocol`; name the protocol whose \
+                 fields it implements"
+                    .into(),
+            );
+        }
+        if let Some(configured) = &spec.protocol {
+            return refuse(format!(
+                "is configured as implementing protocol `{configured}` but its handshake names \
+                 no protocol"
+            ));
+        }
+        if codec.check.is_some() || codec.verify.is_some() {
+            return refuse(
+                "claims `check` or `verify` but no `protocol`: a check character is a \
+                 protocol's"
+                    .into(),
+            );
+        }
+        return Ok(None);
+    };
+    let Some(found) = profiles.protocols.get(id) else {
+        return refuse(format!(
+            "names protocol `{id}`, which no protocol profile defines; the protocols are: {}",
+            profiles.protocols.ids().join(", ")
+        ));
+    };
+    match &spec.protocol {
+        Some(configured) if configured != id => {
+            return refuse(format!(
+                "is configured as implementing protocol `{configured}` but its handshake names \
+                 `{id}`"
+            ))
+        }
+        None if spec.codec => {
+            return refuse(format!(
+                "names protocol `{id}` but its configuration does not: add `protocol: {id}` to \
+                 its entry in the project file, so that its trials are planned by that protocol"
+            ))
+        }
+        _ => {}
+    }
+    let cross_vendor = codec.cross_vendor.unwrap_or(false);
+    if spec.protocol.is_some() && cross_vendor != spec.cross_vendor {
+        return refuse(format!(
+            "asks for the cross-vendor view {} but its configuration {}; make `cross_vendor` in \
+             the project file and `cross-vendor` in the handshake agree",
+            if cross_vendor { "too" } else { "not" },
+            if spec.cross_vendor {
+                "does"
+            } else {
+                "does not"
+            }
+        ));
+    }
+    if let Some(fields) = &codec.fields {
+        if fields.is_empty() {
+            return refuse(format!(
+                "implements no field of {id} (`fields: []`); list them, or leave `fields` out for \
+                 every one"
+            ));
+        }
+        let known: Vec<&String> = found.fields.keys().collect();
+        if let Some(unknown) = fields.iter().find(|f| !found.fields.contains_key(*f)) {
+            return refuse(format!(
+                "claims field `{unknown}` of {id}, which has: {}",
+                known
+                    .iter()
+                    .map(|k| k.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
+    }
+    Ok(Some(ProtocolClaim {
+        id: id.clone(),
+        fields: codec.fields.clone(),
+        cross_vendor,
+    }))
 }
 
 /// Checks a handshake's capabilities against the profiles and the configured family.
@@ -1130,11 +1238,29 @@ fn codec_answer(
     error: Option<ErrorReport>,
     value: Option<i64>,
     text: Option<Vec<u8>>,
+    accepted: Option<bool>,
 ) -> Result<Answer, ProtocolViolation> {
     if !memory.is_empty() || !writes.is_empty() {
         return Err(ProtocolViolation(
             "`memory` or `writes` in the answer to a codec question".into(),
         ));
+    }
+    match accepted {
+        Some(true) if value.is_none() && text.is_none() && error.is_none() => {
+            return Ok(Answer::Accepted)
+        }
+        Some(true) => {
+            return Err(ProtocolViolation(
+                "`accepted` and a `value`, `text` or `error` in one codec answer".into(),
+            ))
+        }
+        Some(false) => {
+            return Err(ProtocolViolation(
+                "`accepted: false` in a codec answer; a mismatch is `\"error\": \"bad-check\"`"
+                    .into(),
+            ))
+        }
+        None => {}
     }
     match (value, text, error) {
         // A negative value (some libraries return one) is an answer that differs, not garbage.

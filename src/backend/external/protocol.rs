@@ -207,6 +207,9 @@ pub struct CodecRequest {
     pub value: Option<u64>,
     /// The digit count (FX5 n, IDEC S2).
     pub digits: u32,
+    /// A protocol-field question: the field of the codec's protocol asked (`word`, `lrc`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub field: Option<String>,
 }
 
 /// An operand: a device name or a constant.
@@ -358,6 +361,10 @@ pub enum BackendMessage {
         /// Codec level, value-to-hex: the characters written, as byte values.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         text: Option<Vec<u8>>,
+        /// Codec level, verify: `true` when the check characters match their span (a mismatch
+        /// is the error `bad-check`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        accepted: Option<bool>,
     },
     /// The backend does not implement this case. For a case it claims in its capabilities this
     /// counts as a difference, never as a skip.
@@ -492,6 +499,27 @@ pub struct CodecCapabilities {
         skip_serializing_if = "Option::is_none"
     )]
     pub value_to_hex: Option<OperationCapabilities>,
+    /// A protocol's check characters computed over a span; absent when not implemented.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub check: Option<OperationCapabilities>,
+    /// A protocol's check characters verified; absent when not implemented.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub verify: Option<OperationCapabilities>,
+    /// The protocol whose fields the codec implements (`mc-ascii`, `modbus-ascii`): it is
+    /// judged by that protocol's corpus (`vectors/protocols/`) instead of the cross-vendor one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub protocol: Option<String>,
+    /// The protocol's fields implemented, by the protocol profile's names; every field when
+    /// absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fields: Option<Vec<String>>,
+    /// With `protocol`: also run the cross-vendor (instruction) corpus, the second view.
+    #[serde(
+        rename = "cross-vendor",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub cross_vendor: Option<bool>,
 }
 
 /// What one codec operation takes.
@@ -735,6 +763,7 @@ impl BackendMessage {
             capabilities: Option<Capabilities>,
             value: Option<i64>,
             text: Option<Vec<u8>>,
+            accepted: Option<bool>,
             answers: Option<Vec<Converted>>,
         }
         let l: Line = serde_json::from_slice(line)?;
@@ -749,13 +778,16 @@ impl BackendMessage {
             ("capabilities", l.capabilities.is_some()),
             ("value", l.value.is_some()),
             ("text", l.text.is_some()),
+            ("accepted", l.accepted.is_some()),
             ("answers", l.answers.is_some()),
         ];
         let only = |allowed: &[&str]| only_fields(&l.kind, &present, allowed);
         let missing = |k: &'static str| serde_json::Error::missing_field(k);
         match l.kind.as_str() {
             "result" => {
-                only(&["id", "memory", "writes", "error", "value", "text"])?;
+                only(&[
+                    "id", "memory", "writes", "error", "value", "text", "accepted",
+                ])?;
                 Ok(BackendMessage::Result {
                     id: l.id.ok_or_else(|| missing("id"))?,
                     memory: l.memory.unwrap_or_default(),
@@ -763,6 +795,7 @@ impl BackendMessage {
                     error: l.error,
                     value: l.value,
                     text: l.text,
+                    accepted: l.accepted,
                 })
             }
             "unsupported" => {
@@ -891,6 +924,7 @@ mod tests {
                 error: Some(ErrorReport::Signal(SignalReport::Code(0x3401))),
                 value: None,
                 text: None,
+                accepted: None,
             }
         );
         let codec: BackendMessage =

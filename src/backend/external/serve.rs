@@ -226,6 +226,7 @@ fn answer(backend: &dyn Backend, profile: &Profile, case: &CaseRequest) -> Backe
             }),
             value: None,
             text: None,
+            accepted: None,
         },
         Ok(Response::Unsupported(reason)) => unsupported(reason),
         Ok(Response::Answer(_)) => unsupported("a codec answer to an instruction request".into()),
