@@ -287,11 +287,12 @@ fn remember(
     changed
 }
 
-/// The backend of a trial's name: `backend::...`, or `cross-vendor::backend::...`.
+/// The backend of a trial's name: `backend::...`, `cross-vendor::backend::...` or
+/// `protocol::backend::...`.
 fn backend_of(name: &str) -> &str {
     let mut parts = name.split("::");
     match parts.next() {
-        Some("cross-vendor") => parts.next().unwrap_or_default(),
+        Some("cross-vendor" | "protocol") => parts.next().unwrap_or_default(),
         first => first.unwrap_or_default(),
     }
 }

@@ -627,6 +627,7 @@ mod known_tests {
             instruction: None,
             variant: None,
             kind: None,
+            rule: None,
             reason: "r".into(),
             location: "k.yaml:2".into(),
         }

@@ -131,14 +131,20 @@ pub fn load_known(
                 (Some(kind), false) => format!("{reason} ({kind})"),
             },
         };
+        let shown = match &e.rule {
+            Some(rule) => format!("{shown} [{rule}]"),
+            None => shown,
+        };
         let entry = Entry {
             covers,
             instruction: e.instruction,
             variant: e.variant,
             kind: e.kind,
+            rule: e.rule,
             reason: shown,
             location,
         };
+        check_rule(&entry, corpus, &mut cx, &key);
         if entry.reason.is_empty() {
             cx.error(
                 key("reason"),
@@ -183,7 +189,9 @@ pub fn load_known(
             continue;
         }
         let case_id = entry.case().unwrap_or_default().to_string();
-        let cross_vendor = corpus.cross_vendor.iter().find(|c| c.id == case_id);
+        let cross_vendor = (corpus.cross_vendor.iter())
+            .chain(&corpus.protocol_fields)
+            .find(|c| c.id == case_id);
         let Some(profile) = profile else {
             // A codec has neither instructions nor variants, and answers cross-vendor cases only.
             codec_has_no_instruction(&entry, &mut cx, &key);
@@ -280,7 +288,10 @@ fn check_cause(
     key: &dyn Fn(&str) -> String,
 ) {
     let ids: Vec<&str> = match profile {
-        None => corpus.cross_vendor.iter().map(|c| c.id.as_str()).collect(),
+        None => (corpus.cross_vendor.iter())
+            .chain(&corpus.protocol_fields)
+            .map(|c| c.id.as_str())
+            .collect(),
         Some(p) => corpus
             .cases
             .iter()
@@ -302,6 +313,51 @@ fn check_cause(
             codec_has_no_instruction(entry, cx, key);
         }
         Some(p) => variant_exists(entry, p, cx, key),
+    }
+}
+
+/// An entry that covers protocol-field cases names the protocol rule it breaks, one of theirs;
+/// an entry that covers none names no rule.
+fn check_rule(
+    entry: &Entry,
+    corpus: &Corpus,
+    cx: &mut FileContext<'_>,
+    key: &dyn Fn(&str) -> String,
+) {
+    let rules: std::collections::BTreeSet<&str> = (corpus.protocol_fields.iter())
+        .filter(|c| {
+            entry.matches(&crate::model::known::Subject {
+                case: &c.id,
+                text: Some(&c.text),
+                instruction: "codec",
+                variant: "",
+            })
+        })
+        .filter_map(|c| c.protocol.as_ref().map(|p| p.rule.key.as_str()))
+        .collect();
+    let listed = || rules.iter().copied().collect::<Vec<_>>().join(", ");
+    match &entry.rule {
+        None if !rules.is_empty() => cx.error(
+            key("rule"),
+            LoadErrorKind::Invalid(format!(
+                "an entry for protocol-field cases names the rule it breaks: `rule: {}`",
+                listed()
+            )),
+        ),
+        Some(rule) if rules.is_empty() => cx.error(
+            key("rule"),
+            LoadErrorKind::Invalid(format!(
+                "`{rule}` is a protocol rule, and the entry covers no protocol-field case"
+            )),
+        ),
+        Some(rule) if !rules.contains(rule.as_str()) => cx.error(
+            key("rule"),
+            LoadErrorKind::Invalid(format!(
+                "the cases this entry covers test {}, not `{rule}`",
+                listed()
+            )),
+        ),
+        _ => {}
     }
 }
 

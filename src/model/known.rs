@@ -53,6 +53,8 @@ pub struct Entry {
     pub instruction: Option<String>,
     pub variant: Option<String>,
     pub kind: Option<Kind>,
+    /// The protocol rule it breaks (`modbus-ascii/B3`), for protocol-field cases.
+    pub rule: Option<String>,
     /// What a report shows: the reason, or the kind and the cause.
     pub reason: String,
     /// `file:line` of the entry, to point at when it goes stale.

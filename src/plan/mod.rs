@@ -70,8 +70,8 @@ pub struct Trial {
 }
 
 impl Trial {
-    /// `backend::instruction::case-id::variant`, or `cross-vendor::backend::lowering::case-id::
-    /// variant`: filtering on a prefix selects a backend, an instruction or a case across
+    /// `backend::instruction::case-id::variant`, `cross-vendor::backend::lowering::case-id::
+    /// variant`, or for a protocol's codec `protocol::backend::protocol::case-id`: filtering on a prefix selects a backend, an instruction or a case across
     /// variants. The basis is not part of the name, so a name survives a change of basis.
     pub fn name(&self) -> String {
         match &self.check {
@@ -89,9 +89,15 @@ impl Trial {
                 case.id,
                 self.variant
             ),
-            Check::Codec { case } => {
-                format!("cross-vendor::{}::codec::{}", self.backend.name(), case.id)
-            }
+            Check::Codec { case } => match &case.protocol {
+                Some(from) => format!(
+                    "protocol::{}::{}::{}",
+                    self.backend.name(),
+                    from.protocol,
+                    case.id
+                ),
+                None => format!("cross-vendor::{}::codec::{}", self.backend.name(), case.id),
+            },
         }
     }
 

@@ -18,6 +18,11 @@ use crate::judge::Status;
 fn names(record: &Record) -> (String, String, String) {
     let parts: Vec<&str> = record.trial.split("::").collect();
     match parts.as_slice() {
+        ["protocol", backend, protocol, rest @ ..] => (
+            backend.to_string(),
+            format!("{backend}.protocol.{protocol}"),
+            rest.join("::"),
+        ),
         ["cross-vendor", backend, rest @ ..] => {
             // The case first, then how it was asked: `case::lowering::variant`.
             let name = match rest {

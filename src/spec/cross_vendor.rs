@@ -13,6 +13,7 @@ use super::vectors::{Basis, ScalarSpec};
     Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Deserialize, Serialize, JsonSchema,
 )]
 #[serde(rename_all = "kebab-case")]
+#[non_exhaustive]
 pub enum Operation {
     /// Hex ASCII text -> binary value (HABIN, FX5 HEXA, ATOH).
     HexToValue,
@@ -42,6 +43,7 @@ impl fmt::Display for Operation {
     Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Deserialize, Serialize, JsonSchema,
 )]
 #[serde(rename_all = "kebab-case")]
+#[non_exhaustive]
 pub enum ErrorClass {
     /// A character that is not a hex digit.
     InvalidDigit,

@@ -38,6 +38,10 @@ pub(crate) struct EntrySpec {
     /// Whether the difference is a bug or a deliberate choice of the implementation.
     #[serde(default)]
     pub kind: Option<Kind>,
+    /// The protocol rule the difference breaks, `<protocol>/<rule>` (`modbus-ascii/B3`):
+    /// required for an entry that covers protocol-field cases, and the rule of one of them.
+    #[serde(default)]
+    pub rule: Option<String>,
     /// Why the backend differs: shown with the trial. Required for a single case; for an entry
     /// by cause, more detail after the cause.
     #[serde(default)]

@@ -1,12 +1,15 @@
 //! rmodbus's Modbus ASCII hex coding as a plc-conformance codec.
 //!
 //! A Modbus ASCII frame carries every byte as two hex characters, high nibble first; a 16-bit
-//! register is two bytes, high byte first, so its four characters read like a hex number. That
-//! is the conversion HABIN and BINHA (SM705 off), FX5 HEXA/ASCI and IDEC ATOH/HTOA make, so
-//! rmodbus's `parse_ascii_frame` and `generate_ascii_frame` answer the cross-vendor questions
-//! with 2 digits (a byte) or 4 (a register).
+//! register is two bytes, high byte first, so its four characters read like a hex number
+//! (MODBUS over Serial Line V1.02). rmodbus's `parse_ascii_frame` and `generate_ascii_frame`
+//! are judged first by that protocol's corpus (`protocol: modbus-ascii`, its byte and register
+//! fields), and also by the cross-vendor view: the same conversion as HABIN and BINHA (SM705
+//! off), FX5 HEXA/ASCI and IDEC ATOH/HTOA, with 2 digits (a byte) or 4 (a register).
 
-use plc_conformance::{Answer, CodecAbilities, ErrorClass, Operation, OperationAbilities};
+use plc_conformance::{
+    Answer, CodecAbilities, ErrorClass, Operation, OperationAbilities, ProtocolClaim,
+};
 use plc_conformance::{Codec, Question, Unsupported};
 
 /// rmodbus 0.13 as a codec: the library calls and nothing else.
@@ -26,15 +29,27 @@ impl Codec for Rmodbus {
         CodecAbilities {
             hex_to_value: Some(field.clone()),
             value_to_hex: Some(field),
+            protocol: Some(ProtocolClaim {
+                id: "modbus-ascii".into(),
+                fields: Some(vec!["byte".into(), "register".into()]),
+                cross_vendor: true,
+            }),
+            ..CodecAbilities::default()
         }
     }
 
     fn convert(&self, q: &Question<'_>) -> Result<Answer, Unsupported> {
         match q.operation {
             Operation::HexToValue => {
-                // The field's characters as they arrive; rmodbus indexes the first byte without
-                // a length check, so an empty field is not handed to it.
-                let field = &q.text[..q.text.len().min(q.digits as usize)];
+                // A protocol field is the whole text, as a frame would carry it (rmodbus decodes
+                // what it is given, of any length); the cross-vendor view gives the characters
+                // as they arrive, the field's digits first. rmodbus indexes the first byte
+                // without a length check, so an empty field is not handed to it.
+                let field = if q.field.is_empty() {
+                    &q.text[..q.text.len().min(q.digits as usize)]
+                } else {
+                    q.text
+                };
                 if field.is_empty() {
                     return Ok(Answer::Error(ErrorClass::InvalidDigit));
                 }
@@ -62,6 +77,7 @@ impl Codec for Rmodbus {
                 let text = frame.get(1..frame.len().saturating_sub(2)).unwrap_or(&[]);
                 Ok(Answer::Text(text.to_vec()))
             }
+            other => Err(Unsupported(format!("implements no {other}"))),
         }
     }
 }

@@ -24,10 +24,8 @@ fn rmodbus_fails_exactly_its_known_differences() {
         .known_differences(backend.as_ref(), &here.join("rmodbus.known.yaml"))
         .unwrap_or_else(|e| panic!("{e}"));
     // The cases the entries cover, each listed or covered by a cause.
-    let mut listed: Vec<String> = project
-        .corpus
-        .cross_vendor
-        .iter()
+    let mut listed: Vec<String> = (project.corpus.cross_vendor.iter())
+        .chain(&project.corpus.protocol_fields)
         .filter(|c| {
             known.entries.iter().any(|e| {
                 e.matches(&Subject {
