@@ -46,21 +46,26 @@
 //! }
 //! ```
 //!
-//! A codec answers with a value, a text or an error class:
+//! A codec answers with a value, a text or an error class. A protocol library's codec names the
+//! protocol whose fields it implements, and is judged by that protocol's own manual
+//! (`vectors/protocols/`), each difference naming the rule it breaks and its page; a codec of
+//! no protocol (`protocol: None`) runs the cross-vendor (instruction) corpus instead:
 //!
 //! ```
 //! use plc_conformance::{Answer, Codec, CodecAbilities, ErrorClass, Operation,
-//!     OperationAbilities, Question, Unsupported};
+//!     OperationAbilities, ProtocolClaim, Question, Unsupported};
 //!
+//! /// A Modbus ASCII register read with `u16::from_str_radix`.
 //! struct FromStrRadix;
 //!
 //! impl Codec for FromStrRadix {
 //!     fn name(&self) -> &str { "from-str-radix" }
 //!     fn abilities(&self) -> CodecAbilities {
 //!         CodecAbilities {
-//!             hex_to_value: Some(OperationAbilities { digits: Some(vec![4]), width: 16,
-//!                 ..OperationAbilities::default() }),
-//!             value_to_hex: None,
+//!             hex_to_value: Some(OperationAbilities::default()),
+//!             protocol: Some(ProtocolClaim { id: "modbus-ascii".into(),
+//!                 fields: Some(vec!["register".into()]), cross_vendor: false }),
+//!             ..CodecAbilities::default()
 //!         }
 //!     }
 //!     fn convert(&self, q: &Question<'_>) -> Result<Answer, Unsupported> {
@@ -68,7 +73,7 @@
 //!             Operation::HexToValue => Ok(std::str::from_utf8(q.text).ok()
 //!                 .and_then(|t| u16::from_str_radix(t, 16).ok())
 //!                 .map_or(Answer::Error(ErrorClass::InvalidDigit), |v| Answer::Value(v.into()))),
-//!             Operation::ValueToHex => Err(Unsupported("decode only".into())),
+//!             _ => Err(Unsupported("decode only".into())),
 //!         }
 //!     }
 //! }

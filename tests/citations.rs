@@ -24,9 +24,9 @@ fn anchors() -> BTreeSet<String> {
 
 fn manuals() -> BTreeSet<String> {
     let profiles = load_profiles(&root().join("vendors")).expect("profiles load");
-    profiles
-        .iter()
-        .flat_map(|p| p.manuals.keys().cloned())
+    // The vendor profiles' manuals and the protocol profiles' (vendors/protocols/).
+    (profiles.iter().flat_map(|p| p.manuals.keys().cloned()))
+        .chain((profiles.protocols.iter()).flat_map(|p| p.manuals.keys().cloned()))
         .collect()
 }
 

@@ -160,6 +160,7 @@ fn a_listed_cross_vendor_difference_is_a_known_difference_not_a_failure() {
                 instruction: Some(trial.check_name().to_string()),
                 variant: None,
                 kind: None,
+                rule: None,
                 reason: "reads D150".into(),
                 location: "known.yaml:2".into(),
             }],

@@ -392,3 +392,91 @@ fn a_slip_fails_on_its_rules_only(#[case] slip: Slip) {
         }
     }
 }
+
+/// The rules of the protocols whose `manual` quote or page docs/semantics.md does not carry, as
+/// `rule: what is missing`.
+fn uncarried(semantics: &str, project: &Project) -> Vec<String> {
+    let mut out = Vec::new();
+    for protocol in project.profiles.protocols.iter() {
+        let section = format!("<a id=\"protocol-{}\"></a>", protocol.id);
+        if !semantics.contains(&section) {
+            out.push(format!("{}: no section {section}", protocol.id));
+        }
+        for rule in protocol.rules.values() {
+            let c = &rule.citation;
+            if let (plc_conformance::testing::model::Basis::Manual, Some(quote)) =
+                (rule.basis, &c.text)
+            {
+                let cite = format!("`{} p.{}`", c.manual, c.page);
+                if !semantics.contains(&format!("{cite}: \"{quote}\"")) {
+                    out.push(format!("{}: {cite} and its quote", rule.key));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Every `manual` rule of a protocol — and so every `manual` protocol-field case, which takes
+/// its rule's cite and quote — is carried in docs/semantics.md with its page and quote.
+#[test]
+fn every_manual_rule_and_its_quote_is_carried_in_the_semantics() {
+    let project = project();
+    let semantics =
+        std::fs::read_to_string(root().join("docs/semantics.md")).expect("semantics.md");
+    assert_eq!(uncarried(&semantics, &project), Vec::<String>::new());
+    for case in &project.corpus.protocol_fields {
+        let rule = &case.protocol.as_ref().expect("protocol case").rule;
+        if case.basis == plc_conformance::testing::model::Basis::Manual {
+            assert_eq!(case.citation, rule.citation, "{}", case.id);
+        }
+    }
+    // The check fails on a quote taken out.
+    let quote = "Use capitalized code for alphabetical letter.\"";
+    let planted = semantics.replacen(quote, "\"", 1);
+    assert!(uncarried(&planted, &project)
+        .iter()
+        .any(|m| m.starts_with("mc-ascii/M1")));
+}
+
+/// A Modbus ASCII codec served by the Python helper, run from the command line: written from
+/// the rules it conforms on every protocol-field case it is asked (and on no cross-vendor one);
+/// reading with `bytes.fromhex` it fails on B3 and LEN, naming them; never comparing its LRC
+/// it fails on B7.
+#[rstest]
+#[case::strict("strict", 0, &[])]
+#[case::fromhex("fromhex", 1, &["modbus-ascii/B3 (mbsl p.17", "modbus-ascii/LEN"])]
+#[case::never_compares("never-compares", 1, &["modbus-ascii/B7 (mbsl p.18"])]
+fn a_python_codec_is_judged_by_its_protocol(
+    #[case] mode: &str,
+    #[case] status: i32,
+    #[case] rules: &[&str],
+) {
+    if !common::python() {
+        return;
+    }
+    let script = root().join("tests/fixtures/external/modbus_ascii_codec.py");
+    let backend = format!("external:mb=python3 {} {mode}", script.display());
+    let out = common::cli(&["run", "--backend", &backend]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(status), "{stdout}");
+    assert!(!stdout.contains("cross-vendor"), "{stdout}");
+    for rule in rules {
+        assert!(
+            stdout.contains(&format!("rule:        {rule}")),
+            "{rule}: {stdout}"
+        );
+        assert!(stdout.contains("protocol::mb::modbus-ascii::"), "{stdout}");
+    }
+    let passed: usize = stdout
+        .lines()
+        .find_map(|l| {
+            (l.strip_prefix("protocol modbus-ascii: ")?
+                .split(' ')
+                .next()?)
+            .parse()
+            .ok()
+        })
+        .unwrap_or_else(|| panic!("{stdout}"));
+    assert!(passed >= 20, "{passed} passed: {stdout}");
+}

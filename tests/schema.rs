@@ -26,6 +26,16 @@ fn checked_in(name: &str) -> serde_json::Value {
     "open-questions.schema.json",
     "open-questions"
 )]
+#[case::protocol_profile(
+    SchemaKind::ProtocolProfile,
+    "protocol-profile.schema.json",
+    "protocol-profile"
+)]
+#[case::protocol_fields(
+    SchemaKind::ProtocolFields,
+    "protocol-fields.schema.json",
+    "protocol-fields"
+)]
 fn checked_in_schema_is_current(#[case] kind: SchemaKind, #[case] file: &str, #[case] flag: &str) {
     assert!(
         checked_in(file) == schema(kind),
@@ -124,6 +134,8 @@ fn an_independent_validator_accepts_the_corpus_and_flags_bad_devices_and_values(
             let text = std::fs::read_to_string(&p).expect("read");
             let schema = if p.parent().is_some_and(|d| d.ends_with("cross-vendor")) {
                 "cross-vendor.schema.json"
+            } else if p.parent().is_some_and(|d| d.ends_with("protocols")) {
+                "protocol-fields.schema.json"
             } else {
                 "vectors.schema.json"
             };

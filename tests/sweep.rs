@@ -343,7 +343,7 @@ fn corpus_behaviours(project: &Session, op: Operation) -> BTreeSet<Vec<String>> 
             count: 1,
             max_len: 1,
         },
-        Operation::ValueToHex => Generator::Values { bits: 16 },
+        _ => Generator::Values { bits: 16 },
     };
     let settings = Settings::new(operation(op), generator, 0);
     let sweep = Sweep::new(settings, &project.profiles, &project.backends).expect("sweep");
@@ -354,7 +354,7 @@ fn corpus_behaviours(project: &Session, op: Operation) -> BTreeSet<Vec<String>> 
         .filter(|c| c.operation == op)
         .map(|c| match op {
             Operation::HexToValue => (0, Point::text(&c.text, c.digits)),
-            Operation::ValueToHex => (0, Point::value(c.value, c.digits)),
+            _ => (0, Point::value(c.value, c.digits)),
         })
         .collect();
     sweep
@@ -1748,6 +1748,7 @@ impl plc_conformance::Codec for Lenient {
         plc_conformance::CodecAbilities {
             hex_to_value: Some(field),
             value_to_hex: Some(write),
+            ..Default::default()
         }
     }
     fn convert(
@@ -2174,7 +2175,7 @@ fn a_codec_in_process_that_panics_has_crashed_on_that_case() {
         fn abilities(&self) -> plc_conformance::CodecAbilities {
             plc_conformance::CodecAbilities {
                 hex_to_value: Some(Default::default()),
-                value_to_hex: None,
+                ..Default::default()
             }
         }
         fn convert(
@@ -2230,7 +2231,7 @@ impl plc_conformance::Codec for PanicsOnZ {
         };
         plc_conformance::CodecAbilities {
             hex_to_value: Some(field),
-            value_to_hex: None,
+            ..Default::default()
         }
     }
     fn convert(

@@ -35,9 +35,11 @@ const PROTOCOL_VERSION = 2;
 /** The first version that carries `convert`: a codec answers a hello of 5 or later with 5, an older one with 2. */
 const CONVERT_VERSION = 5;
 /** The error classes a codec answers with. */
-const ERROR_CLASSES = Object.freeze(['invalid-digit', 'invalid-count', 'device-range', 'error']);
+const ERROR_CLASSES = Object.freeze(['invalid-digit', 'invalid-count', 'device-range', 'error', 'bad-check']);
 const HEX_TO_VALUE = 'hex-to-value';
 const VALUE_TO_HEX = 'value-to-hex';
+const CHECK = 'check';
+const VERIFY = 'verify';
 
 /** The case cannot be executed by this backend (answered as "unsupported"). */
 class Unsupported extends Error {
@@ -572,20 +574,35 @@ function convertedLine(id, answers, big) {
  *   (decode skips blanks between byte pairs, as Python's bytes.fromhex) is a shape of
  *   hex-to-value only, refused for value-to-hex. decodeField, encodeField: the field of one
  *   direction, used instead of `field` for it (a library that reads the low byte first but
- *   writes the high byte first: decodeField: { byteOrder: 'low-first' }).
+ *   writes the high byte first: decodeField: { byteOrder: 'low-first' }). protocol: the
+ *   communication protocol whose fields the library implements ('mc-ascii', 'modbus-ascii',
+ *   'fx-computer-link', 'mewtocol-com', 'omron-host-link', 'keyence-kv-l2'): the codec is
+ *   judged by that protocol's corpus, each difference naming its rule and page; fields: the
+ *   profile's fields implemented (absent: every one); crossVendor: true to run the
+ *   cross-vendor corpus too; check(span: Buffer) -> the check characters (LRC, sum check,
+ *   BCC, FCS); verify(frame: Buffer) -> boolean, the span followed by its check characters
+ *   accepted or not ('bad-check').
  */
 function serveCodec(options) {
   const {
     decode, encode, name, version, decodeDigits, encodeDigits, width = 16, decodeReading, encodeReading,
-    field, decodeField, encodeField,
+    field, decodeField, encodeField, protocol, fields, crossVendor = false, check, verify,
   } = options || {};
   if (!name || !version) throw new TypeError('serveCodec needs name and version');
-  if (!decode && !encode) throw new TypeError('serveCodec needs decode, encode or both');
+  if (!decode && !encode && !check && !verify) throw new TypeError('serveCodec needs decode, encode, check or verify');
+  if (protocol === undefined && (fields !== undefined || crossVendor || check || verify)) {
+    throw new TypeError('serveCodec: fields, crossVendor, check and verify belong to a protocol: give protocol too');
+  }
   if (decodeField !== undefined && !decode) throw new TypeError('serveCodec: decodeField is the field of decode, which is not given');
   if (encodeField !== undefined && !encode) throw new TypeError('serveCodec: encodeField is the field of encode, which is not given');
   // Each direction's table: its own entries (decodeErrors, encodeErrors) before the shared ones.
   const shared = errorTable(options.errors);
-  const own = { [HEX_TO_VALUE]: errorTable(options.decodeErrors), [VALUE_TO_HEX]: errorTable(options.encodeErrors) };
+  const own = {
+    [HEX_TO_VALUE]: errorTable(options.decodeErrors),
+    [VALUE_TO_HEX]: errorTable(options.encodeErrors),
+    [CHECK]: errorTable(options.decodeErrors),
+    [VERIFY]: errorTable(options.decodeErrors),
+  };
   const codec = {};
   if (decode) {
     codec[HEX_TO_VALUE] = decodeField === undefined
@@ -596,6 +613,15 @@ function serveCodec(options) {
     codec[VALUE_TO_HEX] = encodeField === undefined
       ? codecCapability(encodeDigits, width, encodeReading, field, VALUE_TO_HEX)
       : codecCapability(encodeDigits, width, encodeReading, encodeField, VALUE_TO_HEX, 'encodeField');
+  }
+
+  // A protocol's codec: judged by that protocol's corpus (docs/protocol.md, "A protocol's fields").
+  if (check) codec[CHECK] = {};
+  if (verify) codec[VERIFY] = {};
+  if (protocol !== undefined) {
+    codec.protocol = protocol;
+    if (fields !== undefined) codec.fields = [...fields];
+    if (crossVendor) codec['cross-vendor'] = true;
   }
 
   const hello = (message, log) => {
@@ -609,7 +635,8 @@ function serveCodec(options) {
   const answer = async (request) => {
     const { id, operation, digits } = request;
     try {
-      const declared = codec[operation];
+      // A check character's length is its protocol's.
+      const declared = operation === CHECK || operation === VERIFY ? undefined : codec[operation];
       if (declared && !takes(declared, digits)) {
         // Outside the declared capabilities: the harness skips such cases.
         throw new Unsupported(`${operation} with ${digits} digits is not implemented`);
@@ -626,6 +653,13 @@ function serveCodec(options) {
           throw new Unsupported(`${request.value} is wider than ${widthOf(declared, digits)} bits`);
         }
         return { type: 'result', id, text: textBytes(await encode(request.value, digits)) };
+      }
+      if (operation === CHECK && check) {
+        return { type: 'result', id, text: textBytes(await check(Buffer.from(request.text))) };
+      }
+      if (operation === VERIFY && verify) {
+        if (await verify(Buffer.from(request.text))) return { type: 'result', id, accepted: true };
+        return { type: 'result', id, error: 'bad-check' };
       }
       const what = operation !== undefined ? operation : `instruction ${request.instruction}`;
       throw new Unsupported(`${what} is not implemented by ${name}`);

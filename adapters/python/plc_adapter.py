@@ -61,11 +61,13 @@ PROTOCOL_VERSION = 2
 CONVERT_VERSION = 5
 
 # The error classes a codec answers with (docs/protocol.md, "Version 2").
-ERROR_CLASSES = ("invalid-digit", "invalid-count", "device-range", "error")
+ERROR_CLASSES = ("invalid-digit", "invalid-count", "device-range", "error", "bad-check")
 
-# The two codec operations.
+# The codec operations: the conversions, and a protocol's check characters.
 HEX_TO_VALUE = "hex-to-value"
 VALUE_TO_HEX = "value-to-hex"
+CHECK = "check"
+VERIFY = "verify"
 
 __all__ = [
     "Case",
@@ -694,7 +696,8 @@ def _convert_encode(encode, declared, table, values, digits):
 def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits=None,
                 encode_digits=None, width=16, errors=None, stdin=None, stdout=None,
                 decode_reading=None, encode_reading=None, decode_errors=None,
-                encode_errors=None, field=None, decode_field=None, encode_field=None):
+                encode_errors=None, field=None, decode_field=None, encode_field=None,
+                protocol=None, fields=None, cross_vendor=False, check=None, verify=None):
     """Answers the harness as a codec-level backend until it says shutdown or closes stdin.
     Speaks protocol version 2 (one `run` case at a time) and 5 (also `convert`: many texts or
     values of one operation in one message, answered by one `converted` line, which is what
@@ -729,6 +732,20 @@ def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits
       byte first gives decode_field={"byte_order": "low-first"}; blanks_between_pairs goes in
       decode_field (or in `field` of a codec without encode).
 
+    protocol: the communication protocol whose fields the library reads and writes, as
+      vendors/protocols/ names it ("mc-ascii", "modbus-ascii", "fx-computer-link",
+      "mewtocol-com", "omron-host-link", "keyence-kv-l2"): the codec is then judged by that
+      protocol's corpus (vectors/protocols/), each difference naming the protocol's rule and
+      page, instead of the cross-vendor (instruction) corpus. A field's digit count says which
+      field is asked (a request also carries its name, `field`).
+    fields: the protocol's fields implemented, by the profile's names (["word", "dword"]);
+      None for every field.
+    cross_vendor: with protocol, also run the cross-vendor corpus (the instruction view).
+    check: function(span: bytes) -> bytes or str: the protocol's check characters (LRC, sum
+      check, BCC, FCS) of the checked span, e.g. b"010304010001" -> "F6" for Modbus ASCII.
+    verify: function(frame: bytes) -> bool: whether the span followed by its check characters
+      checks (True is accepted, False the error bad-check); an exception maps as for decode.
+
     Each item of a `convert` message answers exactly what a `run` case with the same text (or
     value) and digit count answers: the value (or text), {"error": class} for an exception
     `errors` maps or a CodecError, {"unsupported": reason} outside the declared digit counts or
@@ -737,8 +754,12 @@ def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits
     """
     if name is None or version is None:
         raise TypeError("serve_codec needs name= and version=")
-    if decode is None and encode is None:
-        raise TypeError("serve_codec needs decode=, encode= or both")
+    if decode is None and encode is None and check is None and verify is None:
+        raise TypeError("serve_codec needs decode=, encode=, check= or verify=")
+    if protocol is None and (fields is not None or cross_vendor or check is not None
+                             or verify is not None):
+        raise TypeError("serve_codec: fields=, cross_vendor=, check= and verify= belong to a "
+                        "protocol: give protocol= too")
     for label, table in (("errors", errors), ("decode_errors", decode_errors),
                          ("encode_errors", encode_errors)):
         for klass, error_class in (table or {}).items():
@@ -751,6 +772,8 @@ def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits
     by_operation = {
         HEX_TO_VALUE: {**(errors or {}), **(decode_errors or {})},
         VALUE_TO_HEX: {**(errors or {}), **(encode_errors or {})},
+        CHECK: {**(errors or {}), **(decode_errors or {})},
+        VERIFY: {**(errors or {}), **(decode_errors or {})},
     }
     if decode_field is not None and decode is None:
         raise TypeError("serve_codec: decode_field= is the field of decode=, which is not given")
@@ -767,6 +790,17 @@ def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits
             encode_digits, width, encode_reading,
             field if encode_field is None else encode_field, VALUE_TO_HEX,
             "field" if encode_field is None else "encode_field")
+
+    if check is not None:
+        codec[CHECK] = {}
+    if verify is not None:
+        codec[VERIFY] = {}
+    if protocol is not None:
+        codec["protocol"] = protocol
+        if fields is not None:
+            codec["fields"] = list(fields)
+        if cross_vendor:
+            codec["cross-vendor"] = True
 
     def hello(message):
         asked = message.get("protocol", 1)
@@ -806,6 +840,8 @@ def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits
         digits = request.get("digits")
         try:
             declared = codec.get(operation)
+            if operation in (CHECK, VERIFY):
+                declared = None  # a check character's length is its protocol's
             if declared is not None and not _takes(declared, digits):
                 # Outside the declared capabilities: the harness skips such cases, and the
                 # library is never called with a count it does not take.
@@ -822,6 +858,13 @@ def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits
             if operation == VALUE_TO_HEX and encode is not None:
                 text = _text_bytes(encode(request["value"], digits))
                 return {"type": "result", "id": ident, "text": list(text)}
+            if operation == CHECK and check is not None:
+                text = _text_bytes(check(bytes(request["text"])))
+                return {"type": "result", "id": ident, "text": list(text)}
+            if operation == VERIFY and verify is not None:
+                if verify(bytes(request["text"])):
+                    return {"type": "result", "id": ident, "accepted": True}
+                return {"type": "result", "id": ident, "error": "bad-check"}
             what = operation if operation is not None else "instruction %s" % request.get("instruction")
             raise Unsupported("%s is not implemented by %s" % (what, name))
         except Unsupported as why:

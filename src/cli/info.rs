@@ -201,6 +201,8 @@ pub(super) fn schema(kind: SchemaKind) -> Outcome {
         SchemaKind::Project => spec::schema(spec::SchemaKind::Project),
         SchemaKind::Known => spec::schema(spec::SchemaKind::Known),
         SchemaKind::OpenQuestions => spec::schema(spec::SchemaKind::OpenQuestions),
+        SchemaKind::ProtocolProfile => spec::schema(spec::SchemaKind::ProtocolProfile),
+        SchemaKind::ProtocolFields => spec::schema(spec::SchemaKind::ProtocolFields),
         SchemaKind::Protocol => protocol::protocol_schema(),
         // Written by hand: the report's types serialize by hand too (`report::json`).
         SchemaKind::Results => serde_json::from_str(RESULTS_SCHEMA).unwrap_or_default(),

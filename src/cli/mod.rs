@@ -275,6 +275,11 @@ pub(crate) enum SchemaKind {
     Known,
     /// The open-questions file, `docs/open-questions.yaml`.
     OpenQuestions,
+    /// Protocol profiles (`vendors/protocols/*.yaml`): a communication protocol's fields and
+    /// rules.
+    ProtocolProfile,
+    /// Protocol-field vector files (`vectors/protocols/*.yaml`).
+    ProtocolFields,
     /// The JSON report (`--format json`, `--save`).
     Results,
 }

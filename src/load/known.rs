@@ -316,8 +316,9 @@ fn check_cause(
     }
 }
 
-/// An entry that covers protocol-field cases names the protocol rule it breaks, one of theirs;
-/// an entry that covers none names no rule.
+/// An entry that names protocol-field cases only (by id or pattern) names the protocol rule
+/// they break, one of theirs; an entry that names none names no rule. An entry by input class
+/// covers whatever text holds the class, in either view, and names no rule it must break.
 fn check_rule(
     entry: &Entry,
     corpus: &Corpus,
@@ -328,7 +329,7 @@ fn check_rule(
         .filter(|c| {
             entry.matches(&crate::model::known::Subject {
                 case: &c.id,
-                text: Some(&c.text),
+                text: None,
                 instruction: "codec",
                 variant: "",
             })
@@ -336,8 +337,18 @@ fn check_rule(
         .filter_map(|c| c.protocol.as_ref().map(|p| p.rule.key.as_str()))
         .collect();
     let listed = || rules.iter().copied().collect::<Vec<_>>().join(", ");
+    // An entry that also covers cases of no protocol (`cases: ['*']`) is about the codec, not
+    // a protocol's rule.
+    let beyond = (corpus.cross_vendor.iter()).any(|c| {
+        entry.matches(&crate::model::known::Subject {
+            case: &c.id,
+            text: None,
+            instruction: "codec",
+            variant: "",
+        })
+    });
     match &entry.rule {
-        None if !rules.is_empty() => cx.error(
+        None if !rules.is_empty() && !beyond => cx.error(
             key("rule"),
             LoadErrorKind::Invalid(format!(
                 "an entry for protocol-field cases names the rule it breaks: `rule: {}`",
@@ -517,6 +528,7 @@ mod tests {
                 case("open", Basis::Unspecified, None),
             ],
             cross_vendor: Vec::new(),
+            protocol_fields: Vec::new(),
         };
         load_known(&file, Some(&profile()), &corpus, strict)
     }

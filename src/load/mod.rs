@@ -390,13 +390,23 @@ mod tests {
         let mut refusals = Vec::new();
         let profiles = yaml_files(&root.join("vendors"));
         assert!(profiles.len() >= 10, "{profiles:?}");
-        refusals.extend(profiles.iter().filter_map(|p| refused::<ProfileSpec>(p)));
+        for path in &profiles {
+            let protocol = path.parent().is_some_and(|d| d.ends_with("protocols"));
+            refusals.extend(if protocol {
+                refused::<crate::spec::protocol::ProtocolSpec>(path)
+            } else {
+                refused::<ProfileSpec>(path)
+            });
+        }
         let vectors = yaml_files(&root.join("vectors"));
         assert!(vectors.len() >= 20, "{vectors:?}");
         for path in &vectors {
             let cross_vendor = path.parent().is_some_and(|d| d.ends_with("cross-vendor"));
+            let protocol = path.parent().is_some_and(|d| d.ends_with("protocols"));
             refusals.extend(if cross_vendor {
                 refused::<CrossVendorFileSpec>(path)
+            } else if protocol {
+                refused::<crate::spec::protocol::ProtocolFileSpec>(path)
             } else {
                 refused::<VectorFileSpec>(path)
             });

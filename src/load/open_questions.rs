@@ -29,6 +29,7 @@ pub fn load_open_questions(
         .iter()
         .map(|c| c.id.as_str())
         .chain(corpus.cross_vendor.iter().map(|c| c.id.as_str()))
+        .chain(corpus.protocol_fields.iter().map(|c| c.id.as_str()))
         .collect();
     let mut seen = BTreeSet::new();
     let mut out = Vec::new();
@@ -41,12 +42,59 @@ pub fn load_open_questions(
                 invalid(format!("question `{}` is listed twice", q.id)),
             );
         }
-        match profiles.get(&q.profile) {
-            None => cx.error(
+        let profile = match (&q.profile, &q.protocol) {
+            (Some(p), None) => {
+                if q.instructions.is_empty() {
+                    cx.error(
+                        key("instructions"),
+                        invalid(
+                            "a question of a profile names the instructions it is about".into(),
+                        ),
+                    );
+                }
+                profiles.get(p).ok_or(p)
+            }
+            (None, Some(protocol)) => {
+                if profiles.protocols.get(protocol).is_none() {
+                    cx.error(
+                        key("protocol"),
+                        super::checks::unknown("protocol", protocol, &profiles.protocols.ids()),
+                    );
+                }
+                if !q.instructions.is_empty() || q.variants.is_some() {
+                    cx.error(
+                        key("instructions"),
+                        invalid("a protocol's question has no instructions or variants".into()),
+                    );
+                }
+                if q.model_takes != "none" {
+                    cx.error(
+                        key("model_takes"),
+                        invalid(
+                            "no reference model answers a protocol: `model_takes: none`".into(),
+                        ),
+                    );
+                }
+                Err(&String::new())
+            }
+            _ => {
+                cx.error(
+                    key("profile"),
+                    invalid(
+                        "a question is about a `profile` (and its `instructions`) or a `protocol`"
+                            .into(),
+                    ),
+                );
+                Err(&String::new())
+            }
+        };
+        match profile {
+            Err(p) if p.is_empty() => {}
+            Err(p) => cx.error(
                 key("profile"),
-                super::checks::unknown("profile", &q.profile, &profiles.ids()),
+                super::checks::unknown("profile", p, &profiles.ids()),
             ),
-            Some(p) => {
+            Ok(p) => {
                 for (j, instr) in q.instructions.iter().enumerate() {
                     if !p.instructions.contains_key(instr) {
                         let known: Vec<String> = p.instructions.keys().cloned().collect();
@@ -147,7 +195,8 @@ pub fn load_open_questions(
             location: cx.location(&format!("questions[{i}]")),
             id: q.id,
             title: q.title,
-            profile: q.profile,
+            profile: q.profile.unwrap_or_default(),
+            protocol: q.protocol,
             variants: q.variants,
             readings,
             model_takes: q.model_takes,

@@ -566,6 +566,7 @@ mod shape_tests {
         CodecAbilities {
             hex_to_value: Some(ability.clone()),
             value_to_hex: Some(ability),
+            ..CodecAbilities::default()
         }
     }
 

@@ -6,7 +6,10 @@ use super::Location;
 pub struct OpenQuestion {
     pub id: String,
     pub title: String,
+    /// The profile of an instruction's question; empty for a protocol's.
     pub profile: String,
+    /// The protocol of a protocol field's question.
+    pub protocol: Option<String>,
     /// The profile variants it is about; all when `None`.
     pub variants: Option<Vec<String>>,
     /// The readings' ids, in file order.

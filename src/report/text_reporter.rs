@@ -24,9 +24,11 @@ pub(crate) struct TextReporter<W: Write> {
     quiet: bool,
     known: BTreeMap<String, KnownGroup>,
     skipped: BTreeMap<String, usize>,
-    /// Counts per backend; cross-vendor trials count apart.
+    /// Counts per backend; cross-vendor trials, and each protocol's, count apart.
     per_backend: BTreeMap<String, Summary>,
     cross_vendor: Option<Summary>,
+    /// Protocol-field trials, by protocol.
+    protocols: BTreeMap<String, Summary>,
     restarts: BTreeMap<String, usize>,
 }
 
@@ -41,6 +43,7 @@ impl<W: Write> TextReporter<W> {
             skipped: BTreeMap::new(),
             per_backend: BTreeMap::new(),
             cross_vendor: None,
+            protocols: BTreeMap::new(),
             restarts: BTreeMap::new(),
         }
     }
@@ -106,6 +109,9 @@ impl<W: Write> TextReporter<W> {
         if let Some(s) = &self.cross_vendor {
             writeln!(out, "cross-vendor: {s}")?;
         }
+        for (protocol, s) in &self.protocols {
+            writeln!(out, "protocol {protocol}: {s}")?;
+        }
         Ok(())
     }
 }
@@ -120,7 +126,10 @@ impl<W: Write> Reporter for TextReporter<W> {
                 verdict,
                 ..
             } => {
-                let counts = if trial.is_cross_vendor() {
+                let protocol = (trial.cross_vendor_case()).and_then(|c| c.protocol.as_ref());
+                let counts = if let Some(from) = protocol {
+                    self.protocols.entry(from.protocol.clone()).or_default()
+                } else if trial.is_cross_vendor() {
                     self.cross_vendor.get_or_insert_with(Summary::default)
                 } else {
                     self.per_backend

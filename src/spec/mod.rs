@@ -33,7 +33,7 @@ pub enum SchemaKind {
     /// The open-questions file, `docs/open-questions.yaml`.
     OpenQuestions,
     /// Protocol profiles (`vendors/protocols/*.yaml`).
-    Protocol,
+    ProtocolProfile,
     /// Protocol-field vector files (`vectors/protocols/*.yaml`).
     ProtocolFields,
 }
@@ -47,7 +47,7 @@ pub fn schema(kind: SchemaKind) -> serde_json::Value {
         SchemaKind::Project => schema_of::<project::ProjectFileSpec>(),
         SchemaKind::Known => schema_of::<known::KnownFileSpec>(),
         SchemaKind::OpenQuestions => schema_of::<open_questions::OpenQuestionsSpec>(),
-        SchemaKind::Protocol => schema_of::<protocol::ProtocolSpec>(),
+        SchemaKind::ProtocolProfile => schema_of::<protocol::ProtocolSpec>(),
         SchemaKind::ProtocolFields => schema_of::<protocol::ProtocolFileSpec>(),
     }
 }

@@ -25,10 +25,16 @@ pub(crate) struct QuestionSpec {
     pub id: String,
     /// The question, in one line.
     pub title: String,
-    /// The profile it is about.
-    pub profile: String,
+    /// The profile it is about (a question of an instruction).
+    #[serde(default)]
+    pub profile: Option<String>,
     /// The instructions it is about, as the profile spells them.
+    #[serde(default)]
     pub instructions: Vec<String>,
+    /// The protocol it is about (a question of a protocol's field, settled by a device's
+    /// answer to a request), instead of `profile` and `instructions`.
+    #[serde(default)]
+    pub protocol: Option<String>,
     /// The profile variants it is about; all when absent.
     #[serde(default)]
     pub variants: Option<Vec<String>>,

@@ -100,7 +100,7 @@ pub(crate) struct RuleSpec {
     pub basis: Basis,
     /// `<manual> p.<page>` (a key of `manuals`), or the reasoning of an inferred rule.
     pub cite: String,
-    /// The manual's words, short and verbatim: docs/semantics.md carries every one.
+    /// The manual's words, short and verbatim: docs/semantics.md#protocols carries every one.
     #[serde(default)]
     pub quote: Option<String>,
 }

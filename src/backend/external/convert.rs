@@ -258,11 +258,12 @@ fn read_answers(
                 (_, Converted::Unsupported(ConvertedUnsupported { unsupported })) => {
                     Response::Unsupported(unsupported)
                 }
+                (Operation::ValueToHex, Converted::Value(_)) => {
+                    return Err(format!("a value answers {} (value-to-hex)", q.case_id))
+                }
+                // A `convert` message asks conversions only (`convert_batch`).
                 (operation, Converted::Text(_) | Converted::Value(_)) => {
-                    return Err(format!(
-                        "the wrong kind of answer to {} ({operation})",
-                        q.case_id
-                    ))
+                    return Err(format!("a text answers {} ({operation})", q.case_id))
                 }
             }))
         })
