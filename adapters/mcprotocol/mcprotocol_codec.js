@@ -21,4 +21,8 @@ serveCodec({
   },
   encode: (value) => asciize(Buffer.from([value >> 8, value & 0xff])),
   errors: { RangeError: 'invalid-digit' },
+  // Judged by the MC protocol's own manual (its word field), and by the cross-vendor corpus too.
+  protocol: 'mc-ascii',
+  fields: ['word'],
+  crossVendor: true,
 });

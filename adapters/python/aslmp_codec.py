@@ -23,4 +23,7 @@ plc_adapter.serve_codec(
     decode_digits=[2, 4, 8], encode_digits=[2, 4, 8], width=32,
     # A text that ends inside the field ends with 00H in memory: not a digit.
     errors={SlmpHexDigitError: "invalid-digit", SlmpShortBufferError: "invalid-digit",
-            SlmpCodecValueError: "error"})
+            SlmpCodecValueError: "error"},
+    # Judged by the MC protocol's own manual (words, double words, end codes), and by the
+    # cross-vendor corpus too.
+    protocol="mc-ascii", fields=["word", "dword", "end-code"], cross_vendor=True)

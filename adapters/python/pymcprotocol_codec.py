@@ -4,7 +4,8 @@
 In ASCII mode pymcprotocol (PyPI, MIT) sends a word as 4 hex characters and a double word as 8,
 most significant digit first: Type3E._decode_value(text, "short"/"long") reads such a field and
 Type3E._encode_value(value, "short"/"long") writes it. Its callers cut the field out of a
-response with a slice, as decode does here. Known differences: pymcprotocol_codec.known.yaml.
+response with a slice, as decode does here. Judged by the MC protocol's corpus (its word and
+double-word fields) and the cross-vendor one. Known differences: pymcprotocol_codec.known.yaml.
 """
 import os
 import sys
@@ -31,4 +32,7 @@ plc_adapter.serve_codec(
     encode=encode,
     name="pymcprotocol", version=version("pymcprotocol"),
     decode_digits=[4, 8], encode_digits=[4, 8], width=32,
-    errors={ValueError: "invalid-digit"})
+    errors={ValueError: "invalid-digit"},
+    # Judged by the MC protocol's own manual (its word and double-word fields), and by the
+    # cross-vendor corpus too.
+    protocol="mc-ascii", fields=["word", "dword"], cross_vendor=True)
