@@ -314,6 +314,7 @@ fn cases_by_folder() -> std::collections::BTreeMap<String, usize> {
         }
     }
     counted.insert("cross-vendor".into(), project.corpus.cross_vendor.len());
+    counted.insert("protocols".into(), project.corpus.protocol_fields.len());
     counted
 }
 
@@ -333,6 +334,9 @@ fn every_case_count_in_the_docs_is_the_corpus_s() {
             let Some((folder, after)) = rest.split_once("/` (") else {
                 continue;
             };
+            if folder.contains(['`', ' ', '\n']) {
+                continue; // another mention of a folder, with no count after it
+            }
             let Some(count) = after
                 .split_once(" cases)")
                 .and_then(|(n, _)| n.parse::<usize>().ok())
@@ -371,6 +375,9 @@ fn bases_by_folder() -> std::collections::BTreeMap<String, String> {
     }
     for case in &project.corpus.cross_vendor {
         by.entry("cross-vendor".into()).or_default()[slot(case.basis)] += 1;
+    }
+    for case in &project.corpus.protocol_fields {
+        by.entry("protocols".into()).or_default()[slot(case.basis)] += 1;
     }
     by.into_iter()
         .map(|(folder, n)| {
