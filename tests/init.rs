@@ -142,3 +142,43 @@ fn a_rust_scaffold_names_its_codec_after_the_backend() {
         "{said}"
     );
 }
+
+/// `--protocol` writes the protocol into the scaffold, and the first run judges the stand-in by
+/// that protocol's manual: int(text, 16) breaks Modbus ASCII's character rule, and the
+/// difference names it. A protocol no profile defines is refused with the list.
+#[test]
+fn a_scaffold_for_a_protocol_is_judged_by_it() {
+    let dir = scratch();
+    let (code, said) = init(
+        dir.path(),
+        &["--python", "--name", "mylib", "--protocol", "modbus-ascii"],
+    );
+    assert_eq!(code, Some(0), "{said}");
+    let adapter = std::fs::read_to_string(dir.path().join("mylib_adapter.py")).expect("adapter");
+    assert!(
+        adapter.contains("    protocol=\"modbus-ascii\","),
+        "{adapter}"
+    );
+    let other = scratch();
+    let (code, said) = init(other.path(), &["--js", "--protocol", "modbus"]);
+    assert_eq!(code, Some(2), "{said}");
+    assert!(said.contains("the protocols are: "), "{said}");
+    assert!(said.contains("modbus-ascii"), "{said}");
+    assert!(!other.path().join("mylib_adapter.js").exists());
+    if !common::python() {
+        return;
+    }
+    let helper = root().join("adapters/python");
+    let (code, said) = run_adapter(
+        dir.path(),
+        "python3 mylib_adapter.py",
+        &[("PYTHONPATH", &helper)],
+    );
+    assert_eq!(code, Some(1), "{said}");
+    assert!(said.contains("protocol::mylib::modbus-ascii::"), "{said}");
+    assert!(
+        said.contains("rule:        modbus-ascii/B3 (mbsl p.17"),
+        "{said}"
+    );
+    assert!(!said.contains("cross-vendor::mylib"), "{said}");
+}

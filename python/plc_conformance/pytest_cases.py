@@ -58,7 +58,8 @@ def _error_names(errors):
 
 def codec_cases(decode=None, encode=None, *, name="codec", digits=None, decode_digits=None,
                 encode_digits=None, width=16, errors=None, field=None, decode_field=None,
-                encode_field=None, known_differences=None, timeout=5.0):
+                encode_field=None, known_differences=None, timeout=5.0, protocol=None,
+                fields=None, cross_vendor=False, check=None, verify=None):
     """A pytest test function, parametrized by cross-vendor case: assign it to a `test_` name.
 
     decode(text: bytes, digits) -> int and encode(value, digits) -> str or bytes are functions
@@ -66,15 +67,19 @@ def codec_cases(decode=None, encode=None, *, name="codec", digits=None, decode_d
     digit counts (decode_digits / encode_digits one each); width, errors and the field shapes
     are those of plc_adapter.serve_codec (docs/protocol.md, "Field shapes");
     known_differences is a known-differences file, relative to the calling module's folder.
+    protocol, fields, cross_vendor, check and verify are those of plc_adapter.serve_codec: a
+    library of a protocol's fields ("mc-ascii", "modbus-ascii", ...) is judged by that
+    protocol's corpus, one test per protocol-field case (docs/protocol.md, "A protocol's
+    fields"); check(span) and verify(frame) are module-level functions too.
     """
     import pytest
 
     if os.environ.get(SERVING):
         # The serving process imports the test module only for the functions.
         return pytest.mark.skip(reason="the codec's own process")(lambda: None)
-    if decode is None and encode is None:
-        raise TypeError("codec_cases: give decode, encode or both")
-    first = decode or encode
+    if decode is None and encode is None and check is None and verify is None:
+        raise TypeError("codec_cases: give decode, encode, check or verify")
+    first = decode or encode or check or verify
     file, _ = _where(first)
     spec = {
         "module": os.path.splitext(os.path.basename(file))[0],
@@ -88,6 +93,11 @@ def codec_cases(decode=None, encode=None, *, name="codec", digits=None, decode_d
         "field": field,
         "decode_field": decode_field,
         "encode_field": encode_field,
+        "protocol": protocol,
+        "fields": fields,
+        "cross_vendor": cross_vendor,
+        "check": _where(check)[1] if check else None,
+        "verify": _where(verify)[1] if verify else None,
     }
     serve = [sys.executable, "-m", "plc_conformance.serve", file, json.dumps(spec)]
     with tempfile.TemporaryDirectory(prefix="plc-conformance-") as folder:

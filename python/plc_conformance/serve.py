@@ -1,5 +1,5 @@
 """The process that serves a codec for `codec_cases`: `python -m plc_conformance.serve FILE SPEC`
-imports the module FILE, finds its decode and encode functions and serves them with
+imports the module FILE, finds its decode, encode, check and verify functions and serves them with
 plc_adapter.serve_codec as SPEC (JSON) says."""
 
 import importlib
@@ -52,7 +52,11 @@ def main():
         width=spec["width"],
         errors={_resolve(k): v for k, v in spec["errors"].items()},
         field=_field(spec["field"]), decode_field=_field(spec["decode_field"]),
-        encode_field=_field(spec["encode_field"]))
+        encode_field=_field(spec["encode_field"]),
+        protocol=spec.get("protocol"), fields=spec.get("fields"),
+        cross_vendor=spec.get("cross_vendor", False),
+        check=_attribute(module, spec["check"]) if spec.get("check") else None,
+        verify=_attribute(module, spec["verify"]) if spec.get("verify") else None)
 
 
 if __name__ == "__main__":

@@ -34,6 +34,12 @@ pub(crate) struct CodecArgs {
     /// The folder to write into (your library's repository).
     #[arg(long, value_name = "DIR", default_value = ".")]
     pub dir: PathBuf,
+    /// The communication protocol your library speaks (`mc-ascii`, `modbus-ascii`,
+    /// `fx-computer-link`, `mewtocol-com`, `omron-host-link`, `keyence-kv-l2`): its own manual
+    /// then judges the codec. Without it the scaffold names none, and the instruction manuals
+    /// judge it.
+    #[arg(long, value_name = "ID")]
+    pub protocol: Option<String>,
 }
 
 /// One file of a scaffold: where it goes under the folder, and its template.
@@ -57,6 +63,17 @@ pub(super) fn init(command: &InitCommand) -> Outcome {
         return Err(CliError::input(format!(
             "--name {name}: use lowercase letters, digits, `-` and `_`"
         )));
+    }
+    if let Some(protocol) = &args.protocol {
+        let known = crate::load::load_profiles(&crate::load::embedded_vendors())?
+            .protocols
+            .ids();
+        if !known.contains(protocol) {
+            return Err(CliError::input(format!(
+                "--protocol {protocol}: no protocol profile has that id; the protocols are: {}",
+                known.join(", ")
+            )));
+        }
     }
     // An adapter that a process runs: its file, and the command that runs it.
     let script = |extension: &str, interpreter: &str, text: &'static str| {
@@ -108,7 +125,7 @@ pub(super) fn init(command: &InitCommand) -> Outcome {
     for f in &files {
         let path = args.dir.join(&f.path);
         create_parent(&path)?;
-        output::write(Some(&path), &fill(f.text, name))?;
+        output::write(Some(&path), &fill(f.text, name, args.protocol.as_deref()))?;
         let _ = writeln!(said, "wrote {}", path.display());
     }
     let _ = write!(
@@ -128,9 +145,10 @@ fn create_parent(path: &Path) -> Result<(), CliError> {
     }
 }
 
-/// A template with the backend's name (`{{name}}`) and its Rust type (`{{type}}`: `my-lib`
-/// is `MyLibCodec`) filled in.
-fn fill(template: &str, name: &str) -> String {
+/// A template with the backend's name (`{{name}}`), its Rust type (`{{type}}`: `my-lib` is
+/// `MyLibCodec`) and its protocol (`{{protocol_py}}`, `_js`, `_rs`: the line that names it, or
+/// the same line commented out) filled in.
+fn fill(template: &str, name: &str, protocol: Option<&str>) -> String {
     let type_name: String = name
         .split(['-', '_'])
         .filter(|p| !p.is_empty())
@@ -145,9 +163,29 @@ fn fill(template: &str, name: &str) -> String {
         Some(c) if c.is_ascii_digit() => format!("Codec{type_name}"),
         _ => format!("{type_name}Codec"),
     };
+    let (py, js, rs) = match protocol {
+        Some(p) => (
+            format!("protocol=\"{p}\","),
+            format!("protocol: '{p}',"),
+            format!(
+                "protocol: Some(plc_conformance::ProtocolClaim {{ id: \"{p}\".into(), fields: None, \
+                 cross_vendor: false }}),"
+            ),
+        ),
+        None => (
+            "# protocol=\"mc-ascii\",".to_string(),
+            "// protocol: 'mc-ascii',".to_string(),
+            "// protocol: Some(plc_conformance::ProtocolClaim { id: \"mc-ascii\".into(), fields: None, \
+             cross_vendor: false }),"
+                .to_string(),
+        ),
+    };
     template
         .replace("{{name}}", name)
         .replace("{{type}}", &type_name)
+        .replace("{{protocol_py}}", &py)
+        .replace("{{protocol_js}}", &js)
+        .replace("{{protocol_rs}}", &rs)
 }
 
 #[cfg(test)]
@@ -157,9 +195,14 @@ mod tests {
     #[test]
     fn a_template_gets_the_name_and_a_rust_type() {
         assert_eq!(
-            fill("{{name}}: {{type}}", "my-lib_2"),
+            fill("{{name}}: {{type}}", "my-lib_2", None),
             "my-lib_2: MyLib2Codec"
         );
-        assert_eq!(fill("{{type}}", "9lives"), "Codec9lives");
+        assert_eq!(fill("{{type}}", "9lives", None), "Codec9lives");
+        assert_eq!(
+            fill("{{protocol_py}} {{protocol_js}}", "x", Some("modbus-ascii")),
+            "protocol=\"modbus-ascii\", protocol: 'modbus-ascii',"
+        );
+        assert!(fill("{{protocol_rs}}", "x", None).starts_with("// protocol:"));
     }
 }

@@ -237,7 +237,7 @@ fn legend(
 ) {
     let cells = || texts.iter().flatten();
     let mut marks = vec!["#: cases that behave alike, shown by the first"];
-    if section.name.starts_with("cross-vendor") {
+    if section.name.starts_with("cross-vendor") || section.name.starts_with("protocol ") {
         marks.push("cells are the answers");
     }
     if cells().any(|(_, s)| s.is_failure()) {

@@ -176,11 +176,18 @@ impl Record {
                 case.id.clone(),
                 format!("{}/{}", trial.backend.name(), lowering.name),
             ),
-            Check::Codec { case } => (
-                format!("cross-vendor {}", case.operation),
-                case.id.clone(),
-                format!("{}/codec", trial.backend.name()),
-            ),
+            Check::Codec { case } => match &case.protocol {
+                Some(from) => (
+                    format!("protocol {} {}", from.protocol, case.operation),
+                    case.id.clone(),
+                    format!("{}/{}", trial.backend.name(), from.field),
+                ),
+                None => (
+                    format!("cross-vendor {}", case.operation),
+                    case.id.clone(),
+                    format!("{}/codec", trial.backend.name()),
+                ),
+            },
         };
         let shown = match (cross_vendor_answer(trial, verdict), verdict) {
             (Some(a), _) => a.to_string(),

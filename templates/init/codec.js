@@ -37,6 +37,11 @@ serveCodec({
   // 6. Its errors, by constructor name, as the shared error classes: invalid-digit,
   //    invalid-count, device-range, or error.
   errors: { RangeError: 'invalid-digit' },
-  // 7. Optional: the field's shape, e.g. field: { widths: { 2: 8 }, wholeFrame: true }, and
+  // 7. The protocol it speaks, whose own manual then judges it, each difference naming the rule
+  //    and its page: mc-ascii, modbus-ascii, fx-computer-link, mewtocol-com, omron-host-link or
+  //    keyence-kv-l2 (leave it out for a codec of no protocol). fields: [...] names the
+  //    protocol's fields it implements, check and verify its check character.
+  {{protocol_js}}
+  // 8. Optional: the field's shape, e.g. field: { widths: { 2: 8 }, wholeFrame: true }, and
   //    the built-in reading it follows, e.g. decodeReading: 'fx5/hexa-16bit'.
 });

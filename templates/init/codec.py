@@ -39,13 +39,19 @@ plc_adapter.serve_codec(
     # 5. The digit counts it converts, and the width of its values (16 or 32 bits).
     decode_digits=[4], encode_digits=[4], width=16,
     # 6. Its exceptions, as the shared error classes: invalid-digit, invalid-count,
-    #    out-of-range, or error (any other refusal).
+    #    device-range, or error (any other refusal).
     errors={ValueError: "invalid-digit"},
-    # 7. Optional: the field's shape, where it is not a fixed run of digits most significant
+    # 7. The protocol it speaks, whose own manual then judges it, each difference naming the
+    #    rule and its page: mc-ascii, modbus-ascii, fx-computer-link, mewtocol-com,
+    #    omron-host-link or keyence-kv-l2 (leave it out for a codec of no protocol, which the
+    #    instruction manuals judge). fields=[...] names the protocol's fields it implements,
+    #    check= and verify= its check character (docs/check-your-library.md, section 1).
+    {{protocol_py}}
+    # 8. Optional: the field's shape, where it is not a fixed run of digits most significant
     #    first, e.g. {"widths": {2: 8}} for byte fields, {"byte_order": "low-first"} for
     #    MEWTOCOL, {"whole_frame": True} when the library checks the frame around the field.
     # field={"widths": {2: 8}},
-    # 8. Optional: the built-in reading it means to follow; `plc-conformance sweep` then judges
+    # 9. Optional: the built-in reading it means to follow; `plc-conformance sweep` then judges
     #    it against that reading.
     # decode_reading="fx5/hexa-16bit", encode_reading="fx5/asci-16bit",
 )

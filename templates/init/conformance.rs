@@ -37,6 +37,12 @@ impl Codec for {{type}} {
         CodecAbilities {
             hex_to_value: Some(ability.clone()),
             value_to_hex: Some(ability),
+            // 1b. The protocol it speaks, whose own manual then judges it, each difference
+            //     naming the rule and its page: mc-ascii, modbus-ascii, fx-computer-link,
+            //     mewtocol-com, omron-host-link or keyence-kv-l2 (None: a codec of no
+            //     protocol, which the instruction manuals judge).
+            {{protocol_rs}}
+            ..CodecAbilities::default()
         }
     }
 
@@ -55,6 +61,8 @@ impl Codec for {{type}} {
                 format!("{:0width$X}", question.value, width = question.digits as usize)
                     .into_bytes(),
             ),
+            // A protocol's check character (check, verify), when it implements one.
+            other => return Err(Unsupported(format!("implements no {other}"))),
         })
     }
 }

@@ -352,3 +352,26 @@ test('a codec declares its field shape; a count or value outside its widths is u
   assert.throws(() => helper.serveCodec({ name: 'x', version: '1', decode: () => 0, field: { widths: { 2: 12 } } }), TypeError);
   assert.throws(() => helper.serveCodec({ name: 'x', version: '1', decode: () => 0, field: { order: 'low' } }), TypeError);
 });
+
+test("a protocol's codec names its protocol and answers check and verify", async () => {
+  const lrc = (span) => {
+    const bytes = Buffer.from(span.toString('latin1'), 'hex');
+    return ((-bytes.reduce((a, b) => a + b, 0)) & 0xff).toString(16).toUpperCase().padStart(2, '0');
+  };
+  const check = (id, operation, text) => ({ id, case: `c${id}`, operation, text: bytes(text), digits: 2, field: 'lrc' });
+  const answers = await inProcess({
+    name: 'mb',
+    version: '1',
+    protocol: 'modbus-ascii',
+    fields: ['lrc'],
+    check: lrc,
+    verify: (frame) => lrc(frame.subarray(0, -2)) === frame.subarray(-2).toString('latin1'),
+  }, [HELLO_2, { type: 'run', cases: [check(1, 'check', '010304010001'), check(2, 'verify', '010304010001F6'), check(3, 'verify', '010304010001F7')] }, SHUTDOWN]);
+  assert.deepEqual(answers[0].capabilities.codec, { check: {}, verify: {}, protocol: 'modbus-ascii', fields: ['lrc'] });
+  assert.deepEqual(answers.slice(1), [
+    { type: 'result', id: 1, text: bytes('F6') },
+    { type: 'result', id: 2, accepted: true },
+    { type: 'result', id: 3, error: 'bad-check' },
+  ]);
+  assert.throws(() => helper.serveCodec({ name: 'x', version: '1', check: lrc }), TypeError);
+});

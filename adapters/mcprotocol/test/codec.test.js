@@ -29,6 +29,9 @@ test('mcprotocol through its private binarize/asciize', () => {
   assert.deepEqual(hello.capabilities, { codec: {
     'hex-to-value': { width: 16, digits: [4] },
     'value-to-hex': { width: 16, digits: [4] },
+    protocol: 'mc-ascii',
+    fields: ['word'],
+    'cross-vendor': true,
   } });
   assert.deepEqual(answers, [
     { type: 'result', id: 1, value: 0x5a8d },

@@ -351,3 +351,47 @@ class InProcess(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+MODBUS = os.path.join(HERE, "..", "..", "..", "tests", "fixtures", "external", "modbus_ascii_codec.py")
+
+
+def drive_script(script, args, messages):
+    proc = subprocess.run(
+        [sys.executable, script] + list(args),
+        input="".join(json.dumps(m) + "\n" for m in messages),
+        capture_output=True, text=True, timeout=30)
+    return [json.loads(line) for line in proc.stdout.split("\n") if line], proc.stderr, proc.returncode
+
+
+class ProtocolFields(unittest.TestCase):
+    def test_hello_names_the_protocol_and_its_check_operations(self):
+        answers, stderr, status = drive_script(MODBUS, ["strict"], [HELLO_2, SHUTDOWN])
+        self.assertEqual(status, 0, stderr)
+        codec = answers[0]["capabilities"]["codec"]
+        self.assertEqual(codec["protocol"], "modbus-ascii")
+        self.assertEqual(codec["check"], {})
+        self.assertEqual(codec["verify"], {})
+        self.assertNotIn("fields", codec)
+
+    def test_check_and_verify_answer_text_accepted_and_bad_check(self):
+        def case(ident, operation, text):
+            return {"id": ident, "case": "c%d" % ident, "operation": operation,
+                    "text": ascii_list(text), "digits": 2, "field": "lrc"}
+        cases = [case(1, "check", "010304010001"), case(2, "verify", "010304010001F6"),
+                 case(3, "verify", "010304010001F7"), case(4, "check", "01G3")]
+        run = [HELLO_2, {"type": "run", "cases": cases}, SHUTDOWN]
+        strict, stderr, status = drive_script(MODBUS, ["strict"], run)
+        self.assertEqual(status, 0, stderr)
+        self.assertEqual(strict[1:], [
+            {"type": "result", "id": 1, "text": ascii_list("F6")},
+            {"type": "result", "id": 2, "accepted": True},
+            {"type": "result", "id": 3, "error": "bad-check"},
+            {"type": "result", "id": 4, "error": "invalid-digit"},
+        ])
+        lax, _, _ = drive_script(MODBUS, ["never-compares"], run)
+        self.assertEqual(lax[3], {"type": "result", "id": 3, "accepted": True})
+
+    def test_protocol_arguments_without_a_protocol_are_refused(self):
+        with self.assertRaises(TypeError):
+            plc_adapter.serve_codec(check=lambda span: "00", name="x", version="1")
