@@ -176,6 +176,17 @@ pub(super) fn list(cli: &Cli, filter: Option<&str>) -> Outcome {
             let _ = writeln!(out, "    variant {:<22} {}", v.id, v.description);
         }
     }
+    let _ = writeln!(out, "protocols:");
+    for p in session.profiles.protocols.iter() {
+        let fields: Vec<&str> = p.fields.keys().map(String::as_str).collect();
+        let _ = writeln!(
+            out,
+            "  {:<18} {} — fields: {}",
+            p.id,
+            p.name,
+            fields.join(", ")
+        );
+    }
     let _ = writeln!(out, "cases:");
     let mut shown = 0;
     for case in &session.corpus.cases {
