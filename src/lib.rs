@@ -11,20 +11,26 @@
 //! and flags, the memory before — with the words it wrote and the error it signalled:
 //!
 //! ```
-//! use plc_conformance::{Backend, Fault, Outcome, Request, Response, Unsupported, Value};
+//! use std::sync::Arc;
+//! use plc_conformance::{Backend, Fault, Outcome, Paths, Project, Request, Response, Setting,
+//!     Value};
 //!
 //! /// Knows MELSEC iQ-R HABIN with SM705 off (a fixed 4 digits) and nothing else.
 //! struct MyEmulator;
 //!
 //! impl Backend for MyEmulator {
 //!     fn name(&self) -> &str { "my-emulator" }
-//!     fn profile(&self) -> &str { "iqr" }
+//!     // The profile's id (`plc-conformance list` shows them); an unknown one is refused.
+//!     fn profile(&self) -> &str { "mitsubishi-iqr" }
 //!     fn describe(&self) -> String { "my emulator, HABIN only".into() }
 //!     fn claims(&self, instruction: &str, _variant: &str) -> bool { instruction == "HABIN" }
+//!     // What it does not implement of what it claims is declined: skipped with the reason.
+//!     fn declines(&self, s: &Setting<'_>) -> Option<String> {
+//!         (s.flags.get("SM705") == Some(&true)).then(|| "SM705 on is not implemented".into())
+//!     }
+//!     // It keeps no device ranges: the cases about them are skipped, not failed.
+//!     fn checks_device_ranges(&self) -> bool { false }
 //!     fn execute(&self, r: &Request<'_>) -> Result<Response, Fault> {
-//!         if r.flag("SM705") {
-//!             return Ok(Unsupported("SM705 on (up to 4 digits ended by 00H)".into()).into());
-//!         }
 //!         let (s, d) = match (r.device("s"), r.device("d")) {
 //!             (Ok(s), Ok(d)) => (s, d),
 //!             (Err(u), _) | (_, Err(u)) => return Ok(Response::from(u)),
@@ -44,6 +50,18 @@
 //!         Ok(Response::Done(Outcome::written([(d.clone(), value)].into())))
 //!     }
 //! }
+//!
+//! // The corpus built into the crate, planned and judged for it: every trial it runs conforms.
+//! let project = Project::load(&Paths::embedded()).expect("the shipped corpus loads");
+//! let emulator: Arc<dyn Backend> = Arc::new(MyEmulator);
+//! let trials = project.plan(&[emulator]);
+//! let verdicts = plc_conformance::verdicts(&trials);
+//! let failing: Vec<String> = (trials.iter().zip(&verdicts))
+//!     .filter(|(_, v)| v.is_failure())
+//!     .map(|(t, v)| format!("{}: {v:?}", t.name()))
+//!     .collect();
+//! assert!(failing.is_empty(), "{failing:#?}");
+//! assert!(verdicts.iter().filter(|v| **v == plc_conformance::Verdict::Conforms).count() > 20);
 //! ```
 //!
 //! A codec answers with a value, a text or an error class. A protocol library's codec names the
@@ -77,6 +95,17 @@
 //!         }
 //!     }
 //! }
+//!
+//! // Judged by Modbus ASCII: `from_str_radix` takes a sign ("+234") and a field of 3 digits,
+//! // each a difference naming the protocol's rule; everything else conforms.
+//! let project = plc_conformance::Project::load(&plc_conformance::Paths::embedded()).unwrap();
+//! let trials = project.plan(&[plc_conformance::codec_backend(FromStrRadix)]);
+//! let verdicts = plc_conformance::verdicts(&trials);
+//! let failing: Vec<&str> = (trials.iter().zip(&verdicts))
+//!     .filter(|(_, v)| v.is_failure())
+//!     .map(|(t, _)| t.case_id())
+//!     .collect();
+//! assert_eq!(failing, ["mb-register-decode-plus", "mb-register-decode-short"]);
 //! ```
 //!
 //! Inside, data flows one way, one module per stage, none importing from a later one: `spec`

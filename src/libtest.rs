@@ -11,9 +11,14 @@
 //!
 //! The external backends of the project file run as extra trials, each started only when a
 //! trial of it runs: `--list` starts none, and a process running one trial (as nextest does)
-//! starts only that trial's backend. A backend that cannot start fails its `NAME::handshake`
-//! trial and every trial of it; one whose requirements are missing shows as an ignored
-//! `NAME::setup` trial with the reason.
+//! starts only that trial's backend. A backend started that way that cannot start fails its
+//! `NAME::handshake` trial and every trial of it; one whose requirements are missing shows as
+//! an ignored `NAME::setup` trial with the reason.
+//!
+//! A run never passes on nothing: a backend that is not set up (a profile the project does not
+//! have, a known-differences file that does not load, a process started at once that refuses
+//! the handshake) or that gets no trial to run makes the harness refuse to start, exit 2,
+//! whatever filter libtest was given.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -31,7 +36,7 @@ use crate::plan::Trial;
 use crate::project::{Paths, Project};
 use crate::report::console;
 use crate::report::text::{render, Palette};
-use crate::session::{run_one, BackendSource, HelloCache, LazyStart, Session, SetupError};
+use crate::session::{run_one, BackendSource, HelloCache, LazyStart, Session};
 
 /// Names the file of [`Harness::hello_cache`] instead of the one the harness gives; empty, none.
 const ENV_HELLO_CACHE: &str = "PLC_CONFORMANCE_HELLO_CACHE";
@@ -124,6 +129,20 @@ impl Harness {
         if let Err(e) = crate::interrupt::install(crate::interrupt::OnSignal::Exit) {
             console::warning(&format!("SIGINT and SIGTERM are not handled: {e}"));
         }
+        match self.conclude(&args) {
+            Ok(conclusion) => conclusion.exit_code(),
+            Err(refused) => {
+                for line in &refused.0 {
+                    console::error(line);
+                }
+                ExitCode::from(2)
+            }
+        }
+    }
+
+    /// Plans, runs and reports under `args`: libtest's conclusion, or why the harness refuses
+    /// to run at all (a corpus that does not load, a backend not set up or given no trial).
+    pub(crate) fn conclude(self, args: &Arguments) -> Result<libtest_mimic::Conclusion, Refused> {
         let mut paths = Paths::under(&self.root);
         // A corpus cut down to one trial's file need not hold every case a known-differences
         // file names.
@@ -135,8 +154,7 @@ impl Harness {
         let project = match Project::load(&paths) {
             Ok(p) => p,
             Err(errors) => {
-                console::error(&format!("the corpus does not load:\n{errors}"));
-                return ExitCode::from(2);
+                return Err(Refused::one(format!("the corpus does not load:\n{errors}")))
             }
         };
         let mut tests = Vec::new();
@@ -160,8 +178,9 @@ impl Harness {
             let configured = match load_project(&file, explicit, binary) {
                 Ok(p) => p,
                 Err(errors) => {
-                    console::error(&format!("the project file does not load:\n{errors}"));
-                    return ExitCode::from(2);
+                    return Err(Refused::one(format!(
+                        "the project file does not load:\n{errors}"
+                    )))
                 }
             };
             for skipped in configured.skipped {
@@ -204,19 +223,20 @@ impl Harness {
             }
         }
         let (session, failed) = Session::assemble(project, sources, whole_corpus);
+        // A backend that is not set up (its profile unknown, its known differences unreadable,
+        // its process refusing the handshake) would check nothing: the harness refuses to
+        // start, whatever filter would have left its failing trial out.
+        if !failed.is_empty() {
+            let mut lines: Vec<String> = (failed.iter())
+                .map(|(name, error)| format!("{name}: {}", crate::error_chain::chain(error)))
+                .collect();
+            lines.push("no trial runs while a backend is not set up".into());
+            return Err(Refused(lines));
+        }
         let changed = match &mut cache {
             Some(cache) => remember(cache, &session, &by_settings, args.exact),
             None => BTreeMap::new(),
         };
-        for (name, error) in failed {
-            let (what, message) = match error {
-                SetupError::Load(e) => ("known-differences", e.to_string()),
-                e => ("handshake", e.to_string()),
-            };
-            tests.push(Test::test(format!("{name}::{what}"), move || {
-                Err(Failed::from(message))
-            }));
-        }
         for lazy in &session.on_first_use {
             let handshake = lazy.clone();
             tests.push(Test::test(
@@ -233,6 +253,20 @@ impl Harness {
             .map(|l| (l.name().to_string(), l.clone()))
             .collect();
         let trials = session.plan(&session.backends);
+        // A backend that gets no trial to run passes having checked nothing: refused, before
+        // any filter (a corpus cut to one trial's file, as `--exact` reads it, may hold none of
+        // another backend's).
+        let idle = match whole_corpus {
+            true => session.idle(&trials, false),
+            false => Vec::new(),
+        };
+        if !idle.is_empty() {
+            return Err(Refused(
+                (idle.iter())
+                    .map(|(name, why)| format!("backend `{name}` gets no trial to run: {why}"))
+                    .collect(),
+            ));
+        }
         tests.extend(trials.into_iter().map(|t| {
             if let Some(why) = changed.get(t.backend.name()) {
                 let why = why.clone();
@@ -241,11 +275,21 @@ impl Harness {
             let lazy = by_name.get(t.backend.name()).cloned();
             test(t, lazy, &args)
         }));
-        let conclusion = libtest_mimic::run(&args, tests);
+        let conclusion = libtest_mimic::run(args, tests);
         // Started processes get their shutdown message before the harness exits.
         drop(by_name);
         drop(session);
-        conclusion.exit_code()
+        Ok(conclusion)
+    }
+}
+
+/// Why the harness runs no trial at all, a line each: shown on stderr, exit status 2.
+#[derive(Debug)]
+pub(crate) struct Refused(pub Vec<String>);
+
+impl Refused {
+    fn one(line: String) -> Self {
+        Refused(vec![line])
     }
 }
 

@@ -88,6 +88,18 @@ pub mod known_draft {
 }
 pub mod libtest {
     pub use crate::libtest::{main, Harness};
+
+    /// Runs a harness under libtest's arguments `args` (without the program name): libtest's
+    /// conclusion, or the lines of why it refused to run anything.
+    pub fn conclude(
+        harness: Harness,
+        args: &[&str],
+    ) -> Result<libtest_mimic::Conclusion, Vec<String>> {
+        let args = libtest_mimic::Arguments::from_iter(
+            std::iter::once("harness").chain(args.iter().copied()),
+        );
+        harness.conclude(&args).map_err(|refused| refused.0)
+    }
 }
 pub mod load {
     pub use crate::load::{

@@ -67,6 +67,13 @@ pub enum SetupError {
     Duplicate(String),
     /// No built-in reference model has this name.
     NoModel(String),
+    /// An in-process backend of a profile the project does not have: `known` lists each
+    /// profile's id and short name.
+    NoProfile {
+        backend: String,
+        profile: String,
+        known: Vec<(String, String)>,
+    },
     /// A codec configured as implementing a protocol no profile defines.
     NoProtocol {
         backend: String,
@@ -85,6 +92,24 @@ impl fmt::Display for SetupError {
             SetupError::External(e) => write!(f, "{e}"),
             SetupError::Duplicate(name) => write!(f, "there are two backends named `{name}`"),
             SetupError::NoModel(name) => write!(f, "no built-in reference model named `{name}`"),
+            SetupError::NoProfile {
+                backend,
+                profile,
+                known,
+            } => {
+                write!(
+                    f,
+                    "backend `{backend}` names profile `{profile}`, which is not loaded"
+                )?;
+                if let Some((id, _)) = known.iter().find(|(_, short)| short == profile) {
+                    write!(
+                        f,
+                        "; did you mean `{id}` (the profile whose short name it is)?"
+                    )?;
+                }
+                let ids: Vec<&str> = known.iter().map(|(id, _)| id.as_str()).collect();
+                write!(f, " The profiles are: {}", ids.join(", "))
+            }
             SetupError::NoProtocol {
                 backend,
                 protocol,
@@ -107,9 +132,10 @@ impl std::error::Error for SetupError {
         match self {
             SetupError::Load(e) => e.source(),
             SetupError::External(e) => e.source(),
-            SetupError::Duplicate(_) | SetupError::NoModel(_) | SetupError::NoProtocol { .. } => {
-                None
-            }
+            SetupError::Duplicate(_)
+            | SetupError::NoModel(_)
+            | SetupError::NoProfile { .. }
+            | SetupError::NoProtocol { .. } => None,
             SetupError::Live { source, .. } => Some(source),
         }
     }
@@ -269,6 +295,19 @@ impl Session {
                 live
             }
             BackendSource::InProcess(backend, known) => {
+                // An emulator of a profile the project does not have would get no trial: a
+                // run that checks nothing, never a pass.
+                if backend.codec().is_none()
+                    && self.project.profiles.get(backend.profile()).is_none()
+                {
+                    return Err(SetupError::NoProfile {
+                        backend: name,
+                        profile: backend.profile().to_string(),
+                        known: (self.project.profiles.iter())
+                            .map(|p| (p.id.clone(), p.short.clone()))
+                            .collect(),
+                    });
+                }
                 if let Some(file) = known {
                     self.project
                         .add_known(&name, backend.profile(), &file, strict_known)

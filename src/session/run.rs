@@ -58,10 +58,7 @@ impl Session {
         let (records, summary, interrupted) = collector.finish();
         let idle = match interrupted || options.allow_empty {
             true => Vec::new(),
-            false => {
-                let asked: Vec<&str> = self.asked.iter().map(String::as_str).collect();
-                idle_backends(trials, &asked, options.filtered)
-            }
+            false => self.idle(trials, options.filtered),
         };
         Ok(RunOutcome {
             records,
@@ -282,6 +279,15 @@ impl RunOutcome {
             None => self.summary.failed > 0,
         };
         u8::from(differs || !self.idle.is_empty())
+    }
+}
+
+impl Session {
+    /// The backends this session was asked for that `trials` give nothing to run, with why:
+    /// they would pass having checked nothing.
+    pub(crate) fn idle(&self, trials: &[Trial], filtered: bool) -> Vec<(String, String)> {
+        let asked: Vec<&str> = self.asked.iter().map(String::as_str).collect();
+        idle_backends(trials, &asked, filtered)
     }
 }
 

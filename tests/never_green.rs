@@ -1,0 +1,107 @@
+//! A run that checks nothing is never green: the harness a Rust dependent runs from its own
+//! `cargo test` refuses to start when a backend names a profile it does not know, when a
+//! known-differences file cannot load — whatever filter would have left a failing trial out —
+//! and when a backend gets no trial to run.
+
+mod common;
+
+use std::sync::Arc;
+
+use common::root;
+use plc_conformance::testing::libtest::conclude;
+use plc_conformance::{Backend, Fault, Harness, Request, Response};
+
+/// An emulator of `profile` that claims `instruction` and answers nothing useful.
+struct Emulator {
+    profile: &'static str,
+    instruction: &'static str,
+}
+
+impl Backend for Emulator {
+    fn name(&self) -> &str {
+        "emu"
+    }
+    fn profile(&self) -> &str {
+        self.profile
+    }
+    fn describe(&self) -> String {
+        "a test emulator".into()
+    }
+    fn claims(&self, instruction: &str, _variant: &str) -> bool {
+        instruction == self.instruction
+    }
+    fn execute(&self, _request: &Request<'_>) -> Result<Response, Fault> {
+        Ok(Response::Unsupported("nothing".into()))
+    }
+}
+
+fn harness(profile: &'static str, instruction: &'static str) -> Harness {
+    let emu: Arc<dyn Backend> = Arc::new(Emulator {
+        profile,
+        instruction,
+    });
+    Harness::new(root()).without_builtin().backend(emu, None)
+}
+
+fn refused(result: Result<libtest_mimic::Conclusion, Vec<String>>) -> String {
+    match result {
+        Ok(c) => panic!(
+            "the harness ran: {} passed, {} failed, {} ignored",
+            c.num_passed, c.num_failed, c.num_ignored
+        ),
+        Err(lines) => lines.join("\n"),
+    }
+}
+
+#[test]
+fn a_profile_s_short_name_is_refused_with_its_id() {
+    let why = refused(conclude(harness("fx5", "HEXA"), &["--list"]));
+    assert!(
+        why.contains("names profile `fx5`, which is not loaded"),
+        "{why}"
+    );
+    assert!(why.contains("did you mean `mitsubishi-fx5`"), "{why}");
+}
+
+#[test]
+fn a_misspelt_profile_is_refused_whatever_the_filter() {
+    let why = refused(conclude(harness("mitsubishi-fx55", "HEXA"), &["hexa"]));
+    assert!(why.contains("The profiles are: "), "{why}");
+    assert!(why.contains("mitsubishi-fx5"), "{why}");
+}
+
+#[test]
+fn a_known_differences_file_that_does_not_load_is_refused_whatever_the_filter() {
+    let dir = common::scratch();
+    let known = dir.path().join("broken.known.yaml");
+    std::fs::write(&known, "differences: [{case: no-such-case}]\n").expect("write");
+    let emu: Arc<dyn Backend> = Arc::new(Emulator {
+        profile: "mitsubishi-fx5",
+        instruction: "HEXA",
+    });
+    for args in [&["hexa"][..], &["--exact", "emu::hexa::no-such::fx5u"], &[]] {
+        let h = Harness::new(root())
+            .without_builtin()
+            .backend(emu.clone(), Some(known.clone()));
+        let why = refused(conclude(h, args));
+        assert!(why.contains("broken.known.yaml"), "{args:?}: {why}");
+        assert!(
+            why.contains("no trial runs while a backend is not set up"),
+            "{why}"
+        );
+    }
+}
+
+#[test]
+fn a_backend_with_no_trial_is_refused() {
+    let why = refused(conclude(harness("mitsubishi-fx5", "NOSUCH"), &[]));
+    assert!(why.contains("backend `emu` gets no trial to run"), "{why}");
+}
+
+/// And a backend set up right runs: the same harness with a known instruction plans trials
+/// (listed, not run).
+#[test]
+fn a_backend_set_up_right_runs() {
+    let c = conclude(harness("mitsubishi-fx5", "HEXA"), &["--list"]).expect("runs");
+    assert_eq!(c.num_failed, 0);
+}
