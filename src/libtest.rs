@@ -147,7 +147,7 @@ impl Harness {
         // A corpus cut down to one trial's file need not hold every case a known-differences
         // file names.
         let mut whole_corpus = true;
-        if let Some(files) = exact_files(&args, &paths) {
+        if let Some(files) = exact_files(args, &paths) {
             paths.vectors = files;
             whole_corpus = false;
         }
@@ -273,7 +273,7 @@ impl Harness {
                 return Test::test(t.name(), move || Err(Failed::from(why)));
             }
             let lazy = by_name.get(t.backend.name()).cloned();
-            test(t, lazy, &args)
+            test(t, lazy, args)
         }));
         let conclusion = libtest_mimic::run(args, tests);
         // Started processes get their shutdown message before the harness exits.
