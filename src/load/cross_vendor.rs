@@ -117,6 +117,15 @@ fn read_case(
         }
     };
     let expect = match &spec.expect {
+        Some(e) if e.accepted.is_some() => {
+            cx.error(
+                format!("{key}.expect.accepted"),
+                LoadErrorKind::Invalid(
+                    "`accepted` answers a protocol's verify, not a cross-vendor case".into(),
+                ),
+            );
+            None
+        }
         Some(e) => outcome(
             &format!("{key}.expect"),
             e.value.as_ref(),

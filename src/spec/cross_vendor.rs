@@ -198,7 +198,7 @@ pub(crate) struct CrossVendorCaseSpec {
     pub note: Option<String>,
 }
 
-/// One of `value`, `text` or `error`.
+/// One of `value`, `text` or `error` (`accepted` for a protocol's `verify`).
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct CrossVendorExpectSpec {
@@ -208,6 +208,9 @@ pub(crate) struct CrossVendorExpectSpec {
     pub text: Option<String>,
     #[serde(default)]
     pub error: Option<ErrorClass>,
+    /// A protocol's `verify` only: the check characters match.
+    #[serde(default)]
+    pub accepted: Option<bool>,
 }
 
 /// A lowering's own answer, and why it differs.

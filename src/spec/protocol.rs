@@ -12,7 +12,7 @@ use std::collections::BTreeMap;
 use schemars::JsonSchema;
 use serde::Deserialize;
 
-use super::cross_vendor::{ErrorClass, Operation};
+use super::cross_vendor::{CrossVendorExpectSpec, Operation};
 use super::vectors::{Basis, ScalarSpec};
 
 /// One communication protocol's hex fields, check character and error answers.
@@ -149,22 +149,7 @@ pub(crate) struct ProtocolCaseSpec {
     /// The protocol's answer: `value`, `text`, `error` or `accepted: true`; absent for an
     /// `unspecified` case.
     #[serde(default)]
-    pub expect: Option<ProtocolExpectSpec>,
+    pub expect: Option<CrossVendorExpectSpec>,
     #[serde(default)]
     pub note: Option<String>,
-}
-
-/// One of `value`, `text`, `error` or `accepted`.
-#[derive(Debug, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct ProtocolExpectSpec {
-    #[serde(default)]
-    pub value: Option<ScalarSpec>,
-    #[serde(default)]
-    pub text: Option<String>,
-    #[serde(default)]
-    pub error: Option<ErrorClass>,
-    /// verify: the check characters match.
-    #[serde(default)]
-    pub accepted: Option<bool>,
 }
