@@ -354,7 +354,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                 _ => Ok(answer),
             }
         }),
-        Mutant::new("hexa-left-justified-like-iqr", base, |req, b| {
+        Mutant::new("hexa-left-justified", base, |req, b| {
             reshape(req, b, |req, o| {
                 let (Some(s), Some(d), Some(n)) = (device(req, "s"), device(req, "d"), n_of(req))
                 else {
@@ -370,6 +370,30 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                     let mut padded = group.to_vec();
                     padded.resize(4, b'0');
                     if let (Ok(w), Some(dev)) = (fx5::hex_words(&padded), d.offset(i as u32)) {
+                        writes.insert(dev, u32::from(w[0]));
+                    }
+                }
+                Outcome { writes, ..o }
+            })
+        }),
+        // The MELSEC-Q/iQ-R HEX(P) order: the first character of each word in its lowest digit
+        // ("4321" is 1234H), the last word padded with 0 above its digits.
+        Mutant::new("hexa-reversed-like-iqr-hex", base, |req, b| {
+            reshape(req, b, |req, o| {
+                let (Some(s), Some(d), Some(n)) = (device(req, "s"), device(req, "d"), n_of(req))
+                else {
+                    return o;
+                };
+                if is_asci(req) || o.error.is_some() {
+                    return o;
+                }
+                let packing = Packing::from_sm8161(eight_bit(req));
+                let chars = fx5::hex_chars(req.memory, &s, n, packing);
+                let mut writes = BTreeMap::new();
+                for (i, group) in chars.chunks(4).enumerate() {
+                    let mut digits = vec![b'0'; 4 - group.len()];
+                    digits.extend(group.iter().rev());
+                    if let (Ok(w), Some(dev)) = (fx5::hex_words(&digits), d.offset(i as u32)) {
                         writes.insert(dev, u32::from(w[0]));
                     }
                 }

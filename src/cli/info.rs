@@ -29,15 +29,18 @@ pub(super) fn validate(cli: &Cli, given: &[PathBuf]) -> Outcome {
         .iter()
         .map(|c| &c.location.file)
         .chain(corpus.cross_vendor.iter().map(|c| &c.location.file))
+        .chain(corpus.protocol_fields.iter().map(|c| &c.location.file))
         .collect();
     output::write(
         None,
         &format!(
-            "ok: {} and {} in {}, {}, {}",
+            "ok: {}, {} and {} in {}, {}, {}, {}",
             counted(corpus.cases.len(), "case"),
             counted(corpus.cross_vendor.len(), "cross-vendor case"),
+            counted(corpus.protocol_fields.len(), "protocol-field case"),
             counted(files.len(), "file"),
             counted(profiles.iter().count(), "profile"),
+            counted(profiles.protocols.iter().count(), "protocol"),
             counted(open, "open question"),
         ),
     )?;
