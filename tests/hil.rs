@@ -1357,3 +1357,108 @@ fn the_simulated_iqr_cpu_serves_link_registers() {
         [0]
     );
 }
+
+/// `hil probe` against the simulated CPU's ASCII port: the requests as the manual writes them
+/// are read (0000H, a device number's leading blanks included), a character that is no hex
+/// digit is C050H, and the lowercase ones get the simulator's strict reading (C050H), which the
+/// output says settles nothing. A closed port is an error with the address.
+#[test]
+fn a_protocol_probe_reads_the_end_codes_of_an_ascii_port() {
+    let project = session();
+    let m = manifest(&project, "mitsubishi-iqr");
+    let sim = simulator(&project, &m, "rcpu", Vec::new());
+    let address = sim.address().to_string();
+    let out = common::cli(&["hil", "probe", "--address", &address, "--timeout", "5"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    let answer = |id: &str| {
+        (stdout.lines())
+            .find(|l| l.starts_with(&format!("{id} ")))
+            .unwrap_or_else(|| panic!("no line for {id}: {stdout}"))
+            .to_string()
+    };
+    for id in [
+        "as-written",
+        "points-capital",
+        "number-capital",
+        "number-leading-blanks",
+    ] {
+        assert!(answer(id).contains(" 0000H "), "{}", answer(id));
+    }
+    assert!(answer("points-not-hex").contains(" C050H "), "{stdout}");
+    assert!(
+        answer("points-not-hex").contains("(mc-ascii/M4)"),
+        "{stdout}"
+    );
+    for id in ["points-lowercase", "number-lowercase"] {
+        assert!(answer(id).contains(" C050H "), "{}", answer(id));
+        assert!(
+            answer(id).contains("open question mc-ascii-lowercase"),
+            "{}",
+            answer(id)
+        );
+    }
+    assert!(
+        stdout.contains("5 of 5 answers as the manual states"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("never an observation"), "{stdout}");
+    drop(sim);
+    let closed = TcpListener::bind("127.0.0.1:0").expect("port");
+    let port = closed.local_addr().expect("address").to_string();
+    drop(closed);
+    let out = common::cli(&["hil", "probe", "--address", &port, "--timeout", "1"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains(&port));
+}
+
+/// `hil probe` against virtual-plc's MC protocol server (its Q profile, ASCII code): the
+/// requests it decodes judged by the MC protocol's rules. It reads the request as written and
+/// a lowercase point count (codec.py:54 takes a-f), but refuses a hexadecimal device number
+/// and a device number's leading blanks (codec.py:131, decimal digits only: mc-ascii/M10, M11),
+/// and answers C05CH, not C050H, to a point count that is not hex (commands.py:221).
+#[test]
+fn virtual_plc_s_server_is_judged_by_the_mc_protocol() {
+    use std::io::BufRead;
+    let Some(python) = common::adapters_python("virtual_plc", "virtual-plc") else {
+        return;
+    };
+    let script = common::root().join("adapters/python/tools/virtual_plc_server.py");
+    let mut server = std::process::Command::new(python)
+        .arg(script)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .expect("the server starts");
+    let mut line = String::new();
+    std::io::BufReader::new(server.stdout.take().expect("stdout"))
+        .read_line(&mut line)
+        .expect("its address");
+    let address = line
+        .trim()
+        .strip_prefix("listening on ")
+        .expect(&line)
+        .to_string();
+    let out = common::cli(&["hil", "probe", "--address", &address, "--timeout", "5"]);
+    drop(server.stdin.take());
+    let _ = server.wait();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    assert!(
+        stdout.contains("2 of 5 answers as the manual states"),
+        "{stdout}"
+    );
+    for (id, end_code) in [
+        ("as-written", "0000H"),
+        ("points-lowercase", "0000H"),
+        ("number-capital", "C05CH"),
+        ("number-leading-blanks", "C05CH"),
+        ("points-not-hex", "C05CH"),
+    ] {
+        let line = stdout
+            .lines()
+            .find(|l| l.starts_with(&format!("{id} ")))
+            .unwrap_or("");
+        assert!(line.contains(&format!(" {end_code} ")), "{id}: {stdout}");
+    }
+}

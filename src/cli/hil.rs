@@ -65,6 +65,18 @@ pub(crate) enum HilCommand {
         #[arg(long, value_name = "SPEC")]
         backend: String,
     },
+    /// Ask a MELSEC CPU's MC protocol (SLMP) port, set to ASCII code, read requests whose point
+    /// count or device number carries what the manual does not cover (a lowercase letter, a
+    /// leading blank) or refuses (a character that is not a hex digit), and print the end code
+    /// it answers to each beside what the manual says. Only reads: nothing is written.
+    Probe {
+        /// The CPU's port, HOST:PORT (its SLMP connection in ASCII code, 3E frames).
+        #[arg(long, value_name = "HOST:PORT")]
+        address: String,
+        /// Seconds to wait for each answer.
+        #[arg(long, value_name = "S", default_value_t = 5.0)]
+        timeout: f64,
+    },
     /// Serve a simulated CPU on 127.0.0.1 running the manifest's program with the built-in
     /// reference model, until interrupted, over the link of the manifest's profile (SLMP for
     /// MELSEC, Modbus TCP for IDEC); prints `listening on 127.0.0.1:PORT`.
@@ -237,6 +249,7 @@ pub(super) fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
                 EXIT_DIFFERENCES
             })
         }
+        HilCommand::Probe { address, timeout } => probe(address, *timeout),
         HilCommand::Sim {
             manifest,
             variant,
@@ -345,5 +358,62 @@ fn live_settings(
             "`{spec}` is not a live backend: give {}",
             crate::backend::BENCH_FORMS
         ))
+    })
+}
+
+/// `hil probe`: each probe's request, the end code answered and what the manual says; exit 1
+/// when an answer differs from an end code the manual states.
+fn probe(address: &str, timeout: f64) -> Outcome {
+    use crate::backend::slmp::probe::{ask, Manual, PROBES};
+    let limit = std::time::Duration::try_from_secs_f64(timeout)
+        .ok()
+        .filter(|d| !d.is_zero() && d.as_secs() <= 600)
+        .ok_or_else(|| CliError::input(format!("--timeout {timeout}: give 0.001 to 600 s")))?;
+    let mut text = format!(
+        "{:<22} {:<30} {:<17} {:<11} the manual\n",
+        "probe", "field", "device, points", "answered"
+    );
+    let mut against = 0;
+    for p in &PROBES {
+        let heard = ask(address, p, limit)
+            .map_err(|e| CliError::input(format!("{address}: no connection: {e}")))?;
+        let sent = format!("`{}` `{}`", p.device, p.points);
+        let manual = match p.manual {
+            Manual::EndCode(code, rule) => {
+                if heard != crate::backend::slmp::probe::Heard::EndCode(code) {
+                    against += 1;
+                }
+                format!("{code:04X}H ({rule})")
+            }
+            Manual::Open(question) => format!("not settled: open question {question}"),
+        };
+        text.push_str(&format!(
+            "{:<22} {:<30} {sent:<17} {:<11} {manual}\n",
+            p.id,
+            p.field,
+            heard.to_string(),
+        ));
+    }
+    text.push_str(&format!(
+        "{} of {} answers as the manual states; the open ones are what this CPU does. A real \
+         CPU's answers settle the open questions: record them under `observed` in \
+         docs/open-questions.yaml with the CPU's model, firmware, the date and who ran the \
+         probe. A simulated CPU's (hil sim) are its own reading of the manual, never an \
+         observation.",
+        PROBES
+            .iter()
+            .filter(|p| matches!(p.manual, Manual::EndCode(..)))
+            .count()
+            - against,
+        PROBES
+            .iter()
+            .filter(|p| matches!(p.manual, Manual::EndCode(..)))
+            .count()
+    ));
+    output::write(None, &text)?;
+    Ok(if against == 0 {
+        EXIT_OK
+    } else {
+        EXIT_DIFFERENCES
     })
 }

@@ -13,8 +13,8 @@
 //! client's readers of words and type names serve both codes.
 
 use super::frame::{
-    command, device_letters, hex_numbered, DeviceForm, FrameError, FrameKind, Request, Response,
-    Route, MAX_MESSAGE,
+    command, device_code, device_letters, hex_numbered, DeviceForm, FrameError, FrameKind, Request,
+    Response, Route, MAX_MESSAGE,
 };
 
 /// Characters before the end of the length field: subheader, (serial and reserved area), route
@@ -258,6 +258,165 @@ pub(crate) fn decode_response(
     })
 }
 
+/// Why an ASCII request is not carried out, as the end code its answer carries.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Refusal {
+    /// ASCII that cannot be converted to binary: end code C050H from a CPU's built-in Ethernet
+    /// port (qnu-ethernet p.62, `mc-ascii/M4`).
+    NotConvertible,
+    /// A command or subcommand this port does not read in ASCII: C059H.
+    Unsupported,
+}
+
+impl Refusal {
+    pub(crate) fn end_code(self) -> u16 {
+        match self {
+            Refusal::NotConvertible => 0xC050,
+            Refusal::Unsupported => 0xC059,
+        }
+    }
+}
+
+/// A field of hex digits read as the manual writes them: 0-9 and the capitals A-F only
+/// (`mc-ascii/M1`, `M4`); anything else cannot be converted.
+fn strict_at(text: &[u8], at: usize, chars: usize) -> Result<u32, Refusal> {
+    let field = text.get(at..at + chars).ok_or(Refusal::NotConvertible)?;
+    field.iter().try_fold(0u32, |v, c| {
+        let digit = match c {
+            b'0'..=b'9' => c - b'0',
+            b'A'..=b'F' => c - b'A' + 10,
+            _ => return Err(Refusal::NotConvertible),
+        };
+        Ok(v << 4 | u32::from(digit))
+    })
+}
+
+/// A device number: its digits in the device's radix, a leading blank standing for 0 (mcp
+/// p.69: "The '0' in the upper digits can also be specified with a space (code: 20H).").
+fn device_number(text: &[u8], at: usize, chars: usize, hex: bool) -> Result<u32, Refusal> {
+    let field = text.get(at..at + chars).ok_or(Refusal::NotConvertible)?;
+    let leading = field.iter().take_while(|c| **c == b' ').count();
+    let digits: Vec<u8> = (field.iter().enumerate())
+        .map(|(i, c)| if i < leading { b'0' } else { *c })
+        .collect();
+    if hex {
+        return strict_at(&digits, 0, chars);
+    }
+    digits.iter().try_fold(0u32, |v, c| match c {
+        b'0'..=b'9' => Ok(v * 10 + u32::from(c - b'0')),
+        _ => Err(Refusal::NotConvertible),
+    })
+}
+
+/// Reads a request in ASCII code, strictly, into the binary model: its route (for the answer,
+/// read as far as it converts), and the request or why it is refused. Reads 0101 and 0401, in
+/// 3E and 4E frames.
+pub(crate) fn decode_request(bytes: &[u8]) -> (FrameKind, u16, Route, Result<Request, Refusal>) {
+    let (frame, serial, at) = match bytes.get(..4) {
+        Some(b"5400") => (
+            FrameKind::E4,
+            strict_at(bytes, 4, 4).unwrap_or(0) as u16,
+            12,
+        ),
+        _ => (FrameKind::E3, 0, 4),
+    };
+    let route = (|| {
+        Ok::<_, Refusal>(Route {
+            network: strict_at(bytes, at, 2)? as u8,
+            station: strict_at(bytes, at + 2, 2)? as u8,
+            module_io: strict_at(bytes, at + 4, 4)? as u16,
+            multidrop: strict_at(bytes, at + 8, 2)? as u8,
+        })
+    })();
+    let request = route.and_then(|route| {
+        let body = header_len(frame);
+        let timer = strict_at(bytes, body, 4)? as u16;
+        let command_code = strict_at(bytes, body + 4, 4)? as u16;
+        let subcommand = strict_at(bytes, body + 8, 4)? as u16;
+        let mut data = Vec::new();
+        match (command_code, subcommand) {
+            (command::READ_TYPE_NAME, 0) => {}
+            (command::READ, 0x0000 | 0x0002) => {
+                let long = subcommand == 0x0002;
+                let (letters_width, digits) = if long { (4, 8) } else { (2, 6) };
+                let at = body + 12;
+                let letters = bytes
+                    .get(at..at + letters_width)
+                    .ok_or(Refusal::NotConvertible)?;
+                let letters = std::str::from_utf8(letters)
+                    .map_err(|_| Refusal::NotConvertible)?
+                    .trim_end_matches(['*', ' ']);
+                let code = device_code(letters).ok_or(Refusal::NotConvertible)?;
+                let number =
+                    device_number(bytes, at + letters_width, digits, hex_numbered(letters))?;
+                let points = strict_at(bytes, at + letters_width + digits, 4)? as u16;
+                if long {
+                    data.extend_from_slice(&number.to_le_bytes());
+                    data.extend_from_slice(&code.to_le_bytes());
+                } else {
+                    data.extend_from_slice(&number.to_le_bytes()[..3]);
+                    data.push(code as u8);
+                }
+                data.extend_from_slice(&points.to_le_bytes());
+            }
+            _ => return Err(Refusal::Unsupported),
+        }
+        Ok(Request {
+            frame,
+            serial,
+            route,
+            timer,
+            command: command_code,
+            subcommand,
+            data,
+        })
+    });
+    (frame, serial, route.unwrap_or_default(), request)
+}
+
+/// A response in ASCII code, from the binary model of it: a batch read's words 4 digits each,
+/// a type name as its 16 characters and the model code; the error information of an error
+/// response (route, command, subcommand) as its fields.
+pub(crate) fn encode_response(response: &Response, command_code: u16) -> Vec<u8> {
+    let data = &response.data;
+    let mut body = Vec::new();
+    hex_field(&mut body, u32::from(response.end_code), 2);
+    if response.end_code != 0 {
+        if let [network, station, io_lo, io_hi, multidrop, c_lo, c_hi, s_lo, s_hi] = data[..] {
+            hex_field(&mut body, u32::from(network), 1);
+            hex_field(&mut body, u32::from(station), 1);
+            hex_field(&mut body, u32::from(u16::from_le_bytes([io_lo, io_hi])), 2);
+            hex_field(&mut body, u32::from(multidrop), 1);
+            hex_field(&mut body, u32::from(u16::from_le_bytes([c_lo, c_hi])), 2);
+            hex_field(&mut body, u32::from(u16::from_le_bytes([s_lo, s_hi])), 2);
+        }
+    } else if command_code == command::READ_TYPE_NAME && data.len() == 18 {
+        body.extend_from_slice(&data[..16]);
+        hex_field(
+            &mut body,
+            u32::from(u16::from_le_bytes([data[16], data[17]])),
+            2,
+        );
+    } else {
+        for w in data.chunks_exact(2) {
+            hex_field(&mut body, u32::from(u16::from_le_bytes([w[0], w[1]])), 2);
+        }
+    }
+    let mut out = Vec::with_capacity(header_len(response.frame) + body.len());
+    match response.frame {
+        FrameKind::E3 => out.extend_from_slice(b"D000"),
+        FrameKind::E4 => {
+            out.extend_from_slice(b"D400");
+            hex_field(&mut out, u32::from(response.serial), 2);
+            out.extend_from_slice(b"0000");
+        }
+    }
+    route(&mut out, response.route);
+    hex_field(&mut out, body.len() as u32, 2);
+    out.extend_from_slice(&body);
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -360,5 +519,57 @@ mod tests {
         let e = decode_response(FrameKind::E3, command::READ, text.as_bytes())
             .expect_err("does not decode");
         assert!(e.to_string().contains(message), "{e}");
+    }
+
+    /// The simulated CPU's ASCII port reads a request as the manual writes it: capitals, the
+    /// device number in its radix with leading blanks as 0; anything else is C050H.
+    #[rstest]
+    #[case::as_written("500000FF03FF000018001004010000D*0001000001", Ok((100, 1)))]
+    #[case::leading_blanks("500000FF03FF000018001004010000D*  01000001", Ok((100, 1)))]
+    #[case::points_capitals("500000FF03FF000018001004010000D*000100000A", Ok((100, 10)))]
+    #[case::points_lowercase("500000FF03FF000018001004010000D*000100000a", Err(0xC050))]
+    #[case::points_g("500000FF03FF000018001004010000D*000100000G", Err(0xC050))]
+    #[case::hex_number_lowercase("500000FF03FF000018001004010000W*00001a0001", Err(0xC050))]
+    #[case::hex_number("500000FF03FF000018001004010000W*00001A0001", Ok((0x1A, 1)))]
+    #[case::decimal_number_with_a_letter("500000FF03FF000018001004010000D*0001A00001", Err(0xC050))]
+    #[case::write_unsupported("500000FF03FF000018001014010000D*0001000001", Err(0xC059))]
+    fn an_ascii_request_is_read_strictly(
+        #[case] text: &str,
+        #[case] expected: Result<(u32, u16), u16>,
+    ) {
+        let (_, _, route, request) = decode_request(text.as_bytes());
+        assert_eq!(route, Route::default());
+        let read = request.map_err(Refusal::end_code).map(|r| {
+            let number = u32::from_le_bytes([r.data[0], r.data[1], r.data[2], 0]);
+            (number, u16::from_le_bytes([r.data[4], r.data[5]]))
+        });
+        assert_eq!(read, expected);
+    }
+
+    /// A response the client's reader reads back: words, and an error with its information.
+    #[test]
+    fn an_ascii_response_reads_back() {
+        let words = Response {
+            frame: FrameKind::E3,
+            serial: 0,
+            route: Route::default(),
+            end_code: 0,
+            data: vec![0x8D, 0x5A, 0x01, 0x00],
+        };
+        let text = encode_response(&words, command::READ);
+        assert_eq!(text, b"D00000FF03FF00000C00005A8D0001".to_vec());
+        assert_eq!(
+            decode_response(FrameKind::E3, command::READ, &text),
+            Ok(words)
+        );
+        let error = Response {
+            end_code: 0xC050,
+            data: vec![0x00, 0xFF, 0xFF, 0x03, 0x00, 0x01, 0x04, 0x00, 0x00],
+            ..decode_response(FrameKind::E3, command::READ, &text).expect("decodes")
+        };
+        assert_eq!(
+            String::from_utf8_lossy(&encode_response(&error, command::READ)),
+            "D00000FF03FF000016C05000FF03FF0004010000"
+        );
     }
 }

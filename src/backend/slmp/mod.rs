@@ -9,6 +9,7 @@ pub(crate) mod ascii;
 pub(crate) mod client;
 pub(crate) mod frame;
 pub mod limits;
+pub(crate) mod probe;
 pub(crate) mod sim;
 
 use std::path::Path;

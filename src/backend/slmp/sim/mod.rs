@@ -3,7 +3,10 @@
 //! reference model.
 //!
 //! The server answers 0101, 0401, 0403 and 1401 in 3E or 4E frames, binary code, in the frame
-//! of each request; SD203 says whether the CPU runs.
+//! of each request; SD203 says whether the CPU runs. In ASCII code it answers 0101 and 0401
+//! (what a protocol probe asks, `hil probe`), reading every field as the manual writes it:
+//! capitals only, so a character the manual does not list — a lowercase letter included, which
+//! no manual settles — is C050H, ASCII that cannot be converted.
 
 mod remote;
 
@@ -13,6 +16,7 @@ use std::io::Write;
 use std::net::TcpStream;
 use std::sync::Arc;
 
+use super::ascii;
 use super::frame::{
     self, decode_body, message_len, Code, Decoded, DeviceForm, DeviceRef, FrameKind, Request,
     Response,
@@ -154,10 +158,26 @@ fn device_words(cpu: &Cpu, d: DeviceRef, count: usize) -> Result<&[u16], u16> {
     words.get(first..first + count).ok_or(0xC056)
 }
 
-/// Reads one whole request, polling the stop flag; `None` when the connection ends.
-fn read_request(shared: &Program<SlmpSim>, stream: &mut TcpStream) -> Option<Vec<u8>> {
-    let mut buf = vec![0u8; 2];
-    shared.fill(stream, &mut buf, 0)?;
+/// Reads one whole request, polling the stop flag, in the code its first character says
+/// (`5000`/`5400` in ASCII, 50H/54H in binary); `None` when the connection ends.
+fn read_request(shared: &Program<SlmpSim>, stream: &mut TcpStream) -> Option<(Vec<u8>, Code)> {
+    let mut buf = vec![0u8; 4];
+    shared.fill(stream, &mut buf[..2], 0)?;
+    if buf[0] == b'5' {
+        shared.fill(stream, &mut buf, 2)?;
+        let frame = match &buf[..] {
+            b"5400" => FrameKind::E4,
+            _ => FrameKind::E3,
+        };
+        let header = ascii::header_len(frame);
+        buf.resize(header, 0);
+        shared.fill(stream, &mut buf, 4)?;
+        let total = ascii::message_len(frame, &buf).ok()?;
+        buf.resize(total, 0);
+        shared.fill(stream, &mut buf, header)?;
+        return Some((buf, Code::Ascii));
+    }
+    buf.truncate(2);
     let frame = FrameKind::of_request(buf[0]).unwrap_or(FrameKind::E3);
     let header = frame.header_len();
     buf.resize(header, 0);
@@ -165,15 +185,38 @@ fn read_request(shared: &Program<SlmpSim>, stream: &mut TcpStream) -> Option<Vec
     let total = message_len(frame, &buf).ok()?;
     buf.resize(total, 0);
     shared.fill(stream, &mut buf, header)?;
-    Some(buf)
+    Some((buf, Code::Binary))
 }
 
 fn serve(shared: &Program<SlmpSim>, mut stream: TcpStream) {
-    while let Some(bytes) = read_request(shared, &mut stream) {
-        // A request that does not decode gets no answer, as a CPU stays silent on a frame it
-        // does not take.
-        let Ok(request) = Request::decode(&bytes) else {
-            continue;
+    while let Some((bytes, code)) = read_request(shared, &mut stream) {
+        // A binary request that does not decode gets no answer, as a CPU stays silent on a
+        // frame it does not take; an ASCII one that does not convert is answered C050H (the
+        // manual's strictest reading: capitals only, docs/live-cpu.md).
+        let request = match code {
+            Code::Binary => match Request::decode(&bytes) {
+                Ok(request) => request,
+                Err(_) => continue,
+            },
+            Code::Ascii => match ascii::decode_request(&bytes) {
+                (_, _, _, Ok(request)) => request,
+                (frame, serial, route, Err(refusal)) => {
+                    let answer = Response {
+                        frame,
+                        serial,
+                        route,
+                        end_code: refusal.end_code(),
+                        data: Vec::new(),
+                    };
+                    if stream
+                        .write_all(&ascii::encode_response(&answer, 0))
+                        .is_err()
+                    {
+                        return;
+                    }
+                    continue;
+                }
+            },
         };
         let body = decode_body(&request);
         let action = {
@@ -225,7 +268,11 @@ fn serve(shared: &Program<SlmpSim>, mut stream: TcpStream) {
             }
             _ => {}
         }
-        if stream.write_all(&response.encode()).is_err() {
+        let answer = match code {
+            Code::Binary => response.encode(),
+            Code::Ascii => ascii::encode_response(&response, request.command),
+        };
+        if stream.write_all(&answer).is_err() {
             return;
         }
     }
