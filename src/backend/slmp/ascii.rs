@@ -291,8 +291,8 @@ fn strict_at(text: &[u8], at: usize, chars: usize) -> Result<u32, Refusal> {
     })
 }
 
-/// A device number: its digits in the device's radix, a leading blank standing for 0 (mcp
-/// p.69: "The '0' in the upper digits can also be specified with a space (code: 20H).").
+/// A device number: its digits in the device's radix, a leading blank standing for 0
+/// (`mc-ascii/M11`, mcp p.69: "The '0' in the upper digits can also be specified with a space").
 fn device_number(text: &[u8], at: usize, chars: usize, hex: bool) -> Result<u32, Refusal> {
     let field = text.get(at..at + chars).ok_or(Refusal::NotConvertible)?;
     let leading = field.iter().take_while(|c| **c == b' ').count();

@@ -248,7 +248,7 @@ fn serve(shared: &Program<SlmpSim>, mut stream: TcpStream) {
             }
             _ => {
                 let (end_code, data) = match body {
-                    Ok(decoded) => handle(shared, &request, decoded),
+                    Ok(decoded) => handle(shared, &request, code, decoded),
                     Err(_) => (0xC061, Vec::new()),
                 };
                 response.end_code = end_code;
@@ -288,22 +288,27 @@ fn error_information(request: &Request) -> Vec<u8> {
     out
 }
 
-/// What a request may carry on this CPU: the limits of its family in binary code, the one this
-/// simulator speaks, for the device form the request uses.
-fn limits(shared: &Program<SlmpSim>, request: &Request) -> Limits {
+/// What a request may carry on this CPU: the limits of its family in the code the request came
+/// in (ASCII halves some), for the device form it uses.
+fn limits(shared: &Program<SlmpSim>, request: &Request, code: Code) -> Limits {
     let form = match request.subcommand {
         0x0002 => DeviceForm::Long,
         _ => DeviceForm::Short,
     };
     super::limits::limits(
         Family::of_profile(&shared.settings.manifest.profile),
-        Code::Binary,
+        code,
         form,
     )
 }
 
 /// Answers one decoded request: (end code, data).
-fn handle(shared: &Program<SlmpSim>, request: &Request, decoded: Decoded) -> (u16, Vec<u8>) {
+fn handle(
+    shared: &Program<SlmpSim>,
+    request: &Request,
+    code: Code,
+    decoded: Decoded,
+) -> (u16, Vec<u8>) {
     if request.subcommand == 0x0002 && !shared.settings.link.long_form {
         return (0xC059, Vec::new());
     }
@@ -317,7 +322,7 @@ fn handle(shared: &Program<SlmpSim>, request: &Request, decoded: Decoded) -> (u1
             ),
         ),
         Decoded::Read { head, count } => {
-            if count == 0 || count > limits(shared, request).batch_words {
+            if count == 0 || count > limits(shared, request, code).batch_words {
                 return (0xC051, Vec::new());
             }
             match device_words(&cpu, head, count) {
@@ -326,7 +331,7 @@ fn handle(shared: &Program<SlmpSim>, request: &Request, decoded: Decoded) -> (u1
             }
         }
         Decoded::RandomRead { devices } => {
-            if devices.is_empty() || devices.len() > limits(shared, request).random_points {
+            if devices.is_empty() || devices.len() > limits(shared, request, code).random_points {
                 return (0xC054, Vec::new());
             }
             let mut data = Vec::with_capacity(2 * devices.len());
@@ -344,7 +349,7 @@ fn handle(shared: &Program<SlmpSim>, request: &Request, decoded: Decoded) -> (u1
             (0, data)
         }
         Decoded::Write { head, words } => {
-            if words.is_empty() || words.len() > limits(shared, request).batch_words {
+            if words.is_empty() || words.len() > limits(shared, request, code).batch_words {
                 return (0xC051, Vec::new());
             }
             if let Err(code) = device_words(&cpu, head, words.len()) {
