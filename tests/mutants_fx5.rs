@@ -354,50 +354,21 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                 _ => Ok(answer),
             }
         }),
+        // Each word's 4 characters as they come, the last word padded with 0 below its digits.
         Mutant::new("hexa-left-justified", base, |req, b| {
-            reshape(req, b, |req, o| {
-                let (Some(s), Some(d), Some(n)) = (device(req, "s"), device(req, "d"), n_of(req))
-                else {
-                    return o;
-                };
-                if is_asci(req) || o.error.is_some() {
-                    return o;
-                }
-                let packing = Packing::from_sm8161(eight_bit(req));
-                let chars = fx5::hex_chars(req.memory, &s, n, packing);
-                let mut writes = BTreeMap::new();
-                for (i, group) in chars.chunks(4).enumerate() {
-                    let mut padded = group.to_vec();
-                    padded.resize(4, b'0');
-                    if let (Ok(w), Some(dev)) = (fx5::hex_words(&padded), d.offset(i as u32)) {
-                        writes.insert(dev, u32::from(w[0]));
-                    }
-                }
-                Outcome { writes, ..o }
+            hexa_words(req, b, |group| {
+                let mut digits = group.to_vec();
+                digits.resize(4, b'0');
+                digits
             })
         }),
         // The MELSEC-Q/iQ-R HEX(P) order: the first character of each word in its lowest digit
         // ("4321" is 1234H), the last word padded with 0 above its digits.
         Mutant::new("hexa-reversed-like-iqr-hex", base, |req, b| {
-            reshape(req, b, |req, o| {
-                let (Some(s), Some(d), Some(n)) = (device(req, "s"), device(req, "d"), n_of(req))
-                else {
-                    return o;
-                };
-                if is_asci(req) || o.error.is_some() {
-                    return o;
-                }
-                let packing = Packing::from_sm8161(eight_bit(req));
-                let chars = fx5::hex_chars(req.memory, &s, n, packing);
-                let mut writes = BTreeMap::new();
-                for (i, group) in chars.chunks(4).enumerate() {
-                    let mut digits = vec![b'0'; 4 - group.len()];
-                    digits.extend(group.iter().rev());
-                    if let (Ok(w), Some(dev)) = (fx5::hex_words(&digits), d.offset(i as u32)) {
-                        writes.insert(dev, u32::from(w[0]));
-                    }
-                }
-                Outcome { writes, ..o }
+            hexa_words(req, b, |group| {
+                let mut digits = vec![b'0'; 4 - group.len()];
+                digits.extend(group.iter().rev());
+                digits
             })
         }),
         Mutant::new("hexa-accepts-lowercase", base, |req, b| {
@@ -566,4 +537,26 @@ fn the_fx5_corpus_catches_every_wrong_model() {
         );
     }
     assert_corpus_kills(&session, &reference, &mutants);
+}
+
+/// HEXA's result rebuilt by a mutant: the characters read as the model reads them, in groups of
+/// 4 (one word each), each group turned into the 4 digits `word` makes of it.
+fn hexa_words(req: &Request<'_>, b: &dyn Backend, word: impl Fn(&[u8]) -> Vec<u8>) -> Answer {
+    reshape(req, b, |req, o| {
+        let (Some(s), Some(d), Some(n)) = (device(req, "s"), device(req, "d"), n_of(req)) else {
+            return o;
+        };
+        if is_asci(req) || o.error.is_some() {
+            return o;
+        }
+        let packing = Packing::from_sm8161(eight_bit(req));
+        let chars = fx5::hex_chars(req.memory, &s, n, packing);
+        let mut writes = BTreeMap::new();
+        for (i, group) in chars.chunks(4).enumerate() {
+            if let (Ok(w), Some(dev)) = (fx5::hex_words(&word(group)), d.offset(i as u32)) {
+                writes.insert(dev, u32::from(w[0]));
+            }
+        }
+        Outcome { writes, ..o }
+    })
 }

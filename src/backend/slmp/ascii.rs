@@ -146,19 +146,37 @@ pub(crate) fn encode_request(request: &Request) -> Result<Vec<u8>, FrameError> {
             )))
         }
     }
-    let mut out = Vec::with_capacity(header_len(request.frame) + body.len());
-    match request.frame {
-        FrameKind::E3 => out.extend_from_slice(b"5000"),
+    Ok(message(
+        request.frame,
+        [b"5000", b"5400"],
+        request.serial,
+        request.route,
+        &body,
+    ))
+}
+
+/// A whole message: the subheader of its frame (`subheaders`: the 3E one, the 4E one, which the
+/// serial follows), the route, the length of the body in characters, and the body.
+fn message(
+    frame: FrameKind,
+    subheaders: [&[u8; 4]; 2],
+    serial: u16,
+    r: Route,
+    body: &[u8],
+) -> Vec<u8> {
+    let mut out = Vec::with_capacity(header_len(frame) + body.len());
+    match frame {
+        FrameKind::E3 => out.extend_from_slice(subheaders[0]),
         FrameKind::E4 => {
-            out.extend_from_slice(b"5400");
-            hex_field(&mut out, u32::from(request.serial), 2);
+            out.extend_from_slice(subheaders[1]);
+            hex_field(&mut out, u32::from(serial), 2);
             out.extend_from_slice(b"0000");
         }
     }
-    route(&mut out, request.route);
+    route(&mut out, r);
     hex_field(&mut out, body.len() as u32, 2);
-    out.extend_from_slice(&body);
-    Ok(out)
+    out.extend_from_slice(body);
+    out
 }
 
 fn route(out: &mut Vec<u8>, r: Route) {
@@ -402,19 +420,13 @@ pub(crate) fn encode_response(response: &Response, command_code: u16) -> Vec<u8>
             hex_field(&mut body, u32::from(u16::from_le_bytes([w[0], w[1]])), 2);
         }
     }
-    let mut out = Vec::with_capacity(header_len(response.frame) + body.len());
-    match response.frame {
-        FrameKind::E3 => out.extend_from_slice(b"D000"),
-        FrameKind::E4 => {
-            out.extend_from_slice(b"D400");
-            hex_field(&mut out, u32::from(response.serial), 2);
-            out.extend_from_slice(b"0000");
-        }
-    }
-    route(&mut out, response.route);
-    hex_field(&mut out, body.len() as u32, 2);
-    out.extend_from_slice(&body);
-    out
+    message(
+        response.frame,
+        [b"D000", b"D400"],
+        response.serial,
+        response.route,
+        &body,
+    )
 }
 
 #[cfg(test)]
