@@ -79,7 +79,8 @@ pub(crate) enum HilCommand {
     },
     /// Serve a simulated CPU on 127.0.0.1 running the manifest's program with the built-in
     /// reference model, until interrupted, over the link of the manifest's profile (SLMP for
-    /// MELSEC, Modbus TCP for IDEC); prints `listening on 127.0.0.1:PORT`.
+    /// MELSEC, Modbus TCP for IDEC); prints `listening on 127.0.0.1:PORT`. Its SLMP port also
+    /// reads 0101 and 0401 in ASCII code, as the manual writes fields (what `hil probe` asks).
     Sim {
         /// The manifest of the generated program.
         #[arg(long, value_name = "FILE")]

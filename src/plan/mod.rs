@@ -71,8 +71,9 @@ pub struct Trial {
 
 impl Trial {
     /// `backend::instruction::case-id::variant`, `cross-vendor::backend::lowering::case-id::
-    /// variant`, or for a protocol's codec `protocol::backend::protocol::case-id`: filtering on a prefix selects a backend, an instruction or a case across
-    /// variants. The basis is not part of the name, so a name survives a change of basis.
+    /// variant`, or for a protocol's codec `protocol::backend::protocol::case-id`: filtering on
+    /// a prefix selects a backend, an instruction or a case across variants. The basis is not
+    /// part of the name, so a name survives a change of basis.
     pub fn name(&self) -> String {
         match &self.check {
             Check::Native { instruction, case } => format!(
