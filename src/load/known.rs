@@ -23,14 +23,14 @@ use crate::model::profile::Profile;
 use crate::model::{Basis, Corpus};
 use crate::spec::known::KnownFileSpec;
 
-/// An entry's coverage, cause, instruction, variant and location.
-type Seen = (
-    Covers,
-    Option<String>,
-    Option<String>,
-    Option<String>,
-    String,
-);
+/// The entries read so far, for the duplicate check: where each was, by what it covers and by
+/// its cause, each within its instruction and variant. Maps, so that a file of tens of
+/// thousands of entries (a sweep's, written by `record --known`) loads in linear time.
+#[derive(Default)]
+struct Seen {
+    by_covers: std::collections::HashMap<(Covers, Option<String>, Option<String>), String>,
+    by_cause: std::collections::HashMap<(String, Option<String>, Option<String>), String>,
+}
 
 /// Loads and checks a known-differences file against the backend's profile (`None` for a
 /// codec-level backend, which runs the cross-vendor cases only) and the corpus. With `strict`,
@@ -53,7 +53,7 @@ pub fn load_known(
         ..KnownDifferences::default()
     };
     // What each entry so far covers, for the duplicate check.
-    let mut seen: Vec<Seen> = Vec::new();
+    let mut seen = Seen::default();
     for (i, e) in spec.differences.into_iter().enumerate() {
         let key = |k: &str| format!("differences[{i}].{k}");
         let location = cx.location(&format!("differences[{i}]")).to_string();
@@ -154,12 +154,12 @@ pub fn load_known(
         // Two entries for the same trials, or two naming one cause for the same instruction
         // and variant, would say the same thing twice, or two things about one trial.
         let cause = e.cause.as_deref().map(str::trim).map(str::to_string);
-        let twin = seen.iter().find(|(covers, c, instruction, variant, _)| {
-            *instruction == entry.instruction
-                && *variant == entry.variant
-                && (*covers == entry.covers || (cause.is_some() && *c == cause))
-        });
-        if let Some((.., first)) = twin {
+        let (instruction, variant) = (entry.instruction.clone(), entry.variant.clone());
+        let covers_key = (entry.covers.clone(), instruction.clone(), variant.clone());
+        let cause_key = cause.map(|c| (c, instruction, variant));
+        let twin = (seen.by_covers.get(&covers_key))
+            .or_else(|| cause_key.as_ref().and_then(|k| seen.by_cause.get(k)));
+        if let Some(first) = twin {
             cx.error(
                 key(if entry.case().is_some() {
                     "case"
@@ -176,13 +176,10 @@ pub fn load_known(
             );
             continue;
         }
-        seen.push((
-            entry.covers.clone(),
-            cause,
-            entry.instruction.clone(),
-            entry.variant.clone(),
-            entry.location.clone(),
-        ));
+        seen.by_covers.insert(covers_key, entry.location.clone());
+        if let Some(k) = cause_key {
+            seen.by_cause.insert(k, entry.location.clone());
+        }
         if let Covers::Cause { patterns, .. } = &entry.covers {
             check_cause(&entry, patterns, profile, corpus, strict, &mut cx, &key);
             known.entries.push(entry);

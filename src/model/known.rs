@@ -34,7 +34,7 @@ pub(crate) fn id_matches(pattern: &str, id: &str) -> bool {
 }
 
 /// What an entry covers.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
 pub enum Covers {
     /// One case, by id.
     Case(String),

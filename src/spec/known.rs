@@ -68,7 +68,7 @@ impl std::fmt::Display for Kind {
 /// A class of input text, as codecs tend to mistreat it: the characters no vendor takes as a
 /// digit (30H-39H and 41H-46H are the digits).
 #[derive(
-    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize, JsonSchema,
+    Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize, JsonSchema,
 )]
 #[serde(rename_all = "kebab-case")]
 pub enum InputClass {
