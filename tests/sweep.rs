@@ -1993,7 +1993,57 @@ fn a_merge_refuses_what_is_not_the_whole_sweep() {
     let bad = dir.path().join("bad.json");
     std::fs::write(&bad, "{\"tool\":\n").expect("written");
     let bad = bad.to_str().expect("path").to_string();
+    // A shard edited: another shard count, a time that is no time, counts that do not add up.
+    let edited = |name: &str, edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&a).expect("shard")).expect("JSON");
+        edit(&mut v);
+        let path = dir.path().join(name);
+        std::fs::write(&path, v.to_string()).expect("written");
+        path.to_str().expect("path").to_string()
+    };
+    let huge = edited("huge.json", &|v| {
+        v["settings"]["shard"] = serde_json::json!([1, u64::MAX])
+    });
+    let zeroth = edited("zeroth.json", &|v| {
+        v["settings"]["shard"] = serde_json::json!([0, 3])
+    });
+    let forever = edited("forever.json", &|v| {
+        v["elapsed_seconds"] = serde_json::json!(1e308)
+    });
+    let backwards = edited("backwards.json", &|v| {
+        v["elapsed_seconds"] = serde_json::json!(-1.0)
+    });
+    let more = edited("more.json", &|v| v["swept"] = serde_json::json!(u64::MAX));
+    let fifo = dir.path().join("fifo.json");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    let fifo = fifo.to_str().expect("path").to_string();
     for (files, other, wanted) in [
+        (
+            vec![&huge],
+            None,
+            "and 18446744073709551604 more".to_string(),
+        ),
+        (
+            vec![&zeroth, &b, &c],
+            None,
+            format!("{zeroth}: shard 0/3 is no shard of 3"),
+        ),
+        (
+            vec![&forever, &b, &c],
+            None,
+            format!("{forever}: it says it took 1e308 s"),
+        ),
+        (
+            vec![&backwards, &b, &c],
+            None,
+            format!("{backwards}: it says it took -1.0 s"),
+        ),
+        (
+            vec![&more, &b, &c],
+            None,
+            format!("{more}: its counts do not add up"),
+        ),
         (vec![&a, &b], None, "missing 3/3".to_string()),
         (vec![&a, &b, &c, &b], None, format!("{b}: shard 2/3 again")),
         (
@@ -2002,7 +2052,12 @@ fn a_merge_refuses_what_is_not_the_whole_sweep() {
             format!("{a}: another sweep: its `generator`"),
         ),
         (vec![&bad], None, format!("{bad}:2:")),
-    ] {
+    ]
+    .into_iter()
+    .chain(
+        made.is_ok_and(|m| m.success())
+            .then(|| (vec![&fifo], None, format!("{fifo}: cannot be read: a FIFO"))),
+    ) {
         let mut all = args.to_vec();
         if let Some(o) = other {
             all.truncate(3);

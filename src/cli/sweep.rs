@@ -134,9 +134,14 @@ fn read_shards(
     paths
         .iter()
         .map(|p| {
-            let text = std::fs::read_to_string(p).map_err(|e| {
-                CliError::input(format!("--merge {}: cannot be read: {e}", p.display()))
-            })?;
+            // A regular file of bounded size: a FIFO, a device or a runaway file is refused
+            // before anything is read.
+            let bytes = crate::load::read_regular_limited(p, crate::sweep::merge::MAX_SHARD_BYTES)
+                .map_err(|e| {
+                    CliError::input(format!("--merge {}: cannot be read: {e}", p.display()))
+                })?;
+            let text = String::from_utf8(bytes)
+                .map_err(|_| CliError::input(format!("--merge {}: not UTF-8 text", p.display())))?;
             Ok((p.clone(), crate::sweep::merge::read(p, &text)?))
         })
         .collect()

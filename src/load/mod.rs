@@ -295,6 +295,12 @@ pub(crate) fn read_file(path: &Path) -> Result<String, LoadError> {
 /// refused without being opened for long: reading a FIFO blocks until a writer comes, and a
 /// device may never end.
 pub(crate) fn read_regular(path: &Path) -> std::io::Result<Vec<u8>> {
+    read_regular_limited(path, u64::MAX)
+}
+
+/// [`read_regular`] of a file at most `max` bytes long: a longer one (or one that grows while
+/// read) is an error, never read into memory past `max`.
+pub(crate) fn read_regular_limited(path: &Path, max: u64) -> std::io::Result<Vec<u8>> {
     use std::io::Read;
     not_special(&std::fs::metadata(path)?)?;
     let mut options = std::fs::OpenOptions::new();
@@ -305,10 +311,23 @@ pub(crate) fn read_regular(path: &Path) -> std::io::Result<Vec<u8>> {
         // Opening a FIFO that appeared since the check must not wait for a writer.
         options.custom_flags(libc::O_NONBLOCK);
     }
-    let mut file = options.open(path)?;
-    not_special(&file.metadata()?)?;
+    let file = options.open(path)?;
+    let meta = file.metadata()?;
+    not_special(&meta)?;
+    let too_long = || {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("longer than {max} bytes"),
+        )
+    };
+    if meta.len() > max {
+        return Err(too_long());
+    }
     let mut bytes = Vec::new();
-    file.read_to_end(&mut bytes)?;
+    file.take(max.saturating_add(1)).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > max {
+        return Err(too_long());
+    }
     Ok(bytes)
 }
 

@@ -100,6 +100,12 @@ struct Tally {
     shard: usize,
 }
 
+/// The largest shard file a merge reads.
+pub(crate) const MAX_SHARD_BYTES: u64 = 1 << 30;
+
+/// The longest time a shard may say it took: more is no time a sweep took.
+const MAX_SHARD_SECONDS: f64 = 1e9;
+
 /// Reads one shard's JSON results (`sweep --format json`).
 pub(crate) fn read(path: &std::path::Path, text: &str) -> Result<ShardFile, SweepError> {
     serde_json::from_str(text).map_err(|e| {
@@ -138,14 +144,14 @@ pub(crate) fn merge(
                 classes: BTreeMap::new(),
                 shard: f,
             });
-            t.inputs += g.inputs;
+            t.inputs = t.inputs.saturating_add(g.inputs);
             if g.representative.index < t.first {
                 t.first = g.representative.index;
                 t.shard = f;
             }
             for c in &g.classes {
                 let e = t.classes.entry(c.name.clone()).or_insert((0, u64::MAX));
-                e.0 += c.inputs;
+                e.0 = e.0.saturating_add(c.inputs);
                 e.1 = e.1.min(c.first.index);
             }
         }
@@ -230,7 +236,10 @@ pub(crate) fn merge(
             },
         );
     }
-    let sum = |f: fn(&ShardFile) -> u64| files.iter().map(|(_, file)| f(file)).sum::<u64>();
+    // The counts were checked to add up within each shard and across them ([`check`]).
+    let sum = |f: fn(&ShardFile) -> u64| {
+        (files.iter()).fold(0u64, |total, (_, file)| total.saturating_add(f(file)))
+    };
     let mut results = sweep.results(
         sum(|f| f.shard_inputs),
         sum(|f| f.swept),
@@ -268,9 +277,10 @@ pub(crate) fn merge(
         });
     }
     results.shrunk = super::shrink::shrink_groups(sweep, &results, stop);
+    // Each shard's time was checked to be a time ([`check`]).
+    let shards_took = files.iter().map(|(_, f)| f.elapsed_seconds).sum::<f64>();
     results.elapsed =
-        Duration::from_secs_f64(files.iter().map(|(_, f)| f.elapsed_seconds).sum::<f64>())
-            + started.elapsed();
+        Duration::try_from_secs_f64(shards_took).unwrap_or(Duration::MAX) + started.elapsed();
     Ok(results)
 }
 
@@ -337,6 +347,27 @@ fn check(sweep: &Sweep, files: &[(PathBuf, ShardFile)]) -> Result<(), SweepError
                 columns.join(", ")
             )));
         }
+        if shard.0 == 0 || shard.0 > shard.1 {
+            return Err(at(format!(
+                "shard {}/{} is no shard of {}",
+                shard.0, shard.1, shard.1
+            )));
+        }
+        if !(0.0..=MAX_SHARD_SECONDS).contains(&file.elapsed_seconds) {
+            return Err(at(format!(
+                "it says it took {:?} s, which is no time a shard took",
+                file.elapsed_seconds
+            )));
+        }
+        let grouped = (file.groups.iter()).try_fold(0u64, |t, g| t.checked_add(g.inputs));
+        if file.swept > file.shard_inputs || grouped != Some(file.swept) {
+            return Err(at(format!(
+                "its counts do not add up: {} input(s) swept of {}, its groups hold {}",
+                file.swept,
+                file.shard_inputs,
+                grouped.map_or("more than 2^64".into(), |g| g.to_string())
+            )));
+        }
         if file.interrupted {
             return Err(at(format!(
                 "shard {}/{} was interrupted ({} of {} inputs): run it again",
@@ -374,17 +405,25 @@ fn check(sweep: &Sweep, files: &[(PathBuf, ShardFile)]) -> Result<(), SweepError
         }
     }
     let n = of.unwrap_or(0);
-    let missing: Vec<String> = (1..=n)
-        .filter(|k| !shards.contains_key(k))
-        .map(|k| format!("{k}/{n}"))
-        .collect();
-    if n == 0 || !missing.is_empty() {
+    // Every shard is in 1..=n and given once, so the count tells whether one is missing; the
+    // list of those missing is cut short (n may be any number a file claims).
+    let absent = n.saturating_sub(shards.len() as u64);
+    if n == 0 || absent > 0 {
+        let shown: Vec<String> = (1..=n)
+            .filter(|k| !shards.contains_key(k))
+            .take(10)
+            .map(|k| format!("{k}/{n}"))
+            .collect();
         return Err(SweepError(format!(
             "the shards are not the whole sweep: missing {}",
-            if missing.is_empty() {
-                "every shard".to_string()
-            } else {
-                missing.join(", ")
+            match (shown.is_empty(), absent > shown.len() as u64) {
+                (true, _) => "every shard".to_string(),
+                (false, true) => format!(
+                    "{} and {} more",
+                    shown.join(", "),
+                    absent - shown.len() as u64
+                ),
+                (false, false) => shown.join(", "),
             }
         )));
     }
