@@ -52,6 +52,61 @@ fn parent(path: &Path) -> PathBuf {
         .map_or_else(|| PathBuf::from("."), Path::to_path_buf)
 }
 
+/// Refuses a target the staged rename would wrongly replace: a symbolic link to a file or to
+/// nothing (the rename would put the output in the link's place, and writing through it would
+/// reach a file elsewhere; a link to a device or FIFO, `/dev/stdout`, is written through), and
+/// a read-only file (its mode and owner would be lost).
+fn refuse_link_or_read_only(path: &Path) -> Result<(), CliError> {
+    let refuse = |what: &str| Err(CliError::input(format!("{}: {what}", path.display())));
+    let Ok(own) = std::fs::symlink_metadata(path) else {
+        return Ok(());
+    };
+    if own.file_type().is_symlink() && !special(path) {
+        return refuse(
+            "a symbolic link: give the file it leads to, or another name (the output is never \
+             written through a link)",
+        );
+    }
+    if own.is_file() && own.permissions().readonly() {
+        return refuse("read-only: make it writable, or give another file");
+    }
+    Ok(())
+}
+
+/// A new file beside the target to write the output into: created exclusively (never an
+/// existing file, and never through a link planted at its name) under a name no other process
+/// can predict, tried again under another name if one is taken.
+fn stage(folder: &Path, name: &str) -> std::io::Result<(PathBuf, File)> {
+    use std::hash::{BuildHasher, Hasher};
+    let mut last = None;
+    for attempt in 0..16u32 {
+        // RandomState is seeded from the OS's randomness once per process; the hasher mixes the
+        // clock and the attempt into it.
+        let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+        h.write_u32(attempt);
+        h.write_u128(
+            std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_nanos()),
+        );
+        let temp = folder.join(format!(
+            ".{name}.{}.{:016x}.tmp",
+            std::process::id(),
+            h.finish()
+        ));
+        match std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&temp)
+        {
+            Ok(file) => return Ok((temp, file)),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => last = Some(e),
+            Err(e) => return Err(e),
+        }
+    }
+    Err(last.unwrap_or_else(|| std::io::ErrorKind::AlreadyExists.into()))
+}
+
 /// Whether `path` is something other than a regular file, to be written in place.
 fn special(path: &Path) -> bool {
     std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir())
@@ -99,6 +154,7 @@ impl Sink {
             return Ok(Sink::Stdout(anstream::stdout()));
         };
         let failed = |e| CliError::write(Some(path), e);
+        refuse_link_or_read_only(path)?;
         if special(path) {
             return Ok(Sink::Direct {
                 path: path.to_path_buf(),
@@ -109,8 +165,7 @@ impl Sink {
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default();
-        let temp = parent(path).join(format!(".{name}.{}.tmp", std::process::id()));
-        let file = File::create(&temp).map_err(failed)?;
+        let (temp, file) = stage(&parent(path), &name).map_err(failed)?;
         Ok(Sink::Staged {
             path: path.to_path_buf(),
             temp,
@@ -256,5 +311,51 @@ mod tests {
         write_every([(first.as_path(), "after"), (second.as_path(), "new")]).expect("written");
         assert_eq!(std::fs::read_to_string(&first).expect("read"), "after");
         assert_eq!(std::fs::read_to_string(&second).expect("read"), "new");
+    }
+
+    /// A link planted where the output goes, to a file or to nothing, and a read-only file are
+    /// refused, the file the link leads to untouched; a link to a device is written through.
+    #[cfg(unix)]
+    #[test]
+    fn a_link_or_a_read_only_file_is_refused_and_nothing_is_written_through_it() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let decoy = dir.path().join("decoy");
+        std::fs::write(&decoy, "keep").expect("write");
+        let link = dir.path().join("out.txt");
+        std::os::unix::fs::symlink(&decoy, &link).expect("link");
+        let e = write(Some(&link), "report").expect_err("refused");
+        assert!(e.to_string().contains("a symbolic link"), "{e}");
+        let dangling = dir.path().join("gone.txt");
+        std::os::unix::fs::symlink(dir.path().join("nothing"), &dangling).expect("link");
+        assert!(write(Some(&dangling), "report").is_err());
+        assert!(!dir.path().join("nothing").exists());
+        let read_only = dir.path().join("ro.yaml");
+        std::fs::write(&read_only, "before").expect("write");
+        let mut mode = std::fs::metadata(&read_only).expect("meta").permissions();
+        mode.set_readonly(true);
+        std::fs::set_permissions(&read_only, mode).expect("chmod");
+        let e = write(Some(&read_only), "after").expect_err("refused");
+        assert!(e.to_string().contains("read-only"), "{e}");
+        assert_eq!(std::fs::read_to_string(&read_only).expect("read"), "before");
+        assert_eq!(std::fs::read_to_string(&decoy).expect("read"), "keep");
+        let null = dir.path().join("null");
+        std::os::unix::fs::symlink("/dev/null", &null).expect("link");
+        write(Some(&null), "through").expect("written to the device");
+        let left: Vec<_> = (std::fs::read_dir(dir.path()).expect("dir"))
+            .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+            .filter(|n| n.ends_with(".tmp"))
+            .collect();
+        assert!(left.is_empty(), "{left:?}");
+    }
+
+    /// Each staged file is new, under a name of its own: never one that exists.
+    #[test]
+    fn a_staged_file_is_created_new_under_a_name_of_its_own() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let (a, _) = stage(dir.path(), "x").expect("staged");
+        let (b, _) = stage(dir.path(), "x").expect("staged");
+        assert_ne!(a, b);
+        let name = a.file_name().expect("name").to_string_lossy().into_owned();
+        assert!(name.starts_with(".x.") && name.ends_with(".tmp"), "{name}");
     }
 }
