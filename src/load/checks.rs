@@ -73,3 +73,25 @@ pub(crate) fn unknown(what: &'static str, name: &str, expected: &[String]) -> Lo
         expected: expected.to_vec(),
     }
 }
+
+/// Each case of a vector file read by `read`, with its key (`cases[i]`); a file of no case is
+/// an error. What every kind of vector file (an instruction's, cross-vendor, protocol-field)
+/// does with its list.
+pub(crate) fn read_cases<S, C>(
+    cases: &[S],
+    cx: &mut FileContext<'_>,
+    mut read: impl FnMut(&str, &S, &mut FileContext<'_>) -> Option<C>,
+) -> Vec<(String, C)> {
+    if cases.is_empty() {
+        cx.error(
+            "cases",
+            LoadErrorKind::Missing("case: a vector file holds at least one"),
+        );
+    }
+    (cases.iter().enumerate())
+        .filter_map(|(i, case)| {
+            let key = format!("cases[{i}]");
+            read(&key, case, cx).map(|c| (key, c))
+        })
+        .collect()
+}

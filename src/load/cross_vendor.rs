@@ -36,20 +36,9 @@ pub(crate) fn read_cases(
         .map(|l| l.key.clone())
         .collect();
     let known: Vec<String> = keys.iter().cloned().collect();
-    if spec.cases.is_empty() {
-        cx.error(
-            "cases",
-            LoadErrorKind::Missing("case: a vector file holds at least one"),
-        );
-    }
-    spec.cases
-        .iter()
-        .enumerate()
-        .filter_map(|(i, case)| {
-            let key = format!("cases[{i}]");
-            read_case(&key, case, spec, &known, cx).map(|c| (key, c))
-        })
-        .collect()
+    super::checks::read_cases(&spec.cases, cx, |key, case, cx| {
+        read_case(key, case, spec, &known, cx)
+    })
 }
 
 fn read_case(
@@ -237,7 +226,13 @@ fn outcome(
     }
 }
 
-fn number(key: &str, v: &ScalarSpec, bits: u32, cx: &mut FileContext<'_>) -> Option<u64> {
+/// A value of a vector as a number of `bits` bits (64: unsigned, any width below it checked).
+pub(super) fn number(
+    key: &str,
+    v: &ScalarSpec,
+    bits: u32,
+    cx: &mut FileContext<'_>,
+) -> Option<u64> {
     if let (ScalarSpec::Text(t), true) = (v, bits >= 64) {
         return crate::value::parse_unsigned(t)
             .map_err(|e| cx.error(key, LoadErrorKind::Value(e)))

@@ -6,13 +6,13 @@ use std::path::Path;
 use std::sync::Arc;
 
 use super::checks::{check_cite, check_expect_optional, check_id, text_bytes, unknown};
+use super::cross_vendor::number;
 use super::{FileContext, LineIndex, LoadError, LoadErrorKind};
 use crate::model::cross_vendor::{Answer, CrossVendorCase, Operation};
 use crate::model::profile::Profiles;
 use crate::model::protocol::{Field, FieldRule, Protocol, Rule};
 use crate::model::{Basis, Citation};
 use crate::spec::protocol::{FieldOrder, ProtocolCaseSpec, ProtocolFileSpec, ProtocolSpec};
-use crate::spec::ScalarSpec;
 
 /// Whether a file of `vendors/` is a protocol profile: it names a `protocol` and its `rules`.
 pub(super) fn is_protocol_profile(text: &str) -> bool {
@@ -187,20 +187,9 @@ pub(super) fn read_file(
         );
         return Vec::new();
     };
-    if spec.cases.is_empty() {
-        cx.error(
-            "cases",
-            LoadErrorKind::Missing("case: a vector file holds at least one"),
-        );
-    }
-    spec.cases
-        .iter()
-        .enumerate()
-        .filter_map(|(i, case)| {
-            let key = format!("cases[{i}]");
-            read_case(&key, case, protocol, cx).map(|c| (key, c))
-        })
-        .collect()
+    super::checks::read_cases(&spec.cases, cx, |key, case, cx| {
+        read_case(key, case, protocol, cx)
+    })
 }
 
 fn read_case(
@@ -351,15 +340,4 @@ fn read_case(
             rule: rule.clone(),
         }),
     })
-}
-
-fn number(key: &str, v: &ScalarSpec, bits: u32, cx: &mut FileContext<'_>) -> Option<u64> {
-    let parsed = match v {
-        ScalarSpec::Number(n) => Ok(*n),
-        ScalarSpec::Text(t) => crate::value::parse_number(t),
-    };
-    parsed
-        .and_then(|n| crate::value::to_bits(&v.to_string(), n, bits))
-        .map_err(|e| cx.error(key, LoadErrorKind::Value(e)))
-        .ok()
 }

@@ -114,20 +114,9 @@ impl FileRead {
         let Some(header) = read_header(&spec, profiles, &mut cx) else {
             return read;
         };
-        if spec.cases.is_empty() {
-            cx.error(
-                "cases",
-                LoadErrorKind::Missing("case: a vector file holds at least one"),
-            );
-        }
-        let mut cases = Vec::new();
-        for (i, case) in spec.cases.iter().enumerate() {
-            let key = format!("cases[{i}]");
-            if let Some(case) = read_case(&key, case, &header, &mut cx) {
-                cases.push((key, case));
-            }
-        }
-        read.cases = cases;
+        read.cases = super::checks::read_cases(&spec.cases, &mut cx, |key, case, cx| {
+            read_case(key, case, &header, cx)
+        });
         read
     }
 }
