@@ -365,27 +365,21 @@ fn live_settings(
 /// `hil probe`: each probe's request, the end code answered and what the manual says; exit 1
 /// when an answer differs from an end code the manual states.
 fn probe(address: &str, timeout: f64) -> Outcome {
-    use crate::backend::slmp::probe::{ask, Manual, PROBES};
+    use crate::backend::slmp::probe::{ask_all, Manual};
     let limit = std::time::Duration::try_from_secs_f64(timeout)
         .ok()
         .filter(|d| !d.is_zero() && d.as_secs() <= 600)
         .ok_or_else(|| CliError::input(format!("--timeout {timeout}: give 0.001 to 600 s")))?;
+    let answers = ask_all(address, limit)
+        .map_err(|e| CliError::input(format!("{address}: no connection: {e}")))?;
     let mut text = format!(
         "{:<22} {:<30} {:<17} {:<11} the manual\n",
         "probe", "field", "device, points", "answered"
     );
-    let mut against = 0;
-    for p in &PROBES {
-        let heard = ask(address, p, limit)
-            .map_err(|e| CliError::input(format!("{address}: no connection: {e}")))?;
+    for (p, heard) in &answers {
         let sent = format!("`{}` `{}`", p.device, p.points);
         let manual = match p.manual {
-            Manual::EndCode(code, rule) => {
-                if heard != crate::backend::slmp::probe::Heard::EndCode(code) {
-                    against += 1;
-                }
-                format!("{code:04X}H ({rule})")
-            }
+            Manual::EndCode(code, rule) => format!("{code:04X}H ({rule})"),
             Manual::Open(question) => format!("not settled: open question {question}"),
         };
         text.push_str(&format!(
@@ -395,21 +389,18 @@ fn probe(address: &str, timeout: f64) -> Outcome {
             heard.to_string(),
         ));
     }
+    let stated: Vec<bool> = (answers.iter())
+        .filter_map(|(p, heard)| p.manual.agrees(heard))
+        .collect();
+    let against = stated.iter().filter(|agrees| !**agrees).count();
     text.push_str(&format!(
         "{} of {} answers as the manual states; the open ones are what this CPU does. A real \
          CPU's answers settle the open questions: record them under `observed` in \
          docs/open-questions.yaml with the CPU's model, firmware, the date and who ran the \
          probe. A simulated CPU's (hil sim) are its own reading of the manual, never an \
          observation.",
-        PROBES
-            .iter()
-            .filter(|p| matches!(p.manual, Manual::EndCode(..)))
-            .count()
-            - against,
-        PROBES
-            .iter()
-            .filter(|p| matches!(p.manual, Manual::EndCode(..)))
-            .count()
+        stated.len() - against,
+        stated.len()
     ));
     output::write(None, &text)?;
     Ok(if against == 0 {

@@ -116,9 +116,30 @@ impl std::fmt::Display for Heard {
     }
 }
 
+/// Every probe asked in turn, each with its answer; `Err` when no connection can be made.
+pub(crate) fn ask_all(
+    address: &str,
+    timeout: Duration,
+) -> Result<Vec<(&'static Probe, Heard)>, String> {
+    PROBES
+        .iter()
+        .map(|p| ask(address, p, timeout).map(|heard| (p, heard)))
+        .collect()
+}
+
+impl Manual {
+    /// Whether `heard` is what the manual states; `None` where it states nothing.
+    pub(crate) fn agrees(self, heard: &Heard) -> Option<bool> {
+        match self {
+            Manual::EndCode(code, _) => Some(*heard == Heard::EndCode(code)),
+            Manual::Open(_) => None,
+        }
+    }
+}
+
 /// Sends a probe on a connection of its own (a refused request may leave a CPU's connection
 /// in any state) and reads the answer's end code; `Err` when no connection can be made.
-pub(crate) fn ask(address: &str, probe: &Probe, timeout: Duration) -> Result<Heard, String> {
+fn ask(address: &str, probe: &Probe, timeout: Duration) -> Result<Heard, String> {
     let mut stream = tcp::connect(address, timeout)?;
     stream
         .write_all(&probe.request())
