@@ -323,28 +323,23 @@ fn check_rule(
     cx: &mut FileContext<'_>,
     key: &dyn Fn(&str) -> String,
 ) {
-    let rules: std::collections::BTreeSet<&str> = (corpus.protocol_fields.iter())
-        .filter(|c| {
-            entry.matches(&crate::model::known::Subject {
-                case: &c.id,
-                text: None,
-                instruction: "codec",
-                variant: "",
-            })
-        })
-        .filter_map(|c| c.protocol.as_ref().map(|p| p.rule.key.as_str()))
-        .collect();
-    let listed = || rules.iter().copied().collect::<Vec<_>>().join(", ");
-    // An entry that also covers cases of no protocol (`cases: ['*']`) is about the codec, not
-    // a protocol's rule.
-    let beyond = (corpus.cross_vendor.iter()).any(|c| {
+    // By id or pattern only: no text, so no input class matches.
+    let names = |c: &CrossVendorCase| {
         entry.matches(&crate::model::known::Subject {
             case: &c.id,
             text: None,
             instruction: "codec",
             variant: "",
         })
-    });
+    };
+    let rules: std::collections::BTreeSet<&str> = (corpus.protocol_fields.iter())
+        .filter(|c| names(c))
+        .filter_map(|c| c.protocol.as_ref().map(|p| p.rule.key.as_str()))
+        .collect();
+    let listed = || rules.iter().copied().collect::<Vec<_>>().join(", ");
+    // An entry that also covers cases of no protocol (`cases: ['*']`) is about the codec, not
+    // a protocol's rule.
+    let beyond = corpus.cross_vendor.iter().any(|c| names(c));
     match &entry.rule {
         None if !rules.is_empty() && !beyond => cx.error(
             key("rule"),

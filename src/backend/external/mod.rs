@@ -981,15 +981,11 @@ fn protocol_claim(
                  every one"
             ));
         }
-        let known: Vec<&String> = found.fields.keys().collect();
         if let Some(unknown) = fields.iter().find(|f| !found.fields.contains_key(*f)) {
+            let known: Vec<&str> = found.fields.keys().map(String::as_str).collect();
             return refuse(format!(
                 "claims field `{unknown}` of {id}, which has: {}",
-                known
-                    .iter()
-                    .map(|k| k.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", ")
+                known.join(", ")
             ));
         }
     }
