@@ -19,6 +19,73 @@ use crate::backend::{Fault, Question, Request, Response};
 use crate::memory::{Fill, Image};
 use crate::plan::{Check, Trial};
 
+/// Why a run ended before every trial ran: what its end event and its reports say.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Stopped {
+    /// A signal (SIGINT, SIGTERM) interrupted it: its backends were killed, and a trial they
+    /// were running is cancelled, not failed.
+    Interrupted,
+    /// `--fail-fast`: a trial failed, and no batch started after it. The backends were left
+    /// alone, so whatever finished is a result like any other.
+    FailFast,
+}
+
+/// What a run checks before each batch: whether it is to stop.
+pub trait ShouldStop: Sync {
+    fn should_stop(&self) -> bool;
+}
+
+/// The process-wide interruption flag alone (or a test's own).
+impl ShouldStop for AtomicBool {
+    fn should_stop(&self) -> bool {
+        self.load(Ordering::Relaxed)
+    }
+}
+
+/// A run's stop: the interruption flag it was given, and its own decision to stop at the first
+/// failure, kept apart so that the run can say which one ended it.
+pub(crate) struct Stop<'a> {
+    interrupt: &'a AtomicBool,
+    failed: AtomicBool,
+}
+
+impl<'a> Stop<'a> {
+    pub(crate) fn new(interrupt: &'a AtomicBool) -> Self {
+        Stop {
+            interrupt,
+            failed: AtomicBool::new(false),
+        }
+    }
+
+    /// A trial failed under `--fail-fast`: no further batch starts.
+    pub(crate) fn at_failure(&self) {
+        self.failed.store(true, Ordering::Relaxed);
+    }
+
+    /// Whether the interruption flag is set: the backends are being killed.
+    pub(crate) fn interrupted(&self) -> bool {
+        self.interrupt.load(Ordering::Relaxed)
+    }
+
+    /// Why the run stopped, if it did: an interruption wins over a failure.
+    pub(crate) fn reason(&self) -> Option<Stopped> {
+        if self.interrupted() {
+            Some(Stopped::Interrupted)
+        } else if self.failed.load(Ordering::Relaxed) {
+            Some(Stopped::FailFast)
+        } else {
+            None
+        }
+    }
+}
+
+impl ShouldStop for Stop<'_> {
+    fn should_stop(&self) -> bool {
+        self.reason().is_some()
+    }
+}
+
 /// What one backend did under one fill (a codec-level backend answers once, reported under
 /// fill A: it reads no memory).
 #[derive(Debug, Clone, Serialize)]
@@ -157,7 +224,7 @@ pub fn execute_all(
     trials: &[Trial],
     indices: &[usize],
     jobs: usize,
-    stop: &AtomicBool,
+    stop: &dyn ShouldStop,
     pace: Pace,
     mut progress: impl FnMut(Progress) -> ControlFlow<()>,
 ) {
@@ -205,7 +272,7 @@ pub fn execute_all(
 fn run_backend(
     trials: &[Trial],
     group: &[usize],
-    stop: &AtomicBool,
+    stop: &dyn ShouldStop,
     pace: Pace,
     tx: &mpsc::Sender<Message>,
 ) {
@@ -215,7 +282,7 @@ fn run_backend(
     let backend = &trials[first].backend;
     let mut restarts = backend.restarts();
     for chunk in group.chunks(backend.chunk_trials().max(1)) {
-        if stop.load(Ordering::Relaxed) {
+        if stop.should_stop() {
             return;
         }
         let started = Instant::now();

@@ -1,8 +1,9 @@
 //! Interruption: SIGINT and SIGTERM end a run with what it has, and no backend outlives it.
 //!
 //! Backends run in process groups of their own, so the terminal's Ctrl-C never reaches them. On
-//! a signal the harness sets the run's stop flag ([`stop_flag`]: no further chunk of trials
-//! starts), kills every backend process group — also one still in its handshake — and starts no
+//! a signal the harness sets the one stop flag ([`stop_flag`]: no further chunk of trials
+//! starts, no backend process starts, a live bench answers nothing more), kills every backend
+//! process group — also one still in its handshake — and starts no
 //! backend any more. The run then finishes with the trials that finished, its reports marked
 //! incomplete, and the command exits with the status of an interruption, 128 + the signal
 //! ([`exit_status`]: 130 for SIGINT, 143 for SIGTERM). A second signal exits at once.
@@ -11,7 +12,6 @@ use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
 
 use crate::backend::external;
 
-static STOP: AtomicBool = AtomicBool::new(false);
 static SIGNAL: AtomicI32 = AtomicI32::new(0);
 
 /// What a signal does once the backends are killed.
@@ -24,9 +24,10 @@ pub(crate) enum OnSignal {
     Exit,
 }
 
-/// The stop flag a run is given: set by an interruption.
+/// The stop flag a run is given: set by an interruption (the flag that also keeps any backend
+/// from starting once the backends are being killed).
 pub(crate) fn stop_flag() -> &'static AtomicBool {
-    &STOP
+    external::closing_flag()
 }
 
 /// The signal that interrupted the run, if one did.
@@ -46,7 +47,6 @@ pub(crate) fn exit_status() -> Option<u8> {
 /// backend process group.
 pub(crate) fn interrupt(signal: i32) {
     SIGNAL.store(signal, Ordering::SeqCst);
-    STOP.store(true, Ordering::SeqCst);
     external::kill_all();
 }
 
@@ -82,7 +82,7 @@ pub(crate) fn install(on_signal: OnSignal) -> std::io::Result<()> {
             .name("signals".into())
             .spawn(move || {
                 for signal in signals.forever() {
-                    let again = STOP.load(Ordering::SeqCst);
+                    let again = external::closing();
                     interrupt(signal);
                     if again || on_signal == OnSignal::Exit {
                         std::process::exit(128 + signal);

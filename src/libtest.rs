@@ -428,7 +428,9 @@ fn ignored_text(verdict: &Verdict) -> String {
         Verdict::KnownDifference { entry, .. } => {
             format!("known difference ({}): {}", entry.location, entry.reason)
         }
-        Verdict::Skipped { reason } => reason.clone(),
-        other => other.label().to_string(),
+        other => match other.not_run() {
+            Some(reason) => reason.to_string(),
+            None => other.label().to_string(),
+        },
     }
 }

@@ -241,9 +241,24 @@ fn fail_fast_stops_after_the_first_failing_batch() {
         (numbers.iter().take(4).sum::<usize>(), stdout)
     };
     let (all, _) = counted(&[]);
-    let (stopped, stdout) = counted(&["--fail-fast"]);
+    let saved = scratch.path().join("saved.json");
+    let saved_arg = saved.to_str().unwrap_or_default();
+    let (stopped, stdout) = counted(&["--fail-fast", "--save", saved_arg]);
     assert!(stopped < all, "{stopped} of {all} trials:\n{stdout}");
-    assert!(stdout.contains("interrupted: "), "{stdout}");
+    // A fail-fast stop is the run's own decision, not an interruption: it says so, exits 1
+    // (checked by `counted`) and saves what it ran.
+    assert!(
+        stdout.contains("stopped at the first failure (--fail-fast): "),
+        "{stdout}"
+    );
+    assert!(!stdout.contains("interrupted"), "{stdout}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&saved).expect("--save written"))
+            .expect("json");
+    assert_eq!(json["run"]["stopped"], "fail-fast", "{}", json["run"]);
+    assert_eq!(json["run"]["interrupted"], false, "{}", json["run"]);
+    let failed = json["summary"]["failed"].as_u64().unwrap_or_default();
+    assert!(failed >= 1, "{}", json["summary"]);
 }
 
 #[test]

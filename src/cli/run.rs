@@ -21,7 +21,7 @@ use crate::report::matrix_text;
 use crate::report::progress::ProgressReporter;
 use crate::report::text::Palette;
 use crate::report::text_reporter::TextReporter;
-use crate::report::{All, Event, Reporter};
+use crate::report::{All, Event, Reporter, Stopped};
 use crate::session::{Against, RunOptions, RunOutcome, Session};
 
 pub(super) fn run(cli: &Cli, args: &RunArgs) -> Outcome {
@@ -129,9 +129,10 @@ fn execute_command(
     let RunOutcome {
         records,
         summary,
-        interrupted,
+        stopped,
         ..
     } = &outcome;
+    let interrupted = *stopped == Some(Stopped::Interrupted);
     let info = RunInfo {
         tool: format!("plc-conformance {}", env!("CARGO_PKG_VERSION")),
         commit: project_root(cli)
@@ -147,7 +148,8 @@ fn execute_command(
                 version: b.version(),
             })
             .collect(),
-        interrupted: *interrupted,
+        interrupted,
+        stopped: *stopped,
         seconds: outcome.seconds,
     };
     if format != Format::Text {
@@ -173,7 +175,7 @@ fn execute_command(
             ));
         }
     }
-    if let (Some(path), true) = (&report.save, *interrupted) {
+    if let (Some(path), true) = (&report.save, interrupted) {
         console::note(&format!(
             "the run was interrupted; {} is left as it was",
             path.display()

@@ -49,6 +49,9 @@ pub enum Verdict {
     Skipped {
         reason: String,
     },
+    /// Not run, or cut off, because a signal interrupted the run: counted with the skipped
+    /// trials, never a failure, and never taken for a backend's skip.
+    Cancelled,
     /// A difference the backend's known-differences file lists: reported, not a failure.
     KnownDifference {
         entry: KnownEntry,
@@ -60,20 +63,17 @@ pub enum Verdict {
     },
 }
 
-/// Why a trial is not run when the run is interrupted before it, or its backend is killed by
-/// the interruption while it runs.
-pub(crate) const CANCELLED: &str = "not run: the run was interrupted";
+/// What a cancelled trial shows as its reason.
+const CANCELLED: &str = "not run: the run was interrupted";
 
 impl Verdict {
-    /// A trial the interruption cancelled: skipped, counted apart from failures.
-    pub fn cancelled() -> Verdict {
-        Verdict::Skipped {
-            reason: CANCELLED.into(),
+    /// Why the trial did not run (skipped or cancelled).
+    pub fn not_run(&self) -> Option<&str> {
+        match self {
+            Verdict::Skipped { reason } => Some(reason),
+            Verdict::Cancelled => Some(CANCELLED),
+            _ => None,
         }
-    }
-
-    pub fn is_cancelled(&self) -> bool {
-        matches!(self, Verdict::Skipped { reason } if reason == CANCELLED)
     }
 }
 
@@ -143,7 +143,7 @@ impl Verdict {
             | Verdict::Fault { .. }
             | Verdict::StaleEntry { .. } => Status::Fail,
             Verdict::Recorded { .. } | Verdict::KnownDifference { .. } => Status::Ignored,
-            Verdict::Skipped { .. } => Status::Skipped,
+            Verdict::Skipped { .. } | Verdict::Cancelled => Status::Skipped,
         }
     }
 
@@ -160,6 +160,7 @@ impl Verdict {
             Verdict::Fault { fault, .. } => fault.kind(),
             Verdict::Recorded { .. } => "recorded",
             Verdict::Skipped { .. } => "skipped",
+            Verdict::Cancelled => "cancelled",
             Verdict::KnownDifference { .. } => "known-difference",
             Verdict::StaleEntry { .. } => "stale-entry",
         }

@@ -4,7 +4,7 @@
 
 use super::matrix::sections;
 use super::record::Record;
-use super::{Event, Reporter, Summary};
+use super::{Event, Reporter, Stopped, Summary};
 
 /// The report formats, as `--format` names them: text is written as the run goes, the others
 /// as one document at its end.
@@ -27,17 +27,17 @@ pub(crate) enum Format {
 pub(crate) struct Collector {
     records: Vec<(usize, Record)>,
     summary: Summary,
-    interrupted: bool,
+    stopped: Option<Stopped>,
 }
 
 impl Collector {
-    /// The records in plan order, the counts, and whether the run was interrupted.
-    pub(crate) fn finish(mut self) -> (Vec<Record>, Summary, bool) {
+    /// The records in plan order, the counts, and why the run stopped early, if it did.
+    pub(crate) fn finish(mut self) -> (Vec<Record>, Summary, Option<Stopped>) {
         self.records.sort_by_key(|(i, _)| *i);
         (
             self.records.into_iter().map(|(_, r)| r).collect(),
             self.summary,
-            self.interrupted,
+            self.stopped,
         )
     }
 }
@@ -57,12 +57,9 @@ impl Reporter for Collector {
                     ..Record::of(trial, verdict)
                 },
             )),
-            Event::RunFinished {
-                summary,
-                interrupted,
-            } => {
+            Event::RunFinished { summary, stopped } => {
                 self.summary = **summary;
-                self.interrupted = *interrupted;
+                self.stopped = *stopped;
             }
             Event::RunStarted { .. }
             | Event::BackendRestarted { .. }

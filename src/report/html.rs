@@ -92,10 +92,10 @@ pub(crate) fn render(sections: &[Section<'_>], records: &[Record], run: &RunInfo
         &format!(
             "{}{}",
             run.tool,
-            if run.interrupted {
-                " (interrupted: incomplete)"
-            } else {
-                ""
+            match run.stopped {
+                Some(super::Stopped::Interrupted) => " (interrupted: incomplete)",
+                Some(super::Stopped::FailFast) => " (stopped at the first failure: incomplete)",
+                None => "",
             }
         ),
     );

@@ -1,7 +1,7 @@
 //! The JSON report of `run` and `diff`: one versioned document for both.
 //!
 //! Shape: `{"format": "plc-conformance-results", "version": 2, "run": {tool, backends,
-//! interrupted}, "summary": {passed, failed, skipped, recorded, known}, "records": [Record],
+//! interrupted, stopped}, "summary": {passed, failed, skipped, recorded, known}, "records": [Record],
 //! "sections": [matrix]}`. Each record carries the trial's status, its structured behaviour and,
 //! where it ran, its verdict (words in hex, as the manuals write them). The document is also a
 //! saved run: `--baseline` reads its records.
@@ -28,8 +28,12 @@ pub(crate) struct RunInfo {
     pub date: String,
     /// Each backend of the run, with what it says of itself.
     pub backends: Vec<BackendInfo>,
-    /// Whether the run stopped before every trial finished.
+    /// Whether a signal stopped the run before every trial finished.
     pub interrupted: bool,
+    /// Why the run stopped before every trial finished (`interrupted`, `fail-fast`), when it
+    /// did.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopped: Option<super::Stopped>,
     /// How long the run took, wall clock, in seconds (the trials' own times add up to less
     /// when backends run side by side, and to nothing measurable for the built-in models).
     #[serde(default)]

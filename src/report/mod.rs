@@ -21,6 +21,7 @@ pub(crate) mod text_reporter;
 
 use std::time::Duration;
 
+pub(crate) use crate::execute::Stopped;
 use crate::judge::{Status, Verdict};
 use crate::plan::Trial;
 
@@ -45,10 +46,10 @@ pub enum Event<'a> {
         answered: usize,
         of: usize,
     },
-    /// Every trial is reported; `interrupted` when the run stopped early.
+    /// Every trial is reported; `stopped` says why the run ended early, when it did.
     RunFinished {
         summary: &'a Summary,
-        interrupted: bool,
+        stopped: Option<Stopped>,
     },
 }
 

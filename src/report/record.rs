@@ -196,8 +196,10 @@ impl Record {
         };
         let detail = match verdict {
             Verdict::Conforms => String::new(),
-            Verdict::Skipped { reason } => reason.clone(),
-            v => render(trial, v, Palette::plain()),
+            v => match v.not_run() {
+                Some(reason) => reason.to_string(),
+                None => render(trial, v, Palette::plain()),
+            },
         };
         Record {
             section,
@@ -308,7 +310,7 @@ fn behaviour(trial: &Trial, verdict: &Verdict) -> Behaviour {
         Verdict::Recorded { observed, .. } => Behaviour::Recorded {
             observed: observed.clone(),
         },
-        Verdict::Skipped { .. } => Behaviour::Skipped,
+        Verdict::Skipped { .. } | Verdict::Cancelled => Behaviour::Skipped,
         Verdict::StaleEntry { .. } => Behaviour::StaleEntry,
         Verdict::KnownDifference { difference, .. } => Behaviour::Known {
             difference: Box::new(behaviour(trial, difference)),

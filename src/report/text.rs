@@ -277,7 +277,8 @@ fn render_body(out: &mut String, verdict: &Verdict, palette: Palette) {
                 terminal(&fault.to_string())
             );
         }
-        Verdict::Skipped { reason } => {
+        Verdict::Skipped { .. } | Verdict::Cancelled => {
+            let reason = verdict.not_run().unwrap_or_default();
             let _ = writeln!(out, "  skipped: {}", terminal(reason));
         }
         Verdict::Recorded {

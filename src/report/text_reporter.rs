@@ -6,7 +6,7 @@ use std::io::Write;
 
 use super::sanitize::terminal;
 use super::text::{render, Palette};
-use super::{Event, Reporter, Summary};
+use super::{Event, Reporter, Stopped, Summary};
 use crate::judge::Verdict;
 
 /// A known-differences entry and the trials it covers, in plan order.
@@ -60,17 +60,23 @@ impl<W: Write> TextReporter<W> {
         self
     }
 
-    fn finish(&mut self, summary: &Summary, interrupted: bool) -> std::io::Result<()> {
+    fn finish(&mut self, summary: &Summary, stopped: Option<Stopped>) -> std::io::Result<()> {
         // Quiet: only whether the run was cut short, and the summary.
         if !self.quiet {
             self.details()?;
         }
         let out = &mut self.out;
-        if interrupted {
-            writeln!(
+        match stopped {
+            Some(Stopped::Interrupted) => writeln!(
                 out,
                 "interrupted: the counts cover the trials that finished"
-            )?;
+            )?,
+            Some(Stopped::FailFast) => writeln!(
+                out,
+                "stopped at the first failure (--fail-fast): the counts cover the trials that \
+                 finished"
+            )?,
+            None => {}
         }
         writeln!(out, "{summary}")?;
         out.flush()
@@ -158,6 +164,10 @@ impl<W: Write> Reporter for TextReporter<W> {
                     Verdict::Skipped { reason } => {
                         *self.skipped.entry(reason.clone()).or_default() += 1;
                     }
+                    v @ Verdict::Cancelled => {
+                        let reason = v.not_run().unwrap_or_default().to_string();
+                        *self.skipped.entry(reason).or_default() += 1;
+                    }
                     v @ Verdict::Recorded { .. } if self.show_recorded => {
                         writeln!(self.out, "{}", render(trial, v, self.palette))?;
                     }
@@ -169,10 +179,7 @@ impl<W: Write> Reporter for TextReporter<W> {
             }
             // The live progress line shows it; the report does not.
             Event::BackendAnswering { .. } => {}
-            Event::RunFinished {
-                summary,
-                interrupted,
-            } => self.finish(summary, *interrupted)?,
+            Event::RunFinished { summary, stopped } => self.finish(summary, *stopped)?,
         }
         Ok(())
     }

@@ -3,11 +3,11 @@
 
 use std::io;
 use std::ops::ControlFlow;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 use super::Session;
-use crate::execute::{execute, execute_all, Observation, Pace, Progress};
+use crate::execute::{execute, execute_all, Observation, Pace, Progress, Stop, Stopped};
 use crate::judge::{judge, skipped, Verdict};
 use crate::plan::Trial;
 use crate::report::baseline::{self, SavedRun};
@@ -29,20 +29,22 @@ pub(crate) struct RunOptions {
 
 impl Session {
     /// Runs `trials` (planned from this session's backends) and reports each verdict to
-    /// `reporter` as it is judged. When `stop` is set, no further batch starts and the run ends
-    /// with what it has, as interrupted. Ends with the records and counts, and the backends the
+    /// `reporter` as it is judged. When `interrupt` is set, or with `fail_fast` once a trial
+    /// fails, no further batch starts and the run ends with what it has, saying which of the two
+    /// stopped it. Ends with the records and counts, and the backends the
     /// session was asked for that ran nothing (they passed nothing); or with the reporter's
     /// first write error, since a report that cannot be written would only be truncated.
     pub(crate) fn run(
         &self,
         trials: &[Trial],
         options: &RunOptions,
-        stop: &AtomicBool,
+        interrupt: &AtomicBool,
         reporter: &mut dyn Reporter,
     ) -> io::Result<RunOutcome> {
         let started = Instant::now();
+        let stop = Stop::new(interrupt);
         let mut collector = Collector::default();
-        let mut stopper = StopAtFailure { stop };
+        let mut stopper = StopAtFailure { stop: &stop };
         let mut reporters: Vec<&mut dyn Reporter> = vec![&mut collector, reporter];
         // `fail_fast` holds every batch back until the one before is judged: a run that
         // executes faster than it reports would otherwise finish before the first failure is
@@ -54,9 +56,9 @@ impl Session {
             }
             false => Pace::Ahead,
         };
-        run_trials(trials, options.jobs, stop, pace, &mut All(reporters))?;
-        let (records, summary, interrupted) = collector.finish();
-        let idle = match interrupted || options.allow_empty {
+        run_trials(trials, options.jobs, &stop, pace, &mut All(reporters))?;
+        let (records, summary, stopped) = collector.finish();
+        let idle = match stopped.is_some() || options.allow_empty {
             true => Vec::new(),
             false => self.idle(trials, options.filtered),
         };
@@ -64,7 +66,7 @@ impl Session {
             records,
             summary,
             idle,
-            interrupted,
+            stopped,
             seconds: started.elapsed().as_secs_f64(),
             baseline: None,
         })
@@ -72,15 +74,15 @@ impl Session {
 }
 
 /// Stops the run at the first failing trial: no further batch starts.
-struct StopAtFailure<'a> {
-    stop: &'a AtomicBool,
+struct StopAtFailure<'a, 'b> {
+    stop: &'a Stop<'b>,
 }
 
-impl Reporter for StopAtFailure<'_> {
+impl Reporter for StopAtFailure<'_, '_> {
     fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
         if let Event::TrialFinished { verdict, .. } = event {
             if verdict.is_failure() {
-                self.stop.store(true, Ordering::Relaxed);
+                self.stop.at_failure();
             }
         }
         Ok(())
@@ -116,13 +118,13 @@ pub(crate) fn observe(
 
 /// Runs trials and reports each verdict as it is judged: skipped trials first, then each
 /// backend's results as they come in (backends side by side, at most `jobs` at once). When
-/// `stop` is set, no further chunk is started and the run finishes with what it has, reported
-/// as interrupted. Returns the counts, or the reporter's first write error: the run ends
+/// `stop` is set, no further chunk is started and the run finishes with what it has, its end
+/// event saying why. Returns the counts, or the reporter's first write error: the run ends
 /// there, since a report that cannot be written would only be truncated.
 pub(crate) fn run_trials(
     trials: &[Trial],
     jobs: usize,
-    stop: &AtomicBool,
+    stop: &Stop<'_>,
     pace: Pace,
     reporter: &mut dyn Reporter,
 ) -> std::io::Result<Summary> {
@@ -149,9 +151,10 @@ pub(crate) fn run_trials(
             Progress::Observed(i, observations, elapsed) => {
                 let mut verdict = judge(&trials[i], &observations);
                 // Once the run is interrupted, its backends are killed: a trial that then
-                // faults was cancelled, not failed.
-                if stop.load(Ordering::Relaxed) && matches!(verdict, Verdict::Fault { .. }) {
-                    verdict = Verdict::cancelled();
+                // faults was cancelled, not failed. A fail-fast stop kills nothing, so a fault
+                // after it is the backend's own.
+                if stop.interrupted() && matches!(verdict, Verdict::Fault { .. }) {
+                    verdict = Verdict::Cancelled;
                 }
                 finished(reporter, &mut summary, trials, i, verdict, elapsed)
             }
@@ -180,10 +183,9 @@ pub(crate) fn run_trials(
     if let Some(e) = failed {
         return Err(e);
     }
-    let interrupted = stop.load(Ordering::Relaxed);
     reporter.event(&Event::RunFinished {
         summary: &summary,
-        interrupted,
+        stopped: stop.reason(),
     })?;
     Ok(summary)
 }
@@ -201,7 +203,8 @@ pub fn verdicts(trials: &[Trial]) -> Vec<Verdict> {
     }
     let mut keep = Keep(vec![None; trials.len()]);
     // Keep writes nothing, so it cannot fail.
-    let _ = run_trials(trials, 1, &AtomicBool::new(false), Pace::Ahead, &mut keep);
+    let never = AtomicBool::new(false);
+    let _ = run_trials(trials, 1, &Stop::new(&never), Pace::Ahead, &mut keep);
     keep.0
         .into_iter()
         .map(|v| v.unwrap_or_else(|| skipped("not run")))
@@ -231,8 +234,8 @@ pub(crate) struct RunOutcome {
     pub summary: Summary,
     /// Backends the run was asked for that ran no trial, with why: they passed nothing.
     pub idle: Vec<(String, String)>,
-    /// Whether the run was interrupted: it reports what it did until then.
-    pub interrupted: bool,
+    /// Why the run stopped before its end, if it did: it reports what it did until then.
+    pub stopped: Option<Stopped>,
     /// How long the run took, in seconds.
     pub seconds: f64,
     /// The comparison with a baseline, when one was given.

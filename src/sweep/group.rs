@@ -52,6 +52,9 @@ impl Reply {
             Verdict::Skipped { reason } => Reply::Skipped {
                 reason: reason.clone(),
             },
+            v @ Verdict::Cancelled => Reply::Skipped {
+                reason: v.not_run().unwrap_or_default().to_string(),
+            },
             Verdict::Fault { fault, .. } => Reply::failed(fault),
             Verdict::Unsupported { reason } => Reply::Failed {
                 label: "unsupported".into(),

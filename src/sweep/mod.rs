@@ -422,7 +422,7 @@ impl Sweep {
             let _ = crate::session::run_trials(
                 &trials,
                 self.settings.jobs.max(1),
-                stop,
+                &crate::execute::Stop::new(stop),
                 crate::execute::Pace::Ahead,
                 &mut keep,
             );
@@ -603,7 +603,10 @@ impl Reporter for Keep<'_> {
     fn event(&mut self, event: &Event<'_>) -> std::io::Result<()> {
         if let Event::TrialFinished { index, verdict, .. } = event {
             // A cancelled trial leaves its input unanswered: it is not counted as swept.
-            if let (Some(&(p, c)), false) = (self.place.get(*index), verdict.is_cancelled()) {
+            if let (Some(&(p, c)), false) = (
+                self.place.get(*index),
+                matches!(verdict, crate::judge::Verdict::Cancelled),
+            ) {
                 self.out[p][c] = Some(Reply::of(verdict));
             }
         }

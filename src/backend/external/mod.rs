@@ -22,7 +22,7 @@ use serde::Serialize;
 
 mod convert;
 
-pub(crate) use process::{adopt_orphans, closing, kill_all, MAX_LINE};
+pub(crate) use process::{adopt_orphans, closing, closing_flag, kill_all, MAX_LINE};
 use process::{describe_exit, Next, Process};
 use protocol::{
     first_version_for, BackendInfo, BackendMessage, Capabilities, CaseRequest, ErrorReport,

@@ -114,6 +114,12 @@ pub(crate) fn closing() -> bool {
     CLOSING.load(Ordering::SeqCst)
 }
 
+/// The flag [`kill_all`] sets: the run's stop flag too (`interrupt::stop_flag`), so that one
+/// flag says the harness is shutting down.
+pub(crate) fn closing_flag() -> &'static AtomicBool {
+    &CLOSING
+}
+
 /// SIGKILL to a process group.
 fn signal_group(pgid: i32) {
     #[cfg(unix)]
