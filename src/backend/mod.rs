@@ -371,7 +371,7 @@ impl<C: Codec> Backend for CodecBackend<C> {
             .map(|q| match convert_or_panic(&self.codec, q) {
                 Ok(Ok(answer)) => Ok(Response::Answer(answer)),
                 Ok(Err(u)) => Ok(u.into()),
-                Err(panic) => Err(Fault::Crashed(panic)),
+                Err(crashed) => Err(crashed),
             })
             .collect()
     }
@@ -401,7 +401,7 @@ pub(crate) fn codec_panicked_at(location: String) {
 pub(crate) fn convert_or_panic(
     codec: &dyn Codec,
     question: &Question<'_>,
-) -> Result<Result<Answer, Unsupported>, String> {
+) -> Result<Result<Answer, Unsupported>, Fault> {
     ASKING_CODEC.with(|a| a.set(true));
     let answer = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| codec.convert(question)));
     ASKING_CODEC.with(|a| a.set(false));
@@ -413,10 +413,10 @@ pub(crate) fn convert_or_panic(
             .with(|at| at.borrow_mut().take())
             .map(|at| format!(" (at {at})"))
             .unwrap_or_default();
-        format!(
+        Fault::Crashed(format!(
             "the codec panicked on case {}: {message}{at}",
             question.case_id
-        )
+        ))
     })
 }
 

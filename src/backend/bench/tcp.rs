@@ -5,23 +5,23 @@
 
 use std::fmt::Display;
 use std::io::Read;
-use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
+use std::net::{TcpStream, ToSocketAddrs};
 use std::time::{Duration, Instant};
 
-/// A connection to `address` (`host:port`), or why none could be made.
-pub(crate) fn connect(address: &str, timeout: Duration) -> Result<TcpStream, String> {
-    let addrs: Vec<SocketAddr> = address
-        .to_socket_addrs()
-        .map_err(|e| e.to_string())?
-        .collect();
-    let mut last = String::from("the address resolves to nothing");
-    for a in addrs {
+/// A connection to `address` (`host:port`), or the last address's error (`NotFound` when the
+/// address resolves to nothing).
+pub(crate) fn connect(address: &str, timeout: Duration) -> std::io::Result<TcpStream> {
+    let mut last = std::io::Error::new(
+        std::io::ErrorKind::NotFound,
+        "the address resolves to nothing",
+    );
+    for a in address.to_socket_addrs()? {
         match TcpStream::connect_timeout(&a, timeout) {
             Ok(stream) => {
                 let _ = stream.set_nodelay(true);
                 return Ok(stream);
             }
-            Err(e) => last = e.to_string(),
+            Err(e) => last = e,
         }
     }
     Err(last)

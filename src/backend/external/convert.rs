@@ -227,18 +227,46 @@ fn send(state: &mut State, questions: &[Question<'_>]) -> u64 {
     id
 }
 
+/// Why a `converted` line is not the answers to its questions.
+#[derive(Debug)]
+enum Garbled {
+    Count {
+        answers: usize,
+        questions: usize,
+    },
+    Kind {
+        given: &'static str,
+        case: String,
+        operation: Operation,
+    },
+}
+
+impl std::fmt::Display for Garbled {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Garbled::Count { answers, questions } => {
+                write!(f, "{answers} answers to {questions} questions")
+            }
+            Garbled::Kind {
+                given,
+                case,
+                operation,
+            } => write!(f, "{given} answers {case} ({operation})"),
+        }
+    }
+}
+
 /// The answers of a `converted` line as responses: one per question, each of the kind its
 /// operation gives.
 fn read_answers(
     questions: &[Question<'_>],
     answers: Vec<Converted>,
-) -> Result<Vec<Result<Response, Fault>>, String> {
+) -> Result<Vec<Result<Response, Fault>>, Garbled> {
     if answers.len() != questions.len() {
-        return Err(format!(
-            "{} answers to {} questions",
-            answers.len(),
-            questions.len()
-        ));
+        return Err(Garbled::Count {
+            answers: answers.len(),
+            questions: questions.len(),
+        });
     }
     questions
         .iter()
@@ -259,11 +287,19 @@ fn read_answers(
                     Response::Unsupported(unsupported)
                 }
                 (Operation::ValueToHex, Converted::Value(_)) => {
-                    return Err(format!("a value answers {} (value-to-hex)", q.case_id))
+                    return Err(Garbled::Kind {
+                        given: "a value",
+                        case: q.case_id.to_string(),
+                        operation: Operation::ValueToHex,
+                    })
                 }
                 // A `convert` message asks conversions only (`convert_batch`).
                 (operation, Converted::Text(_) | Converted::Value(_)) => {
-                    return Err(format!("a text answers {} ({operation})", q.case_id))
+                    return Err(Garbled::Kind {
+                        given: "a text",
+                        case: q.case_id.to_string(),
+                        operation,
+                    })
                 }
             }))
         })
@@ -322,9 +358,12 @@ mod tests {
         .expect("answers");
         assert!(matches!(ok[0], Ok(Response::Answer(Answer::Value(0x5A8D)))));
         let wrong = read_answers(&[q("a", h)], vec![Converted::Text(Latin1(b"5A".to_vec()))]);
-        assert!(wrong.unwrap_err().contains("a text answers a"));
+        assert!(wrong.unwrap_err().to_string().contains("a text answers a"));
         let short = read_answers(&[q("a", h), q("b", h)], vec![Converted::Value(1)]);
-        assert!(short.unwrap_err().contains("1 answers to 2 questions"));
+        assert!(short
+            .unwrap_err()
+            .to_string()
+            .contains("1 answers to 2 questions"));
     }
 
     #[test]

@@ -171,7 +171,7 @@ impl ModbusClient {
             let stream = tcp::connect(&self.settings.address, self.settings.connect_timeout)
                 .map_err(|error| ModbusError::Connect {
                     address: self.settings.address.clone(),
-                    error,
+                    error: error.to_string(),
                 })?;
             self.connections += 1;
             self.stream = Some(stream);

@@ -205,7 +205,7 @@ impl Client {
             let stream = tcp::connect(&self.settings.address, self.settings.connect_timeout)
                 .map_err(|error| ClientError::Connect {
                     address: self.settings.address.clone(),
-                    error,
+                    error: error.to_string(),
                 })?;
             self.connections += 1;
             self.stream = Some(stream);

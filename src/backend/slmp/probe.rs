@@ -120,7 +120,7 @@ impl std::fmt::Display for Heard {
 pub(crate) fn ask_all(
     address: &str,
     timeout: Duration,
-) -> Result<Vec<(&'static Probe, Heard)>, String> {
+) -> std::io::Result<Vec<(&'static Probe, Heard)>> {
     PROBES
         .iter()
         .map(|p| ask(address, p, timeout).map(|heard| (p, heard)))
@@ -139,11 +139,9 @@ impl Manual {
 
 /// Sends a probe on a connection of its own (a refused request may leave a CPU's connection
 /// in any state) and reads the answer's end code; `Err` when no connection can be made.
-fn ask(address: &str, probe: &Probe, timeout: Duration) -> Result<Heard, String> {
+fn ask(address: &str, probe: &Probe, timeout: Duration) -> std::io::Result<Heard> {
     let mut stream = tcp::connect(address, timeout)?;
-    stream
-        .write_all(&probe.request())
-        .map_err(|e| e.to_string())?;
+    stream.write_all(&probe.request())?;
     let deadline = Instant::now() + timeout;
     // Subheader, route and length: `D00000FF03FF00` and 4 characters.
     let mut head = [0u8; 18];
