@@ -36,6 +36,7 @@ fn checked_in(name: &str) -> serde_json::Value {
     "protocol-fields.schema.json",
     "protocol-fields"
 )]
+#[case::libraries(SchemaKind::Libraries, "libraries.schema.json", "libraries")]
 fn checked_in_schema_is_current(#[case] kind: SchemaKind, #[case] file: &str, #[case] flag: &str) {
     assert!(
         checked_in(file) == schema(kind),

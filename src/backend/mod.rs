@@ -324,6 +324,11 @@ pub trait Codec: Send + Sync {
     /// Answers one question: a value, a text or an error class; `Err` for a question it does
     /// not implement after all (a difference when inside its abilities).
     fn convert(&self, question: &Question<'_>) -> Result<Answer, Unsupported>;
+    /// The library and its version (`rmodbus 0.13.0`), for the reports: what a saved run and
+    /// the results table say was checked.
+    fn version(&self) -> Option<String> {
+        None
+    }
 }
 
 /// A [`Codec`] as a [`Backend`].
@@ -346,6 +351,9 @@ impl<C: Codec> Backend for CodecBackend<C> {
     }
     fn describe(&self) -> String {
         "codec-level backend (in process)".into()
+    }
+    fn version(&self) -> Option<String> {
+        self.codec.version()
     }
     fn claims(&self, _instruction: &str, _variant: &str) -> bool {
         false

@@ -217,6 +217,7 @@ pub(super) fn schema(kind: SchemaKind) -> Outcome {
         SchemaKind::OpenQuestions => spec::schema(spec::SchemaKind::OpenQuestions),
         SchemaKind::ProtocolProfile => spec::schema(spec::SchemaKind::ProtocolProfile),
         SchemaKind::ProtocolFields => spec::schema(spec::SchemaKind::ProtocolFields),
+        SchemaKind::Libraries => spec::schema(spec::SchemaKind::Libraries),
         SchemaKind::Protocol => protocol::protocol_schema(),
         // Written by hand: the report's types serialize by hand too (`report::json`).
         SchemaKind::Results => serde_json::from_str(RESULTS_SCHEMA).unwrap_or_default(),

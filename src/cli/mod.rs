@@ -12,6 +12,7 @@ mod info;
 mod init;
 mod output;
 mod record;
+mod results;
 mod run;
 mod sweep;
 
@@ -157,6 +158,10 @@ pub(crate) enum Command {
         #[command(subcommand)]
         command: init::InitCommand,
     },
+    /// The results table of real libraries (docs/results.md): one row per library, one column
+    /// per class of rule of its protocol, from the libraries' saved runs; with --check, whether
+    /// the committed table is stale.
+    Results(results::ResultsArgs),
     /// A real CPU on a bench (MELSEC over SLMP, IDEC over Modbus TCP): generate its test program,
     /// look at the bench read-only, dry-run a live backend, or serve a simulated CPU on
     /// 127.0.0.1.
@@ -280,6 +285,8 @@ pub(crate) enum SchemaKind {
     ProtocolProfile,
     /// Protocol-field vector files (`vectors/protocols/*.yaml`).
     ProtocolFields,
+    /// The libraries of the results table (`libraries.yaml`).
+    Libraries,
     /// The JSON report (`--format json`, `--save`).
     Results,
 }
@@ -321,6 +328,7 @@ pub(crate) fn main_with(in_process: Vec<std::sync::Arc<dyn crate::backend::Backe
         Command::Man { dir } => info::man(dir.as_deref()),
         Command::Sweep(args) => sweep::sweep(&cli, args),
         Command::Record(args) => record::record_command(&cli, args),
+        Command::Results(args) => results::results(&cli, args),
         Command::Hil { command } => hil::hil(&cli, command),
         Command::Init { command } => init::init(command),
     };

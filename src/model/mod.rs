@@ -5,6 +5,7 @@
 
 pub(crate) mod cross_vendor;
 pub(crate) mod known;
+pub(crate) mod library;
 pub(crate) mod open_questions;
 pub(crate) mod profile;
 pub(crate) mod project;

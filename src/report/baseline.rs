@@ -19,6 +19,9 @@ use super::record::{Behaviour, Record};
 pub(crate) struct SavedRun {
     pub format: String,
     pub version: u32,
+    /// What ran (the backends and their versions): what the results table names.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub run: Option<super::json::RunInfo>,
     pub records: Vec<Record>,
 }
 

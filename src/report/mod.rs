@@ -15,6 +15,7 @@ pub(crate) mod matrix;
 pub(crate) mod matrix_text;
 pub(crate) mod progress;
 pub(crate) mod record;
+pub(crate) mod results;
 pub(crate) mod sanitize;
 pub(crate) mod text;
 pub(crate) mod text_reporter;

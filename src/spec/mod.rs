@@ -8,6 +8,7 @@
 
 pub(crate) mod cross_vendor;
 pub(crate) mod known;
+pub(crate) mod libraries;
 pub(crate) mod open_questions;
 pub(crate) mod profile;
 pub(crate) mod project;
@@ -36,6 +37,8 @@ pub enum SchemaKind {
     ProtocolProfile,
     /// Protocol-field vector files (`vectors/protocols/*.yaml`).
     ProtocolFields,
+    /// The libraries of the results table, `libraries.yaml`.
+    Libraries,
 }
 
 /// The JSON Schema (draft-07) of one on-disk format.
@@ -49,6 +52,7 @@ pub fn schema(kind: SchemaKind) -> serde_json::Value {
         SchemaKind::OpenQuestions => schema_of::<open_questions::OpenQuestionsSpec>(),
         SchemaKind::ProtocolProfile => schema_of::<protocol::ProtocolSpec>(),
         SchemaKind::ProtocolFields => schema_of::<protocol::ProtocolFileSpec>(),
+        SchemaKind::Libraries => schema_of::<libraries::LibrariesFileSpec>(),
     }
 }
 

@@ -38,6 +38,11 @@ impl Codec for Rmodbus {
         }
     }
 
+    /// The version Cargo.toml pins (`=0.13.0`).
+    fn version(&self) -> Option<String> {
+        Some("rmodbus 0.13.0".into())
+    }
+
     fn convert(&self, q: &Question<'_>) -> Result<Answer, Unsupported> {
         match q.operation {
             Operation::HexToValue => {
