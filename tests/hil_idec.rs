@@ -489,3 +489,44 @@ fn the_hil_commands_through_the_binary() {
         String::from_utf8_lossy(&run.stderr)
     );
 }
+
+/// A bench backend's link is its manifest's profile's: an IDEC CPU's manifest over SLMP is
+/// refused before anything is planned, naming the link its profile benches over.
+#[test]
+fn a_bench_spec_whose_link_disagrees_with_its_profile_is_refused() {
+    let dir = common::scratch();
+    let out_dir = dir.path().join("bench");
+    let generated = common::cli(&[
+        "hil",
+        "generate",
+        "--profile",
+        PROFILE,
+        "--variant",
+        VARIANT,
+        "--out",
+        out_dir.to_str().expect("utf-8"),
+    ]);
+    assert!(generated.status.success(), "{generated:?}");
+    let manifest = out_dir.join("manifest.json");
+    let over = |scheme: &str, confirm: &str| {
+        common::cli(&[
+            "hil",
+            "dry-run",
+            "--backend",
+            &format!(
+                "{scheme}:bench=127.0.0.1:5000?manifest={}&confirm={confirm}&sandbox=manifest",
+                manifest.display()
+            ),
+        ])
+    };
+    let refused = over("slmp", "R04CPU");
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("benched over Modbus TCP (`modbus:`), not SLMP (`slmp:`)"),
+        "{stderr}"
+    );
+    // The same manifest over its own link plans.
+    let planned = over("modbus", &TYPE_CODE.to_string());
+    assert!(planned.status.success(), "{planned:?}");
+}

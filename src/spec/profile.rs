@@ -116,9 +116,18 @@ pub(crate) struct ModbusRange {
 /// The link a bench reaches a CPU by.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
 #[serde(rename_all = "kebab-case")]
-pub(crate) enum LinkKind {
+pub enum LinkKind {
     Slmp,
     ModbusTcp,
+}
+
+impl std::fmt::Display for LinkKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            LinkKind::Slmp => "SLMP (`slmp:`)",
+            LinkKind::ModbusTcp => "Modbus TCP (`modbus:`)",
+        })
+    }
 }
 
 /// The form of a bench's test program.

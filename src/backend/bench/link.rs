@@ -134,6 +134,8 @@ pub struct Identity {
 
 /// How to reach a CPU over one protocol: what a bench's settings hold for its link.
 pub trait LinkSettings: fmt::Debug + Send + Sync {
+    /// Which link this is: what a profile's `bench.link` must name for its manifests.
+    fn kind(&self) -> crate::model::profile::LinkKind;
     /// A link, not yet connected.
     fn open(&self) -> Box<dyn Link>;
     /// The transport as provenance names it: the protocol, its options and the address.
@@ -151,6 +153,9 @@ impl Clone for Box<dyn LinkSettings> {
 }
 
 impl LinkSettings for Box<dyn LinkSettings> {
+    fn kind(&self) -> crate::model::profile::LinkKind {
+        self.as_ref().kind()
+    }
     fn open(&self) -> Box<dyn Link> {
         self.as_ref().open()
     }

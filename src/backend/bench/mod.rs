@@ -148,6 +148,20 @@ impl BenchBackend {
                 profiles.ids().join(", ")
             )
         })?;
+        // A manifest's CPU is reached by its profile's link: SLMP to an IDEC CPU would address
+        // devices its program does not have.
+        let wanted = profile.bench.as_ref().map(|b| b.link);
+        if wanted != Some(settings.link.kind()) {
+            return Err(refused!(
+                "the manifest is for {}, whose CPUs are benched over {}, not {}: {}",
+                profile.id,
+                wanted.map_or("no link (its profile has no `bench` section)".into(), |l| {
+                    l.to_string()
+                }),
+                settings.link.kind(),
+                crate::backend::BENCH_FORMS
+            ));
+        }
         let Some(variant) = profile.variant(&settings.variant) else {
             return Err(refused!(
                 "variant `{}` is not a variant of {}; it has: {}",

@@ -119,11 +119,7 @@ impl<'a> Spec<'a> {
         let (name, rest) = rest
             .split_once('=')
             .ok_or_else(|| refused!("`{text}`: {usage}"))?;
-        if name.is_empty()
-            || !name
-                .chars()
-                .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-' || c == '_')
-        {
+        if !crate::load::valid_name(name) {
             return Err(refused!(
                 "`{name}` is not a backend name: use lowercase letters, digits, `-` and `_`"
             ));

@@ -297,6 +297,9 @@ pub struct ModbusLinkSettings {
 }
 
 impl LinkSettings for ModbusLinkSettings {
+    fn kind(&self) -> crate::model::profile::LinkKind {
+        crate::model::profile::LinkKind::ModbusTcp
+    }
     fn open(&self) -> Box<dyn Link> {
         Box::new(ModbusLink {
             client: ModbusClient::new(self.client.clone()),

@@ -189,6 +189,9 @@ impl Link for SlmpLink {
 }
 
 impl LinkSettings for ClientSettings {
+    fn kind(&self) -> crate::model::profile::LinkKind {
+        crate::model::profile::LinkKind::Slmp
+    }
     fn open(&self) -> Box<dyn Link> {
         Box::new(SlmpLink(Client::new(self.clone())))
     }
