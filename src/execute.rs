@@ -111,6 +111,11 @@ pub enum Progress {
     },
 }
 
+/// Backends run side by side when nothing says how many: one per CPU.
+pub(crate) fn default_jobs() -> usize {
+    std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
+}
+
 /// Whether a backend's next chunk waits until the trials of the one before are judged.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Pace {

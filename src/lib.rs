@@ -118,6 +118,7 @@
 
 mod backend;
 mod cli;
+mod clock;
 mod corpus_yaml;
 mod device;
 mod error_chain;

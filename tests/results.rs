@@ -122,7 +122,12 @@ fn a_table_is_made_from_saved_runs_with_a_reproduction_per_deviation() {
     std::fs::write(&markdown, text.replacen("✓", "✗", 1)).expect("write");
     let stale = cli(&checking);
     assert_eq!(stale.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&stale.stderr).contains("is stale from line"));
+    let said = String::from_utf8_lossy(&stale.stderr);
+    assert!(said.contains("is stale"), "{said}");
+    assert!(
+        said.contains("\n-") && said.contains("\n+"),
+        "a diff: {said}"
+    );
 
     // A listed library without a run is refused, not left out.
     let only_strict = cli(&[

@@ -25,25 +25,7 @@ use crate::session::Session;
 pub(crate) enum HilCommand {
     /// Write the test program (structured text for GX Works3, a rung list for WindLDR), its
     /// manifest and a setup checklist for a profile, from the corpus's own operands.
-    Generate {
-        /// The profile (mitsubishi-iqr, mitsubishi-fx5, idec-fc4a).
-        #[arg(long, value_name = "ID")]
-        profile: String,
-        /// Only this variant's trials; repeat for several [default: every variant].
-        #[arg(long = "variant", value_name = "ID")]
-        variants: Vec<String>,
-        /// The mailbox's first word, e.g. D12000, or W100 (W, SW, X, Y, B, SB are hexadecimal)
-        /// [default: data registers clear of every case window].
-        #[arg(long, value_name = "DEVICE")]
-        mailbox: Option<String>,
-        /// Only trials whose name contains this text.
-        #[arg(long)]
-        filter: Option<String>,
-        /// The folder to write the program (executive.st or executive.txt), manifest.json and
-        /// SETUP.md into.
-        #[arg(long, value_name = "DIR")]
-        out: PathBuf,
-    },
+    Generate(GenerateArgs),
     /// Look at a bench without writing anything: the CPU's name, its operating status, the
     /// program's signature in the mailbox, its state, and whether its scan counter moves.
     Doctor {
@@ -81,275 +63,328 @@ pub(crate) enum HilCommand {
     /// reference model, until interrupted, over the link of the manifest's profile (SLMP for
     /// MELSEC, Modbus TCP for IDEC); prints `listening on 127.0.0.1:PORT`. Its SLMP port also
     /// reads 0101 and 0401 in ASCII code, as the manual writes fields (what `hil probe` asks).
-    Sim {
-        /// The manifest of the generated program.
-        #[arg(long, value_name = "FILE")]
-        manifest: PathBuf,
-        /// The profile variant the simulated CPU is [default: the manifest's only one].
-        #[arg(long, value_name = "ID")]
-        variant: Option<String>,
-        /// SLMP: the type name 0101 answers [default: R04CPU, FX5U-32MT/DS for an FX5
-        /// manifest].
-        #[arg(long, value_name = "NAME")]
-        type_name: Option<String>,
-        /// SLMP: the model code 0101 answers, in hexadecimal [default: the one the manuals give
-        /// the type name].
-        #[arg(long, value_name = "HEX")]
-        model_code: Option<String>,
-        /// Modbus TCP (IDEC): the type code the CPU holds in D8002, what `confirm=` names.
-        #[arg(long, value_name = "CODE", default_value_t = 0)]
-        type_code: u16,
-        /// The port on 127.0.0.1 [default: any free one].
-        #[arg(long, default_value_t = 0)]
-        port: u16,
-        /// Microseconds between scans.
-        #[arg(long, value_name = "US", default_value_t = 200)]
-        scan_us: u64,
-        /// Start in STOP (SD203 or M8000 says so, the program does not scan).
-        #[arg(long)]
-        stop: bool,
-        /// A port fault, COMMAND:NTH:ACTION: `1401:3:drop` closes the connection on the third
-        /// SLMP write (`10:3:drop` on the third Modbus write of several registers); actions
-        /// drop, delay=MS, end=CODE (an end code, or a Modbus exception), garbage, serial
-        /// (another serial or transaction id), stop. Repeat for several.
-        #[arg(long = "fault", value_name = "RULE")]
-        faults: Vec<String>,
-    },
+    Sim(SimArgs),
+}
+
+/// What `hil generate` takes.
+#[derive(Debug, clap::Args)]
+pub(crate) struct GenerateArgs {
+    /// The profile (mitsubishi-iqr, mitsubishi-fx5, idec-fc4a).
+    #[arg(long, value_name = "ID")]
+    profile: String,
+    /// Only this variant's trials; repeat for several [default: every variant].
+    #[arg(long = "variant", value_name = "ID")]
+    variants: Vec<String>,
+    /// The mailbox's first word, e.g. D12000, or W100 (W, SW, X, Y, B, SB are hexadecimal)
+    /// [default: data registers clear of every case window].
+    #[arg(long, value_name = "DEVICE")]
+    mailbox: Option<String>,
+    /// Only trials whose name contains this text.
+    #[arg(long)]
+    filter: Option<String>,
+    /// The folder to write the program (executive.st or executive.txt), manifest.json and
+    /// SETUP.md into.
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+}
+
+/// What `hil sim` takes.
+#[derive(Debug, clap::Args)]
+pub(crate) struct SimArgs {
+    /// The manifest of the generated program.
+    #[arg(long, value_name = "FILE")]
+    manifest: PathBuf,
+    /// The profile variant the simulated CPU is [default: the manifest's only one].
+    #[arg(long, value_name = "ID")]
+    variant: Option<String>,
+    /// SLMP: the type name 0101 answers [default: R04CPU, FX5U-32MT/DS for an FX5
+    /// manifest].
+    #[arg(long, value_name = "NAME")]
+    type_name: Option<String>,
+    /// SLMP: the model code 0101 answers, in hexadecimal [default: the one the manuals give
+    /// the type name].
+    #[arg(long, value_name = "HEX")]
+    model_code: Option<String>,
+    /// Modbus TCP (IDEC): the type code the CPU holds in D8002, what `confirm=` names.
+    #[arg(long, value_name = "CODE", default_value_t = 0)]
+    type_code: u16,
+    /// The port on 127.0.0.1 [default: any free one].
+    #[arg(long, default_value_t = 0)]
+    port: u16,
+    /// Microseconds between scans.
+    #[arg(long, value_name = "US", default_value_t = 200)]
+    scan_us: u64,
+    /// Start in STOP (SD203 or M8000 says so, the program does not scan).
+    #[arg(long)]
+    stop: bool,
+    /// A port fault, COMMAND:NTH:ACTION: `1401:3:drop` closes the connection on the third
+    /// SLMP write (`10:3:drop` on the third Modbus write of several registers); actions
+    /// drop, delay=MS, end=CODE (an end code, or a Modbus exception), garbage, serial
+    /// (another serial or transaction id), stop. Repeat for several.
+    #[arg(long = "fault", value_name = "RULE")]
+    faults: Vec<String>,
 }
 
 pub(super) fn hil(cli: &Cli, command: &HilCommand) -> Outcome {
     match command {
-        HilCommand::Generate {
-            profile,
-            variants,
-            mailbox,
-            filter,
-            out,
-        } => {
-            let project = load(&paths(cli, &[], "--vectors")?)?;
-            // The mailbox is numbered as the profile's link numbers its code (`generate`
-            // refuses a profile with no bench).
-            let addressing: Box<dyn Addressing> = match project.profiles.get(profile) {
-                Some(p) if p.bench.is_some() => crate::backend::addressing(p)?,
-                _ => Box::new(slmp::Slmp),
-            };
-            let mailbox = mailbox
-                .as_deref()
-                .map(|m| {
-                    mailbox::head(m, addressing.as_ref())
-                        .map_err(|e| CliError::within(format!("--mailbox {m}"), e))
-                })
-                .transpose()?;
-            let generated = generate(
-                &project,
-                &GenerateOptions {
-                    profile: profile.clone(),
-                    variants: variants.clone(),
-                    mailbox,
-                    filter: filter.clone(),
-                },
-            )?;
-            let manifest = serde_json::to_string_pretty(&generated.manifest)
-                .map_err(|e| CliError::within("the manifest does not serialize", e))?;
-            std::fs::create_dir_all(out).map_err(|e| CliError::write(Some(out), e))?;
-            let files = [
-                (out.join(generated.program_file), generated.program.clone()),
-                (out.join("manifest.json"), manifest + "\n"),
-                (out.join("SETUP.md"), generated.setup.clone()),
-            ];
-            output::write_every(files.iter().map(|(p, t)| (p.as_path(), t.as_str())))?;
-            let m = &generated.manifest;
-            output::write(
-                None,
-                &format!(
-                    "{} rungs for {} trials ({} operand tuples no program can hold), mailbox {}, \
-                     program {}; wrote {}",
-                    m.rungs.len(),
-                    generated.trials,
-                    m.unrealisable.len(),
-                    m.mailbox,
-                    m.hash,
-                    files
-                        .iter()
-                        .map(|(p, _)| p.display().to_string())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-            )?;
-            Ok(EXIT_OK)
-        }
-        HilCommand::Doctor { backend, self_test } => {
-            let project = load(&paths(cli, &[], "--vectors")?)?;
-            let settings = live_settings(backend, &project.profiles)?;
-            let (findings, requests) = doctor(&settings);
-            let mut text = String::new();
-            for f in &findings {
-                let _ = match &f.result {
-                    Ok(s) => writeln!(text, "ok    {}: {s}", f.what),
-                    Err(s) => writeln!(text, "FAIL  {}: {s}", f.what),
-                };
-            }
-            let _ = write!(text, "{requests} read requests sent, nothing written");
-            let mut ok = findings.iter().all(|f| f.result.is_ok());
-            if *self_test && ok {
-                let session = Session::new(project);
-                let live = session.live(settings)?;
-                live.connect()?;
-                let _ = writeln!(text);
-                match pulse_self_test(&session, &live) {
-                    Ok(check) => {
-                        ok = check.fired_twice;
-                        let _ = write!(
-                            text,
-                            "{}  pulse self-test: {} run twice: {} / {}{}",
-                            if ok { "ok  " } else { "FAIL" },
-                            check.trial,
-                            check.first,
-                            check.second,
-                            if ok {
-                                ""
-                            } else {
-                                "; the second execution differs: a pulse rung fires once \
-                                 only, so its later cases would be judged on a stale result"
-                            }
-                        );
-                    }
-                    Err(why) => {
-                        ok = false;
-                        let _ = write!(text, "FAIL  pulse self-test: {why}");
-                    }
-                }
-            }
-            output::write(None, &text)?;
-            Ok(if ok { EXIT_OK } else { EXIT_DIFFERENCES })
-        }
-        HilCommand::DryRun { backend } => {
-            let session = Session::new(load(&paths(cli, &[], "--vectors")?)?);
-            let settings = live_settings(backend, &session.profiles)?;
-            let live = session.live(settings)?;
-            let found = dry_run(&session, &live);
-            let mut text = String::new();
-            for (trial, why) in &found.refused {
-                let _ = writeln!(text, "refused {trial}: {why}");
-            }
-            let _ = write!(
-                text,
-                "dry run, no socket opened: {} trials ({} executions) on {} rungs would run, {} \
-                 skipped, {} refused by the write fence; words written: {}",
-                found.trials,
-                found.executions,
-                found.rungs,
-                found.skipped.len(),
-                found.refused.len(),
-                fence::list(&found.writes)
-            );
-            output::write(None, &text)?;
-            Ok(if found.refused.is_empty() {
-                EXIT_OK
-            } else {
-                EXIT_DIFFERENCES
-            })
-        }
+        HilCommand::Generate(args) => generate_command(cli, args),
+        HilCommand::Doctor { backend, self_test } => doctor_command(cli, backend, *self_test),
+        HilCommand::DryRun { backend } => dry_run_command(cli, backend),
         HilCommand::Probe { address, timeout } => probe(address, *timeout),
-        HilCommand::Sim {
-            manifest,
-            variant,
-            type_name,
-            model_code,
-            type_code,
-            port,
-            scan_us,
-            stop,
-            faults,
-        } => {
-            let project = load(&paths(cli, &[], "--vectors")?)?;
-            let m = Manifest::read(manifest)?;
-            let profile =
-                project.profiles.get(&m.profile).cloned().ok_or_else(|| {
-                    CliError::input(format!("profile `{}` is not loaded", m.profile))
-                })?;
-            let link = (profile.bench.as_ref().map(|b| b.link)).ok_or_else(|| {
-                CliError::input(format!(
-                    "{} has no `bench` section in its profile: no simulated CPU runs its program",
-                    profile.id
-                ))
-            })?;
-            let fault = match link {
-                LinkKind::Slmp => FaultRule::slmp,
-                LinkKind::ModbusTcp => FaultRule::modbus,
-            };
-            let faults = faults
-                .iter()
-                .map(|f| fault(f).map_err(|e| CliError::within("--fault", e)))
-                .collect::<Result<Vec<_>, _>>()?;
-            let m = m
-                .validated(crate::backend::addressing(&profile)?.as_ref())
-                .map_err(|e| CliError::within(manifest.display().to_string(), e))?;
-            let variant = match variant {
-                Some(v) => v.clone(),
-                None if m.variants.len() == 1 => m.variants[0].clone(),
-                None => {
-                    return Err(CliError::input(format!(
-                        "the manifest has several variants ({}): give --variant",
-                        m.variants.join(", ")
-                    )))
-                }
-            };
-            let model = crate::backend::reference_model(&project.profiles, &m.profile).ok_or_else(
-                || CliError::input(format!("no built-in reference model for {}", m.profile)),
-            )?;
-            // The simulator serves until the process is ended.
-            let (address, _serving) = match link {
-                LinkKind::Slmp => {
-                    let type_name =
-                        type_name
-                            .clone()
-                            .unwrap_or_else(|| match Family::of_profile(&m.profile) {
-                                Family::Fx5 => "FX5U-32MT/DS".into(),
-                                Family::Iqr => "R04CPU".into(),
-                            });
-                    let model_code = match model_code {
-                        Some(hex) => {
-                            u16::from_str_radix(hex.trim_end_matches('H'), 16).map_err(|_| {
-                                CliError::input(format!(
-                                    "--model-code {hex}: give four hexadecimal digits"
-                                ))
-                            })?
-                        }
-                        None => sim::model_code(&type_name).ok_or_else(|| {
-                            CliError::input(format!(
-                                "no model code is known for `{type_name}`: give --model-code"
-                            ))
-                        })?,
-                    };
-                    let mut settings = SimSettings::new(m, variant, type_name);
-                    settings.link.model_code = model_code;
-                    settings.port = *port;
-                    settings.scan = Duration::from_micros(*scan_us);
-                    settings.run = !*stop;
-                    settings.faults = faults;
-                    let sim = Simulator::start(settings, profile, model)?;
-                    (sim.address(), Box::new(sim) as Box<dyn std::any::Any>)
-                }
-                LinkKind::ModbusTcp => {
-                    let mut settings = IdecSimSettings::idec(m, variant, *type_code);
-                    settings.port = *port;
-                    settings.scan = Duration::from_micros(*scan_us);
-                    settings.run = !*stop;
-                    settings.faults = faults;
-                    let sim = IdecSimulator::start(settings, profile, model)?;
-                    (sim.address(), Box::new(sim) as Box<dyn std::any::Any>)
-                }
-            };
-            output::write(None, &format!("listening on {address}"))?;
-            loop {
-                std::thread::sleep(Duration::from_secs(3600));
-            }
-        }
+        HilCommand::Sim(args) => sim_command(cli, args),
     }
 }
 
-/// A live backend's settings; the project's profiles give a link its map.
+/// `hil generate`: the program, its manifest and the setup checklist, written to `--out`.
+fn generate_command(cli: &Cli, args: &GenerateArgs) -> Outcome {
+    let GenerateArgs {
+        profile,
+        variants,
+        mailbox,
+        filter,
+        out,
+    } = args;
+    let project = load(&paths(cli, &[], "--vectors")?)?;
+    // The mailbox is numbered as the profile's link numbers its code (`generate`
+    // refuses a profile with no bench).
+    let addressing: Box<dyn Addressing> = match project.profiles.get(profile) {
+        Some(p) if p.bench.is_some() => crate::backend::addressing(p)?,
+        _ => Box::new(slmp::Slmp),
+    };
+    let mailbox = mailbox
+        .as_deref()
+        .map(|m| {
+            mailbox::head(m, addressing.as_ref())
+                .map_err(|e| CliError::within(format!("--mailbox {m}"), e))
+        })
+        .transpose()?;
+    let generated = generate(
+        &project,
+        &GenerateOptions {
+            profile: profile.clone(),
+            variants: variants.clone(),
+            mailbox,
+            filter: filter.clone(),
+        },
+    )?;
+    let manifest = serde_json::to_string_pretty(&generated.manifest)
+        .map_err(|e| CliError::within("the manifest does not serialize", e))?;
+    std::fs::create_dir_all(out).map_err(|e| CliError::write(Some(out), e))?;
+    let files = [
+        (out.join(generated.program_file), generated.program.clone()),
+        (out.join("manifest.json"), manifest + "\n"),
+        (out.join("SETUP.md"), generated.setup.clone()),
+    ];
+    output::write_every(files.iter().map(|(p, t)| (p.as_path(), t.as_str())))?;
+    let m = &generated.manifest;
+    output::write(
+        None,
+        &format!(
+            "{} rungs for {} trials ({} operand tuples no program can hold), mailbox {}, \
+             program {}; wrote {}",
+            m.rungs.len(),
+            generated.trials,
+            m.unrealisable.len(),
+            m.mailbox,
+            m.hash,
+            files
+                .iter()
+                .map(|(p, _)| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    )?;
+    Ok(EXIT_OK)
+}
+
+/// `hil doctor`: the bench looked at read-only, and with `--self-test` one pulse case twice.
+fn doctor_command(cli: &Cli, backend: &str, self_test: bool) -> Outcome {
+    let project = load(&paths(cli, &[], "--vectors")?)?;
+    let settings = live_settings(backend, &project.profiles)?;
+    let (findings, requests) = doctor(&settings);
+    let mut text = String::new();
+    for f in &findings {
+        let _ = match &f.result {
+            Ok(s) => writeln!(text, "ok    {}: {s}", f.what),
+            Err(s) => writeln!(text, "FAIL  {}: {s}", f.what),
+        };
+    }
+    let _ = write!(text, "{requests} read requests sent, nothing written");
+    let mut ok = findings.iter().all(|f| f.result.is_ok());
+    if self_test && ok {
+        let session = Session::new(project);
+        let live = session.live(settings)?;
+        live.connect()?;
+        let _ = writeln!(text);
+        match pulse_self_test(&session, &live) {
+            Ok(check) => {
+                ok = check.fired_twice;
+                let _ = write!(
+                    text,
+                    "{}  pulse self-test: {} run twice: {} / {}{}",
+                    if ok { "ok  " } else { "FAIL" },
+                    check.trial,
+                    check.first,
+                    check.second,
+                    if ok {
+                        ""
+                    } else {
+                        "; the second execution differs: a pulse rung fires once \
+                         only, so its later cases would be judged on a stale result"
+                    }
+                );
+            }
+            Err(why) => {
+                ok = false;
+                let _ = write!(text, "FAIL  pulse self-test: {why}");
+            }
+        }
+    }
+    output::write(None, &text)?;
+    Ok(if ok { EXIT_OK } else { EXIT_DIFFERENCES })
+}
+
+/// `hil dry-run`: every trial and write a live backend would make, with no socket.
+fn dry_run_command(cli: &Cli, backend: &str) -> Outcome {
+    let session = Session::new(load(&paths(cli, &[], "--vectors")?)?);
+    let settings = live_settings(backend, &session.profiles)?;
+    let live = session.live(settings)?;
+    let found = dry_run(&session, &live);
+    let mut text = String::new();
+    for (trial, why) in &found.refused {
+        let _ = writeln!(text, "refused {trial}: {why}");
+    }
+    let _ = write!(
+        text,
+        "dry run, no socket opened: {} trials ({} executions) on {} rungs would run, {} \
+         skipped, {} refused by the write fence; words written: {}",
+        found.trials,
+        found.executions,
+        found.rungs,
+        found.skipped.len(),
+        found.refused.len(),
+        fence::list(&found.writes)
+    );
+    output::write(None, &text)?;
+    Ok(if found.refused.is_empty() {
+        EXIT_OK
+    } else {
+        EXIT_DIFFERENCES
+    })
+}
+
+/// `hil sim`: a simulated CPU over the manifest's profile's link, serving until ended.
+fn sim_command(cli: &Cli, args: &SimArgs) -> Outcome {
+    let SimArgs {
+        manifest,
+        variant,
+        faults,
+        ..
+    } = args;
+    let project = load(&paths(cli, &[], "--vectors")?)?;
+    let m = Manifest::read(manifest)?;
+    let profile = project
+        .profiles
+        .get(&m.profile)
+        .cloned()
+        .ok_or_else(|| CliError::input(format!("profile `{}` is not loaded", m.profile)))?;
+    let link = (profile.bench.as_ref().map(|b| b.link)).ok_or_else(|| {
+        CliError::input(format!(
+            "{} has no `bench` section in its profile: no simulated CPU runs its program",
+            profile.id
+        ))
+    })?;
+    let fault = match link {
+        LinkKind::Slmp => FaultRule::slmp,
+        LinkKind::ModbusTcp => FaultRule::modbus,
+    };
+    let faults = faults
+        .iter()
+        .map(|f| fault(f).map_err(|e| CliError::within("--fault", e)))
+        .collect::<Result<Vec<_>, _>>()?;
+    let m = m
+        .validated(crate::backend::addressing(&profile)?.as_ref())
+        .map_err(|e| CliError::within(manifest.display().to_string(), e))?;
+    let variant = match variant {
+        Some(v) => v.clone(),
+        None if m.variants.len() == 1 => m.variants[0].clone(),
+        None => {
+            return Err(CliError::input(format!(
+                "the manifest has several variants ({}): give --variant",
+                m.variants.join(", ")
+            )))
+        }
+    };
+    let model = crate::backend::reference_model(&project.profiles, &m.profile)
+        .ok_or_else(|| CliError::input(format!("no built-in reference model for {}", m.profile)))?;
+    // The simulator serves until the process is ended.
+    let (address, _serving) = start_simulator(link, args, m, variant, faults, profile, model)?;
+    output::write(None, &format!("listening on {address}"))?;
+    loop {
+        std::thread::sleep(Duration::from_secs(3600));
+    }
+}
+
+/// The simulated CPU of the manifest's link, started, with its address; the simulator serves
+/// for as long as the box is kept.
+fn start_simulator(
+    link: LinkKind,
+    args: &SimArgs,
+    m: Manifest,
+    variant: String,
+    faults: Vec<FaultRule>,
+    profile: std::sync::Arc<crate::model::profile::Profile>,
+    model: std::sync::Arc<dyn crate::backend::Backend>,
+) -> Result<(std::net::SocketAddr, Box<dyn std::any::Any>), CliError> {
+    let SimArgs {
+        type_name,
+        model_code,
+        type_code,
+        port,
+        scan_us,
+        stop,
+        ..
+    } = args;
+    Ok(match link {
+        LinkKind::Slmp => {
+            let type_name =
+                type_name
+                    .clone()
+                    .unwrap_or_else(|| match Family::of_profile(&m.profile) {
+                        Family::Fx5 => "FX5U-32MT/DS".into(),
+                        Family::Iqr => "R04CPU".into(),
+                    });
+            let model_code = match model_code {
+                Some(hex) => u16::from_str_radix(hex.trim_end_matches('H'), 16).map_err(|_| {
+                    CliError::input(format!("--model-code {hex}: give four hexadecimal digits"))
+                })?,
+                None => sim::model_code(&type_name).ok_or_else(|| {
+                    CliError::input(format!(
+                        "no model code is known for `{type_name}`: give --model-code"
+                    ))
+                })?,
+            };
+            let mut settings = SimSettings::new(m, variant, type_name);
+            settings.link.model_code = model_code;
+            settings.port = *port;
+            settings.scan = Duration::from_micros(*scan_us);
+            settings.run = !*stop;
+            settings.faults = faults;
+            let sim = Simulator::start(settings, profile, model)?;
+            (sim.address(), Box::new(sim) as Box<dyn std::any::Any>)
+        }
+        LinkKind::ModbusTcp => {
+            let mut settings = IdecSimSettings::idec(m, variant, *type_code);
+            settings.port = *port;
+            settings.scan = Duration::from_micros(*scan_us);
+            settings.run = !*stop;
+            settings.faults = faults;
+            let sim = IdecSimulator::start(settings, profile, model)?;
+            (sim.address(), Box::new(sim) as Box<dyn std::any::Any>)
+        }
+    })
+}
+
 fn live_settings(
     spec: &str,
     profiles: &crate::model::profile::Profiles,

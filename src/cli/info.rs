@@ -162,8 +162,25 @@ pub(super) fn list(cli: &Cli, filter: Option<&str>) -> Outcome {
     for skipped in &file.skipped {
         let _ = writeln!(out, "  (skipped: {skipped})");
     }
+    list_profiles(&mut out, &session.profiles);
+    let _ = writeln!(out, "cases:");
+    let mut shown = 0;
+    for case in &session.corpus.cases {
+        let line = case_line(case);
+        if filter.is_none_or(|f| line.contains(f)) {
+            let _ = writeln!(out, "  {line}");
+            shown += 1;
+        }
+    }
+    let _ = write!(out, "{shown} of {} cases", session.corpus.cases.len());
+    output::write(None, &out)?;
+    Ok(EXIT_OK)
+}
+
+/// The profiles with their instructions and variants, and the protocols with their fields.
+fn list_profiles(out: &mut String, profiles: &crate::model::profile::Profiles) {
     let _ = writeln!(out, "profiles:");
-    for p in session.profiles.iter() {
+    for p in profiles.iter() {
         let _ = writeln!(
             out,
             "  {:<18} {} — instructions: {}",
@@ -180,7 +197,7 @@ pub(super) fn list(cli: &Cli, filter: Option<&str>) -> Outcome {
         }
     }
     let _ = writeln!(out, "protocols:");
-    for p in session.profiles.protocols.iter() {
+    for p in profiles.protocols.iter() {
         let fields: Vec<&str> = p.fields.keys().map(String::as_str).collect();
         let _ = writeln!(
             out,
@@ -190,18 +207,6 @@ pub(super) fn list(cli: &Cli, filter: Option<&str>) -> Outcome {
             fields.join(", ")
         );
     }
-    let _ = writeln!(out, "cases:");
-    let mut shown = 0;
-    for case in &session.corpus.cases {
-        let line = case_line(case);
-        if filter.is_none_or(|f| line.contains(f)) {
-            let _ = writeln!(out, "  {line}");
-            shown += 1;
-        }
-    }
-    let _ = write!(out, "{shown} of {} cases", session.corpus.cases.len());
-    output::write(None, &out)?;
-    Ok(EXIT_OK)
 }
 
 /// The JSON report's schema, as shipped in `schema/`.
@@ -239,8 +244,7 @@ pub(super) fn serve(cli: &Cli, profile_id: &str) -> Outcome {
             profiles.ids().join(", ")
         )));
     };
-    let backends = crate::backend::reference_backends(&profiles);
-    let Some(backend) = backends.iter().find(|b| b.profile() == profile_id) else {
+    let Some(backend) = crate::backend::reference_model(&profiles, profile_id) else {
         return Err(CliError::input(format!(
             "profile `{profile_id}` has no built-in reference model"
         )));

@@ -243,9 +243,7 @@ pub(crate) struct BackendArgs {
 impl BackendArgs {
     /// Backends run side by side: `--jobs`, or one per CPU.
     pub(crate) fn jobs(&self) -> usize {
-        self.jobs.unwrap_or_else(|| {
-            std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
-        })
+        self.jobs.unwrap_or_else(crate::execute::default_jobs)
     }
 }
 

@@ -6,7 +6,8 @@ use std::fmt::Write as _;
 
 use super::backends::{prepare, Prepared};
 use super::{output, BackendArgs, Cli, CliError, Outcome, EXIT_DIFFERENCES, EXIT_OK};
-use crate::record::{record, today, Change, Provenance};
+use crate::clock::today;
+use crate::record::{record, Change, Provenance, Recording};
 
 /// What `record` takes.
 #[derive(Debug, clap::Args)]
@@ -58,21 +59,8 @@ pub(super) fn record_command(cli: &Cli, args: &RecordArgs) -> Outcome {
     if let Some(path) = &args.known {
         return known_file(backend, project, args.filter.as_deref(), path);
     }
-    // Recording edits vector files in place: the copies built into the binary are not files.
     if !args.dry_run {
-        if let Some(case) = project
-            .corpus
-            .cases
-            .iter()
-            .find(|c| c.location.file.starts_with(crate::load::EMBEDDED))
-        {
-            return Err(CliError::input(format!(
-                "record writes into the vector files, and {} is built into the binary: run it in \
-                 a project folder (one with vendors/ and vectors/), give --vectors FOLDER, or \
-                 add --dry-run",
-                case.location.file.display()
-            )));
-        }
+        refuse_embedded(project)?;
     }
     let provenance = Provenance {
         backend: backend.name().to_string(),
@@ -99,6 +87,53 @@ pub(super) fn record_command(cli: &Cli, args: &RecordArgs) -> Outcome {
         crate::interrupt::stop_flag(),
     )?;
     simulated()?;
+    let (mut out, [filled, replaced, kept, skipped, faulted]) =
+        listing(&recording, &provenance.backend);
+    if !args.dry_run {
+        output::write_every(
+            recording
+                .files
+                .iter()
+                .map(|(path, text)| (path.as_path(), text.as_str())),
+        )?;
+    }
+    let _ = write!(
+        out,
+        "{}{filled} unspecified case(s) filled in, {replaced} expectation(s) replaced, {kept} manual \
+         kept, {skipped} not recorded, {faulted} faulted, in {} file(s)",
+        if args.dry_run { "dry run: " } else { "" },
+        recording.files.len()
+    );
+    output::write(None, &out)?;
+    // A backend that faulted did not answer: the recording is incomplete.
+    Ok(if faulted > 0 {
+        EXIT_DIFFERENCES
+    } else {
+        EXIT_OK
+    })
+}
+
+/// Recording edits vector files in place: the copies built into the binary are not files.
+fn refuse_embedded(project: &crate::project::Project) -> Result<(), CliError> {
+    if let Some(case) = project
+        .corpus
+        .cases
+        .iter()
+        .find(|c| c.location.file.starts_with(crate::load::EMBEDDED))
+    {
+        return Err(CliError::input(format!(
+            "record writes into the vector files, and {} is built into the binary: run it in \
+             a project folder (one with vendors/ and vectors/), give --vectors FOLDER, or \
+             add --dry-run",
+            case.location.file.display()
+        )));
+    }
+    Ok(())
+}
+
+/// One line per case the recording changed, kept or could not record, and the counts: filled,
+/// replaced, manual kept, not recorded, faulted.
+fn listing(recording: &Recording, backend: &str) -> (String, [usize; 5]) {
     let (mut filled, mut replaced, mut kept, mut skipped, mut faulted) = (0, 0, 0, 0, 0);
     let mut out = String::new();
     for e in &recording.entries {
@@ -131,7 +166,7 @@ pub(super) fn record_command(cli: &Cli, args: &RecordArgs) -> Outcome {
                     let _ = writeln!(
                         out,
                         "{at}: {}: manual, kept; {} did otherwise: {effect}",
-                        e.case.id, provenance.backend
+                        e.case.id, backend
                     );
                 }
             }
@@ -149,28 +184,7 @@ pub(super) fn record_command(cli: &Cli, args: &RecordArgs) -> Outcome {
             }
         }
     }
-    if !args.dry_run {
-        output::write_every(
-            recording
-                .files
-                .iter()
-                .map(|(path, text)| (path.as_path(), text.as_str())),
-        )?;
-    }
-    let _ = write!(
-        out,
-        "{}{filled} unspecified case(s) filled in, {replaced} expectation(s) replaced, {kept} manual \
-         kept, {skipped} not recorded, {faulted} faulted, in {} file(s)",
-        if args.dry_run { "dry run: " } else { "" },
-        recording.files.len()
-    );
-    output::write(None, &out)?;
-    // A backend that faulted did not answer: the recording is incomplete.
-    Ok(if faulted > 0 {
-        EXIT_DIFFERENCES
-    } else {
-        EXIT_OK
-    })
+    (out, [filled, replaced, kept, skipped, faulted])
 }
 
 /// `record --known FILE`: the starting known-differences file (`crate::known_draft`).

@@ -74,23 +74,32 @@ pub(super) fn results(cli: &Cli, args: &ResultsArgs) -> Outcome {
     Ok(if stale { EXIT_DIFFERENCES } else { EXIT_OK })
 }
 
-/// Whether the file holds `text`; if not, says so with the first line that differs.
+/// Lines of the stale file's diff shown at most.
+const DIFF_LINES: usize = 40;
+
+/// Whether the file holds `text`; if not, says so with the start of a unified diff of the
+/// committed file against what the runs give.
 fn same(path: &Path, text: &str) -> bool {
     let committed = std::fs::read_to_string(path).unwrap_or_default();
     if committed == text {
         return true;
     }
-    let first = committed
-        .lines()
-        .zip(text.lines())
-        .position(|(a, b)| a != b)
-        .unwrap_or_else(|| committed.lines().count().min(text.lines().count()));
+    let diff = similar::TextDiff::from_lines(committed.as_str(), text);
+    let shown = diff
+        .unified_diff()
+        .context_radius(1)
+        .header("committed", "from the runs")
+        .to_string();
+    let lines: Vec<&str> = shown.lines().collect();
     console::status(&format!(
-        "{} is stale from line {} (regenerate it with .ci/results):\n  committed: {}\n  from the runs: {}",
+        "{} is stale (regenerate it with .ci/results):\n{}{}",
         path.display(),
-        first + 1,
-        committed.lines().nth(first).unwrap_or("(end of file)"),
-        text.lines().nth(first).unwrap_or("(end of file)")
+        lines[..lines.len().min(DIFF_LINES)].join("\n"),
+        if lines.len() > DIFF_LINES {
+            format!("\n... {} more diff lines", lines.len() - DIFF_LINES)
+        } else {
+            String::new()
+        }
     ));
     false
 }

@@ -79,13 +79,49 @@ fn execute_command(
              what exists)",
         ));
     }
-    let date = utc_now();
+    let date = crate::clock::utc_now();
     // Backends left out are a fact about this machine, not a result: stderr, whatever the format.
     if backend_args.backends.is_empty() && !cli.quiet {
         for skipped in &file.skipped {
             console::note(&format!("skipped: {skipped}"));
         }
     }
+    let options = RunOptions {
+        jobs: backend_args.jobs(),
+        fail_fast: backend_args.fail_fast,
+        filtered: backend_args.filter.is_some(),
+        allow_empty: backend_args.allow_empty,
+    };
+    let mut outcome = run_reported(
+        cli,
+        &session,
+        &trials,
+        &options,
+        report,
+        format,
+        show_recorded,
+    )?;
+    let info = run_info(cli, &backends, date, &outcome);
+    write_documents(report, format, &outcome, &info)?;
+    notes(cli, &session, &outcome);
+    if let Some(before) = before {
+        outcome.against(&before);
+        report_baseline(report.baseline.as_deref(), &outcome);
+    }
+    Ok(outcome.exit_code())
+}
+
+/// Runs the trials with the text report (when the format is text) and, unless quiet, the live
+/// progress lines.
+fn run_reported(
+    cli: &Cli,
+    session: &Session,
+    trials: &[Trial],
+    options: &RunOptions,
+    report: &ReportArgs,
+    format: Format,
+    show_recorded: bool,
+) -> Result<RunOutcome, CliError> {
     let mut text = None;
     if format == Format::Text {
         let sink = Sink::open(report.output.as_deref())?;
@@ -96,12 +132,6 @@ fn execute_command(
         };
         text = Some(TextReporter::new(sink, palette, show_recorded).quiet(cli.quiet));
     }
-    let options = RunOptions {
-        jobs: backend_args.jobs(),
-        fail_fast: backend_args.fail_fast,
-        filtered: backend_args.filter.is_some(),
-        allow_empty: backend_args.allow_empty,
-    };
     let stop = crate::interrupt::stop_flag();
     let ran = {
         let mut none = All(Vec::new());
@@ -110,30 +140,30 @@ fn execute_command(
             None => &mut none,
         };
         if cli.quiet {
-            session.run(&trials, &options, stop, reporter)
+            session.run(trials, options, stop, reporter)
         } else {
-            let mut progress = ProgressReporter::new(&trials, reporter);
-            session.run(&trials, &options, stop, &mut progress)
+            let mut progress = ProgressReporter::new(trials, reporter);
+            session.run(trials, options, stop, &mut progress)
         }
     };
-    let mut outcome = match ran {
-        Ok(outcome) => outcome,
-        Err(e) => {
-            let path = report.output.as_deref().filter(|_| text.is_some());
-            return Err(CliError::write(path, e));
-        }
-    };
+    let outcome = ran.map_err(|e| {
+        let path = report.output.as_deref().filter(|_| text.is_some());
+        CliError::write(path, e)
+    })?;
     if let Some(text) = text {
         text.into_inner().finish()?;
     }
-    let RunOutcome {
-        records,
-        summary,
-        stopped,
-        ..
-    } = &outcome;
-    let interrupted = *stopped == Some(Stopped::Interrupted);
-    let info = RunInfo {
+    Ok(outcome)
+}
+
+/// What a report says of the run: the tool, the commit, the date, the backends, how it ended.
+fn run_info(
+    cli: &Cli,
+    backends: &[Arc<dyn Backend>],
+    date: String,
+    outcome: &RunOutcome,
+) -> RunInfo {
+    RunInfo {
         tool: format!("plc-conformance {}", env!("CARGO_PKG_VERSION")),
         commit: project_root(cli)
             .ok()
@@ -148,10 +178,23 @@ fn execute_command(
                 version: b.version(),
             })
             .collect(),
-        interrupted,
-        stopped: *stopped,
+        interrupted: outcome.stopped == Some(Stopped::Interrupted),
+        stopped: outcome.stopped,
         seconds: outcome.seconds,
-    };
+    }
+}
+
+/// The report in a format other than text, and the saved run (`--save`), which an interrupted
+/// run leaves as it was.
+fn write_documents(
+    report: &ReportArgs,
+    format: Format,
+    outcome: &RunOutcome,
+    info: &RunInfo,
+) -> Result<(), CliError> {
+    let RunOutcome {
+        records, summary, ..
+    } = outcome;
     if format != Format::Text {
         let coloured = report.output.is_none()
             && anstream::AutoStream::choice(&std::io::stdout()) != anstream::ColorChoice::Never;
@@ -159,12 +202,36 @@ fn execute_command(
             format,
             records,
             summary,
-            &info,
+            info,
             coloured,
             text_width(report.output.is_none()),
         );
         output::write(report.output.as_deref(), &rendered)?;
     }
+    match (&report.save, info.interrupted) {
+        (Some(path), true) => console::note(&format!(
+            "the run was interrupted; {} is left as it was",
+            path.display()
+        )),
+        (Some(path), false) => {
+            let saved = document::render(
+                Format::Json,
+                records,
+                summary,
+                info,
+                false,
+                matrix_text::DEFAULT_WIDTH,
+            );
+            output::write(Some(path), &saved)?;
+        }
+        (None, _) => {}
+    }
+    Ok(())
+}
+
+/// The notes and errors beside the report: known-differences entries not used, backends that
+/// ran nothing.
+fn notes(cli: &Cli, session: &Session, outcome: &RunOutcome) {
     for (name, known) in &session.known {
         if !known.ignored.is_empty() && !cli.quiet {
             console::note(&format!(
@@ -175,32 +242,11 @@ fn execute_command(
             ));
         }
     }
-    if let (Some(path), true) = (&report.save, interrupted) {
-        console::note(&format!(
-            "the run was interrupted; {} is left as it was",
-            path.display()
-        ));
-    } else if let Some(path) = &report.save {
-        let saved = document::render(
-            Format::Json,
-            records,
-            summary,
-            &info,
-            false,
-            matrix_text::DEFAULT_WIDTH,
-        );
-        output::write(Some(path), &saved)?;
-    }
     for (name, why) in &outcome.idle {
         console::status(&format!(
             "error: backend `{name}` ran no trial: {why} (--allow-empty accepts such a run)"
         ));
     }
-    if let Some(before) = before {
-        outcome.against(&before);
-        report_baseline(report.baseline.as_deref(), &outcome);
-    }
-    Ok(outcome.exit_code())
 }
 
 /// The case ids that probe an open question (every question's when `question` is empty).
@@ -252,30 +298,6 @@ fn git_commit(root: &Path) -> Option<String> {
         .ok()?;
     let text = String::from_utf8(out.stdout).ok()?;
     (out.status.success() && !text.trim().is_empty()).then(|| text.trim().to_string())
-}
-
-/// The current time, UTC, as RFC 3339 (`2026-11-22T13:24:34Z`).
-fn utc_now() -> String {
-    let secs = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_secs());
-    let (days, rest) = (secs / 86_400, secs % 86_400);
-    // Civil date from days since 1970-01-01 (Howard Hinnant's algorithm).
-    let z = days as i64 + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z - era * 146_097;
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let day = doy - (153 * mp + 2) / 5 + 1;
-    let month = if mp < 10 { mp + 3 } else { mp - 9 };
-    let year = yoe + era * 400 + i64::from(month <= 2);
-    format!(
-        "{year:04}-{month:02}-{day:02}T{:02}:{:02}:{:02}Z",
-        rest / 3600,
-        rest % 3600 / 60,
-        rest % 60
-    )
 }
 
 /// The width text reports fit: the terminal's when writing to one, else `COLUMNS`, else

@@ -11,9 +11,9 @@ use crate::load::CorpusBuilder;
 use crate::model::cross_vendor::Operation;
 use crate::model::profile::Profiles;
 use crate::report::console;
-use crate::sweep::generate::{Digits, Generator, BOUNDARIES, MAX_DIGITS};
-use crate::sweep::target::Target;
-use crate::sweep::{emit, render, Oracle, Settings, Sweep};
+use crate::sweep::generate::{Digits, Generator, MAX_DIGITS};
+use crate::sweep::request::{GeneratorChoice, Request, Swept};
+use crate::sweep::{emit, render, Results, Sweep};
 
 /// What `sweep` takes.
 #[derive(Debug, clap::Args)]
@@ -201,6 +201,7 @@ fn sweep_format() -> impl clap::builder::TypedValueParser<Value = Format> {
 }
 
 pub(super) fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
+    let request = request(args)?;
     let backend_args = BackendArgs {
         backends: args.backends.clone(),
         timeout: args.timeout,
@@ -215,118 +216,7 @@ pub(super) fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
     // The reference models are always there, and first: they are the oracle.
     let Prepared { session, .. } = prepare_with_references(cli, &backend_args)?;
     let project = &session.project;
-    let target = match (&args.operation, &args.instruction) {
-        (Some(OperationArg::HexToValue), _) => Target::Operation {
-            operation: Operation::HexToValue,
-        },
-        (Some(OperationArg::ValueToHex), _) => Target::Operation {
-            operation: Operation::ValueToHex,
-        },
-        (None, Some(instruction)) => {
-            let profile = match &args.profile {
-                Some(p) => p.clone(),
-                None => {
-                    let having: Vec<String> = project
-                        .profiles
-                        .iter()
-                        .filter(|p| p.instructions.contains_key(instruction))
-                        .map(|p| p.id.clone())
-                        .collect();
-                    match having.as_slice() {
-                        [one] => one.clone(),
-                        [] => {
-                            return Err(CliError::input(format!(
-                                "no profile has an instruction `{instruction}`"
-                            )))
-                        }
-                        many => {
-                            return Err(CliError::input(format!(
-                                "several profiles have {instruction} ({}): give --profile",
-                                many.join(", ")
-                            )))
-                        }
-                    }
-                }
-            };
-            Target::Instruction {
-                profile,
-                instruction: instruction.clone(),
-            }
-        }
-        (None, None) => {
-            return Err(CliError::input(
-                "give --operation hex-to-value|value-to-hex or --instruction NAME",
-            ))
-        }
-    };
-    let chosen = &session.backends;
-    let reads_text = match &target {
-        Target::Operation { operation } => *operation == Operation::HexToValue,
-        Target::Instruction {
-            profile,
-            instruction,
-        } => project
-            .profiles
-            .get(profile)
-            .and_then(|p| crate::sweep::target::Shape::of(p, instruction).ok())
-            .is_none_or(|s| s.reads == Operation::HexToValue),
-    };
-    let generator = match args.generator {
-        Some(GeneratorArg::Values) => Generator::Values { bits: 16 },
-        Some(GeneratorArg::Values32) => Generator::Values { bits: 32 },
-        Some(GeneratorArg::Text) => text_generator(args)?,
-        Some(GeneratorArg::Random) => Generator::Random {
-            count: args.count,
-            max_len: args.length.unwrap_or(8),
-        },
-        Some(GeneratorArg::Full) => Generator::Full {
-            by_class: !args.each_text,
-        },
-        None if reads_text => text_generator(args)?,
-        None => Generator::Values { bits: 16 },
-    };
-    if args.each_text && !matches!(generator, Generator::Full { .. }) {
-        return Err(CliError::input("--each-text applies to --generator full"));
-    }
-    let seed = args.seed.unwrap_or_else(|| {
-        std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(1, |d| d.as_secs())
-    });
-    let mut settings = Settings::new(target, generator, seed);
-    settings.digits = digits(&args.digits)?;
-    settings.shard = shard(&args.shard)?;
-    settings.shrink = args.shrink;
-    if args.class_check > MAX_CLASS_CHECK {
-        return Err(CliError::input(format!(
-            "--class-check {}: at most {} random texts (2^32, the whole space)",
-            args.class_check,
-            render::thousands(MAX_CLASS_CHECK)
-        )));
-    }
-    settings.class_check = args.class_check;
-    if args.oracle.is_some() && args.operation.is_none() {
-        return Err(CliError::input(
-            "--oracle applies to --operation: an instruction sweep judges each backend against \
-             its profile's reference model",
-        ));
-    }
-    settings.oracle = match args.oracle.as_deref() {
-        None => Oracle::Declared,
-        Some("none") => Oracle::None,
-        Some(reading) => Oracle::Named(reading.to_string()),
-    };
-    if let Some(j) = args.jobs {
-        settings.jobs = j.max(1);
-    }
-    let sweep = Sweep::new(settings, &project.profiles, chosen)?;
-    // A space past 2^64 inputs cannot be numbered, let alone swept.
-    if sweep.space.total() == u64::MAX {
-        return Err(CliError::input(
-            "the inputs asked for are more than 2^64: give a shorter --length, a smaller \
-             --alphabet or fewer --digits",
-        ));
-    }
+    let sweep = request.sweep(&project.profiles, &session.backends)?;
     // The shards' files are read before anything is swept or asked.
     let shards = match args.merge.is_empty() {
         true => None,
@@ -336,7 +226,7 @@ pub(super) fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
     if let (Some(path), false) = (&args.emit, args.force) {
         refuse_hand_written(path)?;
     }
-    let mut output_sink = args
+    let output_sink = args
         .output
         .as_deref()
         .map(|p| Sink::open(Some(p)))
@@ -346,8 +236,120 @@ pub(super) fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
         .as_deref()
         .map(|p| Sink::open(Some(p)))
         .transpose()?;
-    let bar = std::io::stderr().is_terminal().then(|| {
-        let bar = indicatif::ProgressBar::new(sweep.space.total());
+    announce(&sweep, shards.as_ref().map(Vec::len));
+    // SIGINT and SIGTERM (handled in `cli::main`) stop the sweep after the round under way and
+    // kill every backend process group, so a hung backend ends the round too.
+    let stop = crate::interrupt::stop_flag();
+    let bar = progress_bar(sweep.space.total());
+    let mut results = match shards {
+        Some(files) => crate::sweep::merge::merge(&sweep, &files, stop)?,
+        None => sweep.run(stop, &mut |done, of| {
+            if let Some(bar) = &bar {
+                bar.set_length(of);
+                bar.set_position(done);
+            }
+        }),
+    };
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    if sweep.conclude(&mut results, &project.known) {
+        console::warning(
+            "a value has no input class: of a known-differences file, only an entry for every \
+             case (`cases: ['*']`) covers a value-to-hex sweep's inputs, so its other entries \
+             cover none of the differences below",
+        );
+    }
+    write_results(&results, args.format, output_sink)?;
+    if let Some(code) = inexact(&results) {
+        return Ok(code);
+    }
+    if let (Some(path), Some(sink)) = (&args.emit, emit_sink) {
+        emit_vectors(&sweep, &results, project, path, sink)?;
+    }
+    Ok(if results.interrupted {
+        // As `run`: an interruption, whatever was found before it.
+        EXIT_INTERRUPTED
+    } else if results.differs() || !results.faulted().is_empty() {
+        EXIT_DIFFERENCES
+    } else {
+        EXIT_OK
+    })
+}
+
+/// The request the arguments make: each list read, the target named.
+fn request(args: &SweepArgs) -> Result<Request, CliError> {
+    let swept = match (&args.operation, &args.instruction) {
+        (Some(OperationArg::HexToValue), _) => Swept::Operation(Operation::HexToValue),
+        (Some(OperationArg::ValueToHex), _) => Swept::Operation(Operation::ValueToHex),
+        (None, Some(name)) => Swept::Instruction {
+            name: name.clone(),
+            profile: args.profile.clone(),
+        },
+        (None, None) => {
+            return Err(CliError::input(
+                "give --operation hex-to-value|value-to-hex or --instruction NAME",
+            ))
+        }
+    };
+    Ok(Request {
+        swept,
+        generator: args.generator.map(|g| match g {
+            GeneratorArg::Values => GeneratorChoice::Values,
+            GeneratorArg::Values32 => GeneratorChoice::Values32,
+            GeneratorArg::Text => GeneratorChoice::Text,
+            GeneratorArg::Random => GeneratorChoice::Random,
+            GeneratorArg::Full => GeneratorChoice::Full,
+        }),
+        seed: args.seed,
+        count: args.count,
+        length: args.length,
+        alphabet: args.alphabet.as_deref().map(alphabet).transpose()?,
+        digits: digits(&args.digits)?,
+        each_text: args.each_text,
+        class_check: args.class_check,
+        shard: shard(&args.shard)?,
+        oracle: args.oracle.clone(),
+        jobs: args.jobs,
+        shrink: args.shrink,
+    })
+}
+
+/// What is about to be swept, on stderr.
+fn announce(sweep: &Sweep, shards: Option<usize>) {
+    let settings = &sweep.settings;
+    let seed = settings.seed;
+    match shards {
+        Some(n) => console::status(&format!(
+            "merging {n} shard(s) of {} with the {} generator: their first inputs asked again",
+            settings.target,
+            settings.generator.name()
+        )),
+        None => console::status(&format!(
+            "sweeping {} with the {} generator{}: {} input(s) in this shard",
+            settings.target,
+            settings.generator.name(),
+            if settings.generator.uses_seed() {
+                format!(", seed {seed} (--seed {seed} repeats it)")
+            } else {
+                String::new()
+            },
+            render::thousands(sweep.space.total().div_ceil(settings.shard.1))
+        )),
+    }
+    if matches!(settings.generator, Generator::Full { by_class: true }) {
+        console::status(&format!(
+            "by byte class: the classes are found first, then one text per tuple of classes is \
+             asked, then {} random texts check them",
+            render::thousands(settings.class_check)
+        ));
+    }
+}
+
+/// A progress bar on a terminal's stderr; none when stderr is not one.
+fn progress_bar(total: u64) -> Option<indicatif::ProgressBar> {
+    std::io::stderr().is_terminal().then(|| {
+        let bar = indicatif::ProgressBar::new(total);
         bar.set_style(
             indicatif::ProgressStyle::with_template(
                 "{elapsed_precise} [{bar:40}] {human_pos}/{human_len} inputs ({rate}, eta {eta})",
@@ -363,59 +365,11 @@ pub(super) fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
             .progress_chars("=> "),
         );
         bar
-    });
-    let seed = sweep.settings.seed;
-    if let Some(files) = &shards {
-        console::status(&format!(
-            "merging {} shard(s) of {} with the {} generator: their first inputs asked again",
-            files.len(),
-            sweep.settings.target,
-            sweep.settings.generator.name()
-        ));
-    } else {
-        console::status(&format!(
-            "sweeping {} with the {} generator{}: {} input(s) in this shard",
-            sweep.settings.target,
-            sweep.settings.generator.name(),
-            if sweep.settings.generator.uses_seed() {
-                format!(", seed {seed} (--seed {seed} repeats it)")
-            } else {
-                String::new()
-            },
-            render::thousands(sweep.space.total().div_ceil(sweep.settings.shard.1))
-        ));
-    }
-    if matches!(sweep.settings.generator, Generator::Full { by_class: true }) {
-        console::status(&format!(
-            "by byte class: the classes are found first, then one text per tuple of classes is \
-             asked, then {} random texts check them",
-            render::thousands(sweep.settings.class_check)
-        ));
-    }
-    // SIGINT and SIGTERM (handled in `cli::main`) stop the sweep after the round under way and
-    // kill every backend process group, so a hung backend ends the round too.
-    let stop = crate::interrupt::stop_flag();
-    let mut results = match shards {
-        Some(files) => crate::sweep::merge::merge(&sweep, &files, stop)?,
-        None => sweep.run(stop, &mut |done, of| {
-            if let Some(bar) = &bar {
-                bar.set_length(of);
-                bar.set_position(done);
-            }
-        }),
-    };
-    if let Some(bar) = bar {
-        bar.finish_and_clear();
-    }
-    let stale = crate::sweep::known::apply(&mut results, &project.known);
-    results.hints = crate::sweep::explain::hints(&sweep, &results);
-    if stale {
-        console::warning(
-            "a value has no input class: of a known-differences file, only an entry for every \
-             case (`cases: ['*']`) covers a value-to-hex sweep's inputs, so its other entries \
-             cover none of the differences below",
-        );
-    }
+    })
+}
+
+/// The results in their format, to `--output` or stdout.
+fn write_results(results: &Results, format: Format, sink: Option<Sink>) -> Result<(), CliError> {
     if results.interrupted {
         console::status(&format!(
             "interrupted: {} of {} inputs swept; what was found so far follows",
@@ -423,90 +377,77 @@ pub(super) fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
             render::thousands(results.shard_inputs)
         ));
     }
-    let rendered = match args.format {
-        Format::Json => render::json(&results),
-        Format::Html => render::html(&results),
+    let rendered = match format {
+        Format::Json => render::json(results),
+        Format::Html => render::html(results),
         // Text; the parser takes SWEEP_FORMATS only.
-        _ => render::text(&results),
+        _ => render::text(results),
     };
-    match output_sink.take() {
+    match sink {
         Some(mut sink) => {
             sink.write_all(rendered.as_bytes())
                 .map_err(|e| sink.error(e))?;
-            sink.finish()?;
+            sink.finish()
         }
-        None => output::write(None, rendered.trim_end())?,
+        None => output::write(None, rendered.trim_end()),
     }
+}
+
+/// Exit 1 when the counts are not exact: the byte classes did not hold, or the built-in models
+/// answered unlike their rules as every text was asked.
+fn inexact(results: &Results) -> Option<u8> {
     if let Some(m) = results.classes.as_ref().and_then(|c| c.mismatch.as_ref()) {
         console::status(&format!(
             "error: the byte classes do not hold: {} answers differently from its class representative {}; \
              the counts above are not exact (--each-text asks every text)",
             m.text.point, m.representative.point
         ));
-        return Ok(EXIT_DIFFERENCES);
+        return Some(EXIT_DIFFERENCES);
     }
-    if let Some(f) = results
-        .exhaustive
-        .as_ref()
-        .and_then(|e| e.disagreement.as_ref())
-    {
+    let disagreement = (results.exhaustive.as_ref()).and_then(|e| e.disagreement.as_ref())?;
+    console::status(&format!(
+        "error: the built-in models answer {} unlike their rules as the sweep asked every \
+         text; the counts above are not exact",
+        disagreement.point
+    ));
+    Some(EXIT_DIFFERENCES)
+}
+
+/// The shrunk inputs that load, written as a vector file through `sink`.
+fn emit_vectors(
+    sweep: &Sweep,
+    results: &Results,
+    project: &crate::project::Project,
+    path: &Path,
+    mut sink: Sink,
+) -> Result<(), CliError> {
+    let emitted = emit::emit(sweep, results, &project.corpus);
+    for why in &emitted.skipped {
+        console::note(&format!("not written as a vector: {why}"));
+    }
+    let cases = loadable(path, &emitted, &project.profiles);
+    if cases.is_empty() {
+        // Dropped unfinished: a staged file is removed and the target left as it was.
+        drop(sink);
         console::status(&format!(
-            "error: the built-in models answer {} unlike their rules as the sweep asked every \
-             text; the counts above are not exact",
-            f.point
+            "nothing to write to {}: no shrunk input makes a vector",
+            path.display()
         ));
-        return Ok(EXIT_DIFFERENCES);
+        return Ok(());
     }
-    if let (Some(path), Some(mut sink)) = (&args.emit, emit_sink) {
-        let emitted = emit::emit(&sweep, &results, &project.corpus);
-        for why in &emitted.skipped {
-            console::note(&format!("not written as a vector: {why}"));
-        }
-        let cases = loadable(path, &emitted, &project.profiles);
-        if cases.is_empty() {
-            // Dropped unfinished: a staged file is removed and the target left as it was.
-            drop(sink);
-            console::status(&format!(
-                "nothing to write to {}: no shrunk input makes a vector",
-                path.display()
-            ));
-        } else {
-            let yaml = emitted.yaml(cases.iter().copied());
-            sink.write_all(yaml.as_bytes()).map_err(|e| sink.error(e))?;
-            sink.finish()?;
-            console::status(&format!(
-                "wrote {} vector(s) to {}",
-                cases.len(),
-                path.display()
-            ));
-        }
-    }
-    Ok(if results.interrupted {
-        // As `run`: an interruption, whatever was found before it.
-        EXIT_INTERRUPTED
-    } else if results.differs() || !results.faulted().is_empty() {
-        EXIT_DIFFERENCES
-    } else {
-        EXIT_OK
-    })
+    let yaml = emitted.yaml(cases.iter().copied());
+    sink.write_all(yaml.as_bytes()).map_err(|e| sink.error(e))?;
+    sink.finish()?;
+    console::status(&format!(
+        "wrote {} vector(s) to {}",
+        cases.len(),
+        path.display()
+    ));
+    Ok(())
 }
 
 /// 128 + SIGINT, as a shell reports a command Ctrl-C ended.
 const EXIT_INTERRUPTED: u8 = 130;
-
-/// The most random texts a class check asks: the whole 4-byte space.
-const MAX_CLASS_CHECK: u64 = 1 << 32;
-
-fn text_generator(args: &SweepArgs) -> Result<Generator, CliError> {
-    let alphabet = match &args.alphabet {
-        Some(list) => alphabet(list)?,
-        None => BOUNDARIES.to_vec(),
-    };
-    Ok(Generator::Text {
-        alphabet,
-        max_len: args.length.unwrap_or(4),
-    })
-}
 
 /// `20H,0,9,a` -> bytes.
 pub(super) fn alphabet(list: &str) -> Result<Vec<u8>, CliError> {

@@ -4,7 +4,6 @@
 use std::fmt::Write;
 
 use anstyle::{AnsiColor, Style};
-use similar::{ChangeTag, TextDiff};
 
 use super::sanitize::terminal;
 use crate::judge::{Difference, Mismatch, Verdict, WordRow};
@@ -196,11 +195,13 @@ pub fn render(trial: &Trial, verdict: &Verdict, palette: Palette) -> String {
     );
     // A cite, a note or a backend's output may hold escape sequences: none reaches a terminal.
     out.push_str(&terminal(&describe_setting(trial)));
-    render_body(&mut out, verdict, palette);
+    // A codec reads no memory: its one answer has no fill to name.
+    let fills = !matches!(trial.check, Check::Codec { .. });
+    render_body(&mut out, verdict, palette, fills);
     out
 }
 
-fn render_body(out: &mut String, verdict: &Verdict, palette: Palette) {
+fn render_body(out: &mut String, verdict: &Verdict, palette: Palette, fills: bool) {
     match verdict {
         Verdict::Conforms => {}
         Verdict::KnownDifference { entry, difference } => {
@@ -210,7 +211,7 @@ fn render_body(out: &mut String, verdict: &Verdict, palette: Palette) {
                 terminal(&entry.location.to_string()),
                 terminal(&entry.reason)
             );
-            render_body(out, difference, palette);
+            render_body(out, difference, palette, fills);
         }
         Verdict::StaleEntry { entry } => {
             let _ = writeln!(
@@ -268,6 +269,9 @@ fn render_body(out: &mut String, verdict: &Verdict, palette: Palette) {
                 "  the backend claims this trial but answered unsupported: {}",
                 terminal(reason)
             );
+        }
+        Verdict::Fault { fault, .. } if !fills => {
+            let _ = writeln!(out, "  {}", terminal(&fault.to_string()));
         }
         Verdict::Fault { fill, fault } => {
             let _ = writeln!(
@@ -340,29 +344,53 @@ fn render_mismatch(m: &Mismatch, palette: Palette) -> String {
     out
 }
 
-/// A unified diff of expected against actual words, one word per line.
+/// Lines of a memory diff shown at most: a mismatch over thousands of words shows its first and
+/// last lines and says how many it leaves out.
+const MAX_DIFF_LINES: usize = 64;
+
+/// A unified diff of expected against actual words, one word per line. The rows are aligned by
+/// device already, so it is made in one pass (no line-matching diff, whose time grows with the
+/// square of a long listing): each run of differing words shows its expected lines, then its
+/// actual ones, as a unified diff would.
 pub(crate) fn memory_diff(rows: &[WordRow], palette: Palette) -> String {
-    let expected: String = rows
-        .iter()
-        .map(|r| word_line(&r.device, r.expected, r.unit) + "\n")
-        .collect();
-    let actual: String = rows
-        .iter()
-        .map(|r| word_line(&r.device, r.actual, r.unit) + "\n")
-        .collect();
-    let diff = TextDiff::from_lines(&expected, &actual);
+    let mut lines: Vec<String> = Vec::new();
+    let mut run: Vec<&WordRow> = Vec::new();
+    let flush = |run: &mut Vec<&WordRow>, lines: &mut Vec<String>| {
+        for r in run.iter() {
+            let line = word_line(&r.device, r.expected, r.unit);
+            lines.push(format!("    {0}-{line}{0:#}", palette.removed));
+        }
+        for r in run.drain(..) {
+            let line = word_line(&r.device, r.actual, r.unit);
+            lines.push(format!("    {0}+{line}{0:#}", palette.added));
+        }
+    };
+    for row in rows {
+        if row.expected == row.actual {
+            flush(&mut run, &mut lines);
+            let line = word_line(&row.device, row.expected, row.unit);
+            lines.push(format!("    {0} {line}{0:#}", Style::new()));
+        } else {
+            run.push(row);
+        }
+    }
+    flush(&mut run, &mut lines);
     let mut out = String::new();
-    for change in diff.iter_all_changes() {
-        let (sign, style) = match change.tag() {
-            ChangeTag::Delete => ("-", palette.removed),
-            ChangeTag::Insert => ("+", palette.added),
-            ChangeTag::Equal => (" ", Style::new()),
-        };
-        let _ = writeln!(
-            out,
-            "    {style}{sign}{}{style:#}",
-            change.value().trim_end_matches('\n')
-        );
+    let shown = MAX_DIFF_LINES / 2;
+    for (i, line) in lines.iter().enumerate() {
+        if lines.len() > MAX_DIFF_LINES && i >= shown && i < lines.len() - shown {
+            if i == shown {
+                let _ = writeln!(
+                    out,
+                    "    ... {} more lines of {} words ({} differ) ...",
+                    lines.len() - 2 * shown,
+                    rows.len(),
+                    rows.iter().filter(|r| r.expected != r.actual).count()
+                );
+            }
+            continue;
+        }
+        let _ = writeln!(out, "{line}");
     }
     out
 }
@@ -384,6 +412,49 @@ mod tests {
     use crate::judge::words::RegisterRow;
     use crate::memory::Fill;
     use crate::model::ErrorSignal;
+
+    fn rows(values: &[(u32, u32)]) -> Vec<WordRow> {
+        values
+            .iter()
+            .enumerate()
+            .map(|(i, &(expected, actual))| WordRow {
+                device: format!("D{}", 200 + i).parse().expect("device"),
+                unit: crate::memory::Unit::Word,
+                before: 0,
+                expected,
+                actual,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_run_of_differing_words_shows_its_expected_lines_then_its_actual_ones() {
+        let diff = memory_diff(&rows(&[(1, 1), (2, 3), (4, 5), (6, 6)]), Palette::plain());
+        let signs: Vec<char> = diff
+            .lines()
+            .map(|l| l.chars().nth(4).unwrap_or('?'))
+            .collect();
+        assert_eq!(signs, [' ', '-', '-', '+', '+', ' '], "{diff}");
+        assert!(
+            diff.lines().nth(1).is_some_and(|l| l.contains("D201")),
+            "{diff}"
+        );
+        assert!(
+            diff.lines().nth(3).is_some_and(|l| l.contains("D201")),
+            "{diff}"
+        );
+    }
+
+    #[test]
+    fn a_mismatch_over_thousands_of_words_is_listed_bounded() {
+        let values: Vec<(u32, u32)> = (0..32_767).map(|i| (i % 7, (i + 1) % 7)).collect();
+        let diff = memory_diff(&rows(&values), Palette::plain());
+        assert_eq!(diff.lines().count(), MAX_DIFF_LINES + 1, "{diff}");
+        assert!(
+            diff.contains("more lines of 32767 words (32767 differ)"),
+            "{diff}"
+        );
+    }
 
     #[test]
     fn a_register_that_does_not_hold_the_code_is_shown_alone() {

@@ -36,6 +36,7 @@ pub(crate) mod input;
 pub(crate) mod known;
 pub(crate) mod merge;
 pub mod render;
+pub(crate) mod request;
 pub(crate) mod rng;
 pub(crate) mod shrink;
 pub(crate) mod target;
@@ -108,7 +109,7 @@ impl Settings {
             seed,
             digits: Digits::Natural,
             shard: (1, 1),
-            jobs: std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get),
+            jobs: crate::execute::default_jobs(),
             max_classes: 64,
             shrink: 4,
             direct: true,
@@ -246,6 +247,19 @@ impl std::fmt::Display for SweepError {
 impl std::error::Error for SweepError {}
 
 impl Sweep {
+    /// Makes the results whole: the groups of a judged column that a known-differences entry
+    /// covers set apart, and the hints that explain the rest. `true` when the entries could
+    /// cover nothing (a value-to-hex sweep's inputs have no input class).
+    pub(crate) fn conclude(
+        &self,
+        results: &mut Results,
+        known: &std::collections::BTreeMap<String, crate::model::known::KnownDifferences>,
+    ) -> bool {
+        let stale = known::apply(results, known);
+        results.hints = explain::hints(self, results);
+        stale
+    }
+
     /// Sets up a sweep of `settings.target` on `backends`. The reference model of each profile
     /// involved should be among them: it is the oracle.
     pub fn new(
