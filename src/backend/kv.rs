@@ -5,9 +5,10 @@
 //! runs each as `LDA s` / `ASC` (or `RASC`) / `STA d`. ASC turns the register's low-order 8 bits
 //! into two characters, the high digit's in the high byte (`A5` -> 4135H), and ignores its
 //! high-order 8 bits. RASC reads the register's two bytes, the high one first, as two hex
-//! digits; a byte outside 30H-39H and 41H-46H disables the conversion and turns on the special utility relay 2012 (CR2012), and
-//! then `STA` stores the register as it was loaded. Which byte holds the first character is
-//! read from the manual's figure, whose labels disagree (open question `kv-asc-byte-order`).
+//! digits; a byte outside 30H-39H and 41H-46H disables the conversion and turns on the
+//! special utility relay 2012 (CR2012), and then `STA` stores the register as it was loaded.
+//! Which byte holds the first character is read from the manual's figure, whose labels
+//! disagree (open question `kv-asc-byte-order`).
 
 use super::reference::{constant_word, Model, Stop};
 use super::{Outcome, Request, Unsupported};
