@@ -414,3 +414,90 @@ fn the_quote_check_catches_a_manual_claim_or_case_without_a_quote() {
         ["other-anchor", "other-page", "other-manual", "nothing"]
     );
 }
+
+/// The quotes a `manual` cite carries: a `"..."` of four words or more that opens the cite or
+/// follows `: `, `(`, `; ` or `, `, and ends before a space or punctuation.
+fn cite_quotes(cite: &str) -> Vec<String> {
+    let cite: String = cite.split_whitespace().collect::<Vec<_>>().join(" ");
+    let mut out = Vec::new();
+    let mut at = 0;
+    while let Some(open) = cite[at..].find('"').map(|i| at + i) {
+        let Some(close) = cite[open + 1..].find('"').map(|i| open + 1 + i) else {
+            break;
+        };
+        let opens = cite[..open].is_empty()
+            || [": ", "(", "; ", ", "]
+                .iter()
+                .any(|p| cite[..open].ends_with(p));
+        let ends = cite[close + 1..]
+            .chars()
+            .next()
+            .is_none_or(|c| matches!(c, ' ' | ',' | ';' | ')' | '.' | ':'));
+        let quote = &cite[open + 1..close];
+        if opens && ends && quote.len() >= 20 && quote.split(' ').count() >= 4 {
+            out.push(quote.to_string());
+            at = close + 1;
+        } else {
+            at = open + 1;
+        }
+    }
+    out
+}
+
+/// Every quote a `manual` vector rests on is carried in docs/semantics.md, the project's own
+/// evidence, so that a reader can check it without the vector files.
+#[test]
+fn every_quote_a_manual_vector_uses_is_in_the_semantics() {
+    let semantics = std::fs::read_to_string(root().join("docs/semantics.md")).expect("semantics");
+    let semantics = semantics
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ")
+        .replace(['“', '”'], "\"");
+    let mut vector_files = Vec::new();
+    files(&root().join("vectors"), &["yaml"], &mut vector_files);
+    let mut missing = Vec::new();
+    let mut checked = 0;
+    for file in vector_files {
+        let text = std::fs::read_to_string(&file).expect("vector file");
+        let doc: serde_yaml::Value = serde_yaml::from_str(&text).expect("yaml");
+        let Some(cases) = doc.get("cases").and_then(|c| c.as_sequence()) else {
+            continue;
+        };
+        for case in cases {
+            if case.get("basis").and_then(|b| b.as_str()) != Some("manual") {
+                continue;
+            }
+            let cite = case
+                .get("cite")
+                .and_then(|c| c.as_str())
+                .unwrap_or_default();
+            for quote in cite_quotes(&cite.replace(['“', '”'], "\"")) {
+                checked += 1;
+                if !semantics.contains(&quote) {
+                    let id = case.get("id").and_then(|i| i.as_str()).unwrap_or("?");
+                    missing.push(format!("{} {id}: \"{quote}\"", file.display()));
+                }
+            }
+        }
+    }
+    assert!(
+        checked > 100,
+        "only {checked} quotes found: the extraction broke"
+    );
+    assert!(
+        missing.is_empty(),
+        "not in docs/semantics.md:\n{}",
+        missing.join("\n")
+    );
+}
+
+#[test]
+fn quotes_are_taken_where_a_cite_quotes() {
+    assert_eq!(
+        cite_quotes(
+            "p.478: \"The quick brown fox jumps\" and \"AB\", (\"one two three four five\")"
+        ),
+        ["The quick brown fox jumps", "one two three four five"]
+    );
+}

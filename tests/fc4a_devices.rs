@@ -150,7 +150,7 @@ fn probe_profile(devices: &str, more: &str) -> (bool, Vec<String>) {
 id: probe
 name: probe
 short: probe
-manuals: {{m: {{title: t}}}}
+manuals: {{m: {{title: t, covers: [v]}}}}
 errors: {{signal: flag, flag: M8004}}
 devices:
 {devices}

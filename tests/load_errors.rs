@@ -622,7 +622,7 @@ fn a_structured_text_form_is_checked_against_its_instruction() {
     for (form, message) in [
         (
             r#"  ASCI: {form: "ASCI(EN,s,n,d)", basis: manual, source: &asci-quoted "fx5-instructions"#,
-            "fx5.yaml:107: structured_text.ASCI.form: `ASCI(EN,s,n,d)`: a form is written",
+            "fx5.yaml:109: structured_text.ASCI.form: `ASCI(EN,s,n,d)`: a form is written",
         ),
         (
             r#"  ASCI: {form: "ENO:=ASCI(s,n,d,EN);", basis: manual, source: &asci-quoted "fx5-instructions"#,
@@ -689,4 +689,69 @@ fn a_manual_case_runs_only_on_the_variants_its_manual_covers() {
     let unknown = marked.replacen("covers: [s7-1200]", "covers: [s7-1300]", 1);
     let e = load_profile_text("siemens-s7-1200.yaml", &unknown).expect_err("no such variant");
     assert!(e.contains("manuals.s7-1200-2011.covers[0]"), "{e}");
+    // A manual that does not say what it covers is refused: no manual covers every variant by
+    // default.
+    let shipped = vendor_profile("siemens-s7-1200.yaml");
+    let unsaid = shipped.replacen(
+        "    covers: [s7-1200]\n  s7-1200-2012:",
+        "  s7-1200-2012:",
+        1,
+    );
+    assert_ne!(unsaid, shipped, "the S7 profile changed");
+    let e = load_profile_text("siemens-s7-1200.yaml", &unsaid).expect_err("covers unsaid");
+    assert!(
+        e.contains("manuals.s7-1200-2011") && e.contains("covers"),
+        "{e}"
+    );
+}
+
+/// Every manual a cite names counts, with the file's source when the cite opens with a quote:
+/// two manuals of two CPUs together cover both; a manual of other CPUs (`covers: []`) none.
+#[test]
+fn every_manual_a_cite_names_counts_toward_its_variants() {
+    let s7 = vendor_profile("siemens-s7-1200.yaml");
+    let edition_2016 = "section 9.2.3.3\"\n    language: en\n    covers: [s7-1200]";
+    let two = s7.replacen(
+        edition_2016,
+        &edition_2016.replace("s7-1200]", "s7-1500]"),
+        1,
+    );
+    assert_ne!(two, s7, "the S7 profile changed");
+    let profiles = load_profile_text("siemens-s7-1200.yaml", &two).expect("profile loads");
+    let case = |cite: &str| {
+        format!(
+            "instructions: [ATH]\nprofiles: [siemens-s7-1200]\nsource: {{manual: s7-1200-2011, page: 253}}\n\
+             cases:\n  - id: example\n    basis: manual\n    cite: \"{cite}\"\n\
+             \x20   operands: {{IN: DB1.DBB0, N: 2, OUT: DB2.DBB0}}\n    before:\n      DB1.DBB0: {{ascii: \"01\"}}\n\
+             \x20   expect:\n      after: {{DB2.DBB0: 01H}}\n      error: none\n"
+        )
+    };
+    let load_with = |text: &str| {
+        let mut builder = CorpusBuilder::default();
+        builder.add_file(Path::new("s7.yaml"), text, &profiles);
+        builder
+            .finish()
+            .map(|c| c.cases.len())
+            .map_err(|e| e.0.iter().map(|e| chain(e)).collect::<Vec<_>>().join("\n"))
+    };
+    // The source (s7-1200-2011) and the 2016 edition named later: both variants covered.
+    assert_eq!(
+        load_with(&case("the example row; s7-1200-2016 p.359")),
+        Ok(1)
+    );
+    // Opening with the 2011 edition alone: the S7-1500 is not covered.
+    let e = load_with(&case("s7-1200-2011 p.253: the example row")).expect_err("s7-1500");
+    assert!(e.contains("also runs on s7-1500"), "{e}");
+    // A manual of other CPUs covers none.
+    let none = s7.replacen("    covers: [s7-1200]\n", "    covers: []\n", 1);
+    let profiles_none = load_profile_text("siemens-s7-1200.yaml", &none).expect("loads");
+    let mut builder = CorpusBuilder::default();
+    builder.add_file(
+        Path::new("s7.yaml"),
+        &case("s7-1200-2011 p.253: the example row"),
+        &profiles_none,
+    );
+    let e = builder.finish().map(|_| ()).expect_err("covers none");
+    let e = e.0.iter().map(|e| chain(e)).collect::<Vec<_>>().join("\n");
+    assert!(e.contains("which covers no variant of this profile"), "{e}");
 }

@@ -285,9 +285,11 @@ fn check_source(key: &str, source: &SourceSpec, profiles: &[&Profile], cx: &mut 
     }
 }
 
-/// A `manual` expectation holds for the variants its manual covers: the manual the cite starts
-/// with (`s7-1200-2011 p.253: ...`), else the source's, must cover every variant the case runs
-/// on. What one CPU's page states is only an inference for another CPU.
+/// A `manual` expectation holds for the variants its manuals cover: every manual of the
+/// profile the cite names (`s7-1200-2011 p.253: ...; s7-1200-2014 p.305`), and the file's
+/// source when the cite does not open with a manual; together they must cover every variant
+/// the case runs on. What one CPU's page states is
+/// only an inference for another CPU, and a manual of other CPUs (`covers: []`) covers none.
 fn check_manual_covers(
     key: &str,
     cite: Option<&str>,
@@ -296,31 +298,52 @@ fn check_manual_covers(
     h: &Header<'_>,
     cx: &mut FileContext<'_>,
 ) {
-    let first = cite
-        .and_then(|c| c.split_whitespace().next())
-        .map(|w| w.trim_end_matches([',', ':', ';']));
+    let words: Vec<&str> = cite
+        .unwrap_or_default()
+        .split(|c: char| c.is_whitespace() || matches!(c, ',' | ':' | ';' | '(' | ')'))
+        .filter(|w| !w.is_empty())
+        .collect();
     for p in &h.profiles {
-        let id = first
+        let mut named: Vec<&str> = (words.iter().copied())
             .filter(|w| p.manuals.contains_key(*w))
-            .unwrap_or(&source.manual);
-        let Some(manual) = p.manuals.get(id).filter(|m| !m.covers.is_empty()) else {
-            continue;
+            .collect();
+        // A cite that does not open with a manual quotes the file's source.
+        if words.first().is_none_or(|w| !p.manuals.contains_key(*w)) {
+            named.push(&source.manual);
+        }
+        named.sort_unstable();
+        named.dedup();
+        let covered = |variant: &str| {
+            named.iter().any(|id| {
+                p.manuals
+                    .get(*id)
+                    .is_some_and(|m| m.covers.iter().any(|c| c == variant))
+            })
         };
         let uncovered: Vec<&str> = (p.variants.iter())
             .map(|v| v.id.as_str())
             .filter(|v| variants.is_none_or(|list| list.contains(*v)))
-            .filter(|v| !manual.covers.iter().any(|c| c == v))
+            .filter(|v| !covered(v))
             .collect();
         if !uncovered.is_empty() {
+            let covering: BTreeSet<&str> = (named.iter())
+                .filter_map(|id| p.manuals.get(*id))
+                .flat_map(|m| m.covers.iter().map(String::as_str))
+                .collect();
+            let covering: Vec<&str> = covering.into_iter().collect();
             cx.error(
                 format!("{key}.basis"),
                 LoadErrorKind::Invalid(format!(
-                    "`basis: manual` rests on {id}, the manual of {}, and the case also runs \
-                     on {}: restrict it with `variants: [{}]` and give the other variants an \
-                     `inferred` case of their own",
-                    manual.covers.join(", "),
+                    "`basis: manual` rests on {}, {}, and the case also runs on {}: restrict it \
+                     with `variants: [{}]` and give the other variants an `inferred` case of \
+                     their own",
+                    named.join(", "),
+                    match covering.is_empty() {
+                        true => "which covers no variant of this profile".to_string(),
+                        false => format!("the manual of {}", covering.join(", ")),
+                    },
                     uncovered.join(", "),
-                    manual.covers.join(", ")
+                    covering.join(", ")
                 )),
             );
         }

@@ -169,10 +169,9 @@ pub struct Manual {
     pub number: Option<String>,
     #[serde(default)]
     pub language: Option<String>,
-    /// The variants whose own manual this is (every variant when left out): a `manual` case
-    /// citing it may run only on these, since what one CPU's page states is an inference for
-    /// another CPU.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    /// The variants whose own manual this is, said for every manual (`[]`: a manual of other
+    /// CPUs, read for inferences only): a `manual` case citing it may run only on these, since
+    /// what one CPU's page states is an inference for another CPU.
     pub covers: Vec<String>,
 }
 
