@@ -46,12 +46,12 @@ pub mod backend {
         }
         pub mod sim {
             pub use crate::backend::modbus::sim::{
-                IdecSim, IdecSimSettings, IdecSimulator, Served,
+                ModbusSim, ModbusSimSettings, ModbusSimulator, Served,
             };
         }
     }
     pub mod slmp {
-        pub use crate::backend::slmp::{fault_of, limits, SlmpSettings, ADDRESSING};
+        pub use crate::backend::slmp::{fault_of, limits, SlmpBench, ADDRESSING};
         pub mod client {
             pub use crate::backend::slmp::client::{Client, ClientError, ClientSettings, Code};
         }
@@ -60,7 +60,7 @@ pub mod backend {
         }
         pub mod sim {
             pub use crate::backend::slmp::sim::{
-                FaultAction, FaultRule, RemoteProgram, SimSettings, Simulator,
+                FaultAction, FaultRule, RemoteProgram, SlmpSimSettings, SlmpSimulator,
             };
         }
     }

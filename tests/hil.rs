@@ -16,9 +16,9 @@ use plc_conformance::testing::backend::bench::manifest::Manifest;
 use plc_conformance::testing::backend::bench::BenchBackend;
 use plc_conformance::testing::backend::slmp::frame::{command, DeviceForm, FrameKind};
 use plc_conformance::testing::backend::slmp::sim::{
-    FaultAction, FaultRule, SimSettings, Simulator,
+    FaultAction, FaultRule, SlmpSimSettings, SlmpSimulator,
 };
-use plc_conformance::testing::backend::slmp::{SlmpSettings, ADDRESSING};
+use plc_conformance::testing::backend::slmp::{SlmpBench, ADDRESSING};
 use plc_conformance::testing::backend::Backend;
 use plc_conformance::testing::device::Device;
 use plc_conformance::testing::error_chain::chain;
@@ -57,21 +57,22 @@ fn simulator(
     manifest: &Manifest,
     variant: &str,
     faults: Vec<FaultRule>,
-) -> Simulator {
+) -> SlmpSimulator {
     let profile = project
         .profiles
         .get(&manifest.profile)
         .cloned()
         .expect("profile");
-    let mut settings = SimSettings::new(manifest.clone(), variant, type_name(&manifest.profile));
+    let mut settings =
+        SlmpSimSettings::new(manifest.clone(), variant, type_name(&manifest.profile));
     settings.faults = faults;
-    Simulator::start(settings, profile, reference(project, &manifest.profile))
+    SlmpSimulator::start(settings, profile, reference(project, &manifest.profile))
         .unwrap_or_else(|e| panic!("simulator: {e}"))
 }
 
-fn settings(manifest: &Manifest, variant: &str, sim: &Simulator) -> SlmpSettings {
+fn settings(manifest: &Manifest, variant: &str, sim: &SlmpSimulator) -> SlmpBench {
     let sandbox = parse_ranges(&manifest.writes.join(","), &ADDRESSING).expect("writes");
-    let mut s = SlmpSettings::new(
+    let mut s = SlmpBench::new(
         "live",
         sim.address().to_string(),
         manifest.clone(),
@@ -86,7 +87,7 @@ fn settings(manifest: &Manifest, variant: &str, sim: &Simulator) -> SlmpSettings
     s
 }
 
-fn live(project: &mut Session, settings: SlmpSettings) -> Arc<dyn Backend> {
+fn live(project: &mut Session, settings: SlmpBench) -> Arc<dyn Backend> {
     project
         .add(BackendSource::Bench(Box::new(settings.erased())), true)
         .unwrap_or_else(|e| panic!("interlocks: {}", chain(&e)))[0]
@@ -197,9 +198,10 @@ fn an_fx5_that_leaves_sd8067_alone_differs_on_every_error() {
         .get("mitsubishi-fx5")
         .cloned()
         .expect("fx5");
-    let mut sim_settings = SimSettings::new(manifest.clone(), "fx5u", type_name("mitsubishi-fx5"));
+    let mut sim_settings =
+        SlmpSimSettings::new(manifest.clone(), "fx5u", type_name("mitsubishi-fx5"));
     sim_settings.untouched_registers = vec!["SD8067".parse().expect("SD8067")];
-    let sim = Simulator::start(sim_settings, profile, reference(&project, "mitsubishi-fx5"))
+    let sim = SlmpSimulator::start(sim_settings, profile, reference(&project, "mitsubishi-fx5"))
         .expect("simulator");
     let backend = live(&mut project, settings(&manifest, "fx5u", &sim));
     let trials: Vec<Trial> = project
@@ -236,25 +238,25 @@ fn iqr_manifest() -> &'static Manifest {
 }
 
 /// A simulated iQ-R CPU (4E frames, long device form) set up by `change`.
-fn iqr_sim(project: &Session, change: impl FnOnce(&mut SimSettings)) -> Simulator {
+fn iqr_sim(project: &Session, change: impl FnOnce(&mut SlmpSimSettings)) -> SlmpSimulator {
     let m = iqr_manifest();
     let profile = project.profiles.get(&m.profile).cloned().expect("profile");
-    let mut s = SimSettings::new(m.clone(), "rcpu", "R04CPU");
+    let mut s = SlmpSimSettings::new(m.clone(), "rcpu", "R04CPU");
     change(&mut s);
-    Simulator::start(s, profile, reference(project, &m.profile)).expect("simulator")
+    SlmpSimulator::start(s, profile, reference(project, &m.profile)).expect("simulator")
 }
 
 fn iqr_backend(
     project: &Session,
-    sim: &Simulator,
-    change: impl FnOnce(&mut SlmpSettings),
+    sim: &SlmpSimulator,
+    change: impl FnOnce(&mut SlmpBench),
 ) -> Arc<BenchBackend> {
     let mut s = settings(iqr_manifest(), "rcpu", sim);
     change(&mut s);
     Arc::new(BenchBackend::new(s, &project.profiles).expect("backend"))
 }
 
-fn writes_sent(sim: &Simulator) -> usize {
+fn writes_sent(sim: &SlmpSimulator) -> usize {
     sim.audit()
         .commands
         .get(&command::WRITE)
@@ -372,7 +374,7 @@ fn no_connection_is_unreachable() {
         let l = TcpListener::bind("127.0.0.1:0").expect("bind");
         l.local_addr().expect("addr").to_string()
     };
-    let mut s = SlmpSettings::new(
+    let mut s = SlmpBench::new(
         "live",
         address,
         iqr_manifest().clone(),
@@ -393,12 +395,12 @@ fn no_connection_is_unreachable() {
 /// Nothing is written before the type name, the operating status and the program's signature
 /// match: each interlock refuses on its own.
 #[rstest::rstest]
-#[case::another_cpu(|s: &mut SimSettings| s.link.type_name = "R08CPU".into(), "`confirm` says `R04CPU`")]
-#[case::cpu_in_stop(|s: &mut SimSettings| s.run = false, "STOP")]
-#[case::no_program(|s: &mut SimSettings| s.program = false, "no test program signature")]
-#[case::another_program(|s: &mut SimSettings| { s.manifest = manifest_for("habin"); }, "another one than the manifest's")]
+#[case::another_cpu(|s: &mut SlmpSimSettings| s.link.type_name = "R08CPU".into(), "`confirm` says `R04CPU`")]
+#[case::cpu_in_stop(|s: &mut SlmpSimSettings| s.run = false, "STOP")]
+#[case::no_program(|s: &mut SlmpSimSettings| s.program = false, "no test program signature")]
+#[case::another_program(|s: &mut SlmpSimSettings| { s.manifest = manifest_for("habin"); }, "another one than the manifest's")]
 fn an_interlock_refuses_before_any_write(
-    #[case] change: fn(&mut SimSettings),
+    #[case] change: fn(&mut SlmpSimSettings),
     #[case] expected: &str,
 ) {
     let project = session();
@@ -433,7 +435,7 @@ fn a_write_outside_the_sandbox_is_refused_before_any_byte_is_sent() {
     let project = session();
     let listener = TcpListener::bind("127.0.0.1:0").expect("bind");
     listener.set_nonblocking(true).expect("nonblocking");
-    let s = SlmpSettings::new(
+    let s = SlmpBench::new(
         "live",
         listener.local_addr().expect("addr").to_string(),
         iqr_manifest().clone(),
@@ -468,7 +470,7 @@ fn a_write_outside_the_sandbox_is_refused_before_any_byte_is_sent() {
 
 /// The FX5U program of the whole corpus in a simulated CPU, and a live backend past its
 /// interlocks.
-fn fx5u_live(project: &Session) -> (Simulator, Arc<BenchBackend>) {
+fn fx5u_live(project: &Session) -> (SlmpSimulator, Arc<BenchBackend>) {
     let m = manifest(project, "mitsubishi-fx5");
     let sim = simulator(project, &m, "fx5u", vec![]);
     let backend = Arc::new(
@@ -586,7 +588,7 @@ fn a_mailbox_in_link_registers_is_numbered_in_hexadecimal() {
 #[test]
 fn a_sandbox_over_the_mailbox_is_refused() {
     let project = session();
-    let s = SlmpSettings::new(
+    let s = SlmpBench::new(
         "live",
         "127.0.0.1:1",
         iqr_manifest().clone(),
@@ -608,7 +610,7 @@ fn a_dry_run_opens_no_socket() {
     let listener = TcpListener::bind("127.0.0.1:0").expect("bind");
     listener.set_nonblocking(true).expect("nonblocking");
     let m = iqr_manifest();
-    let s = SlmpSettings::new(
+    let s = SlmpBench::new(
         "live",
         listener.local_addr().expect("addr").to_string(),
         m.clone(),
@@ -977,8 +979,8 @@ fn record_through_the_simulated_cpu_writes_nothing() {
 /// The trials of a rung, and the backend on a simulated CPU changed by `change`.
 fn rung_trials(
     project: &Session,
-    change: impl FnOnce(&mut SimSettings, u16),
-) -> (Simulator, Arc<BenchBackend>, Trial, u16) {
+    change: impl FnOnce(&mut SlmpSimSettings, u16),
+) -> (SlmpSimulator, Arc<BenchBackend>, Trial, u16) {
     let probe = iqr_sim(project, |_| {});
     let probe_backend = iqr_backend(project, &probe, |_| {});
     let trial = first_trial(project, &probe_backend, "HABIN");
@@ -1294,7 +1296,7 @@ fn special_registers_are_written_only_when_named() {
         )
     };
     let parsed = |sandbox: &str| {
-        SlmpSettings::parse(&spec(sandbox), std::path::Path::new("."))
+        SlmpBench::parse(&spec(sandbox), std::path::Path::new("."))
             .expect("parses")
             .expect("a live backend")
     };
@@ -1325,7 +1327,7 @@ fn special_registers_are_written_only_when_named() {
     let backend = Arc::new(BenchBackend::new(parsed(&named), &project.profiles).expect("backend"));
     let found = dry_run(&project, &backend);
     assert_eq!(found.refused, Vec::<(String, String)>::new());
-    let bits = SlmpSettings::parse(&spec("manifest,Y0-Y17"), std::path::Path::new("."))
+    let bits = SlmpBench::parse(&spec("manifest,Y0-Y17"), std::path::Path::new("."))
         .expect("parses")
         .expect("a live backend");
     let e = chain(

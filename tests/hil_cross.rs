@@ -18,8 +18,8 @@ use plc_conformance::testing::backend::bench::BenchBackend;
 use plc_conformance::testing::backend::slmp::client::{Client, ClientError, ClientSettings, Code};
 use plc_conformance::testing::backend::slmp::frame::{DeviceForm, FrameKind};
 use plc_conformance::testing::backend::slmp::limits::{self, Family};
-use plc_conformance::testing::backend::slmp::sim::{RemoteProgram, SimSettings, Simulator};
-use plc_conformance::testing::backend::slmp::{fault_of, SlmpSettings, ADDRESSING};
+use plc_conformance::testing::backend::slmp::sim::{RemoteProgram, SlmpSimSettings, SlmpSimulator};
+use plc_conformance::testing::backend::slmp::{fault_of, SlmpBench, ADDRESSING};
 use plc_conformance::testing::backend::Backend;
 use plc_conformance::testing::device::Device;
 use plc_conformance::testing::hil::{generate, GenerateOptions};
@@ -218,9 +218,9 @@ fn pymcprotocol_talks_to_the_simulated_cpu() {
         .cloned()
         .expect("profile");
     for (plctype, long_form) in [("iQ-R", true), ("Q", false)] {
-        let mut s = SimSettings::new(manifest.clone(), "rcpu", "R04CPU");
+        let mut s = SlmpSimSettings::new(manifest.clone(), "rcpu", "R04CPU");
         s.link.long_form = long_form;
-        let sim = Simulator::start(s, profile.clone(), reference(&project, "mitsubishi-iqr"))
+        let sim = SlmpSimulator::start(s, profile.clone(), reference(&project, "mitsubishi-iqr"))
             .expect("simulator");
         let script = format!(
             "import sys\n\
@@ -441,7 +441,7 @@ fn a_live_run_against_aslmps_simulated_cpu(
     };
     let model = reference(&project, profile);
     let program = RemoteProgram::start(
-        SimSettings::new(manifest.clone(), variant, type_name),
+        SlmpSimSettings::new(manifest.clone(), variant, type_name),
         project.profiles.get(profile).cloned().expect("profile"),
         model.clone(),
         family_client(
@@ -482,7 +482,7 @@ fn a_live_run_against_aslmps_simulated_cpu(
     assert!(doctor.status.success(), "{shown}");
     assert!(shown.contains("ok    program signature"), "{shown}");
     let sandbox = fence::parse_ranges(&manifest.writes.join(","), &ADDRESSING).expect("writes");
-    let mut s = SlmpSettings::new(
+    let mut s = SlmpBench::new(
         "aslmp",
         server.address(entry),
         manifest.clone(),
@@ -543,9 +543,9 @@ fn plc_comm_slmp_talks_to_the_simulated_cpu() {
         .get("mitsubishi-fx5")
         .cloned()
         .expect("profile");
-    let s = SimSettings::new(manifest.clone(), "fx5u", "FX5U-32MT/DS");
+    let s = SlmpSimSettings::new(manifest.clone(), "fx5u", "FX5U-32MT/DS");
     let sim =
-        Simulator::start(s, profile, reference(&project, "mitsubishi-fx5")).expect("simulator");
+        SlmpSimulator::start(s, profile, reference(&project, "mitsubishi-fx5")).expect("simulator");
     let script = format!(
         "from slmp.client import SlmpClient\n\
          from slmp import SlmpTarget\n\

@@ -15,7 +15,7 @@ use plc_conformance::testing::backend::bench::fence::{parse_ranges, WordRange};
 use plc_conformance::testing::backend::bench::manifest::Manifest;
 use plc_conformance::testing::backend::bench::sim::{FaultAction, FaultRule};
 use plc_conformance::testing::backend::bench::BenchBackend;
-use plc_conformance::testing::backend::modbus::sim::{IdecSimSettings, IdecSimulator};
+use plc_conformance::testing::backend::modbus::sim::{ModbusSimSettings, ModbusSimulator};
 use plc_conformance::testing::backend::modbus::{Map, ModbusBench};
 use plc_conformance::testing::error_chain::chain;
 use plc_conformance::testing::hil::{dry_run, generate, GenerateOptions};
@@ -57,12 +57,12 @@ fn idec_manifest() -> &'static Manifest {
 }
 
 /// A simulated FC4A set up by `change`.
-fn idec_sim(project: &Session, change: impl FnOnce(&mut IdecSimSettings)) -> IdecSimulator {
+fn idec_sim(project: &Session, change: impl FnOnce(&mut ModbusSimSettings)) -> ModbusSimulator {
     let m = idec_manifest();
     let profile = project.profiles.get(&m.profile).cloned().expect("profile");
-    let mut s = IdecSimSettings::idec(m.clone(), VARIANT, TYPE_CODE);
+    let mut s = ModbusSimSettings::idec(m.clone(), VARIANT, TYPE_CODE);
     change(&mut s);
-    IdecSimulator::start(s, profile, reference(project, PROFILE)).expect("simulator")
+    ModbusSimulator::start(s, profile, reference(project, PROFILE)).expect("simulator")
 }
 
 /// The FC4A profile's Modbus map.
@@ -93,7 +93,7 @@ fn settings(address: String) -> ModbusBench {
 
 fn idec_backend(
     project: &Session,
-    sim: &IdecSimulator,
+    sim: &ModbusSimulator,
     change: impl FnOnce(&mut ModbusBench),
 ) -> Arc<BenchBackend> {
     let mut s = settings(sim.address().to_string());
@@ -101,7 +101,7 @@ fn idec_backend(
     Arc::new(BenchBackend::new(s, &project.profiles).expect("backend"))
 }
 
-fn writes_sent(sim: &IdecSimulator) -> usize {
+fn writes_sent(sim: &ModbusSimulator) -> usize {
     let commands = sim.audit().commands;
     [WRITE_SINGLE, WRITE_MULTIPLE]
         .iter()
@@ -250,11 +250,11 @@ fn no_connection_is_unreachable() {
 /// Nothing is written before the type code, the start control relay and the program's
 /// signature match: each interlock refuses on its own.
 #[rstest::rstest]
-#[case::another_cpu(|s: &mut IdecSimSettings| s.link.type_code = 3, "`confirm` says `6`")]
-#[case::cpu_in_stop(|s: &mut IdecSimSettings| s.run = false, "STOP (M8000 off)")]
-#[case::no_program(|s: &mut IdecSimSettings| s.program = false, "no test program signature")]
+#[case::another_cpu(|s: &mut ModbusSimSettings| s.link.type_code = 3, "`confirm` says `6`")]
+#[case::cpu_in_stop(|s: &mut ModbusSimSettings| s.run = false, "STOP (M8000 off)")]
+#[case::no_program(|s: &mut ModbusSimSettings| s.program = false, "no test program signature")]
 fn an_interlock_refuses_before_any_write(
-    #[case] change: fn(&mut IdecSimSettings),
+    #[case] change: fn(&mut ModbusSimSettings),
     #[case] expected: &str,
 ) {
     let project = session();

@@ -19,7 +19,7 @@ use plc_conformance::testing::backend::bench::{Failure, LinkError, LinkSettings}
 use plc_conformance::testing::backend::modbus::client::{
     ModbusClient, ModbusError, ModbusSettings,
 };
-use plc_conformance::testing::backend::modbus::sim::{IdecSimSettings, IdecSimulator};
+use plc_conformance::testing::backend::modbus::sim::{ModbusSimSettings, ModbusSimulator};
 use plc_conformance::testing::backend::modbus::{Map, ModbusLinkSettings};
 use plc_conformance::testing::device::Device;
 use plc_conformance::testing::hil::{generate, GenerateOptions};
@@ -204,8 +204,8 @@ fn pymodbus_reads_and_writes_the_simulated_idec_cpu() {
     let project = session();
     let m = idec_manifest();
     let profile = project.profiles.get(&m.profile).cloned().expect("profile");
-    let sim = IdecSimulator::start(
-        IdecSimSettings::idec(m.clone(), "d40k3", 6),
+    let sim = ModbusSimulator::start(
+        ModbusSimSettings::idec(m.clone(), "d40k3", 6),
         profile,
         reference(&project, "idec-fc4a"),
     )

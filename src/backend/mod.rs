@@ -459,7 +459,7 @@ pub(crate) fn bench_settings(
     base: &std::path::Path,
     profiles: &Profiles,
 ) -> Result<Option<bench::BenchSettings>, bench::error::LiveError> {
-    if let Some(s) = slmp::SlmpSettings::parse(text, base)? {
+    if let Some(s) = slmp::SlmpBench::parse(text, base)? {
         return Ok(Some(s.erased()));
     }
     Ok(modbus::ModbusBench::parse(text, base, profiles)?.map(bench::BenchSettings::erased))

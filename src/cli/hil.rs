@@ -13,10 +13,10 @@ use crate::backend::bench::doctor::doctor;
 use crate::backend::bench::manifest::Manifest;
 use crate::backend::bench::{fence, mailbox};
 use crate::backend::bench::{Addressing, BenchSettings};
-use crate::backend::modbus::sim::{IdecSimSettings, IdecSimulator};
+use crate::backend::modbus::sim::{ModbusSimSettings, ModbusSimulator};
 use crate::backend::slmp;
 use crate::backend::slmp::limits::Family;
-use crate::backend::slmp::sim::{self, FaultRule, SimSettings, Simulator};
+use crate::backend::slmp::sim::{self, FaultRule, SlmpSimSettings, SlmpSimulator};
 use crate::hil::{dry_run, generate, pulse_self_test, GenerateOptions};
 use crate::model::profile::LinkKind;
 use crate::session::Session;
@@ -364,22 +364,22 @@ fn start_simulator(
                     ))
                 })?,
             };
-            let mut settings = SimSettings::new(m, variant, type_name);
+            let mut settings = SlmpSimSettings::new(m, variant, type_name);
             settings.link.model_code = model_code;
             settings.port = *port;
             settings.scan = Duration::from_micros(*scan_us);
             settings.run = !*stop;
             settings.faults = faults;
-            let sim = Simulator::start(settings, profile, model)?;
+            let sim = SlmpSimulator::start(settings, profile, model)?;
             (sim.address(), Box::new(sim) as Box<dyn std::any::Any>)
         }
         LinkKind::ModbusTcp => {
-            let mut settings = IdecSimSettings::idec(m, variant, *type_code);
+            let mut settings = ModbusSimSettings::idec(m, variant, *type_code);
             settings.port = *port;
             settings.scan = Duration::from_micros(*scan_us);
             settings.run = !*stop;
             settings.faults = faults;
-            let sim = IdecSimulator::start(settings, profile, model)?;
+            let sim = ModbusSimulator::start(settings, profile, model)?;
             (sim.address(), Box::new(sim) as Box<dyn std::any::Any>)
         }
     })

@@ -208,14 +208,6 @@ impl Shape {
         }
     }
 
-    /// The digits a point of this instruction stands for.
-    pub fn digits_of(&self, point: &Point) -> u32 {
-        match self.count {
-            Some(_) => point.digits,
-            None => self.width.unwrap_or(4),
-        }
-    }
-
     /// The instruction input for a point.
     pub fn input(&self, point: &Point) -> Input {
         let mut operands = self.operands.clone();

@@ -39,11 +39,6 @@ impl LinkError {
         }
     }
 
-    /// The protocol's own error, for a caller (a test) that knows the link.
-    pub fn protocol_error(&self) -> &(dyn Error + Send + Sync + 'static) {
-        self.error.as_ref()
-    }
-
     /// The fault a case reports for this error.
     pub fn fault(&self) -> Fault {
         let text = self.to_string();

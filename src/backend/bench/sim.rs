@@ -322,11 +322,6 @@ impl<L: Send + Sync + 'static> Running<L> {
         self.program.lock().word(device).unwrap_or(0)
     }
 
-    /// Sets a word of device memory, as a program or an operator would (not audited).
-    pub fn poke(&self, device: &Device, value: u16) {
-        self.program.lock().set_word(device, value);
-    }
-
     /// Keeps the error flag on whatever the program does, as a CPU on which the program cannot
     /// reset it would.
     pub fn hold_error_flag(&self, held: bool) {

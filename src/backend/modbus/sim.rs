@@ -23,7 +23,7 @@ use crate::model::profile::Profile;
 
 /// What the Modbus server adds to the simulated CPU.
 #[derive(Debug, Clone)]
-pub struct IdecSim {
+pub struct ModbusSim {
     /// What the map's identity register (D8002) holds.
     pub type_code: u16,
 }
@@ -35,7 +35,7 @@ pub struct Served {
 }
 
 /// How the simulated IDEC CPU is set up.
-pub type IdecSimSettings = crate::backend::bench::sim::SimSettings<IdecSim>;
+pub type ModbusSimSettings = crate::backend::bench::sim::SimSettings<ModbusSim>;
 
 /// The function codes the server answers, which a fault rule may name.
 pub(crate) const FUNCTIONS: [u16; 4] = [
@@ -45,10 +45,10 @@ pub(crate) const FUNCTIONS: [u16; 4] = [
     frame::WRITE_MULTIPLE as u16,
 ];
 
-impl crate::backend::bench::sim::SimSettings<IdecSim> {
+impl crate::backend::bench::sim::SimSettings<ModbusSim> {
     /// A CPU that holds `type_code` in D8002.
     pub fn idec(manifest: Manifest, variant: impl Into<String>, type_code: u16) -> Self {
-        Self::with_link(manifest, variant, IdecSim { type_code })
+        Self::with_link(manifest, variant, ModbusSim { type_code })
     }
 }
 
@@ -67,15 +67,15 @@ fn show_state(settings: &SimSettings<Served>, cpu: &mut Cpu) {
 }
 
 /// A running simulated IDEC CPU; dropping it stops it.
-pub type IdecSimulator = Running<Served>;
+pub type ModbusSimulator = Running<Served>;
 
 impl Running<Served> {
     /// Starts the server and the scan thread.
     pub fn start(
-        settings: IdecSimSettings,
+        settings: ModbusSimSettings,
         profile: Arc<Profile>,
         model: Arc<dyn Backend>,
-    ) -> Result<IdecSimulator, LiveError> {
+    ) -> Result<ModbusSimulator, LiveError> {
         let map = Arc::new(Map::of(&profile)?);
         let type_code = settings.link.type_code;
         let identity = map.identity().clone();

@@ -210,7 +210,7 @@ impl LinkSettings for ClientSettings {
 }
 
 /// A bench over SLMP, while its link settings may still change.
-pub type SlmpSettings = BenchSettings<ClientSettings>;
+pub type SlmpBench = BenchSettings<ClientSettings>;
 
 /// The keys the SLMP link reads besides the bench's own.
 const LINK_KEYS: [&str; 4] = ["frame", "code", "form", "monitor"];
@@ -219,7 +219,7 @@ impl BenchSettings<ClientSettings> {
     /// Settings with the defaults of the manifest's family: FX5 CPUs get 3E frames, the
     /// Q-compatible device form (an FX5U refuses the long form) and the monitoring timer 0;
     /// others 4E, the long form and 2 s. The limits follow the code and the form
-    /// ([`SlmpSettings::fit_limits`]).
+    /// ([`SlmpBench::fit_limits`]).
     pub fn new(
         name: impl Into<String>,
         address: impl Into<String>,
@@ -253,12 +253,12 @@ impl BenchSettings<ClientSettings> {
     /// manifest's `writes`: `manifest,SD100-SD167` adds special registers), and optionally
     /// `variant`, `frame` (3e, 4e), `code` (binary, ascii), `form` (short, long), `timeout`
     /// (case seconds), `monitor` (monitoring timer, units of 250 ms), `max_faults`, `poll_ms`.
-    pub fn parse(text: &str, base: &Path) -> Result<Option<SlmpSettings>, LiveError> {
+    pub fn parse(text: &str, base: &Path) -> Result<Option<SlmpBench>, LiveError> {
         let Some(spec) = Spec::split(text, "slmp", &LINK_KEYS)? else {
             return Ok(None);
         };
         let (manifest, variant, confirm, sandbox, _) = spec.parts(base, |_| Ok(Slmp))?;
-        let mut s = SlmpSettings::new(spec.name, spec.address, manifest, variant, confirm, sandbox);
+        let mut s = SlmpBench::new(spec.name, spec.address, manifest, variant, confirm, sandbox);
         if let Some(f) = spec.get("frame") {
             s.link.frame = match f {
                 "3e" | "3E" => FrameKind::E3,

@@ -40,7 +40,7 @@ pub struct SlmpSim {
 }
 
 /// How the simulated MELSEC CPU is set up.
-pub type SimSettings = crate::backend::bench::sim::SimSettings<SlmpSim>;
+pub type SlmpSimSettings = crate::backend::bench::sim::SimSettings<SlmpSim>;
 
 /// The commands the server answers, which a fault rule may name.
 pub(crate) const COMMANDS: [u16; 4] = [
@@ -104,21 +104,21 @@ pub(crate) fn model_code(type_name: &str) -> Option<u16> {
 }
 
 /// SD203: 0 in the low four bits for RUN, 2 for STOP.
-fn show_state(_: &SimSettings, cpu: &mut Cpu) {
+fn show_state(_: &SlmpSimSettings, cpu: &mut Cpu) {
     let v = if cpu.running { 0x0000 } else { 0x0002 };
     cpu.set_word(&Device::new("SD", 203), v);
 }
 
 /// A running simulated MELSEC CPU; dropping it stops it.
-pub type Simulator = Running<SlmpSim>;
+pub type SlmpSimulator = Running<SlmpSim>;
 
 impl Running<SlmpSim> {
     /// Starts the server and the scan thread.
     pub fn start(
-        settings: SimSettings,
+        settings: SlmpSimSettings,
         profile: Arc<Profile>,
         model: Arc<dyn Backend>,
-    ) -> Result<Simulator, LiveError> {
+    ) -> Result<SlmpSimulator, LiveError> {
         Running::serve(program(settings, profile, model)?, serve)
     }
 }
@@ -127,7 +127,7 @@ impl Running<SlmpSim> {
 /// (SD0, SD203, SD8067 and their neighbours) and link registers every MELSEC CPU has though a
 /// profile may not name them (iQ-R's default allocation: W0-W1FFF, SW0-SW7FF).
 pub(super) fn program(
-    settings: SimSettings,
+    settings: SlmpSimSettings,
     profile: Arc<Profile>,
     model: Arc<dyn Backend>,
 ) -> Result<Arc<Program<SlmpSim>>, LiveError> {

@@ -10,7 +10,7 @@ use std::sync::atomic::Ordering;
 use std::sync::Arc;
 use std::thread::JoinHandle;
 
-use super::{program, SimSettings, SlmpSim};
+use super::{program, SlmpSim, SlmpSimSettings};
 use crate::backend::bench::error::LiveError;
 use crate::backend::bench::fence::{parse_ranges, WordRange, WriteFence};
 use crate::backend::bench::mailbox::{self, off, state};
@@ -31,7 +31,7 @@ impl RemoteProgram {
     /// Starts scanning the memory of the server `client` reaches. The settings' port, faults
     /// and protocol options do not apply: the server is someone else's.
     pub fn start(
-        settings: SimSettings,
+        settings: SlmpSimSettings,
         profile: Arc<Profile>,
         model: Arc<dyn Backend>,
         client: ClientSettings,
