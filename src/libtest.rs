@@ -64,7 +64,7 @@ pub fn main(root: &Path, binary: &Path, extra: Vec<Arc<dyn Backend>>) -> ExitCod
 /// use plc_conformance::Harness;
 ///
 /// fn main() -> std::process::ExitCode {
-///     Harness::new("path/to/plc-conformance")   // its vendors/ and vectors/
+///     Harness::embedded()                        // the corpus built into the crate
 ///         .without_builtin()                     // only your backend's trials
 ///         .backend(my_backend(), Some("my.known.yaml".into()))
 ///         .run()
@@ -90,6 +90,24 @@ impl Harness {
             extra: Vec::new(),
             hello_cache: None,
         }
+    }
+
+    /// The corpus and profiles built into this crate, with the built-in reference models: what
+    /// a dependent checks an emulator or a codec against without a checkout of this repository
+    /// (`--exact` narrows it to the file of the one trial named, as for a folder).
+    ///
+    /// ```no_run
+    /// # use std::sync::Arc;
+    /// # fn my_backend() -> Arc<dyn plc_conformance::Backend> { unimplemented!() }
+    /// fn main() -> std::process::ExitCode {
+    ///     plc_conformance::Harness::embedded()
+    ///         .without_builtin()
+    ///         .backend(my_backend(), Some("my.known.yaml".into()))
+    ///         .run()
+    /// }
+    /// ```
+    pub fn embedded() -> Self {
+        Harness::new(crate::load::EMBEDDED)
     }
 
     /// Also runs the external backends of the project file under the root; `binary` is what
@@ -356,7 +374,8 @@ fn exact_files(args: &Arguments, paths: &Paths) -> Option<Vec<std::path::PathBuf
     let mut files = Vec::new();
     for dir in &paths.vectors {
         for file in crate::load::yaml_files(dir).ok()? {
-            let text = String::from_utf8(crate::load::read_regular(&file).ok()?).ok()?;
+            // A file shipped in the binary reads as one on disk does.
+            let text = crate::load::read_file(&file).ok()?;
             let holds = text.match_indices(&needle).any(|(at, _)| {
                 text[at + needle.len()..]
                     .chars()
@@ -432,5 +451,30 @@ fn ignored_text(verdict: &Verdict) -> String {
             Some(reason) => reason.to_string(),
             None => other.label().to_string(),
         },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `--exact` with one trial's name reads only the file that holds its case, in the corpus
+    /// built into the crate as in a folder.
+    #[test]
+    fn exact_narrows_the_embedded_corpus_to_the_case_s_file() {
+        let args = Arguments::from_iter([
+            "test",
+            "--exact",
+            "iqr::habin::habin-fixed-4-digits-example::rcpu",
+        ]);
+        let files = exact_files(&args, &Paths::under(Path::new(crate::load::EMBEDDED)));
+        assert_eq!(
+            files,
+            Some(vec![PathBuf::from(
+                "<embedded>/vectors/mitsubishi-iqr/habin.yaml"
+            )])
+        );
+        let all = Arguments::from_iter(["test", "habin-fixed-4-digits-example"]);
+        assert_eq!(exact_files(&all, &Paths::embedded()), None, "not --exact");
     }
 }

@@ -135,6 +135,8 @@ fn a_rust_scaffold_names_its_codec_after_the_backend() {
         "{test}"
     );
     assert!(!test.contains("{{"), "{test}");
+    // The corpus the crate carries, not a checkout beside it.
+    assert!(test.contains("Harness::embedded()"), "{test}");
     let (code, said) = init(dir.path(), &["--rust", "--name", "My Lib"]);
     assert_eq!(code, Some(2), "{said}");
     assert!(

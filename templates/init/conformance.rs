@@ -68,8 +68,9 @@ impl Codec for {{type}} {
 }
 
 fn main() -> std::process::ExitCode {
-    // 3. Where plc-conformance's vendors/ and vectors/ are: a checkout beside this crate.
-    Harness::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../plc-conformance"))
+    // 3. The corpus and profiles built into the plc-conformance crate (`Harness::new(DIR)` for
+    //    a folder with vendors/ and vectors/ of your own).
+    Harness::embedded()
         .without_builtin()
         .backend(codec_backend({{type}}), Some("{{name}}.known.yaml".into()))
         .run()
