@@ -697,7 +697,8 @@ def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits
                 encode_digits=None, width=16, errors=None, stdin=None, stdout=None,
                 decode_reading=None, encode_reading=None, decode_errors=None,
                 encode_errors=None, field=None, decode_field=None, encode_field=None,
-                protocol=None, fields=None, cross_vendor=False, check=None, verify=None):
+                protocol=None, fields=None, cross_vendor=False, check=None, verify=None,
+                digits=None):
     """Answers the harness as a codec-level backend until it says shutdown or closes stdin.
     Speaks protocol version 2 (one `run` case at a time) and 5 (also `convert`: many texts or
     values of one operation in one message, answered by one `converted` line, which is what
@@ -708,6 +709,7 @@ def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits
     encode: function(value: int, digits: int) -> bytes or str, for value-to-hex (None: not
       implemented). The harness reads the text up to its first 00H.
     decode_digits, encode_digits: the digit counts each implements (None: any count 1-8);
+      digits sets both at once, as codec_cases takes it;
       cases with another count are skipped with that reason.
     width: the value width in bits, 16 or 32: cases whose value does not fit are skipped.
     errors: {exception class: error class}, e.g. {ValueError: "invalid-digit"}: how the
@@ -752,6 +754,9 @@ def serve_codec(decode=None, encode=None, name=None, version=None, decode_digits
     width, or for Unsupported. An exception `errors` does not map ends the process with its
     traceback and none of the message's answers; the harness then asks its items one by one.
     """
+    if digits is not None:
+        decode_digits = digits if decode_digits is None else decode_digits
+        encode_digits = digits if encode_digits is None else encode_digits
     if name is None or version is None:
         raise TypeError("serve_codec needs name= and version=")
     if decode is None and encode is None and check is None and verify is None:

@@ -56,16 +56,19 @@ def _error_names(errors):
     return {"%s:%s" % (k.__module__, k.__qualname__): v for k, v in (errors or {}).items()}
 
 
-def codec_cases(decode=None, encode=None, *, name="codec", digits=None, decode_digits=None,
-                encode_digits=None, width=16, errors=None, field=None, decode_field=None,
-                encode_field=None, known_differences=None, timeout=5.0, protocol=None,
-                fields=None, cross_vendor=False, check=None, verify=None):
+def codec_cases(decode=None, encode=None, *, name="codec", version=None, digits=None,
+                decode_digits=None, encode_digits=None, width=16, errors=None,
+                decode_errors=None, encode_errors=None, decode_reading=None,
+                encode_reading=None, field=None, decode_field=None, encode_field=None,
+                known_differences=None, timeout=5.0, protocol=None, fields=None,
+                cross_vendor=False, check=None, verify=None):
     """A pytest test function, parametrized by cross-vendor case: assign it to a `test_` name.
 
     decode(text: bytes, digits) -> int and encode(value, digits) -> str or bytes are functions
     at the top level of a module (the test module itself will do); digits sets both directions'
-    digit counts (decode_digits / encode_digits one each); width, errors and the field shapes
-    are those of plc_adapter.serve_codec (docs/protocol.md, "Field shapes");
+    digit counts (decode_digits / encode_digits one each); version, width, errors,
+    decode_errors / encode_errors, decode_reading / encode_reading and the field shapes are
+    those of plc_adapter.serve_codec (docs/protocol.md, "Field shapes"), which takes digits too;
     known_differences is a known-differences file, relative to the calling module's folder.
     protocol, fields, cross_vendor, check and verify are those of plc_adapter.serve_codec: a
     library of a protocol's fields ("mc-ascii", "modbus-ascii", ...) is judged by that
@@ -86,6 +89,11 @@ def codec_cases(decode=None, encode=None, *, name="codec", digits=None, decode_d
         "decode": _where(decode)[1] if decode else None,
         "encode": _where(encode)[1] if encode else None,
         "name": name,
+        "version": version,
+        "decode_errors": _error_names(decode_errors),
+        "encode_errors": _error_names(encode_errors),
+        "decode_reading": decode_reading,
+        "encode_reading": encode_reading,
         "decode_digits": decode_digits if decode_digits is not None else digits,
         "encode_digits": encode_digits if encode_digits is not None else digits,
         "width": width,

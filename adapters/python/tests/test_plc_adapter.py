@@ -60,6 +60,17 @@ class CodecLevel(unittest.TestCase):
             }},
         }])
 
+    def test_digits_sets_both_directions_as_codec_cases_takes_it(self):
+        stdin = io.StringIO(json.dumps(HELLO_2) + "\n" + json.dumps(SHUTDOWN) + "\n")
+        stdout = io.StringIO()
+        plc_adapter.serve_codec(decode=lambda t, d: int(t, 16), encode=lambda v, d: "%04X" % v,
+                                name="both", version="1", digits=[4], stdin=stdin,
+                                stdout=stdout)
+        hello = json.loads(stdout.getvalue().splitlines()[0])
+        codec = hello["capabilities"]["codec"]
+        self.assertEqual(codec["hex-to-value"]["digits"], [4])
+        self.assertEqual(codec["value-to-hex"]["digits"], [4])
+
     def test_cases_are_answered_in_order(self):
         cases = [h2v(1, "5A8D", 4), h2v(2, "5a8D", 4), h2v(3, "12345678", 8), h2v(4, "12", 4),
                  h2v(5, "7F", 2), v2h(6, 2748, 4), v2h(7, 0x12345678, 4), v2h(8, 0x10000, 8),
