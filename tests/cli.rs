@@ -422,3 +422,46 @@ fn list_shows_which_trials_a_backend_runs_and_why_not_the_others() {
     );
     assert!(!stdout.contains("  run "), "{stdout}");
 }
+
+/// One wrong expectation fails on every FX5 variant and pulse form the same way: the first
+/// failing trial shows the whole report, each other is one line naming the trial it matches.
+#[test]
+fn the_same_failure_on_other_variants_is_named_not_repeated() {
+    let scratch = scratch();
+    let vectors = scratch.path().join("vectors");
+    let family = vectors.join("mitsubishi-fx5");
+    std::fs::create_dir_all(&family).expect("dir");
+    let asci = std::fs::read_to_string(common::root().join("vectors/mitsubishi-fx5/asci.yaml"))
+        .expect("read");
+    std::fs::write(
+        family.join("asci.yaml"),
+        asci.replacen("D200: {ascii: \"CZ\"}", "D200: {ascii: \"DZ\"}", 1),
+    )
+    .expect("write");
+    let out = cli(&[
+        "run",
+        "--backend",
+        "fx5",
+        "--vectors",
+        vectors.to_str().unwrap_or_default(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let stdout = text(&out.stdout);
+    let full = stdout.lines().filter(|l| l.ends_with(" differs")).count();
+    let named: Vec<&str> = stdout
+        .lines()
+        .filter(|l| l.contains(" differs: as "))
+        .collect();
+    assert_eq!(full, 1, "{stdout}");
+    assert_eq!(named.len(), 7, "{stdout}");
+    assert!(
+        named
+            .iter()
+            .all(|l| l.ends_with("::asci::asci-16bit-sm701-on-k1::fx5s above")),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("0 passed, 8 failed") || stdout.contains(" 8 failed"),
+        "{stdout}"
+    );
+}

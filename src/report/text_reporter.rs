@@ -30,6 +30,9 @@ pub(crate) struct TextReporter<W: Write> {
     /// Protocol-field trials, by protocol.
     protocols: BTreeMap<String, Summary>,
     restarts: BTreeMap<String, usize>,
+    /// A failure's report without its trial's name and run line, with the trial it was shown
+    /// for: the same failure under another variant or pulse form is named, not repeated.
+    shown: std::collections::HashMap<String, String>,
 }
 
 impl<W: Write> TextReporter<W> {
@@ -45,6 +48,7 @@ impl<W: Write> TextReporter<W> {
             cross_vendor: None,
             protocols: BTreeMap::new(),
             restarts: BTreeMap::new(),
+            shown: std::collections::HashMap::new(),
         }
     }
 
@@ -145,7 +149,24 @@ impl<W: Write> Reporter for TextReporter<W> {
                 counts.add(verdict);
                 match verdict {
                     v if v.is_failure() => {
-                        writeln!(self.out, "{}", render(trial, v, self.palette))?;
+                        let report = render(trial, v, self.palette);
+                        match self.shown.entry(same_failure(&report)) {
+                            std::collections::hash_map::Entry::Occupied(first) => {
+                                let h = self.palette.heading;
+                                writeln!(
+                                    self.out,
+                                    "{h}{}: {} {}{h:#}: as {} above\n",
+                                    terminal(&trial.location().to_string()),
+                                    trial.name(),
+                                    v.label(),
+                                    first.get()
+                                )?;
+                            }
+                            std::collections::hash_map::Entry::Vacant(slot) => {
+                                slot.insert(trial.name());
+                                writeln!(self.out, "{report}")?;
+                            }
+                        }
                         self.out.flush()?;
                     }
                     Verdict::KnownDifference { entry, .. } => {
@@ -183,4 +204,15 @@ impl<W: Write> Reporter for TextReporter<W> {
         }
         Ok(())
     }
+}
+
+/// What makes two failure reports the same failure: every line but the heading (which names
+/// the trial) and the `run:` line (its instruction form and variant).
+fn same_failure(report: &str) -> String {
+    report
+        .lines()
+        .skip(1)
+        .filter(|l| !l.starts_with("  run:"))
+        .collect::<Vec<_>>()
+        .join("\n")
 }
