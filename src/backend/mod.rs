@@ -183,8 +183,9 @@ impl From<Unsupported> for Response {
     }
 }
 
-/// Why a backend gave no answer: only external backends fail this way, and each is an outcome
-/// of the case, never a pass.
+/// Why a backend gave no answer: an external process that crashed, hung or answered garbage,
+/// a live CPU not reached, a codec in process that panicked. Each is an outcome of the case,
+/// never a pass.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case", tag = "kind", content = "detail")]
 pub enum Fault {
@@ -264,6 +265,12 @@ pub trait Backend: Send + Sync {
     fn chunk_trials(&self) -> usize {
         128
     }
+    /// Executes one trial's instruction on the memory image the request carries, under one
+    /// fill: `Ok(Response::Done(outcome))` with the words written and the error signalled,
+    /// `Ok(Response::Unsupported(why))` for a trial it claimed but cannot execute after all (a
+    /// failure: decline such a trial up front with [`Backend::declines`] instead), or a
+    /// [`Fault`] when no answer could be had (a process that crashed or hung; an emulator in
+    /// process rarely returns one).
     fn execute(&self, request: &Request<'_>) -> Result<Response, Fault>;
     /// Executes several requests, answers in order, calling `answered` with how many are
     /// answered so far as they come in. A backend in another process answers a batch in one

@@ -19,6 +19,10 @@ pub(crate) use crate::spec::profile::{
 };
 pub use crate::spec::profile::{DeviceRange, DeviceRanges, Variant};
 
+/// A vendor family as its profile (`vendors/<id>.yaml`) describes it: its manuals and what
+/// each covers, devices and their ranges, instructions and their operands, error signalling,
+/// variants (CPU models and firmware), and how it answers the cross-vendor operations. What a
+/// request carries so that an emulator can read the family's rules instead of hard-coding them.
 #[derive(Debug, Clone)]
 pub struct Profile {
     /// The id vectors name in `profiles:`, e.g. `mitsubishi-iqr`.

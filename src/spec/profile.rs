@@ -411,6 +411,8 @@ impl ConstantRange {
     }
 }
 
+/// A CPU model or firmware of a family (`rcpu`, `fx5u`, `c200h`): its own device ranges, the
+/// flags it ignores and the features it has, where the family's CPUs differ.
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Variant {
