@@ -21,10 +21,13 @@ use crate::project::Project;
 use crate::session::verdicts;
 use crate::value::hex_word;
 
-/// Every input class, in the order the draft tries them.
-const CLASSES: [InputClass; 10] = [
+/// Every input class, in the order the draft tries them. The coarse classes first: a finer one (a blank's position) only where a coarse one does not
+/// differ on every case it holds.
+const CLASSES: [InputClass; 15] = [
     InputClass::Lowercase,
     InputClass::OtherLowercase,
+    InputClass::OtherUppercase,
+    InputClass::Punctuation,
     InputClass::Blank,
     InputClass::Sign,
     InputClass::HexPrefix,
@@ -33,6 +36,9 @@ const CLASSES: [InputClass; 10] = [
     InputClass::Nul,
     InputClass::Control,
     InputClass::Empty,
+    InputClass::BlankLeading,
+    InputClass::BlankTrailing,
+    InputClass::BlankInside,
 ];
 
 /// The draft and what it holds.

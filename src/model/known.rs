@@ -158,5 +158,16 @@ mod tests {
         assert!(InputClass::Control.holds(b"1\x1F34"));
         assert!(!InputClass::Control.holds(b"1\t34"));
         assert!(InputClass::Empty.holds(b""));
+        assert!(InputClass::OtherUppercase.holds(b"5AG8"));
+        assert!(!InputClass::OtherUppercase.holds(b"5A8F"));
+        assert!(InputClass::Punctuation.holds(b"5A:8"));
+        assert!(InputClass::Punctuation.holds(b"5A8."));
+        assert!(!InputClass::Punctuation.holds(b"-5A_8"));
+        assert!(InputClass::BlankLeading.holds(b" 5A8"));
+        assert!(!InputClass::BlankLeading.holds(b"5A8 "));
+        assert!(InputClass::BlankTrailing.holds(b"5A8\t"));
+        assert!(InputClass::BlankInside.holds(b" 5A 8 "));
+        assert!(!InputClass::BlankInside.holds(b" 5A8 "));
+        assert!(!InputClass::BlankInside.holds(b"   "));
     }
 }

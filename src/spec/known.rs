@@ -94,6 +94,22 @@ pub enum InputClass {
     Control,
     /// No character at all.
     Empty,
+    /// An uppercase letter G-Z (47H-5AH): no digit, and no lowercase either.
+    OtherUppercase,
+    /// Other printable punctuation (21H-2FH, 3AH-40H, 5BH-60H, 7BH-7EH) but `+`, `-` and `_`,
+    /// which are `sign` and `underscore`.
+    Punctuation,
+    /// A blank (as `blank`) before the first other character: `" 5A8"`.
+    BlankLeading,
+    /// A blank after the last other character: `"5A8 "`.
+    BlankTrailing,
+    /// A blank between two other characters: `"5A 8"`.
+    BlankInside,
+}
+
+/// A space or a tab, line feed, vertical tab, form feed or carriage return.
+fn is_blank(b: u8) -> bool {
+    b == b' ' || (0x09..=0x0D).contains(&b)
 }
 
 impl InputClass {
@@ -106,7 +122,7 @@ impl InputClass {
                 let prefix_x = b == b'x' && i > 0 && text[i - 1] == b'0';
                 (b'g'..=b'z').contains(&b) && !prefix_x
             }),
-            InputClass::Blank => any(|b| b == b' ' || (0x09..=0x0D).contains(&b)),
+            InputClass::Blank => any(is_blank),
             InputClass::Sign => any(|b| b == b'+' || b == b'-'),
             InputClass::HexPrefix => text.windows(2).any(|w| w == b"0x" || w == b"0X"),
             InputClass::Underscore => any(|b| b == b'_'),
@@ -116,6 +132,21 @@ impl InputClass {
                 any(|b| (0x01..=0x08).contains(&b) || (0x0E..=0x1F).contains(&b) || b == 0x7F)
             }
             InputClass::Empty => text.is_empty(),
+            InputClass::OtherUppercase => any(|b| (b'G'..=b'Z').contains(&b)),
+            InputClass::Punctuation => any(|b| {
+                matches!(b, 0x21..=0x2F | 0x3A..=0x40 | 0x5B..=0x60 | 0x7B..=0x7E)
+                    && !matches!(b, b'+' | b'-' | b'_')
+            }),
+            InputClass::BlankLeading => text.first().is_some_and(|&b| is_blank(b)),
+            InputClass::BlankTrailing => text.last().is_some_and(|&b| is_blank(b)),
+            InputClass::BlankInside => {
+                let first = text.iter().position(|&b| !is_blank(b));
+                let last = text.iter().rposition(|&b| !is_blank(b));
+                match (first, last) {
+                    (Some(f), Some(l)) => text[f..l].iter().any(|&b| is_blank(b)),
+                    _ => false,
+                }
+            }
         }
     }
 }
