@@ -164,6 +164,7 @@ fn a_listed_cross_vendor_difference_is_a_known_difference_not_a_failure() {
                 rule: None,
                 reason: "reads D150".into(),
                 location: "known.yaml:2".into(),
+                also: Vec::new(),
             }],
             ignored: Vec::new(),
         },

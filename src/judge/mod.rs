@@ -114,6 +114,9 @@ pub struct KnownEntry {
     pub reason: String,
     /// `file:line` of the entry.
     pub location: String,
+    /// The other entries that cover the trial too (`file:line: reason`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub also: Vec<String>,
 }
 
 /// What a verdict means for a run: the one place where verdicts become pass or fail.
@@ -349,6 +352,7 @@ pub(crate) fn apply_known(entry: Option<&Entry>, verdict: Verdict) -> Verdict {
     let cited = KnownEntry {
         reason: entry.reason.clone(),
         location: entry.location.clone(),
+        also: entry.also.clone(),
     };
     match verdict {
         Verdict::Differs { .. } | Verdict::Unsupported { .. } => Verdict::KnownDifference {
@@ -631,6 +635,7 @@ mod known_tests {
             rule: None,
             reason: "r".into(),
             location: "k.yaml:2".into(),
+            also: Vec::new(),
         }
     }
 

@@ -143,6 +143,7 @@ pub fn load_known(
             rule: e.rule,
             reason: shown,
             location,
+            also: Vec::new(),
         };
         check_rule(&entry, corpus, strict, &mut cx, &key);
         if entry.reason.is_empty() {

@@ -59,6 +59,9 @@ pub struct Entry {
     pub reason: String,
     /// `file:line` of the entry, to point at when it goes stale.
     pub location: String,
+    /// The other entries that cover the same trial (`file:line: reason`): one cause shadowing
+    /// another is shown, never silent.
+    pub also: Vec<String>,
 }
 
 /// The case a trial checks, as an entry looks at it.
@@ -114,11 +117,71 @@ impl KnownDifferences {
             .find(|e| e.case().is_some() && e.matches(s))
             .or_else(|| self.entries.iter().find(|e| e.matches(s)))
     }
+
+    /// [`KnownDifferences::entry`], with the other entries that cover the trial too.
+    pub fn covering(&self, s: &Subject<'_>) -> Option<Entry> {
+        let first = self.entry(s)?;
+        let mut entry = first.clone();
+        entry.also = (self.entries.iter())
+            .filter(|e| !std::ptr::eq(*e, first) && e.matches(s))
+            .map(|e| format!("{}: {}", e.location, e.reason))
+            .collect();
+        Some(entry)
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Two entries covering one trial (a class and a list of cases): the case's own entry
+    /// first, the other named beside it rather than never shown.
+    #[test]
+    fn an_entry_shadowed_by_another_is_named_beside_it() {
+        let entry = |covers, location: &str| Entry {
+            covers,
+            instruction: None,
+            variant: None,
+            kind: None,
+            rule: None,
+            reason: format!("cause at {location}"),
+            location: location.into(),
+            also: Vec::new(),
+        };
+        let known = KnownDifferences {
+            file: "k.yaml".into(),
+            entries: vec![
+                entry(
+                    Covers::Cause {
+                        patterns: Vec::new(),
+                        inputs: vec![InputClass::Blank],
+                    },
+                    "k.yaml:2",
+                ),
+                entry(Covers::Case("xv-h2v-space".into()), "k.yaml:9"),
+            ],
+            ignored: Vec::new(),
+        };
+        let subject = Subject {
+            case: "xv-h2v-space",
+            text: Some(b"5A8 "),
+            instruction: "codec",
+            variant: "",
+        };
+        let covering = known.covering(&subject).expect("covered");
+        assert_eq!(covering.location, "k.yaml:9");
+        assert_eq!(covering.also, ["k.yaml:2: cause at k.yaml:2"]);
+        let alone = Subject {
+            case: "xv-h2v-tab",
+            text: Some(b"5A8\t"),
+            ..subject
+        };
+        let covering = known.covering(&alone).expect("covered by the class");
+        assert_eq!(
+            (covering.location.as_str(), covering.also.len()),
+            ("k.yaml:2", 0)
+        );
+    }
 
     #[test]
     fn patterns_take_any_run_of_characters_for_a_star() {

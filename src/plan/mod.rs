@@ -243,16 +243,14 @@ pub(crate) fn plan(
                     known: None,
                 };
                 t.skip = skip_reason(&t, backend.as_ref());
-                t.known = list
-                    .and_then(|k| {
-                        k.entry(&Subject {
-                            case: &case.id,
-                            text: Some(&case.text),
-                            instruction: "codec",
-                            variant: "",
-                        })
+                t.known = list.and_then(|k| {
+                    k.covering(&Subject {
+                        case: &case.id,
+                        text: Some(&case.text),
+                        instruction: "codec",
+                        variant: "",
                     })
-                    .cloned();
+                });
                 trials.push(t);
             }
             continue;
@@ -307,16 +305,14 @@ fn trial(
         Check::CrossVendor { case, .. } | Check::Codec { case } => Some(case.text.as_slice()),
         Check::Native { .. } => None,
     };
-    t.known = known
-        .and_then(|k| {
-            k.entry(&Subject {
-                case: t.case_id(),
-                text,
-                instruction: t.check_name(),
-                variant: &t.variant,
-            })
+    t.known = known.and_then(|k| {
+        k.covering(&Subject {
+            case: t.case_id(),
+            text,
+            instruction: t.check_name(),
+            variant: &t.variant,
         })
-        .cloned();
+    });
     t
 }
 

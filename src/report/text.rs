@@ -211,6 +211,9 @@ fn render_body(out: &mut String, verdict: &Verdict, palette: Palette, fills: boo
                 terminal(&entry.location.to_string()),
                 terminal(&entry.reason)
             );
+            for other in &entry.also {
+                let _ = writeln!(out, "  also covered by {}", terminal(other));
+            }
             render_body(out, difference, palette, fills);
         }
         Verdict::StaleEntry { entry } => {
