@@ -435,7 +435,7 @@ fn emit_vectors(
         ));
         return Ok(());
     }
-    let yaml = emitted.yaml(cases.iter().copied());
+    let yaml = schema_line_that_resolves(path, emitted.yaml(cases.iter().copied()));
     sink.write_all(yaml.as_bytes()).map_err(|e| sink.error(e))?;
     sink.finish()?;
     console::status(&format!(
@@ -444,6 +444,29 @@ fn emit_vectors(
         path.display()
     ));
     Ok(())
+}
+
+/// The emitted file's `$schema` line as written (`../../schema/...`, right inside a checkout's
+/// `vectors/<family>/`) when that schema is there from where the file goes; else a line that says
+/// how to get the schema, since a path to nothing would only make an editor complain.
+fn schema_line_that_resolves(path: &Path, yaml: String) -> String {
+    const PREFIX: &str = "# yaml-language-server: $schema=";
+    let Some((first, rest)) = yaml.split_once('\n') else {
+        return yaml;
+    };
+    let Some(schema) = first.strip_prefix(PREFIX) else {
+        return yaml;
+    };
+    let folder = path.parent().filter(|p| !p.as_os_str().is_empty());
+    if folder.unwrap_or(Path::new(".")).join(schema).is_file() {
+        return yaml;
+    }
+    let kind = Path::new(schema)
+        .file_name()
+        .and_then(|n| n.to_str())
+        .and_then(|n| n.strip_suffix(".schema.json"))
+        .unwrap_or("vectors");
+    format!("# Schema: `plc-conformance schema --kind {kind}`.\n{rest}")
 }
 
 /// 128 + SIGINT, as a shell reports a command Ctrl-C ended.
@@ -525,6 +548,24 @@ pub(super) fn shard(spec: &str) -> Result<(u64, u64), CliError> {
         return Err(bad().into());
     }
     Ok((k, n))
+}
+
+#[cfg(test)]
+mod schema_line {
+    use super::*;
+
+    #[test]
+    fn a_schema_path_that_leads_nowhere_becomes_the_command_that_prints_it() {
+        let yaml = "# yaml-language-server: $schema=../../schema/cross-vendor.schema.json\nx: 1\n";
+        let outside = schema_line_that_resolves(Path::new("/tmp/nowhere/swept.yaml"), yaml.into());
+        assert_eq!(
+            outside,
+            "# Schema: `plc-conformance schema --kind cross-vendor`.\nx: 1\n"
+        );
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let inside = root.join("vectors/cross-vendor/swept.yaml");
+        assert_eq!(schema_line_that_resolves(&inside, yaml.into()), yaml);
+    }
 }
 
 #[cfg(test)]
