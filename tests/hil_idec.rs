@@ -408,16 +408,7 @@ fn the_hil_commands_through_the_binary() {
     use std::io::{BufRead, BufReader};
     let dir = common::scratch();
     let out_dir = dir.path().join("bench");
-    let out = common::cli(&[
-        "hil",
-        "generate",
-        "--profile",
-        PROFILE,
-        "--variant",
-        VARIANT,
-        "--out",
-        out_dir.to_str().expect("utf-8"),
-    ]);
+    let out = generate_bench(&out_dir);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
         out.status.success(),
@@ -496,16 +487,7 @@ fn the_hil_commands_through_the_binary() {
 fn a_bench_spec_whose_link_disagrees_with_its_profile_is_refused() {
     let dir = common::scratch();
     let out_dir = dir.path().join("bench");
-    let generated = common::cli(&[
-        "hil",
-        "generate",
-        "--profile",
-        PROFILE,
-        "--variant",
-        VARIANT,
-        "--out",
-        out_dir.to_str().expect("utf-8"),
-    ]);
+    let generated = generate_bench(&out_dir);
     assert!(generated.status.success(), "{generated:?}");
     let manifest = out_dir.join("manifest.json");
     let over = |scheme: &str, confirm: &str| {
@@ -529,4 +511,18 @@ fn a_bench_spec_whose_link_disagrees_with_its_profile_is_refused() {
     // The same manifest over its own link plans.
     let planned = over("modbus", &TYPE_CODE.to_string());
     assert!(planned.status.success(), "{planned:?}");
+}
+
+/// `hil generate` for the FC4A variant of these tests, into `out_dir`.
+fn generate_bench(out_dir: &std::path::Path) -> std::process::Output {
+    common::cli(&[
+        "hil",
+        "generate",
+        "--profile",
+        PROFILE,
+        "--variant",
+        VARIANT,
+        "--out",
+        out_dir.to_str().expect("utf-8"),
+    ])
 }

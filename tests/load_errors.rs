@@ -664,22 +664,8 @@ fn a_manual_case_runs_only_on_the_variants_its_manual_covers() {
         1,
     );
     let profiles = load_profile_text("siemens-s7-1200.yaml", &marked).expect("profile loads");
-    let case = |variants: &str| {
-        format!(
-            "instructions: [ATH]\nprofiles: [siemens-s7-1200]\nsource: {{manual: s7-1200-2011, page: 253}}\n\
-             cases:\n  - id: example\n    basis: manual\n    cite: the example row\n{variants}\
-             \x20   operands: {{IN: DB1.DBB0, N: 2, OUT: DB2.DBB0}}\n    before:\n      DB1.DBB0: {{ascii: \"01\"}}\n\
-             \x20   expect:\n      after: {{DB2.DBB0: 01H}}\n      error: none\n"
-        )
-    };
-    let load_with = |text: &str| {
-        let mut builder = CorpusBuilder::default();
-        builder.add_file(Path::new("s7.yaml"), text, &profiles);
-        builder
-            .finish()
-            .map(|c| c.cases.len())
-            .map_err(|e| e.0.iter().map(|e| chain(e)).collect::<Vec<_>>().join("\n"))
-    };
+    let case = |variants: &str| s7_case("the example row", variants);
+    let load_with = |text: &str| load_s7(text, &profiles);
     let e = load_with(&case("")).expect_err("runs on the S7-1500 too");
     assert!(
         e.contains("cases[0].basis: `basis: manual` rests on s7-1200-2011, the manual of s7-1200, and the case also runs on s7-1500"),
@@ -718,22 +704,8 @@ fn every_manual_a_cite_names_counts_toward_its_variants() {
     );
     assert_ne!(two, s7, "the S7 profile changed");
     let profiles = load_profile_text("siemens-s7-1200.yaml", &two).expect("profile loads");
-    let case = |cite: &str| {
-        format!(
-            "instructions: [ATH]\nprofiles: [siemens-s7-1200]\nsource: {{manual: s7-1200-2011, page: 253}}\n\
-             cases:\n  - id: example\n    basis: manual\n    cite: \"{cite}\"\n\
-             \x20   operands: {{IN: DB1.DBB0, N: 2, OUT: DB2.DBB0}}\n    before:\n      DB1.DBB0: {{ascii: \"01\"}}\n\
-             \x20   expect:\n      after: {{DB2.DBB0: 01H}}\n      error: none\n"
-        )
-    };
-    let load_with = |text: &str| {
-        let mut builder = CorpusBuilder::default();
-        builder.add_file(Path::new("s7.yaml"), text, &profiles);
-        builder
-            .finish()
-            .map(|c| c.cases.len())
-            .map_err(|e| e.0.iter().map(|e| chain(e)).collect::<Vec<_>>().join("\n"))
-    };
+    let case = |cite: &str| s7_case(&format!("\"{cite}\""), "");
+    let load_with = |text: &str| load_s7(text, &profiles);
     // The source (s7-1200-2011) and the 2016 edition named later: both variants covered.
     assert_eq!(
         load_with(&case("the example row; s7-1200-2016 p.359")),
@@ -745,13 +717,31 @@ fn every_manual_a_cite_names_counts_toward_its_variants() {
     // A manual of other CPUs covers none.
     let none = s7.replacen("    covers: [s7-1200]\n", "    covers: []\n", 1);
     let profiles_none = load_profile_text("siemens-s7-1200.yaml", &none).expect("loads");
-    let mut builder = CorpusBuilder::default();
-    builder.add_file(
-        Path::new("s7.yaml"),
-        &case("s7-1200-2011 p.253: the example row"),
-        &profiles_none,
-    );
-    let e = builder.finish().map(|_| ()).expect_err("covers none");
-    let e = e.0.iter().map(|e| chain(e)).collect::<Vec<_>>().join("\n");
+    let e = load_s7(&case("s7-1200-2011 p.253: the example row"), &profiles_none)
+        .expect_err("covers none");
     assert!(e.contains("which covers no variant of this profile"), "{e}");
+}
+
+/// An S7-1200 vector file of one `manual` ATH case with this cite (YAML, quoted or not) and
+/// these `variants:` lines.
+fn s7_case(cite: &str, variants: &str) -> String {
+    format!(
+        "instructions: [ATH]\nprofiles: [siemens-s7-1200]\nsource: {{manual: s7-1200-2011, page: 253}}\n\
+         cases:\n  - id: example\n    basis: manual\n    cite: {cite}\n{variants}\
+         \x20   operands: {{IN: DB1.DBB0, N: 2, OUT: DB2.DBB0}}\n    before:\n      DB1.DBB0: {{ascii: \"01\"}}\n\
+         \x20   expect:\n      after: {{DB2.DBB0: 01H}}\n      error: none\n"
+    )
+}
+
+/// The cases an S7 vector file loads to under `profiles`, or every error.
+fn load_s7(
+    text: &str,
+    profiles: &plc_conformance::testing::model::profile::Profiles,
+) -> Result<usize, String> {
+    let mut builder = CorpusBuilder::default();
+    builder.add_file(Path::new("s7.yaml"), text, profiles);
+    builder
+        .finish()
+        .map(|c| c.cases.len())
+        .map_err(|e| e.0.iter().map(|e| chain(e)).collect::<Vec<_>>().join("\n"))
 }
