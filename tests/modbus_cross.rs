@@ -94,25 +94,25 @@ fn the_client_reads_and_writes_pymodbus_at_the_limits() {
     let mut c = ModbusClient::new(ModbusSettings::new(server.address.clone()));
     assert_eq!(c.read_holding(100, 1).expect("read"), [4660]);
     let words: Vec<u16> = (0..300u16).map(|i| i.wrapping_mul(257) ^ 0x5A00).collect();
-    let before = c.requests;
+    let before = c.requests();
     c.write_registers(0, &words[..123]).expect("123 words");
-    assert_eq!(c.requests - before, 1, "123 words are one request");
+    assert_eq!(c.requests() - before, 1, "123 words are one request");
     let read = c.read_holding(0, 125).expect("125 words");
-    assert_eq!(c.requests - before, 2, "125 words are one request");
+    assert_eq!(c.requests() - before, 2, "125 words are one request");
     assert_eq!(&read[..123], &words[..123]);
     assert_eq!(&read[123..], [0, 0]);
-    let before = c.requests;
+    let before = c.requests();
     c.write_registers(1000, &words).expect("300 words");
-    assert_eq!(c.requests - before, 3, "123 + 123 + 54");
+    assert_eq!(c.requests() - before, 3, "123 + 123 + 54");
     assert_eq!(c.read_holding(1000, 300).expect("300 words"), words);
-    assert_eq!(c.requests - before, 6, "125 + 125 + 50");
+    assert_eq!(c.requests() - before, 6, "125 + 125 + 50");
     c.write_registers(200, &[0xBEEF]).expect("one word");
     assert_eq!(c.read_holding(199, 3).expect("read"), [0, 0xBEEF, 0]);
     assert_eq!(
         c.read_coils(9000, 5).expect("coils"),
         [true, false, false, false, true]
     );
-    let connections = c.connections;
+    let connections = c.connections();
     let e = c
         .read_holding(9995, 10)
         .expect_err("past the server's registers");
@@ -122,14 +122,15 @@ fn the_client_reads_and_writes_pymodbus_at_the_limits() {
     assert_eq!(fault.kind(), "protocol-error");
     assert_eq!(c.read_holding(8002, 1).expect("read"), [6]);
     assert_eq!(
-        c.connections, connections,
+        c.connections(),
+        connections,
         "an exception keeps the connection"
     );
     // A request past the last address is refused before anything is sent.
-    let sent = c.requests;
+    let sent = c.requests();
     let e = c.read_holding(65530, 10).expect_err("past 0xFFFF");
     assert!(matches!(e, ModbusError::Request { .. }), "{e}");
-    assert_eq!(c.requests, sent);
+    assert_eq!(c.requests(), sent);
 }
 
 /// The IDEC link over pymodbus's server: the type code from D8002, RUN from M8000 (coil 9000),

@@ -4,7 +4,7 @@
 //! a reply may arrive in several segments and must never be read past.
 
 use std::fmt::Display;
-use std::io::Read;
+use std::io::{Read, Write};
 use std::net::{TcpStream, ToSocketAddrs};
 use std::time::{Duration, Instant};
 
@@ -25,6 +25,54 @@ pub(crate) fn connect(address: &str, timeout: Duration) -> std::io::Result<TcpSt
         }
     }
     Err(last)
+}
+
+/// A client's one connection to a CPU, as every link keeps it: made on the first request (and
+/// on the first after a fault dropped it), counted with the requests sent, for a run's figures.
+#[derive(Debug, Default)]
+pub(crate) struct Connection {
+    stream: Option<TcpStream>,
+    pub(crate) requests: u64,
+    pub(crate) connections: u64,
+}
+
+/// Why a request was not sent: no connection could be made, or the write failed.
+#[derive(Debug)]
+pub(crate) enum Unsent {
+    Connect(std::io::Error),
+    Write(std::io::Error),
+}
+
+impl Connection {
+    pub(crate) fn is_connected(&self) -> bool {
+        self.stream.is_some()
+    }
+
+    /// Drops the connection; the next request makes a new one.
+    pub(crate) fn disconnect(&mut self) {
+        self.stream = None;
+    }
+
+    /// Sends `request` to `address`, connecting first when there is no connection; the stream
+    /// to read its reply from.
+    pub(crate) fn send(
+        &mut self,
+        address: &str,
+        connect_timeout: Duration,
+        request: &[u8],
+    ) -> Result<&mut TcpStream, Unsent> {
+        let stream = match &mut self.stream {
+            Some(stream) => stream,
+            slot => {
+                let made = connect(address, connect_timeout).map_err(Unsent::Connect)?;
+                self.connections += 1;
+                slot.insert(made)
+            }
+        };
+        self.requests += 1;
+        stream.write_all(request).map_err(Unsent::Write)?;
+        Ok(stream)
+    }
 }
 
 /// Why a buffer was not filled.

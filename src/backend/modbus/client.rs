@@ -11,7 +11,6 @@
 //! are, so that no write can land twice or late without the caller knowing.
 
 use std::fmt;
-use std::io::Write;
 use std::net::TcpStream;
 use std::time::{Duration, Instant};
 
@@ -134,11 +133,8 @@ impl std::error::Error for ModbusError {}
 /// One connection to a server (made on first use, dropped after a fault).
 pub struct ModbusClient {
     settings: ModbusSettings,
-    stream: Option<TcpStream>,
+    connection: tcp::Connection,
     tid: u16,
-    /// Requests sent and connections made, for a run's figures.
-    pub requests: u64,
-    pub connections: u64,
 }
 
 impl ModbusClient {
@@ -146,10 +142,8 @@ impl ModbusClient {
     pub fn new(settings: ModbusSettings) -> Self {
         ModbusClient {
             settings,
-            stream: None,
+            connection: tcp::Connection::default(),
             tid: 0,
-            requests: 0,
-            connections: 0,
         }
     }
 
@@ -158,28 +152,22 @@ impl ModbusClient {
     }
 
     pub fn is_connected(&self) -> bool {
-        self.stream.is_some()
+        self.connection.is_connected()
     }
 
     /// Drops the connection; the next request makes a new one.
     pub fn disconnect(&mut self) {
-        self.stream = None;
+        self.connection.disconnect();
     }
 
-    fn connect(&mut self) -> Result<&mut TcpStream, ModbusError> {
-        if self.stream.is_none() {
-            let stream = tcp::connect(&self.settings.address, self.settings.connect_timeout)
-                .map_err(|error| ModbusError::Connect {
-                    address: self.settings.address.clone(),
-                    error: error.to_string(),
-                })?;
-            self.connections += 1;
-            self.stream = Some(stream);
-        }
-        self.stream.as_mut().ok_or_else(|| ModbusError::Connect {
-            address: self.settings.address.clone(),
-            error: "not connected".into(),
-        })
+    /// Requests sent, for a run's figures.
+    pub fn requests(&self) -> u64 {
+        self.connection.requests
+    }
+
+    /// Connections made, for a run's figures.
+    pub fn connections(&self) -> u64 {
+        self.connection.connections
     }
 
     /// Sends one request and reads its reply; drops the connection on any fault but an
@@ -192,18 +180,21 @@ impl ModbusClient {
             detail: e.to_string(),
         })?;
         let timeout = self.settings.reply_timeout;
+        let address = self.settings.address.clone();
         let result = (|| {
-            self.connect()?;
-            self.requests += 1;
-            let stream = self.stream.as_mut().ok_or_else(|| ModbusError::Closed {
-                what: what.into(),
-                error: "not connected".into(),
-            })?;
             let deadline = Instant::now() + timeout;
-            stream.write_all(&bytes).map_err(|e| ModbusError::Closed {
-                what: what.into(),
-                error: e.to_string(),
-            })?;
+            let stream = (self.connection)
+                .send(&address, self.settings.connect_timeout, &bytes)
+                .map_err(|unsent| match unsent {
+                    tcp::Unsent::Connect(error) => ModbusError::Connect {
+                        address: address.clone(),
+                        error: error.to_string(),
+                    },
+                    tcp::Unsent::Write(e) => ModbusError::Closed {
+                        what: what.into(),
+                        error: e.to_string(),
+                    },
+                })?;
             let reply = read_reply(stream, deadline, what, timeout)?;
             match decode_response(tid, unit, request, &reply) {
                 Ok(Response::Exception { function, code }) => Err(ModbusError::Exception {
@@ -220,7 +211,7 @@ impl ModbusClient {
         })();
         if let Err(e) = &result {
             if !matches!(e, ModbusError::Exception { .. }) {
-                self.stream = None;
+                self.connection.disconnect();
             }
         }
         result
@@ -387,7 +378,7 @@ mod tests {
     use super::*;
     use crate::backend::bench::tcp::hex;
     use frame::{bytes_of, encode_response};
-    use std::io::Read;
+    use std::io::{Read, Write};
     use std::net::TcpListener;
     use std::thread::JoinHandle;
 
@@ -516,7 +507,7 @@ mod tests {
         );
         assert!(c.is_connected());
         assert_eq!(c.read_holding(0, 1), Ok(vec![7]));
-        assert_eq!((c.connections, c.requests), (1, 2));
+        assert_eq!((c.connections(), c.requests()), (1, 2));
     }
 
     #[test]
@@ -529,7 +520,7 @@ mod tests {
         s.read_retries = 1;
         let mut c = ModbusClient::new(s);
         assert_eq!(c.read_holding(5, 1), Ok(vec![0x1234]));
-        assert_eq!((c.connections, c.requests), (2, 2));
+        assert_eq!((c.connections(), c.requests()), (2, 2));
         drop(c);
         let sent = server.join().expect("server");
         assert_eq!(
@@ -549,7 +540,7 @@ mod tests {
         let mut c = ModbusClient::new(s);
         let e = c.write_registers(1, &[3]).expect_err("closed");
         assert!(matches!(e, ModbusError::Closed { .. }), "{e}");
-        assert_eq!((c.connections, c.requests), (1, 1));
+        assert_eq!((c.connections(), c.requests()), (1, 1));
         let sent = server.join().expect("server");
         assert_eq!(sent, ["00 01 00 00 00 06 01 06 00 01 00 03"]);
     }

@@ -273,11 +273,11 @@ impl Link for ModbusLink {
     }
 
     fn connections(&self) -> u64 {
-        self.client.connections
+        self.client.connections()
     }
 
     fn requests(&self) -> u64 {
-        self.client.requests
+        self.client.requests()
     }
 
     fn is_connected(&self) -> bool {

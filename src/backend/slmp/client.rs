@@ -10,7 +10,6 @@
 //! without the caller knowing.
 
 use std::fmt;
-use std::io::Write;
 use std::net::TcpStream;
 use std::time::{Duration, Instant};
 
@@ -163,11 +162,8 @@ pub(crate) fn device_ref(device: &Device, what: &str) -> Result<DeviceRef, Clien
 /// One connection to a CPU (made on first use, dropped after a fault).
 pub struct Client {
     settings: ClientSettings,
-    stream: Option<TcpStream>,
+    connection: tcp::Connection,
     serial: u16,
-    /// Requests sent and connections made, for a run's figures.
-    pub requests: u64,
-    pub connections: u64,
 }
 
 impl Client {
@@ -175,10 +171,8 @@ impl Client {
     pub fn new(settings: ClientSettings) -> Self {
         Client {
             settings,
-            stream: None,
+            connection: tcp::Connection::default(),
             serial: 0,
-            requests: 0,
-            connections: 0,
         }
     }
 
@@ -192,28 +186,22 @@ impl Client {
     }
 
     pub fn is_connected(&self) -> bool {
-        self.stream.is_some()
+        self.connection.is_connected()
     }
 
     /// Drops the connection; the next request makes a new one.
     pub fn disconnect(&mut self) {
-        self.stream = None;
+        self.connection.disconnect();
     }
 
-    fn connect(&mut self) -> Result<&mut TcpStream, ClientError> {
-        if self.stream.is_none() {
-            let stream = tcp::connect(&self.settings.address, self.settings.connect_timeout)
-                .map_err(|error| ClientError::Connect {
-                    address: self.settings.address.clone(),
-                    error: error.to_string(),
-                })?;
-            self.connections += 1;
-            self.stream = Some(stream);
-        }
-        self.stream.as_mut().ok_or_else(|| ClientError::Connect {
-            address: address_of(&self.settings),
-            error: "not connected".into(),
-        })
+    /// Requests sent, for a run's figures.
+    pub fn requests(&self) -> u64 {
+        self.connection.requests
+    }
+
+    /// Connections made, for a run's figures.
+    pub fn connections(&self) -> u64 {
+        self.connection.connections
     }
 
     /// Sends one request and reads its reply; drops the connection on any fault.
@@ -243,19 +231,20 @@ impl Client {
             })?,
         };
         let timeout = self.settings.reply_timeout;
+        let address = self.settings.address.clone();
         let result = (|| {
-            self.connect()?;
-            self.requests += 1;
-            let stream = self.stream.as_mut().ok_or_else(|| ClientError::Closed {
-                what: what.into(),
-                error: "not connected".into(),
-            })?;
             let deadline = Instant::now() + timeout;
-            stream
-                .write_all(&request)
-                .map_err(|e| ClientError::Closed {
-                    what: what.into(),
-                    error: e.to_string(),
+            let stream = (self.connection)
+                .send(&address, self.settings.connect_timeout, &request)
+                .map_err(|unsent| match unsent {
+                    tcp::Unsent::Connect(error) => ClientError::Connect {
+                        address: address_of(&self.settings),
+                        error: error.to_string(),
+                    },
+                    tcp::Unsent::Write(e) => ClientError::Closed {
+                        what: what.into(),
+                        error: e.to_string(),
+                    },
                 })?;
             let bytes = read_reply(stream, frame_kind, code, deadline, what, timeout)?;
             let response = match code {
@@ -287,7 +276,7 @@ impl Client {
         match &result {
             // An error answer is a whole, well-formed reply: the connection is still in step.
             Ok(_) | Err(ClientError::EndCode { .. }) => {}
-            Err(_) => self.stream = None,
+            Err(_) => self.connection.disconnect(),
         }
         result
     }
@@ -385,7 +374,7 @@ impl Client {
         if data.is_empty() {
             Ok(())
         } else {
-            self.stream = None;
+            self.connection.disconnect();
             Err(ClientError::Frame {
                 what,
                 detail: format!("{} bytes of data after a write", data.len()),
@@ -479,7 +468,7 @@ fn read_full(
 mod tests {
     use super::*;
     use crate::backend::bench::fence::{WordRange, WriteFence};
-    use std::io::Read;
+    use std::io::{Read, Write};
     use std::net::TcpListener;
 
     /// A server that answers each request with the given byte chunks (with a pause between

@@ -172,11 +172,11 @@ impl Link for SlmpLink {
     }
 
     fn connections(&self) -> u64 {
-        self.0.connections
+        self.0.connections()
     }
 
     fn requests(&self) -> u64 {
-        self.0.requests
+        self.0.requests()
     }
 
     fn is_connected(&self) -> bool {
