@@ -526,3 +526,27 @@ fn generate_bench(out_dir: &std::path::Path) -> std::process::Output {
         out_dir.to_str().expect("utf-8"),
     ])
 }
+
+/// A simulated CPU serves only what the backend would run against: the manifest's mailbox on a
+/// variant without those words (D6000 on the C10R2) is refused before anything listens.
+#[test]
+fn a_simulated_cpu_refuses_a_mailbox_its_variant_does_not_have() {
+    let dir = common::scratch();
+    let out_dir = dir.path().join("bench");
+    assert!(generate_bench(&out_dir).status.success());
+    let manifest = out_dir.join("manifest.json");
+    let out = common::cli(&[
+        "hil",
+        "sim",
+        "--manifest",
+        manifest.to_str().expect("utf-8"),
+        "--variant",
+        "c10r2",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("does not exist on variant c10r2 of idec-fc4a"),
+        "{stderr}"
+    );
+}

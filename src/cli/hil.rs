@@ -315,6 +315,13 @@ fn sim_command(cli: &Cli, args: &SimArgs) -> Outcome {
             )))
         }
     };
+    // A simulated CPU serves only what the backend would run against.
+    crate::backend::bench::mailbox_on(
+        &profile,
+        &variant,
+        &m,
+        crate::backend::addressing(&profile)?.as_ref(),
+    )?;
     let model = crate::backend::reference_model(&project.profiles, &m.profile)
         .ok_or_else(|| CliError::input(format!("no built-in reference model for {}", m.profile)))?;
     // The simulator serves until the process is ended.

@@ -133,6 +133,28 @@ pub struct Plan {
     pub window: Vec<(Device, Vec<u16>)>,
 }
 
+/// The manifest's mailbox head, checked to lie with all its words on the variant: what the
+/// backend and a simulated CPU both refuse a manifest for.
+pub(crate) fn mailbox_on(
+    profile: &Profile,
+    variant: &str,
+    manifest: &manifest::Manifest,
+    addressing: &dyn Addressing,
+) -> Result<Device, LiveError> {
+    let mailbox = manifest.mailbox_head(addressing)?;
+    let on = profile
+        .variant(variant)
+        .ok_or_else(|| refused!("variant `{variant}` is not a variant of {}", profile.id))?;
+    if !profile.words_exist(on, &mailbox, mailbox::WORDS) {
+        return Err(refused!(
+            "the mailbox {} does not exist on variant {variant} of {}",
+            mailbox::range(&mailbox),
+            profile.id
+        ));
+    }
+    Ok(mailbox)
+}
+
 impl BenchBackend {
     /// The backend, checked against the profiles, without any connection.
     pub fn new<L: LinkSettings + Clone + 'static>(
@@ -162,7 +184,7 @@ impl BenchBackend {
                 crate::backend::BENCH_FORMS
             ));
         }
-        let Some(variant) = profile.variant(&settings.variant) else {
+        if profile.variant(&settings.variant).is_none() {
             return Err(refused!(
                 "variant `{}` is not a variant of {}; it has: {}",
                 settings.variant,
@@ -174,7 +196,7 @@ impl BenchBackend {
                     .collect::<Vec<_>>()
                     .join(", ")
             ));
-        };
+        }
         if !manifest.variants.contains(&settings.variant) {
             return Err(refused!(
                 "the manifest's program was generated for variants {}, not `{}`",
@@ -183,20 +205,13 @@ impl BenchBackend {
             ));
         }
         let addressing = settings.link.addressing();
-        let mailbox = manifest.mailbox_head(addressing)?;
-        let whole = mailbox::range(&mailbox);
         if let Some(why) =
             (settings.sandbox.iter()).find_map(|r| fence::sandbox_refuses(r, addressing))
         {
             return Err(refused!("`sandbox`: {why}"));
         }
-        if !profile.words_exist(variant, &mailbox, mailbox::WORDS) {
-            return Err(refused!(
-                "the mailbox {whole} does not exist on variant {} of {}",
-                settings.variant,
-                profile.id
-            ));
-        }
+        let mailbox = mailbox_on(&profile, &settings.variant, manifest, addressing)?;
+        let whole = mailbox::range(&mailbox);
         if let Some(r) = settings.sandbox.iter().find(|r| r.overlaps(&whole)) {
             return Err(refused!(
                 "the sandbox range {r} overlaps the mailbox {whole}: the program's own words \
