@@ -184,3 +184,36 @@ fn a_scaffold_for_a_protocol_is_judged_by_it() {
     );
     assert!(!said.contains("cross-vendor::mylib"), "{said}");
 }
+
+/// A scaffold is written whole or not at all: a `.github` that is a file, or a link out of the
+/// folder, is refused before any file is written.
+#[test]
+fn a_scaffold_is_written_whole_or_not_at_all() {
+    let dir = scratch();
+    std::fs::write(dir.path().join(".github"), "a file").expect("write");
+    let (code, said) = init(dir.path(), &["--python", "--name", "mylib"]);
+    assert_eq!(code, Some(2), "{said}");
+    assert!(
+        said.contains(".github is a file where init needs a folder"),
+        "{said}"
+    );
+    assert!(!dir.path().join("mylib_adapter.py").exists(), "{said}");
+    assert!(!dir.path().join("mylib.known.yaml").exists(), "{said}");
+    #[cfg(unix)]
+    {
+        let other = scratch();
+        let outside = scratch();
+        std::os::unix::fs::symlink(outside.path(), other.path().join(".github")).expect("link");
+        let (code, said) = init(other.path(), &["--python", "--name", "mylib"]);
+        assert_eq!(code, Some(2), "{said}");
+        assert!(said.contains("is a link"), "{said}");
+        assert!(!other.path().join("mylib_adapter.py").exists(), "{said}");
+        assert!(
+            std::fs::read_dir(outside.path())
+                .expect("dir")
+                .next()
+                .is_none(),
+            "nothing written through the link"
+        );
+    }
+}

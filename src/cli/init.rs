@@ -121,11 +121,23 @@ pub(super) fn init(command: &InitCommand) -> Outcome {
             taken.join(", ")
         )));
     }
-    let mut said = String::new();
+    // All or none: every folder is checked and made before any file, and the files are staged
+    // together and renamed into place together.
     for f in &files {
-        let path = args.dir.join(&f.path);
-        create_parent(&path)?;
-        output::write(Some(&path), &fill(f.text, name, args.protocol.as_deref()))?;
+        refuse_linked_folders(&args.dir, &f.path)?;
+    }
+    let texts: Vec<(std::path::PathBuf, String)> = (files.iter())
+        .map(|f| {
+            let path = args.dir.join(&f.path);
+            (path, fill(f.text, name, args.protocol.as_deref()))
+        })
+        .collect();
+    for (path, _) in &texts {
+        create_parent(path)?;
+    }
+    output::write_every(texts.iter().map(|(p, t)| (p.as_path(), t.as_str())))?;
+    let mut said = String::new();
+    for (path, _) in &texts {
         let _ = writeln!(said, "wrote {}", path.display());
     }
     let _ = write!(
@@ -135,6 +147,32 @@ pub(super) fn init(command: &InitCommand) -> Outcome {
     );
     output::write(None, &said)?;
     Ok(EXIT_OK)
+}
+
+/// Refuses a folder on the way from `dir` to `relative`'s file that is a link (which would
+/// take the file out of the folder given) or a file (where no file can go).
+fn refuse_linked_folders(dir: &Path, relative: &str) -> Result<(), CliError> {
+    let mut at = dir.to_path_buf();
+    let folders: Vec<&str> = relative.split('/').collect();
+    for part in &folders[..folders.len().saturating_sub(1)] {
+        at.push(part);
+        match std::fs::symlink_metadata(&at) {
+            Ok(m) if m.file_type().is_symlink() => {
+                return Err(CliError::input(format!(
+                    "{} is a link: init writes into the folder given, not where a link leads",
+                    at.display()
+                )))
+            }
+            Ok(m) if !m.is_dir() => {
+                return Err(CliError::input(format!(
+                    "{} is a file where init needs a folder; nothing was written",
+                    at.display()
+                )))
+            }
+            _ => {}
+        }
+    }
+    Ok(())
 }
 
 fn create_parent(path: &Path) -> Result<(), CliError> {
