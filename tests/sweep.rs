@@ -2015,6 +2015,11 @@ fn a_merge_refuses_what_is_not_the_whole_sweep() {
         v["elapsed_seconds"] = serde_json::json!(-1.0)
     });
     let more = edited("more.json", &|v| v["swept"] = serde_json::json!(u64::MAX));
+    // Consistent counts of another sweep: more inputs than this sweep's shard 1/3 holds.
+    let other_counts = edited("other-counts.json", &|v| {
+        let held = v["shard_inputs"].as_u64().unwrap_or_default();
+        v["shard_inputs"] = serde_json::json!(held + 5);
+    });
     let fifo = dir.path().join("fifo.json");
     let made = std::process::Command::new("mkfifo").arg(&fifo).status();
     let fifo = fifo.to_str().expect("path").to_string();
@@ -2043,6 +2048,11 @@ fn a_merge_refuses_what_is_not_the_whole_sweep() {
             vec![&more, &b, &c],
             None,
             format!("{more}: its counts do not add up"),
+        ),
+        (
+            vec![&other_counts, &b, &c],
+            None,
+            format!("{other_counts}: it says shard 1/3 holds"),
         ),
         (vec![&a, &b], None, "missing 3/3".to_string()),
         (vec![&a, &b, &c, &b], None, format!("{b}: shard 2/3 again")),

@@ -25,6 +25,7 @@ use std::time::{Duration, Instant};
 
 use serde::Deserialize;
 
+use super::generate::Generator;
 use super::group::{differing, disagree, labels_read, Class, Found, Group, Groups, Key};
 use super::input::Point;
 use super::{classes, exhaustive, Results, Sweep, SweepError};
@@ -426,6 +427,25 @@ fn check(sweep: &Sweep, files: &[(PathBuf, ShardFile)]) -> Result<(), SweepError
                 (false, false) => shown.join(", "),
             }
         )));
+    }
+    // Counts that add up can still be another sweep's: a shard of a space that is not weighted
+    // by class holds exactly every N-th input from the K-th.
+    if sweep.space.classes.is_none() && !matches!(sweep.settings.generator, Generator::Full { .. })
+    {
+        for (k, path) in &shards {
+            let Some((_, file)) = files.iter().find(|(p, _)| p == *path) else {
+                continue;
+            };
+            let holds = sweep.space.total().saturating_sub(k - 1).div_ceil(n);
+            if file.shard_inputs != holds {
+                return Err(SweepError(format!(
+                    "{}: it says shard {k}/{n} holds {} input(s), where this sweep's holds \
+                     {holds}: its counts are not this sweep's",
+                    path.display(),
+                    file.shard_inputs
+                )));
+            }
+        }
     }
     Ok(())
 }
