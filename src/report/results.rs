@@ -124,6 +124,8 @@ impl<'a> Tally<'a> {
         match record.status {
             Status::Pass => self.passed += 1,
             Status::Fail => self.deviating.push(record),
+            // A saved run's record keeps the difference's behaviour, not that it was listed: its
+            // label (`Verdict::label`) tells a known difference from a recorded case.
             Status::Ignored if record.label == "known-difference" => self.deviating.push(record),
             Status::Ignored => self.recorded.push(record),
             Status::Skipped => {}
@@ -385,30 +387,65 @@ const LEGEND: &str = "✓ N: the N cases of the class conform. ✗ N: N cases de
                       device does), and what the library did. –: no case of the class ran (the \
                       library has no such field, or declines the cases).";
 
-/// A cell as markdown.
-fn markdown_cell(row: &Row<'_>, cell: &Cell) -> String {
-    match cell {
-        Cell::NotApplicable => "–".into(),
-        Cell::Conforms(n) => format!("✓ {n}"),
-        Cell::Deviates {
-            count,
-            first,
-            rule,
-            listed,
-        } => {
-            let rule = rule.rsplit('/').next().unwrap_or_default();
-            let label = if rule.is_empty() { "see" } else { rule };
-            format!(
-                "✗ {count} [{label}](#{}){}",
-                row.anchor(first),
-                if *listed { "" } else { "*" }
-            )
+/// What a cell says: its text, and for a deviation the link to its reproduction (label and
+/// anchor) and a mark after it. Both renderers write it, each in its own markup.
+struct CellText {
+    text: String,
+    link: Option<(String, String)>,
+    mark: &'static str,
+}
+
+impl CellText {
+    fn of(row: &Row<'_>, cell: &Cell) -> CellText {
+        let plain = |text: String| CellText {
+            text,
+            link: None,
+            mark: "",
+        };
+        match cell {
+            Cell::NotApplicable => plain("–".into()),
+            Cell::Conforms(n) => plain(format!("✓ {n}")),
+            Cell::Deviates {
+                count,
+                first,
+                rule,
+                listed,
+            } => {
+                let rule = rule.rsplit('/').next().unwrap_or_default();
+                let label = if rule.is_empty() { "see" } else { rule };
+                CellText {
+                    text: format!("✗ {count} "),
+                    link: Some((label.to_string(), row.anchor(first))),
+                    mark: if *listed { "" } else { "*" },
+                }
+            }
+            Cell::Unspecified { accepts, refuses } => plain(match (accepts, refuses) {
+                (_, 0) => "? accepts".into(),
+                (0, _) => "? refuses".into(),
+                _ => format!("? accepts {accepts}, refuses {refuses}"),
+            }),
         }
-        Cell::Unspecified { accepts, refuses } => match (accepts, refuses) {
-            (_, 0) => "? accepts".into(),
-            (0, _) => "? refuses".into(),
-            _ => format!("? accepts {accepts}, refuses {refuses}"),
-        },
+    }
+
+    fn markdown(&self) -> String {
+        match &self.link {
+            Some((label, anchor)) => format!("{}[{label}](#{anchor}){}", self.text, self.mark),
+            None => self.text.clone(),
+        }
+    }
+
+    fn html(&self) -> String {
+        use super::html::escape;
+        match &self.link {
+            Some((label, anchor)) => format!(
+                "{}<a href=\"#{}\">{}</a>{}",
+                escape(&self.text),
+                escape(anchor),
+                escape(label),
+                self.mark
+            ),
+            None => escape(&self.text),
+        }
     }
 }
 
@@ -446,9 +483,13 @@ pub(crate) fn markdown(table: &Table<'_>) -> String {
             l.protocol.as_deref().unwrap_or("–")
         );
         for (_, cell) in &row.cells {
-            let _ = write!(out, " {} |", markdown_cell(row, cell));
+            let _ = write!(out, " {} |", CellText::of(row, cell).markdown());
         }
-        let _ = writeln!(out, " {} |", markdown_cell(row, &row.instruction_view));
+        let _ = writeln!(
+            out,
+            " {} |",
+            CellText::of(row, &row.instruction_view).markdown()
+        );
     }
     for row in &table.rows {
         let l = row.library;
@@ -525,18 +566,7 @@ pub(crate) fn html(table: &Table<'_>) -> String {
             Cell::Deviates { .. } => "bad",
             Cell::Unspecified { .. } => "open",
         };
-        let text = markdown_cell(row, cell);
-        // `✗ N [RULE](#anchor)` becomes a link.
-        let inner = match (text.find('['), text.find("](#"), text.rfind(')')) {
-            (Some(a), Some(b), Some(c)) if a < b && b < c => format!(
-                "{}<a href=\"#{}\">{}</a>{}",
-                escape(&text[..a]),
-                escape(&text[b + 3..c]),
-                escape(&text[a + 1..b]),
-                escape(&text[c + 1..])
-            ),
-            _ => escape(&text),
-        };
+        let inner = CellText::of(row, cell).html();
         format!("<td class=\"{class}\">{inner}</td>")
     };
     for row in &table.rows {
