@@ -182,10 +182,7 @@ impl<W: Write> Reporter for TextReporter<W> {
                             .trials
                             .push((*index, format!("{} ({})", trial.name(), trial.location())));
                     }
-                    Verdict::Skipped { reason } => {
-                        *self.skipped.entry(reason.clone()).or_default() += 1;
-                    }
-                    v @ Verdict::Cancelled => {
+                    v @ (Verdict::Skipped { .. } | Verdict::Cancelled) => {
                         let reason = v.not_run().unwrap_or_default().to_string();
                         *self.skipped.entry(reason).or_default() += 1;
                     }

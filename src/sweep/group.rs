@@ -49,10 +49,7 @@ impl Reply {
                 effect: effect.clone(),
                 fill_dependent: *fill_dependent,
             },
-            Verdict::Skipped { reason } => Reply::Skipped {
-                reason: reason.clone(),
-            },
-            v @ Verdict::Cancelled => Reply::Skipped {
+            v @ (Verdict::Skipped { .. } | Verdict::Cancelled) => Reply::Skipped {
                 reason: v.not_run().unwrap_or_default().to_string(),
             },
             Verdict::Fault { fault, .. } => Reply::failed(fault),

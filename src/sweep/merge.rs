@@ -302,7 +302,7 @@ fn check(sweep: &Sweep, files: &[(PathBuf, ShardFile)]) -> Result<(), SweepError
     };
     without_shard(&mut settings);
     let columns: Vec<&str> = sweep.columns.iter().map(|c| c.name.as_str()).collect();
-    let mut shards: BTreeMap<u64, &PathBuf> = BTreeMap::new();
+    let mut shards: BTreeMap<u64, (&PathBuf, &ShardFile)> = BTreeMap::new();
     let mut of = None;
     for (path, file) in files {
         let at = |what: String| SweepError(format!("{}: {what}", path.display()));
@@ -396,7 +396,7 @@ fn check(sweep: &Sweep, files: &[(PathBuf, ShardFile)]) -> Result<(), SweepError
                 of.unwrap_or_default()
             )));
         }
-        if let Some(other) = shards.insert(shard.0, path) {
+        if let Some((other, _)) = shards.insert(shard.0, (path, file)) {
             return Err(at(format!(
                 "shard {}/{} again (also {})",
                 shard.0,
@@ -432,10 +432,7 @@ fn check(sweep: &Sweep, files: &[(PathBuf, ShardFile)]) -> Result<(), SweepError
     // by class holds exactly every N-th input from the K-th.
     if sweep.space.classes.is_none() && !matches!(sweep.settings.generator, Generator::Full { .. })
     {
-        for (k, path) in &shards {
-            let Some((_, file)) = files.iter().find(|(p, _)| p == *path) else {
-                continue;
-            };
+        for (k, (path, file)) in &shards {
             let holds = sweep.space.total().saturating_sub(k - 1).div_ceil(n);
             if file.shard_inputs != holds {
                 return Err(SweepError(format!(
