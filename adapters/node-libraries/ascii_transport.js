@@ -5,6 +5,7 @@
 // wires and why; this module only drives the package it is given.
 const { EventEmitter } = require('events');
 const { serveCodec, CodecError, Unsupported } = require('plc-conformance-adapter');
+const { valueOf, bytesOf } = require('./field_bytes');
 
 const HEX = (n) => n.toString(16).toUpperCase().padStart(2, '0');
 
@@ -51,13 +52,10 @@ function serveAsciiTransport(pkg, { lfAlone }) {
     decode(text) {
       const bytes = decodeBytes(text);
       if (bytes.length === 0) throw new Unsupported('AsciiTransport handed on no byte for the field');
-      let value = 0;
-      for (const b of bytes) value = value * 256 + b;
-      return value;
+      return valueOf(bytes);
     },
     encode(value, digits) {
-      const bytes = Buffer.alloc(digits / 2);
-      bytes.writeUIntBE(value, 0, digits / 2);
+      const bytes = bytesOf(value, digits);
       return transport.frame(1, bytes).subarray(3, 3 + digits);
     },
     check(span) {

@@ -24,6 +24,7 @@
 // The module requires serialport (an optional dependency of modbus-serial, installed); no port is
 // opened. Known differences: modbus-serial.known.yaml.
 const { serveCodec, privateFunctions, CodecError, Unsupported } = require('plc-conformance-adapter');
+const { valueOf, bytesOf } = require('./field_bytes');
 
 const { _asciiEncodeRequestBuffer, _asciiDecodeResponseBuffer } = privateFunctions(
   require.resolve('modbus-serial/ports/asciiport.js'),
@@ -51,13 +52,10 @@ serveCodec({
     const bytes = decodeBytes(text);
     // An empty body with the LRC 00 is a frame of no byte: the library gives no value to answer.
     if (bytes.length === 0) throw new Unsupported('_asciiDecodeResponseBuffer decoded no byte for the field');
-    let value = 0;
-    for (const b of bytes) value = value * 256 + b;
-    return value;
+    return valueOf(bytes);
   },
   encode(value, digits) {
-    const bytes = Buffer.alloc(digits / 2);
-    bytes.writeUIntBE(value, 0, digits / 2);
+    const bytes = bytesOf(value, digits);
     return encodeRequest(bytes).subarray(1, 1 + digits);
   },
   check(span) {

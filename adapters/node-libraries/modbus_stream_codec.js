@@ -17,6 +17,7 @@
 // unwrap is called on a plain object holding the fields it uses (buffer, callback, stream), so no
 // stream or timer is created. Known differences: modbus-stream.known.yaml.
 const { serveCodec, privateFunctions } = require('plc-conformance-adapter');
+const { valueOf, bytesOf } = require('./field_bytes');
 
 const asciiFile = require.resolve('modbus-stream/lib/transport/ascii.js');
 const Transport = require(asciiFile);
@@ -40,13 +41,10 @@ serveCodec({
   decode(text, digits) {
     const frame = unwrap(Buffer.concat([text, Buffer.from('00')]));
     const bytes = Buffer.concat([Buffer.from([frame.slaveId]), frame.pdu]);
-    let value = 0;
-    for (const b of bytes) value = value * 256 + b;
-    return value;
+    return valueOf(bytes);
   },
   encode(value, digits) {
-    const bytes = Buffer.alloc(digits / 2);
-    bytes.writeUIntBE(value, 0, digits / 2);
+    const bytes = bytesOf(value, digits);
     return ascii(bytes);
   },
   check: (span) => ascii(Buffer.from([unwrap(Buffer.concat([span, Buffer.from('00')])).expected_crc])),
