@@ -142,10 +142,7 @@ pub(crate) fn mailbox_on(
     addressing: &dyn Addressing,
 ) -> Result<Device, LiveError> {
     let mailbox = manifest.mailbox_head(addressing)?;
-    let on = profile
-        .variant(variant)
-        .ok_or_else(|| refused!("variant `{variant}` is not a variant of {}", profile.id))?;
-    if !profile.words_exist(on, &mailbox, mailbox::WORDS) {
+    if !profile.words_exist(variant_of(profile, variant)?, &mailbox, mailbox::WORDS) {
         return Err(refused!(
             "the mailbox {} does not exist on variant {variant} of {}",
             mailbox::range(&mailbox),
@@ -153,6 +150,20 @@ pub(crate) fn mailbox_on(
         ));
     }
     Ok(mailbox)
+}
+
+/// The profile's variant of this id, or a refusal that lists the ones it has.
+fn variant_of<'p>(profile: &'p Profile, variant: &str) -> Result<&'p Variant, LiveError> {
+    profile.variant(variant).ok_or_else(|| {
+        refused!(
+            "variant `{variant}` is not a variant of {}; it has: {}",
+            profile.id,
+            (profile.variants.iter())
+                .map(|v| v.id.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    })
 }
 
 impl BenchBackend {
@@ -184,19 +195,7 @@ impl BenchBackend {
                 crate::backend::BENCH_FORMS
             ));
         }
-        if profile.variant(&settings.variant).is_none() {
-            return Err(refused!(
-                "variant `{}` is not a variant of {}; it has: {}",
-                settings.variant,
-                profile.id,
-                profile
-                    .variants
-                    .iter()
-                    .map(|v| v.id.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ));
-        }
+        variant_of(&profile, &settings.variant)?;
         if !manifest.variants.contains(&settings.variant) {
             return Err(refused!(
                 "the manifest's program was generated for variants {}, not `{}`",
