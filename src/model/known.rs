@@ -118,12 +118,16 @@ impl KnownDifferences {
             .or_else(|| self.entries.iter().find(|e| e.matches(s)))
     }
 
-    /// [`KnownDifferences::entry`], with the other entries that cover the trial too.
+    /// [`KnownDifferences::entry`], with the other entries that cover the trial too: one pass
+    /// over the entries (a sweep's file may hold tens of thousands).
     pub fn covering(&self, s: &Subject<'_>) -> Option<Entry> {
-        let first = self.entry(s)?;
+        let matching: Vec<&Entry> = self.entries.iter().filter(|e| e.matches(s)).collect();
+        let first = (matching.iter().copied())
+            .find(|e| e.case().is_some())
+            .or_else(|| matching.first().copied())?;
         let mut entry = first.clone();
-        entry.also = (self.entries.iter())
-            .filter(|e| !std::ptr::eq(*e, first) && e.matches(s))
+        entry.also = (matching.iter())
+            .filter(|e| !std::ptr::eq(**e, first))
             .map(|e| format!("{}: {}", e.location, e.reason))
             .collect();
         Some(entry)
