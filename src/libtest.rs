@@ -31,12 +31,12 @@ use crate::backend::external::ExternalBackend;
 use crate::backend::Backend;
 use crate::judge::{Status, Verdict};
 use crate::load::{load_project, locate_project};
-use crate::model::project::ExternalSettings;
+use crate::model::project::{ExternalSettings, ProjectBackends};
 use crate::plan::Trial;
 use crate::project::{Paths, Project};
 use crate::report::console;
 use crate::report::text::{render, Palette};
-use crate::session::{run_one, BackendSource, HelloCache, LazyStart, Session};
+use crate::session::{run_one, Asked, BackendSource, HelloCache, LazyStart, Session};
 
 /// Names the file of [`Harness::hello_cache`] instead of the one the harness gives; empty, none.
 const ENV_HELLO_CACHE: &str = "PLC_CONFORMANCE_HELLO_CACHE";
@@ -76,6 +76,8 @@ pub struct Harness {
     project_file: Option<PathBuf>,
     builtin: bool,
     extra: Vec<(Arc<dyn Backend>, Option<PathBuf>)>,
+    /// Backends as the command line's `--backend` names them.
+    asked: Vec<String>,
     hello_cache: Option<PathBuf>,
 }
 
@@ -88,6 +90,7 @@ impl Harness {
             project_file: None,
             builtin: true,
             extra: Vec::new(),
+            asked: Vec::new(),
             hello_cache: None,
         }
     }
@@ -136,6 +139,16 @@ impl Harness {
     /// Adds a backend, with its known-differences file.
     pub fn backend(mut self, backend: Arc<dyn Backend>, known: Option<PathBuf>) -> Self {
         self.extra.push((backend, known));
+        self
+    }
+
+    /// Adds a backend as the command line's `--backend` names it: `external:NAME=COMMAND` (a
+    /// process speaking the protocol, started by `sh -c`, 5 s a case), a bench over a link
+    /// (`slmp:...`, `modbus:...`), or a backend of the project file by name. The text is read by
+    /// the code that reads the command line's, so a wrong one is refused the same way, before
+    /// any trial runs.
+    pub fn backend_spec(mut self, text: impl Into<String>) -> Self {
+        self.asked.push(text.into());
         self
     }
 
@@ -191,9 +204,10 @@ impl Harness {
         for (backend, known) in self.extra {
             sources.push(BackendSource::InProcess(backend, known));
         }
+        let mut configured = ProjectBackends::default();
         if let Some(binary) = &self.project_file {
             let (file, explicit) = locate_project(&self.root);
-            let configured = match load_project(&file, explicit, binary) {
+            configured = match load_project(&file, explicit, binary) {
                 Ok(p) => p,
                 Err(errors) => {
                     return Err(Refused::one(format!(
@@ -201,7 +215,7 @@ impl Harness {
                     )))
                 }
             };
-            for skipped in configured.skipped {
+            for skipped in &configured.skipped {
                 let name = format!("{}::setup", skipped.name);
                 let why = skipped.to_string();
                 tests.push(
@@ -220,7 +234,12 @@ impl Harness {
                 .exact
                 .then(|| args.filter.as_deref().map(backend_of))
                 .flatten();
-            for c in configured.configured.into_iter().filter(|c| !c.on_request) {
+            for c in configured
+                .configured
+                .iter()
+                .filter(|c| !c.on_request)
+                .cloned()
+            {
                 let declared = c.settings.profile.is_some() || c.settings.codec;
                 let now = args.list || alone == Some(c.settings.name.as_str());
                 // Listing plans a backend from its cached answer to `hello` when it has one.
@@ -238,6 +257,25 @@ impl Harness {
                     None if declared && !now => BackendSource::ProcessOnFirstUse(c.settings),
                     None => BackendSource::Process(c.settings),
                 });
+            }
+        }
+        if !self.asked.is_empty() {
+            let binary = (self.project_file.clone())
+                .or_else(|| std::env::current_exe().ok())
+                .unwrap_or_default();
+            let asked = Asked {
+                texts: &self.asked,
+                known_differences: &[],
+                in_process: &[],
+                file: &configured,
+                timeout: crate::model::project::DEFAULT_TIMEOUT,
+                max_faults: crate::model::project::DEFAULT_MAX_CONSECUTIVE_FAULTS,
+                binary: &binary,
+                references: false,
+            };
+            match asked.sources(&project) {
+                Ok(chosen) => sources.extend(chosen.sources),
+                Err(e) => return Err(Refused::one(crate::error_chain::chain(&e))),
             }
         }
         let (session, failed) = Session::assemble(project, sources, whole_corpus);

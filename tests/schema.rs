@@ -39,14 +39,14 @@ fn checked_in(name: &str) -> serde_json::Value {
 #[case::libraries(SchemaKind::Libraries, "libraries.schema.json", "libraries")]
 fn checked_in_schema_is_current(#[case] kind: SchemaKind, #[case] file: &str, #[case] flag: &str) {
     assert!(
-        checked_in(file) == schema(kind),
+        checked_in(file) == schema(kind).expect("a file format"),
         "schema/{file} is stale: run `cargo run -- schema --kind {flag} > schema/{file}`"
     );
 }
 
 #[test]
 fn vector_schema_is_draft_07_and_closed() {
-    let schema = schema(SchemaKind::Vectors);
+    let schema = schema(SchemaKind::Vectors).expect("a file format");
     assert_eq!(schema["$schema"], "http://json-schema.org/draft-07/schema#");
     assert_eq!(schema["additionalProperties"], false);
     let case = &schema["definitions"]["CaseSpec"];

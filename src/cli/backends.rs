@@ -1,18 +1,16 @@
 //! Loading a project for a command and starting the backends it names.
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use super::{BackendArgs, Cli, CliError};
 use crate::backend::Backend;
 use crate::load::{
-    embedded_files, find_project_root, is_project_root, load_project, locate_project, valid_name,
-    ENV_SELF, FILE_NAME,
+    embedded_files, find_project_root, is_project_root, load_project, locate_project, FILE_NAME,
 };
-use crate::model::project::{ExternalSettings, Launch, ProjectBackends};
+use crate::model::project::ProjectBackends;
 use crate::project::{Paths, Project};
-use crate::session::{BackendSource, Session};
+use crate::session::{Asked, Session};
 
 /// The project folder of the command: `--root`, else the nearest project folder at or above the
 /// current one (as a relative path, so that messages stay short), else none: the data built into
@@ -123,123 +121,6 @@ pub(super) fn project_file(cli: &Cli) -> Result<ProjectBackends, CliError> {
     }
 }
 
-/// Reads `external:NAME=COMMAND`.
-fn command_line_external(
-    text: &str,
-    args: &BackendArgs,
-) -> Result<Option<ExternalSettings>, CliError> {
-    let Some(rest) = text.strip_prefix("external:") else {
-        return Ok(None);
-    };
-    let Some((name, command)) = rest.split_once('=') else {
-        return Err(CliError::input(format!(
-            "`{text}`: expected `external:NAME=COMMAND`, e.g. `external:my-emu=./my-emu --serve`"
-        )));
-    };
-    if !valid_name(name) {
-        return Err(CliError::input(format!(
-            "`{name}` is not a backend name: use lowercase letters, digits, `-` and `_`"
-        )));
-    }
-    if command.trim().is_empty() {
-        return Err(CliError::input(format!(
-            "external backend `{name}` has an empty command"
-        )));
-    }
-    if !(args.timeout.is_finite() && args.timeout > 0.0 && args.timeout <= 86_400.0) {
-        return Err(CliError::input(format!(
-            "--timeout {}: give seconds above 0 and at most a day",
-            args.timeout
-        )));
-    }
-    if args.max_faults == 0 {
-        return Err(CliError::input("--max-faults 0: give at least 1"));
-    }
-    let mut settings = ExternalSettings::new(name, Launch::Shell(command.to_string()));
-    settings.timeout = std::time::Duration::from_secs_f64(args.timeout);
-    settings.max_consecutive_faults = args.max_faults;
-    settings.env = vec![(ENV_SELF.into(), this_binary().display().to_string())];
-    Ok(Some(settings))
-}
-
-/// The sources of the backends a command asks for, in the order given: with no `--backend`,
-/// the reference models and the project file's backends (but those run on request).
-/// `references` (the reference models first, the names given among them not again) is what a
-/// sweep asks for, whose oracle they are. Also the names of the backends given, in order.
-fn sources(
-    session: &Session,
-    in_process: &[Arc<dyn Backend>],
-    file: &ProjectBackends,
-    args: &BackendArgs,
-    references: bool,
-) -> Result<(Vec<BackendSource>, Vec<String>), CliError> {
-    let mut known_files: BTreeMap<&str, PathBuf> = BTreeMap::new();
-    for entry in &args.known_differences {
-        let Some((name, path)) = entry.split_once('=') else {
-            return Err(CliError::input(format!(
-                "--known-differences `{entry}`: expected NAME=FILE"
-            )));
-        };
-        known_files.insert(name, PathBuf::from(path));
-    }
-    let models = session.reference_names();
-    let mut sources = Vec::new();
-    let mut chosen = Vec::new();
-    if references || args.backends.is_empty() {
-        sources.push(BackendSource::References);
-    }
-    if args.backends.is_empty() {
-        for c in file.configured.iter().filter(|c| !c.on_request) {
-            sources.push(BackendSource::Process(c.settings.clone()));
-        }
-    }
-    for name in &args.backends {
-        if let Some(settings) =
-            crate::backend::bench_settings(name, Path::new("."), &session.profiles)?
-        {
-            chosen.push(settings.name.clone());
-            sources.push(BackendSource::Bench(Box::new(settings)));
-            continue;
-        } else if let Some(mut settings) = command_line_external(name, args)? {
-            settings.known_differences = known_files.remove(settings.name.as_str());
-            chosen.push(settings.name.clone());
-            sources.push(BackendSource::Process(settings));
-            continue;
-        }
-        chosen.push(name.clone());
-        if let Some(b) = in_process.iter().find(|b| b.name() == name) {
-            sources.push(BackendSource::InProcess(
-                b.clone(),
-                known_files.remove(name.as_str()),
-            ));
-        } else if models.contains(name) {
-            if !references {
-                sources.push(BackendSource::Reference(name.clone()));
-            }
-        } else if let Some(c) = file.configured.iter().find(|c| c.settings.name == *name) {
-            sources.push(BackendSource::Process(c.settings.clone()));
-        } else if let Some(skipped) = file.skipped.iter().find(|s| s.name == *name) {
-            return Err(CliError::input(skipped.to_string()));
-        } else {
-            let mut known: Vec<&str> = models.iter().map(String::as_str).collect();
-            known.extend(in_process.iter().map(|b| b.name()));
-            known.extend(file.configured.iter().map(|c| c.settings.name.as_str()));
-            return Err(CliError::input(format!(
-                "unknown backend `{name}`; expected one of: {}, external:NAME=COMMAND, {}",
-                known.join(", "),
-                crate::backend::BENCH_FORMS
-            )));
-        }
-    }
-    if let Some(name) = known_files.keys().next() {
-        return Err(CliError::input(format!(
-            "--known-differences names `{name}`, which is not an `external:` or in-process \
-             backend of this run"
-        )));
-    }
-    Ok((sources, chosen))
-}
-
 /// Sets up the backends a command asks for in `session` (every external backend has agreed on
 /// the protocol before a case runs) and returns them, in the order given.
 pub(super) fn start(
@@ -262,13 +143,24 @@ fn set_up(
     // known-differences file names.
     let own_corpus = args.vectors.is_empty();
     let before = session.backends.len();
-    let (sources, chosen) = sources(session, &cli.in_process.0, file, args, references)?;
-    for source in sources {
+    let binary = this_binary();
+    let chosen = Asked {
+        texts: &args.backends,
+        known_differences: &args.known_differences,
+        in_process: &cli.in_process.0,
+        file,
+        timeout: args.timeout,
+        max_faults: args.max_faults,
+        binary: &binary,
+        references,
+    }
+    .sources(session)?;
+    for source in chosen.sources {
         session.add(source, own_corpus)?;
     }
     Ok(match args.backends.is_empty() {
         true => session.backends[before..].to_vec(),
-        false => (chosen.iter())
+        false => (chosen.names.iter())
             .filter_map(|name| session.backend(name).cloned())
             .collect(),
     })

@@ -8,12 +8,13 @@ use std::fmt::Write as _;
 use clap::{CommandFactory, Parser};
 
 use super::backends::{load, paths, prepare, project_file, project_file_path, Prepared};
-use super::{output, BackendArgs, Cli, CliError, Outcome, SchemaKind, EXIT_OK};
+use super::{output, BackendArgs, Cli, CliError, Outcome, EXIT_OK};
 use crate::backend::external::{protocol, serve as protocol_serve};
 use crate::load::{load_corpus, load_open_questions, load_profiles, OPEN_QUESTIONS};
 use crate::report::text::case_line;
 use crate::session::Session;
 use crate::spec;
+use crate::spec::SchemaKind;
 
 pub(super) fn validate(cli: &Cli, given: &[PathBuf]) -> Outcome {
     let paths = paths(cli, given, "validate")?;
@@ -209,24 +210,8 @@ fn list_profiles(out: &mut String, profiles: &crate::model::profile::Profiles) {
     }
 }
 
-/// The JSON report's schema, as shipped in `schema/`.
-const RESULTS_SCHEMA: &str = include_str!("../../schema/results.schema.json");
-
 pub(super) fn schema(kind: SchemaKind) -> Outcome {
-    let schema = match kind {
-        SchemaKind::Vectors => spec::schema(spec::SchemaKind::Vectors),
-        SchemaKind::Profile => spec::schema(spec::SchemaKind::Profile),
-        SchemaKind::CrossVendor => spec::schema(spec::SchemaKind::CrossVendor),
-        SchemaKind::Project => spec::schema(spec::SchemaKind::Project),
-        SchemaKind::Known => spec::schema(spec::SchemaKind::Known),
-        SchemaKind::OpenQuestions => spec::schema(spec::SchemaKind::OpenQuestions),
-        SchemaKind::ProtocolProfile => spec::schema(spec::SchemaKind::ProtocolProfile),
-        SchemaKind::ProtocolFields => spec::schema(spec::SchemaKind::ProtocolFields),
-        SchemaKind::Libraries => spec::schema(spec::SchemaKind::Libraries),
-        SchemaKind::Protocol => protocol::protocol_schema(),
-        // Written by hand: the report's types serialize by hand too (`report::json`).
-        SchemaKind::Results => serde_json::from_str(RESULTS_SCHEMA).unwrap_or_default(),
-    };
+    let schema = spec::schema(kind).unwrap_or_else(protocol::protocol_schema);
     output::write(
         None,
         &serde_json::to_string_pretty(&schema).unwrap_or_default(),

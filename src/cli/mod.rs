@@ -19,6 +19,7 @@ mod sweep;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use crate::spec::SchemaKind;
 use clap::{Parser, Subcommand, ValueEnum};
 
 pub(crate) use error::CliError;
@@ -212,8 +213,8 @@ pub(crate) struct BackendArgs {
     #[arg(long = "backend", value_name = "NAME")]
     pub backends: Vec<String>,
     /// Seconds an `external:` backend given here may take to answer one case.
-    #[arg(long, value_name = "SECONDS", default_value_t = 5.0)]
-    pub timeout: f64,
+    #[arg(long, value_name = "SECONDS", default_value = "5", value_parser = seconds)]
+    pub timeout: std::time::Duration,
     /// Faults (crash, timeout, protocol error) in a row after which an `external:` backend
     /// given here is not asked any more: its remaining trials fail as not run.
     #[arg(long, value_name = "N", default_value_t = crate::model::project::DEFAULT_MAX_CONSECUTIVE_FAULTS)]
@@ -262,31 +263,14 @@ pub(crate) struct ReportArgs {
     pub baseline: Option<PathBuf>,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub(crate) enum SchemaKind {
-    /// Vector files (`vectors/<family>/*.yaml`).
-    Vectors,
-    /// Vendor profiles (`vendors/*.yaml`).
-    Profile,
-    /// Cross-vendor vector files (`vectors/cross-vendor/*.yaml`).
-    CrossVendor,
-    /// The messages of the external-backend protocol.
-    Protocol,
-    /// The project file, `plc-conformance.yaml`.
-    Project,
-    /// A known-differences file.
-    Known,
-    /// The open-questions file, `docs/open-questions.yaml`.
-    OpenQuestions,
-    /// Protocol profiles (`vendors/protocols/*.yaml`): a communication protocol's fields and
-    /// rules.
-    ProtocolProfile,
-    /// Protocol-field vector files (`vectors/protocols/*.yaml`).
-    ProtocolFields,
-    /// The libraries of the results table (`libraries.yaml`).
-    Libraries,
-    /// The JSON report (`--format json`, `--save`).
-    Results,
+/// `--timeout SECONDS` of a case: above 0 and at most a day, read the same way by every
+/// command that takes it.
+pub(crate) fn seconds(text: &str) -> Result<std::time::Duration, String> {
+    text.parse::<f64>()
+        .ok()
+        .filter(|s| s.is_finite() && *s > 0.0 && *s <= 86_400.0)
+        .map(std::time::Duration::from_secs_f64)
+        .ok_or_else(|| format!("`{text}`: give seconds above 0 and at most a day"))
 }
 
 /// Parses the arguments, runs the command and returns its exit status.

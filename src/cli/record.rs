@@ -22,8 +22,8 @@ pub(crate) struct RecordArgs {
     #[arg(long = "vectors", value_name = "PATH")]
     pub vectors: Vec<PathBuf>,
     /// Seconds an `external:` backend may take to answer one case.
-    #[arg(long, value_name = "SECONDS", default_value_t = 5.0)]
-    pub timeout: f64,
+    #[arg(long, value_name = "SECONDS", default_value = "5", value_parser = super::seconds)]
+    pub timeout: std::time::Duration,
     /// The date written in the provenance [default: today, UTC].
     #[arg(long, value_name = "YYYY-MM-DD")]
     pub date: Option<String>,

@@ -7,13 +7,11 @@ use std::path::{Path, PathBuf};
 use super::backends::{prepare_with_references, Prepared};
 use super::output::Sink;
 use super::{output, BackendArgs, Cli, CliError, Format, Outcome, EXIT_DIFFERENCES, EXIT_OK};
-use crate::load::CorpusBuilder;
 use crate::model::cross_vendor::Operation;
-use crate::model::profile::Profiles;
 use crate::report::console;
 use crate::sweep::generate::{Digits, Generator, MAX_DIGITS};
 use crate::sweep::request::{GeneratorChoice, Request, Swept};
-use crate::sweep::{emit, render, Results, Sweep};
+use crate::sweep::{emit, merge, render, Completed, Results, Sweep};
 
 /// What `sweep` takes.
 #[derive(Debug, clap::Args)]
@@ -29,7 +27,7 @@ pub(crate) struct SweepArgs {
     pub profile: Option<String>,
     /// The generator [default: text for text-reading targets, values for the others].
     #[arg(long, value_enum)]
-    pub generator: Option<GeneratorArg>,
+    pub generator: Option<GeneratorChoice>,
     /// Seed of the random generator (printed with the results) [default: from the clock].
     #[arg(long)]
     pub seed: Option<u64>,
@@ -83,8 +81,8 @@ pub(crate) struct SweepArgs {
     #[arg(long, value_name = "NAME=FILE")]
     pub known_differences: Vec<String>,
     /// Seconds an `external:` backend may take to answer one case.
-    #[arg(long, value_name = "SECONDS", default_value_t = 5.0)]
-    pub timeout: f64,
+    #[arg(long, value_name = "SECONDS", default_value = "5", value_parser = super::seconds)]
+    pub timeout: std::time::Duration,
     /// Threads for the built-in models [default: the number of CPUs].
     #[arg(short = 'j', long, value_name = "N")]
     pub jobs: Option<usize>,
@@ -127,62 +125,10 @@ fn refuse_hand_written(path: &Path) -> Result<(), CliError> {
     )))
 }
 
-/// The shards' JSON results, read and parsed (file, line and column on a bad one).
-fn read_shards(
-    paths: &[PathBuf],
-) -> Result<Vec<(PathBuf, crate::sweep::merge::ShardFile)>, CliError> {
-    paths
-        .iter()
-        .map(|p| {
-            // A regular file of bounded size: a FIFO, a device or a runaway file is refused
-            // before anything is read.
-            let bytes = crate::load::read_regular_limited(p, crate::sweep::merge::MAX_SHARD_BYTES)
-                .map_err(|e| {
-                    CliError::input(format!("--merge {}: cannot be read: {e}", p.display()))
-                })?;
-            let text = String::from_utf8(bytes)
-                .map_err(|_| CliError::input(format!("--merge {}: not UTF-8 text", p.display())))?;
-            Ok((p.clone(), crate::sweep::merge::read(p, &text)?))
-        })
-        .collect()
-}
-
-/// The emitted cases that load as the corpus would load them, each checked in a file of its
-/// own; the others are set aside with the loader's reason.
-fn loadable<'e>(path: &Path, emitted: &'e emit::Emitted, profiles: &Profiles) -> Vec<&'e str> {
-    let mut kept = Vec::new();
-    for (input, case) in &emitted.cases {
-        let mut builder = CorpusBuilder::default();
-        builder.add_file(path, &emitted.yaml([case.as_str()]), profiles);
-        match builder.finish() {
-            Ok(_) => kept.push(case.as_str()),
-            Err(e) => console::note(&format!(
-                "not written as a vector: {input}: it would not load: {}",
-                e.to_string().lines().next().unwrap_or_default()
-            )),
-        }
-    }
-    kept
-}
-
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub(crate) enum OperationArg {
     HexToValue,
     ValueToHex,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub(crate) enum GeneratorArg {
-    /// Every 16-bit value.
-    Values,
-    /// 32-bit values: the lattice of digits 0, 1, 9, A, F and every boundary.
-    Values32,
-    /// Every text of length 1..--length over --alphabet.
-    Text,
-    /// --count random inputs from --seed.
-    Random,
-    /// All 2^32 texts of 4 bytes, by byte class (--each-text asks every text).
-    Full,
 }
 
 /// The report formats a sweep's results have (the others are a run's: a matrix of trials,
@@ -220,40 +166,37 @@ pub(super) fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
     // The shards' files are read before anything is swept or asked.
     let shards = match args.merge.is_empty() {
         true => None,
-        false => Some(read_shards(&args.merge)?),
+        false => Some(merge::read_files(&args.merge)?),
     };
     // Where the results go is settled before the sweep, not found wrong after it.
     if let (Some(path), false) = (&args.emit, args.force) {
         refuse_hand_written(path)?;
     }
-    let output_sink = args
-        .output
-        .as_deref()
-        .map(|p| Sink::open(Some(p)))
-        .transpose()?;
-    let emit_sink = args
-        .emit
-        .as_deref()
-        .map(|p| Sink::open(Some(p)))
-        .transpose()?;
+    let open = |path: &Option<PathBuf>| path.as_deref().map(|p| Sink::open(Some(p))).transpose();
+    let (output_sink, emit_sink) = (open(&args.output)?, open(&args.emit)?);
     announce(&sweep, shards.as_ref().map(Vec::len));
     // SIGINT and SIGTERM (handled in `cli::main`) stop the sweep after the round under way and
     // kill every backend process group, so a hung backend ends the round too.
-    let stop = crate::interrupt::stop_flag();
     let bar = progress_bar(sweep.space.total());
-    let mut results = match shards {
-        Some(files) => crate::sweep::merge::merge(&sweep, &files, stop)?,
-        None => sweep.run(stop, &mut |done, of| {
+    let completed = sweep.complete(
+        shards.as_deref(),
+        &project.known,
+        crate::interrupt::stop_flag(),
+        &mut |done, of| {
             if let Some(bar) = &bar {
                 bar.set_length(of);
                 bar.set_position(done);
             }
-        }),
-    };
+        },
+    );
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
-    if sweep.conclude(&mut results, &project.known) {
+    let Completed {
+        results,
+        known_cover_nothing,
+    } = completed?;
+    if known_cover_nothing {
         console::warning(
             "a value has no input class: of a known-differences file, only an entry for every \
              case (`cases: ['*']`) covers a value-to-hex sweep's inputs, so its other entries \
@@ -261,8 +204,10 @@ pub(super) fn sweep(cli: &Cli, args: &SweepArgs) -> Outcome {
         );
     }
     write_results(&results, args.format, output_sink)?;
-    if let Some(code) = inexact(&results) {
-        return Ok(code);
+    if let Some(why) = results.inexact() {
+        // Exit 1: the counts above are not exact.
+        console::status(&format!("error: {why}"));
+        return Ok(EXIT_DIFFERENCES);
     }
     if let (Some(path), Some(sink)) = (&args.emit, emit_sink) {
         emit_vectors(&sweep, &results, project, path, sink)?;
@@ -294,13 +239,7 @@ fn request(args: &SweepArgs) -> Result<Request, CliError> {
     };
     Ok(Request {
         swept,
-        generator: args.generator.map(|g| match g {
-            GeneratorArg::Values => GeneratorChoice::Values,
-            GeneratorArg::Values32 => GeneratorChoice::Values32,
-            GeneratorArg::Text => GeneratorChoice::Text,
-            GeneratorArg::Random => GeneratorChoice::Random,
-            GeneratorArg::Full => GeneratorChoice::Full,
-        }),
+        generator: args.generator,
         seed: args.seed,
         count: args.count,
         length: args.length,
@@ -393,26 +332,6 @@ fn write_results(results: &Results, format: Format, sink: Option<Sink>) -> Resul
     }
 }
 
-/// Exit 1 when the counts are not exact: the byte classes did not hold, or the built-in models
-/// answered unlike their rules as every text was asked.
-fn inexact(results: &Results) -> Option<u8> {
-    if let Some(m) = results.classes.as_ref().and_then(|c| c.mismatch.as_ref()) {
-        console::status(&format!(
-            "error: the byte classes do not hold: {} answers differently from its class representative {}; \
-             the counts above are not exact (--each-text asks every text)",
-            m.text.point, m.representative.point
-        ));
-        return Some(EXIT_DIFFERENCES);
-    }
-    let disagreement = (results.exhaustive.as_ref()).and_then(|e| e.disagreement.as_ref())?;
-    console::status(&format!(
-        "error: the built-in models answer {} unlike their rules as the sweep asked every \
-         text; the counts above are not exact",
-        disagreement.point
-    ));
-    Some(EXIT_DIFFERENCES)
-}
-
 /// The shrunk inputs that load, written as a vector file through `sink`.
 fn emit_vectors(
     sweep: &Sweep,
@@ -421,12 +340,12 @@ fn emit_vectors(
     path: &Path,
     mut sink: Sink,
 ) -> Result<(), CliError> {
-    let emitted = emit::emit(sweep, results, &project.corpus);
+    let mut emitted = emit::emit(sweep, results, &project.corpus);
+    emitted.keep_loadable(path, &project.profiles);
     for why in &emitted.skipped {
         console::note(&format!("not written as a vector: {why}"));
     }
-    let cases = loadable(path, &emitted, &project.profiles);
-    if cases.is_empty() {
+    if emitted.cases.is_empty() {
         // Dropped unfinished: a staged file is removed and the target left as it was.
         drop(sink);
         console::status(&format!(
@@ -435,12 +354,15 @@ fn emit_vectors(
         ));
         return Ok(());
     }
-    let yaml = schema_line_that_resolves(path, emitted.yaml(cases.iter().copied()));
+    let yaml = schema_line_that_resolves(
+        path,
+        emitted.yaml(emitted.cases.iter().map(|(_, c)| c.as_str())),
+    );
     sink.write_all(yaml.as_bytes()).map_err(|e| sink.error(e))?;
     sink.finish()?;
     console::status(&format!(
         "wrote {} vector(s) to {}",
-        cases.len(),
+        emitted.cases.len(),
         path.display()
     ));
     Ok(())

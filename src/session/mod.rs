@@ -11,6 +11,7 @@
 //! what [`Session::run`] returns.
 
 mod against;
+mod asked;
 mod first_use;
 mod hello_cache;
 mod run;
@@ -21,6 +22,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 pub(crate) use against::Against;
+pub(crate) use asked::Asked;
 pub(crate) use first_use::LazyStart;
 use first_use::Placeholder;
 pub(crate) use hello_cache::HelloCache;
@@ -80,6 +82,11 @@ pub enum SetupError {
         protocol: String,
         known: Vec<String>,
     },
+    /// A backend asked for that cannot be had (a text that names none, or names one wrongly):
+    /// what was wrong and what to give instead.
+    Asked(String),
+    /// A bench backend's text (`slmp:...`, `modbus:...`) refused before anything was reached.
+    Spec(LiveError),
     /// A live CPU backend whose settings, program manifest or interlocks (type name, RUN, the
     /// program's signature) refused it before anything was written: the backend and why.
     Live { backend: String, source: LiveError },
@@ -120,6 +127,8 @@ impl fmt::Display for SetupError {
                  no protocol profile defines; the protocols are: {}",
                 known.join(", ")
             ),
+            SetupError::Asked(message) => f.write_str(message),
+            SetupError::Spec(e) => write!(f, "{e}"),
             SetupError::Live { backend, .. } => {
                 write!(f, "live CPU backend `{backend}` not started")
             }
@@ -135,7 +144,9 @@ impl std::error::Error for SetupError {
             SetupError::Duplicate(_)
             | SetupError::NoModel(_)
             | SetupError::NoProfile { .. }
-            | SetupError::NoProtocol { .. } => None,
+            | SetupError::NoProtocol { .. }
+            | SetupError::Asked(_) => None,
+            SetupError::Spec(e) => e.source(),
             SetupError::Live { source, .. } => Some(source),
         }
     }
@@ -368,14 +379,6 @@ impl Session {
     /// The backend of this name.
     pub fn backend(&self, name: &str) -> Option<&Arc<dyn Backend>> {
         self.backends.iter().find(|b| b.name() == name)
-    }
-
-    /// The names of the built-in reference models this session's profiles have.
-    pub(crate) fn reference_names(&self) -> Vec<String> {
-        reference_backends(&self.project.profiles)
-            .iter()
-            .map(|b| b.name().to_string())
-            .collect()
     }
 }
 

@@ -18,8 +18,9 @@ pub(crate) mod vectors;
 pub use vectors::Basis;
 pub(crate) use vectors::ScalarSpec;
 
-/// The on-disk formats that have a JSON Schema.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// The formats that have a JSON Schema: the on-disk files, the external-backend protocol's
+/// messages and the JSON report (the command line's `schema --kind` takes these names).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum SchemaKind {
     /// Vector files (`vectors/<family>/*.yaml`).
     Vectors,
@@ -27,23 +28,34 @@ pub enum SchemaKind {
     Profile,
     /// Cross-vendor vector files (`vectors/cross-vendor/*.yaml`).
     CrossVendor,
+    /// The messages of the external-backend protocol.
+    Protocol,
     /// The project file, `plc-conformance.yaml`.
     Project,
     /// A known-differences file.
     Known,
     /// The open-questions file, `docs/open-questions.yaml`.
     OpenQuestions,
-    /// Protocol profiles (`vendors/protocols/*.yaml`).
+    /// Protocol profiles (`vendors/protocols/*.yaml`): a communication protocol's fields and
+    /// rules.
     ProtocolProfile,
     /// Protocol-field vector files (`vectors/protocols/*.yaml`).
     ProtocolFields,
-    /// The libraries of the results table, `libraries.yaml`.
+    /// The libraries of the results table (`libraries.yaml`).
     Libraries,
+    /// The JSON report (`--format json`, `--save`).
+    Results,
 }
 
-/// The JSON Schema (draft-07) of one on-disk format.
-pub fn schema(kind: SchemaKind) -> serde_json::Value {
-    match kind {
+/// The JSON report's schema, as shipped in `schema/`: written by hand, as the report's types
+/// serialize by hand too (`report::json`).
+const RESULTS_SCHEMA: &str = include_str!("../../schema/results.schema.json");
+
+/// The JSON Schema (draft-07) of one format; `None` for the external-backend protocol's
+/// messages, whose types live with that backend (`backend::external::protocol`), above this
+/// layer.
+pub fn schema(kind: SchemaKind) -> Option<serde_json::Value> {
+    Some(match kind {
         SchemaKind::Vectors => schema_of::<vectors::VectorFileSpec>(),
         SchemaKind::Profile => schema_of::<profile::ProfileSpec>(),
         SchemaKind::CrossVendor => schema_of::<cross_vendor::CrossVendorFileSpec>(),
@@ -53,7 +65,9 @@ pub fn schema(kind: SchemaKind) -> serde_json::Value {
         SchemaKind::ProtocolProfile => schema_of::<protocol::ProtocolSpec>(),
         SchemaKind::ProtocolFields => schema_of::<protocol::ProtocolFileSpec>(),
         SchemaKind::Libraries => schema_of::<libraries::LibrariesFileSpec>(),
-    }
+        SchemaKind::Results => serde_json::from_str(RESULTS_SCHEMA).unwrap_or_default(),
+        SchemaKind::Protocol => return None,
+    })
 }
 
 /// The JSON Schema (draft-07) of any type: the one helper every schema comes from (the

@@ -12,7 +12,9 @@ use super::input::{Data, Point};
 use super::target::{Ask, Column, Target};
 use super::{Results, Sweep};
 use crate::corpus_yaml::{answer, expect_lines, hex_value, quote, quote_str};
+use crate::load::CorpusBuilder;
 use crate::model::cross_vendor::{Answer, Operation};
+use crate::model::profile::Profiles;
 use crate::model::{Corpus, Operand};
 
 /// A vector file's header and one case per shrunk input that can be written (the input, and
@@ -29,6 +31,23 @@ impl Emitted {
         let mut text = self.header.clone();
         cases.into_iter().for_each(|c| text.push_str(c));
         text
+    }
+
+    /// Keeps the cases that load as the corpus would load them from `path`, each checked in a
+    /// file of its own; the others join `skipped` with the loader's reason.
+    pub(crate) fn keep_loadable(&mut self, path: &std::path::Path, profiles: &Profiles) {
+        let cases = std::mem::take(&mut self.cases);
+        for (input, case) in cases {
+            let mut builder = CorpusBuilder::default();
+            builder.add_file(path, &self.yaml([case.as_str()]), profiles);
+            match builder.finish() {
+                Ok(_) => self.cases.push((input, case)),
+                Err(e) => self.skipped.push(format!(
+                    "{input}: it would not load: {}",
+                    e.to_string().lines().next().unwrap_or_default()
+                )),
+            }
+        }
     }
 }
 

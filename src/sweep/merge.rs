@@ -107,8 +107,24 @@ pub(crate) const MAX_SHARD_BYTES: u64 = 1 << 30;
 /// The longest time a shard may say it took: more is no time a sweep took.
 const MAX_SHARD_SECONDS: f64 = 1e9;
 
+/// The shards' JSON results, each a regular file of bounded size (a FIFO, a device or a runaway
+/// file is refused before anything is read), read and parsed (file, line and column on a bad
+/// one).
+pub(crate) fn read_files(paths: &[PathBuf]) -> Result<Vec<(PathBuf, ShardFile)>, SweepError> {
+    paths
+        .iter()
+        .map(|p| {
+            let bytes = crate::load::read_regular_limited(p, MAX_SHARD_BYTES)
+                .map_err(|e| SweepError(format!("--merge {}: cannot be read: {e}", p.display())))?;
+            let text = String::from_utf8(bytes)
+                .map_err(|_| SweepError(format!("--merge {}: not UTF-8 text", p.display())))?;
+            Ok((p.clone(), read(p, &text)?))
+        })
+        .collect()
+}
+
 /// Reads one shard's JSON results (`sweep --format json`).
-pub(crate) fn read(path: &std::path::Path, text: &str) -> Result<ShardFile, SweepError> {
+fn read(path: &std::path::Path, text: &str) -> Result<ShardFile, SweepError> {
     serde_json::from_str(text).map_err(|e| {
         SweepError(format!(
             "{}:{}:{}: not the JSON results of a sweep (`sweep --format json --output FILE`): {e}",

@@ -184,6 +184,25 @@ pub struct Results {
 }
 
 impl Results {
+    /// Why the counts are not exact, when they are not: the byte classes did not hold, or the
+    /// built-in models answered unlike their rules as every text was asked. Such a sweep fails
+    /// whatever else it found.
+    pub(crate) fn inexact(&self) -> Option<String> {
+        if let Some(m) = self.classes.as_ref().and_then(|c| c.mismatch.as_ref()) {
+            return Some(format!(
+                "the byte classes do not hold: {} answers differently from its class \
+                 representative {}; the counts above are not exact (--each-text asks every text)",
+                m.text.point, m.representative.point
+            ));
+        }
+        let disagreement = (self.exhaustive.as_ref()).and_then(|e| e.disagreement.as_ref())?;
+        Some(format!(
+            "the built-in models answer {} unlike their rules as the sweep asked every text; the \
+             counts above are not exact",
+            disagreement.point
+        ))
+    }
+
     /// The groups in report order.
     pub fn ordered(&self) -> Vec<&group::Group> {
         self.groups.sorted()
@@ -246,11 +265,41 @@ impl std::fmt::Display for SweepError {
 
 impl std::error::Error for SweepError {}
 
+/// A whole sweep's results, known differences applied.
+#[derive(Debug)]
+pub(crate) struct Completed {
+    pub results: Results,
+    /// The known-differences entries could cover nothing here: a value-to-hex sweep's inputs
+    /// have no input class, so only an entry for every case (`cases: ['*']`) covers them.
+    pub known_cover_nothing: bool,
+}
+
 impl Sweep {
+    /// The sweep as one operation, for a command or a test alike: its inputs asked of the
+    /// backends (`progress` hears how many of how many), or, given the JSON results of its
+    /// shards, put back together from them; then made whole against `known` ([`Sweep::conclude`]).
+    pub(crate) fn complete(
+        &self,
+        shards: Option<&[(std::path::PathBuf, merge::ShardFile)]>,
+        known: &std::collections::BTreeMap<String, crate::model::known::KnownDifferences>,
+        stop: &AtomicBool,
+        progress: &mut dyn FnMut(u64, u64),
+    ) -> Result<Completed, SweepError> {
+        let mut results = match shards {
+            Some(files) => merge::merge(self, files, stop)?,
+            None => self.run(stop, progress),
+        };
+        let known_cover_nothing = self.conclude(&mut results, known);
+        Ok(Completed {
+            results,
+            known_cover_nothing,
+        })
+    }
+
     /// Makes the results whole: the groups of a judged column that a known-differences entry
     /// covers set apart, and the hints that explain the rest. `true` when the entries could
     /// cover nothing (a value-to-hex sweep's inputs have no input class).
-    pub(crate) fn conclude(
+    fn conclude(
         &self,
         results: &mut Results,
         known: &std::collections::BTreeMap<String, crate::model::known::KnownDifferences>,

@@ -22,13 +22,18 @@ pub(crate) enum Swept {
     },
 }
 
-/// Which generator, when one is named.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Which generator, when one is named (the command line's `--generator` takes these names).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub(crate) enum GeneratorChoice {
+    /// Every 16-bit value.
     Values,
+    /// 32-bit values: the lattice of digits 0, 1, 9, A, F and every boundary.
     Values32,
+    /// Every text of length 1..--length over --alphabet.
     Text,
+    /// --count random inputs from --seed.
     Random,
+    /// All 2^32 texts of 4 bytes, by byte class (--each-text asks every text).
     Full,
 }
 
