@@ -26,6 +26,7 @@ pub mod backend {
         pub use crate::backend::omron::{Designator, Parity};
     }
     pub mod bench {
+        pub use crate::backend::bench::tcp::TransportError;
         pub use crate::backend::bench::{
             fence, mailbox, Addressing, BenchBackend, BenchSettings, Failure, Identity, Link,
             LinkError, LinkSettings, RunState,

@@ -14,7 +14,7 @@ use std::time::Duration;
 
 use plc_conformance::testing::backend::bench::fence::{self, WordRange, WriteFence};
 use plc_conformance::testing::backend::bench::manifest::Manifest;
-use plc_conformance::testing::backend::bench::BenchBackend;
+use plc_conformance::testing::backend::bench::{BenchBackend, TransportError};
 use plc_conformance::testing::backend::slmp::client::{Client, ClientError, ClientSettings, Code};
 use plc_conformance::testing::backend::slmp::frame::{DeviceForm, FrameKind};
 use plc_conformance::testing::backend::slmp::limits::{self, Family};
@@ -193,10 +193,16 @@ fn virtual_plc_faults_map_to_their_kinds() {
     assert_eq!(fault_of(&e).kind(), "protocol-error");
     assert!(c.is_connected(), "an error answer keeps the connection");
     let e = c.write(&write()).expect_err("closed");
-    assert!(matches!(e, ClientError::Closed { .. }), "{e}");
+    assert!(
+        matches!(e, ClientError::Transport(TransportError::Closed { .. })),
+        "{e}"
+    );
     assert_eq!(fault_of(&e).kind(), "crashed");
     let e = c.write(&write()).expect_err("late");
-    assert!(matches!(e, ClientError::Timeout { .. }), "{e}");
+    assert!(
+        matches!(e, ClientError::Transport(TransportError::Timeout { .. })),
+        "{e}"
+    );
     assert_eq!(fault_of(&e).kind(), "timeout");
     // And the next request, on a new connection, is answered.
     c.write(&write()).expect("a fourth write");

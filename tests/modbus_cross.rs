@@ -15,7 +15,7 @@ use std::process::{Child, Command, Stdio};
 use plc_conformance::testing::backend::bench::fence::{WordRange, WriteFence};
 use plc_conformance::testing::backend::bench::mailbox;
 use plc_conformance::testing::backend::bench::manifest::Manifest;
-use plc_conformance::testing::backend::bench::{Failure, LinkError, LinkSettings};
+use plc_conformance::testing::backend::bench::{Failure, LinkError, LinkSettings, TransportError};
 use plc_conformance::testing::backend::modbus::client::{
     ModbusClient, ModbusError, ModbusSettings,
 };
@@ -129,7 +129,10 @@ fn the_client_reads_and_writes_pymodbus_at_the_limits() {
     // A request past the last address is refused before anything is sent.
     let sent = c.requests();
     let e = c.read_holding(65530, 10).expect_err("past 0xFFFF");
-    assert!(matches!(e, ModbusError::Request { .. }), "{e}");
+    assert!(
+        matches!(e, ModbusError::Transport(TransportError::Request { .. })),
+        "{e}"
+    );
     assert_eq!(c.requests(), sent);
 }
 

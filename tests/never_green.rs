@@ -105,3 +105,25 @@ fn a_backend_set_up_right_runs() {
     let c = conclude(harness("mitsubishi-fx5", "HEXA"), &["--list"]).expect("runs");
     assert_eq!(c.num_failed, 0);
 }
+
+/// A backend given as the command line's `--backend` text is read by the same code: a wrong
+/// text is refused before any trial with the command line's words, a right one runs.
+#[test]
+fn a_backend_spec_is_read_as_the_command_line_reads_it() {
+    let spec = |text: &str| Harness::new(root()).without_builtin().backend_spec(text);
+    let why = refused(conclude(spec("external:Bad=./emu"), &["--list"]));
+    assert!(why.contains("`Bad` is not a backend name"), "{why}");
+    let why = refused(conclude(spec("no-such"), &["--list"]));
+    assert!(why.contains("unknown backend `no-such`"), "{why}");
+    assert!(why.contains("external:NAME=COMMAND"), "{why}");
+    let why = refused(conclude(spec("slmp:bench=127.0.0.1"), &["--list"]));
+    assert!(why.contains("has no port"), "{why}");
+
+    let served = format!(
+        "external:served=\"{}\" serve --profile mitsubishi-iqr",
+        env!("CARGO_BIN_EXE_plc-conformance")
+    );
+    let c = conclude(spec(&served), &["served::habin::"]).expect("runs");
+    assert!(c.num_passed > 0, "no trial ran: {c:?}");
+    assert_eq!(c.num_failed, 0, "{c:?}");
+}

@@ -265,12 +265,12 @@ pub(crate) struct ReportArgs {
 
 /// `--timeout SECONDS` of a case: above 0 and at most a day, read the same way by every
 /// command that takes it.
-pub(crate) fn seconds(text: &str) -> Result<std::time::Duration, String> {
+pub(crate) fn seconds(text: &str) -> Result<std::time::Duration, CliError> {
     text.parse::<f64>()
         .ok()
         .filter(|s| s.is_finite() && *s > 0.0 && *s <= 86_400.0)
         .map(std::time::Duration::from_secs_f64)
-        .ok_or_else(|| format!("`{text}`: give seconds above 0 and at most a day"))
+        .ok_or_else(|| CliError::input(format!("`{text}`: give seconds above 0 and at most a day")))
 }
 
 /// Parses the arguments, runs the command and returns its exit status.

@@ -3,7 +3,7 @@
 //! would hold back waiting for an acknowledgement); and a reply read whole by a deadline, since
 //! a reply may arrive in several segments and must never be read past.
 
-use std::fmt::Display;
+use std::fmt::{self, Display};
 use std::io::{Read, Write};
 use std::net::{TcpStream, ToSocketAddrs};
 use std::time::{Duration, Instant};
@@ -36,11 +36,113 @@ pub(crate) struct Connection {
     pub(crate) connections: u64,
 }
 
-/// Why a request was not sent: no connection could be made, or the write failed.
-#[derive(Debug)]
-pub(crate) enum Unsent {
-    Connect(std::io::Error),
-    Write(std::io::Error),
+/// Why an exchange got no usable reply, in the ways every link shares: no connection, no
+/// whole reply in time, a lost connection, a reply that does not decode, or a request the client
+/// refuses to build. A protocol's own refusal (an SLMP end code, a Modbus exception) is a whole
+/// reply and belongs to its link's error.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum TransportError {
+    /// No connection could be made.
+    Connect { address: String, error: String },
+    /// No (whole) reply within the reply timeout; `hint` is what the link's devices do when
+    /// they stay silent.
+    Timeout {
+        what: String,
+        waited: Duration,
+        hint: &'static str,
+    },
+    /// The other side closed the connection, or the socket failed.
+    Closed { what: String, error: String },
+    /// A reply that does not decode, or answers another request, in `protocol`.
+    Frame {
+        what: String,
+        detail: String,
+        protocol: &'static str,
+    },
+    /// A request the client refuses to build (a limit of the protocol); nothing was sent.
+    Request { what: String, detail: String },
+}
+
+impl fmt::Display for TransportError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            TransportError::Connect { address, error } => {
+                write!(f, "no connection to {address}: {error}")
+            }
+            TransportError::Timeout { what, waited, hint } => write!(
+                f,
+                "no reply to {what} within {} s; {hint}",
+                waited.as_secs_f64()
+            ),
+            TransportError::Closed { what, error } => {
+                write!(f, "the connection was lost during {what}: {error}")
+            }
+            TransportError::Frame {
+                what,
+                detail,
+                protocol,
+            } => write!(
+                f,
+                "the reply to {what} is not a valid {protocol} response: {detail}"
+            ),
+            TransportError::Request { what, detail } => write!(f, "{what}: {detail}"),
+        }
+    }
+}
+
+impl std::error::Error for TransportError {}
+
+impl TransportError {
+    /// How a bench backend reports it.
+    pub(crate) fn failure(&self) -> super::Failure {
+        match self {
+            TransportError::Connect { .. } => super::Failure::Unreachable,
+            TransportError::Timeout { .. } => super::Failure::Timeout,
+            TransportError::Closed { .. } => super::Failure::Lost,
+            TransportError::Frame { .. } | TransportError::Request { .. } => {
+                super::Failure::Protocol
+            }
+        }
+    }
+
+    /// A read may be sent again on a new connection after this: nothing came back whole.
+    pub(crate) fn worth_retrying(&self) -> bool {
+        matches!(
+            self,
+            TransportError::Timeout { .. } | TransportError::Closed { .. }
+        )
+    }
+}
+
+/// One exchange as a link's client describes it, for its errors.
+pub(crate) struct Exchange<'a> {
+    /// What the request does, as a capture shows it (`FC03 read of 4 registers at 0x0064`).
+    pub what: &'a str,
+    /// How long the whole reply may take.
+    pub timeout: Duration,
+    /// The protocol's name, for a reply that does not decode.
+    pub protocol: &'static str,
+    /// What the link's devices do when they stay silent.
+    pub silence: &'static str,
+}
+
+impl Exchange<'_> {
+    /// A reply (or part of one) that does not decode.
+    pub(crate) fn frame(&self, detail: String) -> TransportError {
+        TransportError::Frame {
+            what: self.what.into(),
+            detail,
+            protocol: self.protocol,
+        }
+    }
+
+    /// A request the client refuses to build.
+    pub(crate) fn refused(&self, detail: impl Display) -> TransportError {
+        TransportError::Request {
+            what: self.what.into(),
+            detail: detail.to_string(),
+        }
+    }
 }
 
 impl Connection {
@@ -53,25 +155,73 @@ impl Connection {
         self.stream = None;
     }
 
-    /// Sends `request` to `address`, connecting first when there is no connection; the stream
-    /// to read its reply from.
-    pub(crate) fn send(
+    /// Sends `request` to `address`, connecting first when there is no connection, and reads
+    /// its whole reply: `header` bytes, then up to the length `total` reads from them (or its
+    /// refusal of a header that does not start like a reply, [`Exchange::frame`]). Drops the connection on any error:
+    /// a late reply must never be read as the answer to the next request.
+    pub(crate) fn exchange(
         &mut self,
         address: &str,
         connect_timeout: Duration,
         request: &[u8],
-    ) -> Result<&mut TcpStream, Unsent> {
+        exchange: &Exchange<'_>,
+        header: usize,
+        total: impl Fn(&[u8]) -> Result<usize, TransportError>,
+    ) -> Result<Vec<u8>, TransportError> {
+        let result = self.send_and_read(address, connect_timeout, request, exchange, header, total);
+        if result.is_err() {
+            self.disconnect();
+        }
+        result
+    }
+
+    fn send_and_read(
+        &mut self,
+        address: &str,
+        connect_timeout: Duration,
+        request: &[u8],
+        exchange: &Exchange<'_>,
+        header: usize,
+        total: impl Fn(&[u8]) -> Result<usize, TransportError>,
+    ) -> Result<Vec<u8>, TransportError> {
+        let deadline = Instant::now() + exchange.timeout;
+        let what = exchange.what;
         let stream = match &mut self.stream {
             Some(stream) => stream,
             slot => {
-                let made = connect(address, connect_timeout).map_err(Unsent::Connect)?;
+                let made =
+                    connect(address, connect_timeout).map_err(|e| TransportError::Connect {
+                        address: address.into(),
+                        error: e.to_string(),
+                    })?;
                 self.connections += 1;
                 slot.insert(made)
             }
         };
         self.requests += 1;
-        stream.write_all(request).map_err(Unsent::Write)?;
-        Ok(stream)
+        stream
+            .write_all(request)
+            .map_err(|e| TransportError::Closed {
+                what: what.into(),
+                error: e.to_string(),
+            })?;
+        let short = |short| match short {
+            Short::Timeout => TransportError::Timeout {
+                what: what.into(),
+                waited: exchange.timeout,
+                hint: exchange.silence,
+            },
+            Short::Closed(error) => TransportError::Closed {
+                what: what.into(),
+                error,
+            },
+        };
+        let mut buf = vec![0u8; header];
+        read_full(stream, &mut buf, deadline).map_err(short)?;
+        let total = total(&buf)?;
+        buf.resize(total.max(header), 0);
+        read_full(stream, &mut buf[header..], deadline).map_err(short)?;
+        Ok(buf)
     }
 }
 

@@ -11,10 +11,9 @@
 //! are, so that no write can land twice or late without the caller knowing.
 
 use std::fmt;
-use std::net::TcpStream;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-use crate::backend::bench::tcp::{self, Short};
+use crate::backend::bench::tcp::{self, TransportError};
 
 use super::frame::{
     self, decode_response, encode_request, exception_meaning, message_len, Request, Response,
@@ -76,46 +75,33 @@ impl ModbusSettings {
     }
 }
 
-/// Why a request got no usable answer.
+/// Why a request got no usable answer: the transport's ways, shared with every link, or the
+/// server's exception.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum ModbusError {
-    /// No connection could be made.
-    Connect { address: String, error: String },
-    /// No (whole) reply within the reply timeout.
-    Timeout { what: String, waited: Duration },
-    /// The server closed the connection, or the socket failed.
-    Closed { what: String, error: String },
-    /// A reply that does not decode, or answers another request.
-    Frame { what: String, detail: String },
+    Transport(TransportError),
     /// The server answered with an exception; `function` is the one requested.
     Exception {
         what: String,
         function: u8,
         code: u8,
     },
-    /// A request this client refuses to build (a limit of the protocol); nothing was sent.
-    Request { what: String, detail: String },
+}
+
+/// What a Modbus TCP server that stays silent is likely telling.
+const SILENCE: &str = "a gateway may stay silent when no device answers at the unit id, and a \
+                       server may ignore a unit id it does not serve";
+
+impl From<TransportError> for ModbusError {
+    fn from(e: TransportError) -> Self {
+        ModbusError::Transport(e)
+    }
 }
 
 impl fmt::Display for ModbusError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            ModbusError::Connect { address, error } => {
-                write!(f, "no connection to {address}: {error}")
-            }
-            ModbusError::Timeout { what, waited } => write!(
-                f,
-                "no reply to {what} within {} s; a gateway may stay silent when no device answers \
-                 at the unit id, and a server may ignore a unit id it does not serve",
-                waited.as_secs_f64()
-            ),
-            ModbusError::Closed { what, error } => {
-                write!(f, "the connection was lost during {what}: {error}")
-            }
-            ModbusError::Frame { what, detail } => write!(
-                f,
-                "the reply to {what} is not a valid Modbus TCP response: {detail}"
-            ),
+            ModbusError::Transport(e) => write!(f, "{e}"),
             ModbusError::Exception { what, code, .. } => {
                 write!(f, "the server answered {what} with exception {code:02X}")?;
                 if let Some(meaning) = exception_meaning(*code) {
@@ -123,7 +109,6 @@ impl fmt::Display for ModbusError {
                 }
                 Ok(())
             }
-            ModbusError::Request { what, detail } => write!(f, "{what}: {detail}"),
         }
     }
 }
@@ -175,46 +160,37 @@ impl ModbusClient {
     fn exchange(&mut self, what: &str, request: &Request) -> Result<Response, ModbusError> {
         self.tid = self.tid.wrapping_add(1);
         let (tid, unit) = (self.tid, self.settings.unit);
-        let bytes = encode_request(tid, unit, request).map_err(|e| ModbusError::Request {
-            what: what.into(),
-            detail: e.to_string(),
-        })?;
-        let timeout = self.settings.reply_timeout;
-        let address = self.settings.address.clone();
-        let result = (|| {
-            let deadline = Instant::now() + timeout;
-            let stream = (self.connection)
-                .send(&address, self.settings.connect_timeout, &bytes)
-                .map_err(|unsent| match unsent {
-                    tcp::Unsent::Connect(error) => ModbusError::Connect {
-                        address: address.clone(),
-                        error: error.to_string(),
-                    },
-                    tcp::Unsent::Write(e) => ModbusError::Closed {
-                        what: what.into(),
-                        error: e.to_string(),
-                    },
-                })?;
-            let reply = read_reply(stream, deadline, what, timeout)?;
-            match decode_response(tid, unit, request, &reply) {
-                Ok(Response::Exception { function, code }) => Err(ModbusError::Exception {
-                    what: what.into(),
-                    function,
-                    code,
-                }),
-                Ok(response) => Ok(response),
-                Err(e) => Err(ModbusError::Frame {
-                    what: what.into(),
-                    detail: tcp::received(&e, &reply),
-                }),
-            }
-        })();
-        if let Err(e) = &result {
-            if !matches!(e, ModbusError::Exception { .. }) {
+        let exchange = tcp::Exchange {
+            what,
+            timeout: self.settings.reply_timeout,
+            protocol: "Modbus TCP",
+            silence: SILENCE,
+        };
+        let bytes = encode_request(tid, unit, request).map_err(|e| exchange.refused(e))?;
+        let reply = self.connection.exchange(
+            &self.settings.address,
+            self.settings.connect_timeout,
+            &bytes,
+            &exchange,
+            6,
+            |header| {
+                let fixed: &[u8; 6] = (header.try_into())
+                    .map_err(|_| exchange.frame("a short header".to_string()))?;
+                message_len(fixed).map_err(|e| exchange.frame(tcp::received(&e, header)))
+            },
+        )?;
+        match decode_response(tid, unit, request, &reply) {
+            Ok(Response::Exception { function, code }) => Err(ModbusError::Exception {
+                what: what.into(),
+                function,
+                code,
+            }),
+            Ok(response) => Ok(response),
+            Err(e) => {
                 self.connection.disconnect();
+                Err(exchange.frame(tcp::received(&e, &reply)).into())
             }
         }
-        result
     }
 
     /// A read, sent again on a new connection after a timeout or a lost connection.
@@ -222,8 +198,8 @@ impl ModbusClient {
         let mut attempt = 0;
         loop {
             match self.exchange(what, request) {
-                Err(ModbusError::Timeout { .. } | ModbusError::Closed { .. })
-                    if attempt < self.settings.read_retries =>
+                Err(ModbusError::Transport(e))
+                    if e.worth_retrying() && attempt < self.settings.read_retries =>
                 {
                     attempt += 1;
                     std::thread::sleep(Duration::from_millis(20 * u64::from(attempt)));
@@ -311,10 +287,10 @@ fn batches(
     unit: &str,
 ) -> Result<Vec<(u16, usize)>, ModbusError> {
     if usize::from(address) + count > 0x1_0000 {
-        return Err(ModbusError::Request {
+        return Err(ModbusError::Transport(TransportError::Request {
             what: describe(action, count, unit, address),
             detail: "the range runs past address 0xFFFF".into(),
-        });
+        }));
     }
     Ok((0..count)
         .step_by(batch)
@@ -328,48 +304,10 @@ fn batches(
 }
 
 fn unexpected(what: String, response: &Response) -> ModbusError {
-    ModbusError::Frame {
+    ModbusError::Transport(TransportError::Frame {
         what,
         detail: format!("decoded as {response:?}"),
-    }
-}
-
-/// Reads one whole ADU: the MBAP header's first six bytes, then as many as they declare.
-fn read_reply(
-    stream: &mut TcpStream,
-    deadline: Instant,
-    what: &str,
-    waited: Duration,
-) -> Result<Vec<u8>, ModbusError> {
-    let mut header = [0u8; 6];
-    read_full(stream, &mut header, deadline, what, waited)?;
-    let total = message_len(&header).map_err(|e| ModbusError::Frame {
-        what: what.into(),
-        detail: tcp::received(&e, &header),
-    })?;
-    let mut buf = header.to_vec();
-    buf.resize(total, 0);
-    read_full(stream, &mut buf[6..], deadline, what, waited)?;
-    Ok(buf)
-}
-
-/// [`tcp::read_full`] with the client's errors.
-fn read_full(
-    stream: &mut TcpStream,
-    buf: &mut [u8],
-    deadline: Instant,
-    what: &str,
-    waited: Duration,
-) -> Result<(), ModbusError> {
-    tcp::read_full(stream, buf, deadline).map_err(|short| match short {
-        Short::Timeout => ModbusError::Timeout {
-            what: what.into(),
-            waited,
-        },
-        Short::Closed(error) => ModbusError::Closed {
-            what: what.into(),
-            error,
-        },
+        protocol: "Modbus TCP",
     })
 }
 
@@ -468,7 +406,10 @@ mod tests {
         ])]]);
         let mut c = ModbusClient::new(settings(&address));
         let e = c.read_holding(0, 1).expect_err("garbage");
-        assert!(matches!(e, ModbusError::Frame { .. }), "{e}");
+        assert!(
+            matches!(e, ModbusError::Transport(TransportError::Frame { .. })),
+            "{e}"
+        );
         assert!(e.to_string().contains("received: 48 54 54 50"), "{e}");
         assert!(!c.is_connected(), "the connection is dropped after garbage");
     }
@@ -480,10 +421,11 @@ mod tests {
         let e = c.read_coils(0x13, 19).expect_err("silent");
         assert_eq!(
             e,
-            ModbusError::Timeout {
+            ModbusError::Transport(TransportError::Timeout {
                 what: "FC01 read of 19 coils at 0x0013".into(),
                 waited: Duration::from_millis(200),
-            }
+                hint: SILENCE,
+            })
         );
         assert!(!c.is_connected());
     }
@@ -539,7 +481,10 @@ mod tests {
         s.read_retries = 3;
         let mut c = ModbusClient::new(s);
         let e = c.write_registers(1, &[3]).expect_err("closed");
-        assert!(matches!(e, ModbusError::Closed { .. }), "{e}");
+        assert!(
+            matches!(e, ModbusError::Transport(TransportError::Closed { .. })),
+            "{e}"
+        );
         assert_eq!((c.connections(), c.requests()), (1, 1));
         let sent = server.join().expect("server");
         assert_eq!(sent, ["00 01 00 00 00 06 01 06 00 01 00 03"]);
@@ -603,7 +548,10 @@ mod tests {
         let (address, _server) = scripted(vec![vec![reply(9, Response::Registers(vec![1]))]]);
         let mut c = ModbusClient::new(settings(&address));
         let e = c.read_holding(0, 1).expect_err("another tid");
-        assert!(matches!(e, ModbusError::Frame { .. }), "{e}");
+        assert!(
+            matches!(e, ModbusError::Transport(TransportError::Frame { .. })),
+            "{e}"
+        );
         assert!(
             e.to_string()
                 .contains("transaction id 0x0009 where 0x0001 was sent"),
@@ -619,7 +567,10 @@ mod tests {
         let e = c
             .write_registers(0xFFF0, &[0; 200])
             .expect_err("past 0xFFFF");
-        assert!(matches!(e, ModbusError::Request { .. }), "{e}");
+        assert!(
+            matches!(e, ModbusError::Transport(TransportError::Request { .. })),
+            "{e}"
+        );
         assert!(!c.is_connected(), "a client connects only when it sends");
         assert!(server.join().expect("server").is_empty());
     }

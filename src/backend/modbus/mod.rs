@@ -17,6 +17,7 @@ use std::time::Duration;
 
 use std::sync::Arc;
 
+use super::bench::tcp::TransportError;
 use client::{ModbusClient, ModbusError, ModbusSettings};
 
 use super::bench::error::{refused, LiveError};
@@ -185,13 +186,9 @@ impl Addressing for Map {
 
 impl From<ModbusError> for LinkError {
     fn from(e: ModbusError) -> Self {
-        let failure = match e {
-            ModbusError::Connect { .. } => Failure::Unreachable,
-            ModbusError::Timeout { .. } => Failure::Timeout,
-            ModbusError::Closed { .. } => Failure::Lost,
-            ModbusError::Frame { .. }
-            | ModbusError::Exception { .. }
-            | ModbusError::Request { .. } => Failure::Protocol,
+        let failure = match &e {
+            ModbusError::Transport(t) => t.failure(),
+            ModbusError::Exception { .. } => Failure::Protocol,
         };
         LinkError::new(failure, e)
     }
@@ -215,10 +212,10 @@ impl ModbusLink {
         self.map.register(device).ok_or_else(|| {
             LinkError::new(
                 Failure::Protocol,
-                ModbusError::Request {
+                ModbusError::Transport(TransportError::Request {
                     what: format!("an access to {device}"),
                     detail: self.map.unaddressable(device).unwrap_or_default(),
-                },
+                }),
             )
         })
     }
@@ -241,10 +238,10 @@ impl Link for ModbusLink {
         let at = self.map.coil(&relay).ok_or_else(|| {
             LinkError::new(
                 Failure::Protocol,
-                ModbusError::Request {
+                ModbusError::Transport(TransportError::Request {
                     what: format!("a read of {relay}"),
                     detail: "the relay is not a coil of the Modbus map".into(),
-                },
+                }),
             )
         })?;
         let on = (self.client.read_coils(at, 1)?.first().copied()).unwrap_or(false);

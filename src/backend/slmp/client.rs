@@ -10,10 +10,9 @@
 //! without the caller knowing.
 
 use std::fmt;
-use std::net::TcpStream;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-use crate::backend::bench::tcp::{self, hex, Short};
+use crate::backend::bench::tcp::{self, hex, TransportError};
 
 use super::ascii;
 pub use super::frame::Code;
@@ -72,49 +71,34 @@ impl ClientSettings {
     }
 }
 
-/// Why a request got no usable answer.
+/// Why a request got no usable answer: the transport's ways, shared with every link, or the
+/// CPU's error end code.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum ClientError {
-    /// No connection could be made.
-    Connect { address: String, error: String },
-    /// No (whole) reply within the reply timeout.
-    Timeout { what: String, waited: Duration },
-    /// The CPU closed the connection, or the socket failed.
-    Closed { what: String, error: String },
-    /// A reply that does not decode, or answers another request.
-    Frame { what: String, detail: String },
+    Transport(TransportError),
     /// The CPU answered with an error end code; `form` is the device form the request used.
     EndCode {
         what: String,
         code: u16,
         form: DeviceForm,
     },
-    /// A request this client refuses to build (a limit of the protocol).
-    Request { what: String, detail: String },
+}
+
+/// What a CPU that stays silent on SLMP is likely telling.
+const SILENCE: &str = "a CPU stays silent when the frame (3E/4E), the code (binary/ASCII) or the \
+                       device form does not match its port, or when the port is not open to \
+                       this host";
+
+impl From<TransportError> for ClientError {
+    fn from(e: TransportError) -> Self {
+        ClientError::Transport(e)
+    }
 }
 
 impl fmt::Display for ClientError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            ClientError::Connect { address, error } => {
-                write!(f, "no connection to {address}: {error}")
-            }
-            ClientError::Timeout { what, waited } => write!(
-                f,
-                "no reply to {what} within {} s; a CPU stays silent when the frame (3E/4E), the \
-                 code (binary/ASCII) or the device form does not match its port, or when the \
-                 port is not open to this host",
-                waited.as_secs_f64()
-            ),
-            ClientError::Closed { what, error } => {
-                write!(f, "the connection was lost during {what}: {error}")
-            }
-            ClientError::Frame { what, detail } => {
-                write!(
-                    f,
-                    "the reply to {what} is not a valid SLMP response: {detail}"
-                )
-            }
+            ClientError::Transport(e) => write!(f, "{e}"),
             ClientError::EndCode { what, code, form } => {
                 write!(f, "the CPU answered {what} with end code {code:04X}H")?;
                 if let Some(meaning) = end_code_meaning(*code, *form) {
@@ -122,7 +106,6 @@ impl fmt::Display for ClientError {
                 }
                 Ok(())
             }
-            ClientError::Request { what, detail } => write!(f, "{what}: {detail}"),
         }
     }
 }
@@ -149,10 +132,8 @@ pub(crate) fn end_code_meaning(code: u16, form: DeviceForm) -> Option<&'static s
 
 /// A device as a command names it, for the request `what`.
 pub(crate) fn device_ref(device: &Device, what: &str) -> Result<DeviceRef, ClientError> {
-    let code = frame::device_code(device.code()).ok_or_else(|| ClientError::Request {
-        what: what.to_string(),
-        detail: format!("{} has no SLMP device code", device.code()),
-    })?;
+    let code = frame::device_code(device.code())
+        .ok_or_else(|| refused(what, format!("{} has no SLMP device code", device.code())))?;
     Ok(DeviceRef {
         code,
         number: device.index,
@@ -225,44 +206,36 @@ impl Client {
         let code = self.settings.code;
         let request = match code {
             Code::Binary => request.encode(),
-            Code::Ascii => ascii::encode_request(&request).map_err(|e| ClientError::Request {
-                what: what.into(),
-                detail: e.to_string(),
-            })?,
+            Code::Ascii => ascii::encode_request(&request).map_err(|e| refused(what, e))?,
         };
-        let timeout = self.settings.reply_timeout;
-        let address = self.settings.address.clone();
+        let exchange = tcp::Exchange {
+            what,
+            timeout: self.settings.reply_timeout,
+            protocol: "SLMP",
+            silence: SILENCE,
+        };
+        let bytes = self.connection.exchange(
+            &self.settings.address,
+            self.settings.connect_timeout,
+            &request,
+            &exchange,
+            header_len(frame_kind, code),
+            |header| reply_len(frame_kind, code, header, &exchange),
+        )?;
         let result = (|| {
-            let deadline = Instant::now() + timeout;
-            let stream = (self.connection)
-                .send(&address, self.settings.connect_timeout, &request)
-                .map_err(|unsent| match unsent {
-                    tcp::Unsent::Connect(error) => ClientError::Connect {
-                        address: address_of(&self.settings),
-                        error: error.to_string(),
-                    },
-                    tcp::Unsent::Write(e) => ClientError::Closed {
-                        what: what.into(),
-                        error: e.to_string(),
-                    },
-                })?;
-            let bytes = read_reply(stream, frame_kind, code, deadline, what, timeout)?;
             let response = match code {
                 Code::Binary => Response::decode(frame_kind, &bytes),
                 Code::Ascii => ascii::decode_response(frame_kind, body.command, &bytes),
             }
-            .map_err(|e| ClientError::Frame {
-                what: what.into(),
-                detail: tcp::received(&e, &bytes),
-            })?;
+            .map_err(|e| garbled(what, tcp::received(&e, &bytes)))?;
             if response.serial != serial {
-                return Err(ClientError::Frame {
-                    what: what.into(),
-                    detail: format!(
+                return Err(garbled(
+                    what,
+                    format!(
                         "it carries serial {:04X}H, the request {serial:04X}H",
                         response.serial
                     ),
-                });
+                ));
             }
             if response.end_code != 0 {
                 return Err(ClientError::EndCode {
@@ -273,10 +246,9 @@ impl Client {
             }
             Ok(response.data)
         })();
-        match &result {
+        if let Err(ClientError::Transport(_)) = &result {
             // An error answer is a whole, well-formed reply: the connection is still in step.
-            Ok(_) | Err(ClientError::EndCode { .. }) => {}
-            Err(_) => self.connection.disconnect(),
+            self.connection.disconnect();
         }
         result
     }
@@ -286,8 +258,8 @@ impl Client {
         let mut attempt = 0;
         loop {
             match self.exchange(what, body) {
-                Err(ClientError::Timeout { .. } | ClientError::Closed { .. })
-                    if attempt < self.settings.read_retries =>
+                Err(ClientError::Transport(e))
+                    if e.worth_retrying() && attempt < self.settings.read_retries =>
                 {
                     attempt += 1;
                     std::thread::sleep(Duration::from_millis(20 * u64::from(attempt)));
@@ -301,10 +273,7 @@ impl Client {
     pub fn type_name(&mut self) -> Result<TypeName, ClientError> {
         let what = "0101 (read type name)";
         let data = self.read_exchange(what, &frame::read_type_name())?;
-        frame::type_name_of(&data).map_err(|e| ClientError::Frame {
-            what: what.into(),
-            detail: e.to_string(),
-        })
+        frame::type_name_of(&data).map_err(|e| garbled(what, e))
     }
 
     /// 0401: `count` words from `head`, in batches of at most the port's limit.
@@ -318,16 +287,10 @@ impl Client {
                 ..first
             };
             let what = format!("0401 (read {at} x{n})");
-            let body =
-                frame::read_words(self.settings.form, at, n).map_err(|e| ClientError::Request {
-                    what: what.clone(),
-                    detail: e.to_string(),
-                })?;
+            let body = frame::read_words(self.settings.form, at, n)
+                .map_err(|e| refused(what.clone(), e))?;
             let data = self.read_exchange(&what, &body)?;
-            out.extend(frame::words_of(&data, n).map_err(|e| ClientError::Frame {
-                what,
-                detail: e.to_string(),
-            })?);
+            out.extend(frame::words_of(&data, n).map_err(|e| garbled(what, e))?);
         }
         Ok(out)
     }
@@ -342,126 +305,93 @@ impl Client {
             .collect::<Result<Vec<_>, _>>()?;
         let most = self.settings.limits.random_points;
         if refs.len() > most {
-            return Err(ClientError::Request {
+            return Err(refused(
                 what,
-                detail: format!("more than {most} points, the limit of this port"),
-            });
+                format!("more than {most} points, the limit of this port"),
+            ));
         }
         let body =
-            frame::random_read(self.settings.form, &refs).map_err(|e| ClientError::Request {
-                what: what.clone(),
-                detail: e.to_string(),
-            })?;
+            frame::random_read(self.settings.form, &refs).map_err(|e| refused(what.clone(), e))?;
         let data = self.read_exchange(&what, &body)?;
-        frame::words_of(&data, refs.len()).map_err(|e| ClientError::Frame {
-            what,
-            detail: e.to_string(),
-        })
+        frame::words_of(&data, refs.len()).map_err(|e| garbled(what, e))
     }
 
     /// 1401: one write the fence let through, encoded here and nowhere else; never sent twice.
     pub fn write(&mut self, write: &FencedWrite) -> Result<(), ClientError> {
         let what = format!("1401 (write {})", write.range());
         let body = device_ref(write.head(), &what).and_then(|head| {
-            frame::write_words(self.settings.form, head, write.words()).map_err(|e| {
-                ClientError::Request {
-                    what: what.clone(),
-                    detail: e.to_string(),
-                }
-            })
+            frame::write_words(self.settings.form, head, write.words())
+                .map_err(|e| refused(what.clone(), e))
         })?;
         let data = self.exchange(&what, &body)?;
         if data.is_empty() {
             Ok(())
         } else {
             self.connection.disconnect();
-            Err(ClientError::Frame {
+            Err(garbled(
                 what,
-                detail: format!("{} bytes of data after a write", data.len()),
-            })
+                format!("{} bytes of data after a write", data.len()),
+            ))
         }
     }
 }
 
-fn address_of(settings: &ClientSettings) -> String {
-    settings.address.clone()
+/// A request refused before anything is sent.
+fn refused(what: impl Into<String>, detail: impl fmt::Display) -> ClientError {
+    ClientError::Transport(TransportError::Request {
+        what: what.into(),
+        detail: detail.to_string(),
+    })
 }
 
-/// Reads one whole reply: the header, then as many bytes as it declares.
-fn read_reply(
-    stream: &mut TcpStream,
+/// A reply that does not decode, or answers another request.
+fn garbled(what: impl Into<String>, detail: impl fmt::Display) -> ClientError {
+    ClientError::Transport(TransportError::Frame {
+        what: what.into(),
+        detail: detail.to_string(),
+        protocol: "SLMP",
+    })
+}
+
+/// How many bytes of a reply say how long it is.
+fn header_len(frame_kind: FrameKind, code: Code) -> usize {
+    match code {
+        Code::Ascii => ascii::header_len(frame_kind),
+        Code::Binary => frame_kind.header_len(),
+    }
+}
+
+/// A reply's whole length, from its header; a header that does not start like a reply is
+/// refused before its length is believed.
+fn reply_len(
     frame_kind: FrameKind,
     code: Code,
-    deadline: Instant,
-    what: &str,
-    waited: Duration,
-) -> Result<Vec<u8>, ClientError> {
+    header: &[u8],
+    exchange: &tcp::Exchange<'_>,
+) -> Result<usize, TransportError> {
     if code == Code::Ascii {
-        let header = ascii::header_len(frame_kind);
-        let mut buf = vec![0u8; header];
-        read_full(stream, &mut buf, deadline, what, waited)?;
-        let total = ascii::message_len(frame_kind, &buf)
+        return ascii::message_len(frame_kind, header)
             .and_then(|total| {
-                // A reply that does not start like one is refused before its length is believed.
-                ascii::decode_response(frame_kind, 0, &buf)
+                ascii::decode_response(frame_kind, 0, header)
                     .err()
                     .filter(|e| !matches!(e, FrameError::Short { .. }))
                     .map_or(Ok(total), Err)
             })
-            .map_err(|e| ClientError::Frame {
-                what: what.into(),
-                detail: tcp::received(&e, &buf),
-            })?;
-        buf.resize(total, 0);
-        read_full(stream, &mut buf[header..], deadline, what, waited)?;
-        return Ok(buf);
+            .map_err(|e| exchange.frame(tcp::received(&e, header)));
     }
-    let header = frame_kind.header_len();
-    let mut buf = vec![0u8; header];
-    read_full(stream, &mut buf, deadline, what, waited)?;
-    // A reply that does not start like one is refused before its "length" is believed.
     let expected = match frame_kind {
         FrameKind::E3 => 0xD0,
         FrameKind::E4 => 0xD4,
     };
-    if buf[0] != expected || buf[1] != 0 {
-        return Err(ClientError::Frame {
-            what: what.into(),
-            detail: format!(
-                "subheader {} where {:02X} 00 was expected; received: {}",
-                hex(&buf[..2]),
-                expected,
-                hex(&buf)
-            ),
-        });
+    if header[0] != expected || header[1] != 0 {
+        return Err(exchange.frame(format!(
+            "subheader {} where {:02X} 00 was expected; received: {}",
+            hex(&header[..2]),
+            expected,
+            hex(header)
+        )));
     }
-    let total = message_len(frame_kind, &buf).map_err(|e| ClientError::Frame {
-        what: what.into(),
-        detail: tcp::received(&e, &buf),
-    })?;
-    buf.resize(total, 0);
-    read_full(stream, &mut buf[header..], deadline, what, waited)?;
-    Ok(buf)
-}
-
-/// [`tcp::read_full`] with the client's errors.
-fn read_full(
-    stream: &mut TcpStream,
-    buf: &mut [u8],
-    deadline: Instant,
-    what: &str,
-    waited: Duration,
-) -> Result<(), ClientError> {
-    tcp::read_full(stream, buf, deadline).map_err(|short| match short {
-        Short::Timeout => ClientError::Timeout {
-            what: what.into(),
-            waited,
-        },
-        Short::Closed(error) => ClientError::Closed {
-            what: what.into(),
-            error,
-        },
-    })
+    message_len(frame_kind, header).map_err(|e| exchange.frame(tcp::received(&e, header)))
 }
 
 #[cfg(test)]
@@ -469,7 +399,7 @@ mod tests {
     use super::*;
     use crate::backend::bench::fence::{WordRange, WriteFence};
     use std::io::{Read, Write};
-    use std::net::TcpListener;
+    use std::net::{TcpListener, TcpStream};
 
     /// A server that answers each request with the given byte chunks (with a pause between
     /// chunks), then closes; it returns every byte it received.
@@ -551,7 +481,10 @@ mod tests {
         let (address, _server) = scripted(vec![vec![b"HTTP/1.1 400 Bad".to_vec()]]);
         let mut c = Client::new(settings(&address));
         let e = c.read_words(&Device::new("D", 0), 1).expect_err("garbage");
-        assert!(matches!(e, ClientError::Frame { .. }), "{e}");
+        assert!(
+            matches!(e, ClientError::Transport(TransportError::Frame { .. })),
+            "{e}"
+        );
         assert!(e.to_string().contains("received: 48 54 54 50"), "{e}");
         assert!(!c.is_connected(), "the connection is dropped after garbage");
     }
@@ -561,7 +494,10 @@ mod tests {
         let (address, _server) = scripted(vec![vec![]]);
         let mut c = Client::new(settings(&address));
         let e = c.type_name().expect_err("silent");
-        assert!(matches!(e, ClientError::Timeout { .. }), "{e}");
+        assert!(
+            matches!(e, ClientError::Transport(TransportError::Timeout { .. })),
+            "{e}"
+        );
         assert!(
             e.to_string()
                 .contains("the frame (3E/4E), the code (binary/ASCII)"),

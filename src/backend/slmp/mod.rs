@@ -110,13 +110,9 @@ fn run_state(sd203: u16) -> RunState {
 
 impl From<ClientError> for LinkError {
     fn from(e: ClientError) -> Self {
-        let failure = match e {
-            ClientError::Connect { .. } => Failure::Unreachable,
-            ClientError::Timeout { .. } => Failure::Timeout,
-            ClientError::Closed { .. } => Failure::Lost,
-            ClientError::Frame { .. }
-            | ClientError::EndCode { .. }
-            | ClientError::Request { .. } => Failure::Protocol,
+        let failure = match &e {
+            ClientError::Transport(t) => t.failure(),
+            ClientError::EndCode { .. } => Failure::Protocol,
         };
         LinkError::new(failure, e)
     }
