@@ -19,6 +19,7 @@ pub(crate) mod omron;
 pub(crate) mod reference;
 pub(crate) mod s7;
 pub(crate) mod s7_200;
+pub(crate) mod simulate;
 pub(crate) mod slmp;
 
 use std::collections::BTreeMap;

@@ -10,15 +10,11 @@ use std::time::Duration;
 use super::backends::{load, paths};
 use super::{output, Cli, CliError, Outcome, EXIT_DIFFERENCES, EXIT_OK};
 use crate::backend::bench::doctor::doctor;
-use crate::backend::bench::manifest::Manifest;
 use crate::backend::bench::{fence, mailbox};
 use crate::backend::bench::{Addressing, BenchSettings};
-use crate::backend::modbus::sim::{ModbusSimSettings, ModbusSimulator};
+use crate::backend::simulate::{simulate, SimRequest};
 use crate::backend::slmp;
-use crate::backend::slmp::limits::Family;
-use crate::backend::slmp::sim::{self, FaultRule, SlmpSimSettings, SlmpSimulator};
 use crate::hil::{dry_run, generate, pulse_self_test, GenerateOptions};
-use crate::model::profile::LinkKind;
 use crate::session::Session;
 
 #[derive(Debug, clap::Subcommand)]
@@ -275,121 +271,24 @@ fn dry_run_command(cli: &Cli, backend: &str) -> Outcome {
 
 /// `hil sim`: a simulated CPU over the manifest's profile's link, serving until ended.
 fn sim_command(cli: &Cli, args: &SimArgs) -> Outcome {
-    let SimArgs {
-        manifest,
-        variant,
-        faults,
-        ..
-    } = args;
     let project = load(&paths(cli, &[], "--vectors")?)?;
-    let m = Manifest::read(manifest)?;
-    let profile = project
-        .profiles
-        .get(&m.profile)
-        .cloned()
-        .ok_or_else(|| CliError::input(format!("profile `{}` is not loaded", m.profile)))?;
-    let link = (profile.bench.as_ref().map(|b| b.link)).ok_or_else(|| {
-        CliError::input(format!(
-            "{} has no `bench` section in its profile: no simulated CPU runs its program",
-            profile.id
-        ))
-    })?;
-    let fault = match link {
-        LinkKind::Slmp => FaultRule::slmp,
-        LinkKind::ModbusTcp => FaultRule::modbus,
+    let request = SimRequest {
+        manifest: args.manifest.clone(),
+        variant: args.variant.clone(),
+        type_name: args.type_name.clone(),
+        model_code: args.model_code.clone(),
+        type_code: args.type_code,
+        port: args.port,
+        scan: Duration::from_micros(args.scan_us),
+        run: !args.stop,
+        faults: args.faults.clone(),
     };
-    let faults = faults
-        .iter()
-        .map(|f| fault(f).map_err(|e| CliError::within("--fault", e)))
-        .collect::<Result<Vec<_>, _>>()?;
-    let m = m
-        .validated(crate::backend::addressing(&profile)?.as_ref())
-        .map_err(|e| CliError::within(manifest.display().to_string(), e))?;
-    let variant = match variant {
-        Some(v) => v.clone(),
-        None if m.variants.len() == 1 => m.variants[0].clone(),
-        None => {
-            return Err(CliError::input(format!(
-                "the manifest has several variants ({}): give --variant",
-                m.variants.join(", ")
-            )))
-        }
-    };
-    // A simulated CPU serves only what the backend would run against.
-    crate::backend::bench::mailbox_on(
-        &profile,
-        &variant,
-        &m,
-        crate::backend::addressing(&profile)?.as_ref(),
-    )?;
-    let model = crate::backend::reference_model(&project.profiles, &m.profile)
-        .ok_or_else(|| CliError::input(format!("no built-in reference model for {}", m.profile)))?;
     // The simulator serves until the process is ended.
-    let (address, _serving) = start_simulator(link, args, m, variant, faults, profile, model)?;
-    output::write(None, &format!("listening on {address}"))?;
+    let serving = simulate(&project.profiles, &request)?;
+    output::write(None, &format!("listening on {}", serving.address()))?;
     loop {
         std::thread::sleep(Duration::from_secs(3600));
     }
-}
-
-/// The simulated CPU of the manifest's link, started, with its address; the simulator serves
-/// for as long as the box is kept.
-fn start_simulator(
-    link: LinkKind,
-    args: &SimArgs,
-    m: Manifest,
-    variant: String,
-    faults: Vec<FaultRule>,
-    profile: std::sync::Arc<crate::model::profile::Profile>,
-    model: std::sync::Arc<dyn crate::backend::Backend>,
-) -> Result<(std::net::SocketAddr, Box<dyn std::any::Any>), CliError> {
-    let SimArgs {
-        type_name,
-        model_code,
-        type_code,
-        port,
-        scan_us,
-        stop,
-        ..
-    } = args;
-    Ok(match link {
-        LinkKind::Slmp => {
-            let type_name =
-                type_name
-                    .clone()
-                    .unwrap_or_else(|| match Family::of_profile(&m.profile) {
-                        Family::Fx5 => "FX5U-32MT/DS".into(),
-                        Family::Iqr => "R04CPU".into(),
-                    });
-            let model_code = match model_code {
-                Some(hex) => u16::from_str_radix(hex.trim_end_matches('H'), 16).map_err(|_| {
-                    CliError::input(format!("--model-code {hex}: give four hexadecimal digits"))
-                })?,
-                None => sim::model_code(&type_name).ok_or_else(|| {
-                    CliError::input(format!(
-                        "no model code is known for `{type_name}`: give --model-code"
-                    ))
-                })?,
-            };
-            let mut settings = SlmpSimSettings::new(m, variant, type_name);
-            settings.link.model_code = model_code;
-            settings.port = *port;
-            settings.scan = Duration::from_micros(*scan_us);
-            settings.run = !*stop;
-            settings.faults = faults;
-            let sim = SlmpSimulator::start(settings, profile, model)?;
-            (sim.address(), Box::new(sim) as Box<dyn std::any::Any>)
-        }
-        LinkKind::ModbusTcp => {
-            let mut settings = ModbusSimSettings::idec(m, variant, *type_code);
-            settings.port = *port;
-            settings.scan = Duration::from_micros(*scan_us);
-            settings.run = !*stop;
-            settings.faults = faults;
-            let sim = ModbusSimulator::start(settings, profile, model)?;
-            (sim.address(), Box::new(sim) as Box<dyn std::any::Any>)
-        }
-    })
 }
 
 fn live_settings(
