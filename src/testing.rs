@@ -28,16 +28,13 @@ pub mod backend {
     pub mod bench {
         pub use crate::backend::bench::tcp::TransportError;
         pub use crate::backend::bench::{
-            fence, mailbox, Addressing, BenchBackend, BenchSettings, Failure, Identity, Link,
-            LinkError, LinkSettings, RunState,
+            fence, mailbox, BenchBackend, Failure, LinkError, LinkSettings,
         };
         pub mod manifest {
             pub use crate::backend::bench::manifest::Manifest;
         }
         pub mod sim {
-            pub use crate::backend::bench::sim::{
-                Audit, FaultAction, FaultRule, Running, SimSettings,
-            };
+            pub use crate::backend::bench::sim::{FaultAction, FaultRule};
         }
     }
     pub mod modbus {
@@ -46,9 +43,7 @@ pub mod backend {
             pub use crate::backend::modbus::client::{ModbusClient, ModbusError, ModbusSettings};
         }
         pub mod sim {
-            pub use crate::backend::modbus::sim::{
-                ModbusSim, ModbusSimSettings, ModbusSimulator, Served,
-            };
+            pub use crate::backend::modbus::sim::{ModbusSimSettings, ModbusSimulator};
         }
     }
     pub mod slmp {

@@ -43,11 +43,12 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-pub use addressing::Addressing;
+pub(crate) use addressing::Addressing;
 use fence::{WordRange, WriteFence};
-pub use link::{Failure, Identity, Link, LinkError, LinkSettings, RunState};
+pub use link::{Failure, LinkError, LinkSettings};
+pub(crate) use link::{Identity, Link, RunState};
 use mailbox::{off, state, Signature};
-pub use settings::BenchSettings;
+pub(crate) use settings::BenchSettings;
 
 use super::breaker::Breaker;
 use super::external::{closing, window};

@@ -20,9 +20,9 @@ mod fault;
 mod scan;
 mod server;
 
-pub use cpu::Audit;
+pub(crate) use cpu::Audit;
 pub(crate) use cpu::Cpu;
 pub use fault::{FaultAction, FaultRule};
-pub use scan::SimSettings;
+pub(crate) use scan::SimSettings;
 pub(crate) use scan::{scan, Program};
-pub use server::Running;
+pub(crate) use server::Running;
