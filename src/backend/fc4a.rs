@@ -8,7 +8,7 @@
 //! on, and the destination is left unchanged. Device ranges and the error flag come from the
 //! profile, so a model with other data register ranges is an edit to `vendors/idec-fc4a.yaml`.
 
-use super::reference::{Model, Stop};
+use super::reference::{Model, Run, Stop};
 use super::{Outcome, Request, Unsupported};
 use crate::memory::Scratch;
 use crate::model::Operand;
@@ -28,24 +28,10 @@ const MAX_DIGITS: u32 = 4;
 /// The FC4A reference model.
 pub(crate) struct Fc4a;
 
-fn modelled(instruction: &str) -> bool {
-    matches!(instruction, "ATOH" | "HTOA")
-}
-
 impl Model for Fc4a {
     const PROFILE: &'static str = PROFILE;
 
-    fn models(instruction: &str) -> bool {
-        modelled(instruction)
-    }
-
-    fn run(req: &Request<'_>) -> Result<Outcome, Stop> {
-        match req.instruction {
-            "ATOH" => atoh(req),
-            "HTOA" => htoa(req),
-            other => Err(Unsupported(format!("{other} is not modelled")).into()),
-        }
-    }
+    const INSTRUCTIONS: &'static [(&'static str, Run)] = &[("ATOH", atoh), ("HTOA", htoa)];
 }
 
 /// A 16-bit source operand: a constant, or one word (a bit device's 16 points, a timer's or

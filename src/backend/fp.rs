@@ -10,8 +10,8 @@
 //! digit's in the low byte. Every error (a count of 0, a character that is not 0-9 or A-F, an
 //! area too small) is an operation error: the flag, and nothing written.
 
-use super::reference::{constant_word, Model, Stop};
-use super::{Outcome, Request, Unsupported};
+use super::reference::{constant_word, Model, Run, Stop};
+use super::{Outcome, Request};
 use crate::memory::Scratch;
 use crate::model::Operand;
 use crate::text::{digit_char, digit_value};
@@ -29,17 +29,7 @@ pub(crate) struct Fp;
 impl Model for Fp {
     const PROFILE: &'static str = PROFILE;
 
-    fn models(instruction: &str) -> bool {
-        matches!(instruction, "F72" | "F71")
-    }
-
-    fn run(req: &Request<'_>) -> Result<Outcome, Stop> {
-        match req.instruction {
-            "F72" => ahex(req),
-            "F71" => hexa(req),
-            other => Err(Unsupported(format!("{other} is not modelled")).into()),
-        }
-    }
+    const INSTRUCTIONS: &'static [(&'static str, Run)] = &[("F72", ahex), ("F71", hexa)];
 }
 
 /// A 16-bit operand: a constant as the CPU holds it, or a word of memory.

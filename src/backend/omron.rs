@@ -23,7 +23,7 @@
 //! What varies between the CPU models is data in `vendors/omron-cs-cj.yaml`: the data area
 //! ranges, and the variant feature `lowercase-hex` (the C200H series takes 61H-66H as digits).
 
-use super::reference::{Model, Stop};
+use super::reference::{Model, Run, Stop};
 use super::{Outcome, Request, Unsupported};
 use crate::device::Device;
 use crate::memory::Scratch;
@@ -49,17 +49,7 @@ pub(crate) struct Omron;
 impl Model for Omron {
     const PROFILE: &'static str = PROFILE;
 
-    fn models(instruction: &str) -> bool {
-        matches!(instruction, "HEX" | "ASC")
-    }
-
-    fn run(req: &Request<'_>) -> Result<Outcome, Stop> {
-        match req.instruction {
-            "HEX" => hex(req),
-            "ASC" => asc(req),
-            other => Err(Unsupported(format!("{other} is not modelled")).into()),
-        }
-    }
+    const INSTRUCTIONS: &'static [(&'static str, Run)] = &[("HEX", hex), ("ASC", asc)];
 }
 
 /// The parity Di digit 3 designates.

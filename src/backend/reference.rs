@@ -14,11 +14,30 @@ use crate::value::{narrow, to_bits};
 pub(crate) trait Model: Send + Sync + 'static {
     /// The profile id the model implements.
     const PROFILE: &'static str;
+    /// The instructions the model runs, each by its function, for a model whose instruction's
+    /// name is all it needs to choose (one that reads a width or a pulse form from the name
+    /// gives `models` and `run` instead).
+    const INSTRUCTIONS: &'static [(&'static str, Run)] = &[];
     /// Whether the model covers an instruction.
-    fn models(instruction: &str) -> bool;
+    fn models(instruction: &str) -> bool {
+        Self::INSTRUCTIONS
+            .iter()
+            .any(|(name, _)| *name == instruction)
+    }
     /// Executes one request.
-    fn run(req: &Request<'_>) -> Result<Outcome, Stop>;
+    fn run(req: &Request<'_>) -> Result<Outcome, Stop> {
+        match Self::INSTRUCTIONS
+            .iter()
+            .find(|(name, _)| *name == req.instruction)
+        {
+            Some((_, run)) => run(req),
+            None => Err(Unsupported(format!("{} is not modelled", req.instruction)).into()),
+        }
+    }
 }
+
+/// One instruction of a model, run on a request.
+pub(crate) type Run = fn(&Request<'_>) -> Result<Outcome, Stop>;
 
 /// A 16-bit constant operand as the CPU holds it (`K-1` is FFFFH); one past 16 bits is not
 /// programmable, so a model declines it.

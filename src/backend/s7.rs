@@ -11,7 +11,7 @@
 //! or marker area) is RET_VAL 8182H (IN) or 8382H (OUT), and nothing is written. HTA writes 2N
 //! uppercase characters and always ends with ENO TRUE.
 
-use super::reference::{Model, Stop};
+use super::reference::{Model, Run, Stop};
 use super::{Outcome, Request, Unsupported};
 use crate::device::Device;
 use crate::memory::Scratch;
@@ -34,17 +34,7 @@ pub(crate) struct S71200;
 impl Model for S71200 {
     const PROFILE: &'static str = PROFILE;
 
-    fn models(instruction: &str) -> bool {
-        matches!(instruction, "ATH" | "HTA")
-    }
-
-    fn run(req: &Request<'_>) -> Result<Outcome, Stop> {
-        match req.instruction {
-            "ATH" => ath(req),
-            "HTA" => hta(req),
-            other => Err(Unsupported(format!("{other} is not modelled")).into()),
-        }
-    }
+    const INSTRUCTIONS: &'static [(&'static str, Run)] = &[("ATH", ath), ("HTA", hta)];
 }
 
 /// The value of an ASCII hex digit as the S7-1200 reads it: 0-9, A-F and a-f (the 0007H

@@ -9,7 +9,7 @@
 //! model writes nothing (open question `s7-200-ath-illegal-output`), and LEN = 0 converts
 //! nothing (open question `s7-200-len-zero`).
 
-use super::reference::{Model, Stop};
+use super::reference::{Model, Run, Stop};
 use super::{Outcome, Request, Unsupported};
 use crate::device::Device;
 use crate::memory::Scratch;
@@ -29,17 +29,7 @@ pub(crate) struct S7200;
 impl Model for S7200 {
     const PROFILE: &'static str = PROFILE;
 
-    fn models(instruction: &str) -> bool {
-        matches!(instruction, "ATH" | "HTA")
-    }
-
-    fn run(req: &Request<'_>) -> Result<Outcome, Stop> {
-        match req.instruction {
-            "ATH" => ath(req),
-            "HTA" => hta(req),
-            other => Err(Unsupported(format!("{other} is not modelled")).into()),
-        }
-    }
+    const INSTRUCTIONS: &'static [(&'static str, Run)] = &[("ATH", ath), ("HTA", hta)];
 }
 
 /// IN, LEN and OUT, once both arrays are inside the conformance program's areas: `n_in(LEN)`
