@@ -168,60 +168,50 @@ impl Connection {
         header: usize,
         total: impl Fn(&[u8]) -> Result<usize, TransportError>,
     ) -> Result<Vec<u8>, TransportError> {
-        let result = self.send_and_read(address, connect_timeout, request, exchange, header, total);
+        let result = (|| {
+            let deadline = Instant::now() + exchange.timeout;
+            let what = exchange.what;
+            let stream = match &mut self.stream {
+                Some(stream) => stream,
+                slot => {
+                    let made =
+                        connect(address, connect_timeout).map_err(|e| TransportError::Connect {
+                            address: address.into(),
+                            error: e.to_string(),
+                        })?;
+                    self.connections += 1;
+                    slot.insert(made)
+                }
+            };
+            self.requests += 1;
+            stream
+                .write_all(request)
+                .map_err(|e| TransportError::Closed {
+                    what: what.into(),
+                    error: e.to_string(),
+                })?;
+            let short = |short| match short {
+                Short::Timeout => TransportError::Timeout {
+                    what: what.into(),
+                    waited: exchange.timeout,
+                    hint: exchange.silence,
+                },
+                Short::Closed(error) => TransportError::Closed {
+                    what: what.into(),
+                    error,
+                },
+            };
+            let mut buf = vec![0u8; header];
+            read_full(stream, &mut buf, deadline).map_err(short)?;
+            let total = total(&buf)?;
+            buf.resize(total.max(header), 0);
+            read_full(stream, &mut buf[header..], deadline).map_err(short)?;
+            Ok(buf)
+        })();
         if result.is_err() {
             self.disconnect();
         }
         result
-    }
-
-    fn send_and_read(
-        &mut self,
-        address: &str,
-        connect_timeout: Duration,
-        request: &[u8],
-        exchange: &Exchange<'_>,
-        header: usize,
-        total: impl Fn(&[u8]) -> Result<usize, TransportError>,
-    ) -> Result<Vec<u8>, TransportError> {
-        let deadline = Instant::now() + exchange.timeout;
-        let what = exchange.what;
-        let stream = match &mut self.stream {
-            Some(stream) => stream,
-            slot => {
-                let made =
-                    connect(address, connect_timeout).map_err(|e| TransportError::Connect {
-                        address: address.into(),
-                        error: e.to_string(),
-                    })?;
-                self.connections += 1;
-                slot.insert(made)
-            }
-        };
-        self.requests += 1;
-        stream
-            .write_all(request)
-            .map_err(|e| TransportError::Closed {
-                what: what.into(),
-                error: e.to_string(),
-            })?;
-        let short = |short| match short {
-            Short::Timeout => TransportError::Timeout {
-                what: what.into(),
-                waited: exchange.timeout,
-                hint: exchange.silence,
-            },
-            Short::Closed(error) => TransportError::Closed {
-                what: what.into(),
-                error,
-            },
-        };
-        let mut buf = vec![0u8; header];
-        read_full(stream, &mut buf, deadline).map_err(short)?;
-        let total = total(&buf)?;
-        buf.resize(total.max(header), 0);
-        read_full(stream, &mut buf[header..], deadline).map_err(short)?;
-        Ok(buf)
     }
 }
 
