@@ -17,11 +17,11 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use plc_conformance::testing::backend::external::ExternalBackend;
-use plc_conformance::testing::backend::{Backend, Request};
 use plc_conformance::testing::execute::{images, requests};
-use plc_conformance::testing::memory::Image;
 use plc_conformance::testing::model::project::{ExternalSettings, Launch};
 use plc_conformance::testing::session::Session;
+use plc_conformance::Image;
+use plc_conformance::{Backend, Request};
 use plc_conformance::{Paths, Project};
 
 struct Setup {

@@ -24,9 +24,6 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use plc_conformance::testing::backend::Request;
-use plc_conformance::testing::memory::{Fill, Image};
-use plc_conformance::testing::model::cross_vendor::Operation;
 use plc_conformance::testing::model::project::{ExternalSettings, Launch};
 use plc_conformance::testing::plan::Input;
 use plc_conformance::testing::session::{BackendSource, Session};
@@ -35,6 +32,9 @@ use plc_conformance::testing::sweep::group::Groups;
 use plc_conformance::testing::sweep::input::{Data, Point};
 use plc_conformance::testing::sweep::target::{Cases, Target};
 use plc_conformance::testing::sweep::{Settings, Sweep};
+use plc_conformance::Operation;
+use plc_conformance::Request;
+use plc_conformance::{Fill, Image};
 use plc_conformance::{Paths, Project};
 
 fn main() {

@@ -7,10 +7,7 @@
 //! the manuals say, which the public interface has no reason to expose.
 
 pub mod backend {
-    pub use crate::backend::{
-        codec_backend, fx5, reference_backends, Backend, Codec, Fault, Outcome, Question, Request,
-        Response, Unsupported,
-    };
+    pub use crate::backend::{fx5, reference_backends};
     pub mod external {
         pub use crate::backend::external::{ExternalBackend, ExternalErrorKind};
         pub mod protocol {
@@ -61,9 +58,6 @@ pub mod backend {
         }
     }
 }
-pub mod device {
-    pub use crate::device::Device;
-}
 pub mod error_chain {
     pub use crate::error_chain::chain;
 }
@@ -76,19 +70,16 @@ pub mod execute {
 pub mod hil {
     pub use crate::hil::{dry_run, generate, pulse_self_test, GenerateOptions};
 }
-pub mod judge {
-    pub use crate::judge::{Difference, Status, Verdict};
-}
 pub mod known_draft {
     pub use crate::known_draft::draft;
 }
 pub mod libtest {
-    pub use crate::libtest::{main, Harness};
+    pub use crate::libtest::main;
 
     /// Runs a harness under libtest's arguments `args` (without the program name): libtest's
     /// conclusion, or the lines of why it refused to run anything.
     pub fn conclude(
-        harness: Harness,
+        harness: crate::Harness,
         args: &[&str],
     ) -> Result<libtest_mimic::Conclusion, Vec<String>> {
         let args = libtest_mimic::Arguments::from_iter(
@@ -104,22 +95,16 @@ pub mod load {
         OPEN_QUESTIONS,
     };
 }
-pub mod memory {
-    pub use crate::memory::{Fill, Image, Unit, Value};
-}
 pub mod model {
-    pub use crate::model::{Basis, Case, Citation, Corpus, ErrorSignal, Operand};
+    pub use crate::model::Citation;
     pub mod cross_vendor {
-        pub use crate::model::cross_vendor::{
-            Answer, CodecAbilities, CrossVendorCase, ErrorClass, Operation, OperationAbilities,
-            TextLayout,
-        };
+        pub use crate::model::cross_vendor::TextLayout;
     }
     pub mod known {
-        pub use crate::model::known::{Covers, Entry, KnownDifferences, Subject};
+        pub use crate::model::known::{Covers, Entry};
     }
     pub mod profile {
-        pub use crate::model::profile::{DeviceRange, DeviceRanges, Profiles, Variant};
+        pub use crate::model::profile::{DeviceRange, DeviceRanges, Profiles};
     }
     pub mod project {
         pub use crate::model::project::{ExternalSettings, Launch};
@@ -129,7 +114,7 @@ pub mod model {
     }
 }
 pub mod plan {
-    pub use crate::plan::{Check, Input, Trial};
+    pub use crate::plan::{Check, Input};
 }
 pub mod report {
     pub use crate::report::{Event, Reporter};

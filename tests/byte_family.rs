@@ -7,9 +7,9 @@ mod common;
 
 use std::path::PathBuf;
 
-use plc_conformance::testing::device::Device;
-use plc_conformance::testing::memory::Unit;
 use plc_conformance::testing::session::Session;
+use plc_conformance::Device;
+use plc_conformance::Unit;
 use plc_conformance::{Paths, Project};
 
 fn fixture() -> PathBuf {

@@ -353,14 +353,14 @@ fn every_manual_basis_rests_on_a_quote() {
     let mut cases: Vec<(String, String)> = corpus
         .cases
         .iter()
-        .filter(|c| c.basis == plc_conformance::testing::model::Basis::Manual)
+        .filter(|c| c.basis == plc_conformance::Basis::Manual)
         .map(|c| (c.id.clone(), cite_of(&c.citation)))
         .collect();
     cases.extend(
         corpus
             .cross_vendor
             .iter()
-            .filter(|c| c.basis == plc_conformance::testing::model::Basis::Manual)
+            .filter(|c| c.basis == plc_conformance::Basis::Manual)
             .map(|c| (c.id.clone(), cite_of(&c.citation))),
     );
     assert!(cases.len() > 200, "{} manual cases", cases.len());

@@ -11,17 +11,18 @@ use std::sync::Arc;
 
 use common::{reference, session, Mutant};
 use plc_conformance::run_one;
-use plc_conformance::testing::backend::{Backend, Fault, Outcome, Response};
-use plc_conformance::testing::device::Device;
-use plc_conformance::testing::judge::{Difference, Status, Verdict};
 use plc_conformance::testing::load::CorpusBuilder;
-use plc_conformance::testing::memory::Fill;
-use plc_conformance::testing::model::known::{Entry, KnownDifferences};
-use plc_conformance::testing::model::ErrorSignal;
-use plc_conformance::testing::plan::Trial;
+use plc_conformance::testing::model::known::Entry;
 use plc_conformance::testing::report::text::{render, Palette};
 use plc_conformance::testing::session::Session;
+use plc_conformance::Device;
+use plc_conformance::ErrorSignal;
+use plc_conformance::Fill;
+use plc_conformance::KnownDifferences;
+use plc_conformance::Trial;
+use plc_conformance::{Backend, Fault, Outcome, Response};
 use plc_conformance::{CrossVendorCase, Operation};
+use plc_conformance::{Difference, Status, Verdict};
 use rstest::rstest;
 
 /// Every cross-vendor trial on one backend.
@@ -68,7 +69,7 @@ fn a_model_ignoring_sm705_fails_the_terminated_lowering() {
     let iqr = reference(&s, "mitsubishi-iqr");
     let mutant = Mutant::new("ignores-sm705", &iqr, |req, base| {
         let flags = req.flags.keys().map(|k| (k.clone(), false)).collect();
-        base.execute(&plc_conformance::testing::backend::Request {
+        base.execute(&plc_conformance::Request {
             flags: &flags,
             ..*req
         })
@@ -376,7 +377,7 @@ fn behaviour_table(project: &Session) -> String {
                     continue;
                 }
                 let mut shown = plc_conformance::testing::report::record::Record::of(t, v).shown;
-                if t.basis() == plc_conformance::testing::model::Basis::Unspecified {
+                if t.basis() == plc_conformance::Basis::Unspecified {
                     shown.push_str(" (unspecified)");
                 }
                 let lowering = t.check_name().to_string();

@@ -8,8 +8,8 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use plc_conformance::testing::memory::Unit;
 use plc_conformance::testing::session::Session;
+use plc_conformance::Unit;
 use plc_conformance::{Paths, Project};
 
 fn fixture() -> PathBuf {

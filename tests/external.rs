@@ -15,12 +15,12 @@ use common::{interpreter, python};
 use std::time::Duration;
 
 use plc_conformance::testing::backend::external::ExternalErrorKind;
-use plc_conformance::testing::backend::Backend;
-use plc_conformance::testing::judge::Verdict;
 use plc_conformance::testing::load::{load_project, ENV_SELF, FILE_NAME};
 use plc_conformance::testing::model::project::{ExternalSettings, Launch};
-use plc_conformance::testing::plan::Trial;
 use plc_conformance::testing::session::{BackendSource, Session, SetupError};
+use plc_conformance::Backend;
+use plc_conformance::Trial;
+use plc_conformance::Verdict;
 use plc_conformance::{run_one, verdicts as run_all, Paths, Project};
 
 fn root() -> &'static Path {

@@ -3,9 +3,9 @@
 
 use std::path::Path;
 
-use plc_conformance::testing::device::Device;
 use plc_conformance::testing::load::{load_profiles, parse_profile, CorpusBuilder};
 use plc_conformance::testing::model::profile::Profiles;
+use plc_conformance::Device;
 use rstest::rstest;
 
 fn profiles() -> Profiles {

@@ -11,13 +11,14 @@ use std::path::Path;
 
 use common::{reference, session, Mutant};
 use plc_conformance::run_one;
-use plc_conformance::testing::backend::{Backend, Response};
-use plc_conformance::testing::judge::Difference;
-use plc_conformance::testing::judge::Verdict;
 use plc_conformance::testing::load::{load_profiles, CorpusBuilder};
-use plc_conformance::testing::model::{Basis, ErrorSignal};
-use plc_conformance::testing::plan::{Check, Trial};
+use plc_conformance::testing::plan::Check;
+use plc_conformance::Difference;
 use plc_conformance::Project;
+use plc_conformance::Trial;
+use plc_conformance::Verdict;
+use plc_conformance::{Backend, Response};
+use plc_conformance::{Basis, ErrorSignal};
 use std::sync::Arc;
 
 const PROFILE: &str = "idec-fc4a";

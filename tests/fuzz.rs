@@ -214,8 +214,7 @@ fn decode(line: &[u8]) {
 
 /// Lines into `plc-conformance serve`'s loop: it answers or stops with an error, never panics.
 fn serve_lines(lines: &[Vec<u8>]) {
-    static BACKENDS: OnceLock<Vec<std::sync::Arc<dyn plc_conformance::testing::backend::Backend>>> =
-        OnceLock::new();
+    static BACKENDS: OnceLock<Vec<std::sync::Arc<dyn plc_conformance::Backend>>> = OnceLock::new();
     let backends = BACKENDS.get_or_init(|| reference_backends(profiles()));
     let Some(backend) = backends.iter().find(|b| b.profile() == "mitsubishi-iqr") else {
         panic!("no iQ-R model");

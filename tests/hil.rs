@@ -19,14 +19,14 @@ use plc_conformance::testing::backend::slmp::sim::{
     FaultAction, FaultRule, SlmpSimSettings, SlmpSimulator,
 };
 use plc_conformance::testing::backend::slmp::{SlmpBench, ADDRESSING};
-use plc_conformance::testing::backend::Backend;
-use plc_conformance::testing::device::Device;
 use plc_conformance::testing::error_chain::chain;
 use plc_conformance::testing::hil::{dry_run, generate, GenerateOptions};
-use plc_conformance::testing::judge::Verdict;
-use plc_conformance::testing::plan::Trial;
 use plc_conformance::testing::session::{BackendSource, Session};
 use plc_conformance::verdicts;
+use plc_conformance::Backend;
+use plc_conformance::Device;
+use plc_conformance::Trial;
+use plc_conformance::Verdict;
 
 use common::bench::{execute_once, first_trial, key, rule};
 use common::{reference, session};
@@ -328,10 +328,7 @@ fn a_read_past_the_timeout_is_sent_again_and_the_case_completes() {
     ));
     let trial = first_trial(&project, &backend, "BINHA");
     let r = execute_once(&backend, &trial).expect("the read is retried on a new connection");
-    assert!(
-        matches!(r, plc_conformance::testing::backend::Response::Done(_)),
-        "{r:?}"
-    );
+    assert!(matches!(r, plc_conformance::Response::Done(_)), "{r:?}");
     assert_eq!(sim.audit().connections, 2);
 }
 
@@ -446,7 +443,7 @@ fn a_write_outside_the_sandbox_is_refused_before_any_byte_is_sent() {
     let backend = Arc::new(BenchBackend::new(s, &project.profiles).expect("backend"));
     let trial = first_trial(&project, &backend, "BINHA");
     match execute_once(&backend, &trial) {
-        Ok(plc_conformance::testing::backend::Response::Unsupported(why)) => {
+        Ok(plc_conformance::Response::Unsupported(why)) => {
             assert!(
                 why.contains("is refused: it lies outside the words the harness may write"),
                 "{why}"
@@ -463,7 +460,7 @@ fn a_write_outside_the_sandbox_is_refused_before_any_byte_is_sent() {
     backend.connect().expect("interlocks");
     assert!(matches!(
         execute_once(&backend, &trial),
-        Ok(plc_conformance::testing::backend::Response::Unsupported(_))
+        Ok(plc_conformance::Response::Unsupported(_))
     ));
     assert_eq!(writes_sent(&sim), 0);
 }
@@ -490,7 +487,7 @@ fn a_case_setting_words_the_client_cannot_address_is_not_run() {
     let written = writes_sent(&sim);
     assert!(matches!(
         execute_once(&backend, &trial),
-        Ok(plc_conformance::testing::backend::Response::Done(_))
+        Ok(plc_conformance::Response::Done(_))
     ));
     assert!(writes_sent(&sim) > written, "the case as it is runs");
     std::sync::Arc::make_mut(&mut trial.input)
@@ -498,7 +495,7 @@ fn a_case_setting_words_the_client_cannot_address_is_not_run() {
         .insert(Device::new("K4M", 0), 0x1234);
     let written = writes_sent(&sim);
     match execute_once(&backend, &trial) {
-        Ok(plc_conformance::testing::backend::Response::Unsupported(why)) => {
+        Ok(plc_conformance::Response::Unsupported(why)) => {
             assert!(why.contains("K4M words"), "{why}");
         }
         other => panic!("run: {other:?}"),
@@ -642,7 +639,7 @@ fn a_pulse_rung_fires_on_every_case() {
     assert_eq!(sim.audit().executions, before + 1);
     assert_eq!(first, second);
     assert!(
-        matches!(first, plc_conformance::testing::backend::Response::Done(ref o) if !o.writes.is_empty()),
+        matches!(first, plc_conformance::Response::Done(ref o) if !o.writes.is_empty()),
         "{first:?}"
     );
 }

@@ -20,11 +20,11 @@ use plc_conformance::testing::backend::slmp::frame::{DeviceForm, FrameKind};
 use plc_conformance::testing::backend::slmp::limits::{self, Family};
 use plc_conformance::testing::backend::slmp::sim::{RemoteProgram, SlmpSimSettings, SlmpSimulator};
 use plc_conformance::testing::backend::slmp::{fault_of, SlmpBench, ADDRESSING};
-use plc_conformance::testing::backend::Backend;
-use plc_conformance::testing::device::Device;
 use plc_conformance::testing::hil::{generate, GenerateOptions};
-use plc_conformance::testing::plan::Trial;
 use plc_conformance::verdicts;
+use plc_conformance::Backend;
+use plc_conformance::Device;
+use plc_conformance::Trial;
 use std::sync::Arc;
 
 use common::{reference, session};

@@ -19,10 +19,11 @@ use plc_conformance::testing::backend::modbus::sim::{ModbusSimSettings, ModbusSi
 use plc_conformance::testing::backend::modbus::{Map, ModbusBench};
 use plc_conformance::testing::error_chain::chain;
 use plc_conformance::testing::hil::{dry_run, generate, GenerateOptions};
-use plc_conformance::testing::judge::Verdict;
-use plc_conformance::testing::plan::{Check, Trial};
+use plc_conformance::testing::plan::Check;
 use plc_conformance::testing::session::{BackendSource, Session};
 use plc_conformance::verdicts;
+use plc_conformance::Trial;
+use plc_conformance::Verdict;
 
 use common::bench::{execute_once, first_trial, key, rule};
 use common::{reference, session};
@@ -279,7 +280,7 @@ fn a_write_outside_the_sandbox_is_refused_before_any_byte_is_sent() {
     backend.connect().expect("interlocks");
     let trial = first_trial(&project, &backend, "ATOH");
     match execute_once(&backend, &trial) {
-        Ok(plc_conformance::testing::backend::Response::Unsupported(why)) => assert!(
+        Ok(plc_conformance::Response::Unsupported(why)) => assert!(
             why.contains("is refused: it lies outside the words the harness may write"),
             "{why}"
         ),

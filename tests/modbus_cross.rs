@@ -21,8 +21,8 @@ use plc_conformance::testing::backend::modbus::client::{
 };
 use plc_conformance::testing::backend::modbus::sim::{ModbusSimSettings, ModbusSimulator};
 use plc_conformance::testing::backend::modbus::{Map, ModbusLinkSettings};
-use plc_conformance::testing::device::Device;
 use plc_conformance::testing::hil::{generate, GenerateOptions};
+use plc_conformance::Device;
 
 use common::{reference, root, session};
 

@@ -11,13 +11,13 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use common::{assert_corpus_kills, failing_trials, map_done, reference, session, Mutant};
-use plc_conformance::testing::backend::{Backend, Fault, Outcome, Request, Response};
-use plc_conformance::testing::device::Device;
-use plc_conformance::testing::memory::{Image, Unit};
 use plc_conformance::testing::model::cross_vendor::TextLayout;
 use plc_conformance::testing::model::profile::{DeviceRange, DeviceRanges};
-use plc_conformance::testing::model::Operand;
 use plc_conformance::testing::text::digit_value;
+use plc_conformance::Device;
+use plc_conformance::Operand;
+use plc_conformance::{Backend, Fault, Outcome, Request, Response};
+use plc_conformance::{Image, Unit};
 
 const PROFILE: &str = "idec-fc4a";
 
@@ -377,7 +377,7 @@ fn unspecified_upper_byte_is_not_asserted() {
         .find(|t| t.case_id() == "atoh-upper-byte-0131h")
         .expect("the 0131H case is in the corpus");
     match plc_conformance::run_one(&probe) {
-        plc_conformance::testing::judge::Verdict::Recorded { observed, .. } => {
+        plc_conformance::Verdict::Recorded { observed, .. } => {
             let observed = observed.to_string();
             assert!(!observed.contains("error"), "recorded {observed}")
         }

@@ -6,8 +6,8 @@
 mod common;
 
 use common::{assert_corpus_kills, map_done, reference, session, with_memory, Mutant};
-use plc_conformance::testing::backend::{Backend, Fault, Request, Response};
-use plc_conformance::testing::model::Operand;
+use plc_conformance::Operand;
+use plc_conformance::{Backend, Fault, Request, Response};
 
 const PROFILE: &str = "panasonic-fp";
 

@@ -9,9 +9,9 @@ mod common;
 use common::{
     assert_corpus_kills, map_done, reference, session, with_constant, with_memory, Mutant,
 };
-use plc_conformance::testing::backend::{Backend, Request, Response};
-use plc_conformance::testing::device::Device;
-use plc_conformance::testing::model::Operand;
+use plc_conformance::Device;
+use plc_conformance::Operand;
+use plc_conformance::{Backend, Request, Response};
 
 fn count(req: &Request<'_>) -> u32 {
     match req.operands.get("n") {

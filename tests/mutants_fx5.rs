@@ -11,11 +11,11 @@ use std::sync::Arc;
 
 use common::{assert_corpus_kills, failing_trials, reference, session, Mutant};
 use plc_conformance::testing::backend::fx5::{self, Packing};
-use plc_conformance::testing::backend::{Backend, Fault, Outcome, Request, Response};
-use plc_conformance::testing::device::Device;
-use plc_conformance::testing::memory::Image;
-use plc_conformance::testing::model::profile::Variant;
-use plc_conformance::testing::model::{ErrorSignal, Operand};
+use plc_conformance::Device;
+use plc_conformance::Image;
+use plc_conformance::Variant;
+use plc_conformance::{Backend, Fault, Outcome, Request, Response};
+use plc_conformance::{ErrorSignal, Operand};
 
 type Answer = Result<Response, Fault>;
 

@@ -6,9 +6,9 @@
 mod common;
 
 use common::{assert_corpus_kills, map_done, reference, session, Mutant};
-use plc_conformance::testing::backend::{Request, Response};
-use plc_conformance::testing::memory::Image;
-use plc_conformance::testing::model::Operand;
+use plc_conformance::Image;
+use plc_conformance::Operand;
+use plc_conformance::{Request, Response};
 
 const PROFILE: &str = "keyence-kv";
 

@@ -10,10 +10,10 @@ mod common;
 use std::collections::BTreeMap;
 
 use common::{assert_corpus_kills, map_done, reference, session, Mutant};
-use plc_conformance::testing::backend::{Backend, Fault, Request, Response};
-use plc_conformance::testing::device::Device;
-use plc_conformance::testing::memory::Image;
-use plc_conformance::testing::model::{ErrorSignal, Operand};
+use plc_conformance::Device;
+use plc_conformance::Image;
+use plc_conformance::{Backend, Fault, Request, Response};
+use plc_conformance::{ErrorSignal, Operand};
 
 const PROFILE: &str = "siemens-s7-1200";
 

@@ -83,9 +83,9 @@ fn run_probes_runs_the_probes_of_a_question() {
 /// model takes is asserted even where the probe is `unspecified`.
 #[test]
 fn every_question_has_a_probe_that_decides_and_the_model_answers_its_reading() {
-    use plc_conformance::testing::judge::Verdict;
-    use plc_conformance::testing::model::Basis;
     use plc_conformance::testing::plan::Check;
+    use plc_conformance::Basis;
+    use plc_conformance::Verdict;
     use std::sync::Arc;
 
     let mut s = session();
@@ -97,7 +97,7 @@ fn every_question_has_a_probe_that_decides_and_the_model_answers_its_reading() {
         .cases
         .iter()
         .map(|c| {
-            Arc::new(plc_conformance::testing::model::Case {
+            Arc::new(plc_conformance::Case {
                 basis: Basis::Unspecified,
                 ..(**c).clone()
             })
@@ -108,12 +108,10 @@ fn every_question_has_a_probe_that_decides_and_the_model_answers_its_reading() {
         .cross_vendor
         .iter()
         .map(|c| {
-            Arc::new(
-                plc_conformance::testing::model::cross_vendor::CrossVendorCase {
-                    basis: Basis::Unspecified,
-                    ..(**c).clone()
-                },
-            )
+            Arc::new(plc_conformance::CrossVendorCase {
+                basis: Basis::Unspecified,
+                ..(**c).clone()
+            })
         })
         .collect();
     let mut problems = Vec::new();

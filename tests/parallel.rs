@@ -8,8 +8,8 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use common::{reference, session};
-use plc_conformance::testing::backend::{Backend, Fault, Request, Response};
 use plc_conformance::testing::execute::{execute_all, Pace};
+use plc_conformance::{Backend, Fault, Request, Response};
 
 /// The reference model answering each batch after a pause, counting how many backends are
 /// answering at the same moment.

@@ -404,9 +404,7 @@ fn uncarried(semantics: &str, project: &Project) -> Vec<String> {
         }
         for rule in protocol.rules.values() {
             let c = &rule.citation;
-            if let (plc_conformance::testing::model::Basis::Manual, Some(quote)) =
-                (rule.basis, &c.text)
-            {
+            if let (plc_conformance::Basis::Manual, Some(quote)) = (rule.basis, &c.text) {
                 let cite = format!("`{} p.{}`", c.manual, c.page);
                 if !semantics.contains(&format!("{cite}: \"{quote}\"")) {
                     out.push(format!("{}: {cite} and its quote", rule.key));
@@ -427,7 +425,7 @@ fn every_manual_rule_and_its_quote_is_carried_in_the_semantics() {
     assert_eq!(uncarried(&semantics, &project), Vec::<String>::new());
     for case in &project.corpus.protocol_fields {
         let rule = &case.protocol.as_ref().expect("protocol case").rule;
-        if case.basis == plc_conformance::testing::model::Basis::Manual {
+        if case.basis == plc_conformance::Basis::Manual {
             assert_eq!(case.citation, rule.citation, "{}", case.id);
         }
     }

@@ -358,7 +358,7 @@ fn every_case_count_in_the_docs_is_the_corpus_s() {
 /// Each folder's cases by basis, as the families table writes them: `80 manual, 40 inferred,
 /// 4 unspecified` (a basis no case has is left out).
 fn bases_by_folder() -> std::collections::BTreeMap<String, String> {
-    use plc_conformance::testing::model::Basis;
+    use plc_conformance::Basis;
     let project = common::session();
     let mut by = std::collections::BTreeMap::<String, [usize; 4]>::new();
     let slot = |b: Basis| match b {

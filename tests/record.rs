@@ -7,7 +7,7 @@ use std::path::Path;
 
 use common::{cli, root, scratch};
 use plc_conformance::testing::load::{load_corpus, load_profiles};
-use plc_conformance::testing::model::{Basis, Corpus};
+use plc_conformance::{Basis, Corpus};
 
 /// A copy of the iQ-R vectors in a scratch folder (kept while the first value lives).
 fn iqr_copy() -> (tempfile::TempDir, std::path::PathBuf) {
@@ -220,7 +220,7 @@ fn record_outside_a_project_says_where_to_run_it() {
 /// stale entry).
 #[test]
 fn the_known_draft_loads_and_covers_exactly_the_differences() {
-    use plc_conformance::testing::judge::Status;
+    use plc_conformance::Status;
     let mut project = common::session();
     let iqr = common::reference(&project, "mitsubishi-iqr");
     let mutant = common::Mutant::new("high-bytes-as-zero", &iqr, |req, base| {
@@ -258,10 +258,9 @@ fn the_known_draft_loads_and_covers_exactly_the_differences() {
         .map(|(t, v)| format!("{}: {v:?}", t.name()))
         .collect();
     assert!(failing.is_empty(), "{failing:#?}\n{}", draft.text);
-    assert!(verdicts.iter().any(|v| matches!(
-        v,
-        plc_conformance::testing::judge::Verdict::KnownDifference { .. }
-    )));
+    assert!(verdicts
+        .iter()
+        .any(|v| matches!(v, plc_conformance::Verdict::KnownDifference { .. })));
 }
 
 /// `record --known` never replaces a file: a known-differences file is edited by hand.

@@ -9,11 +9,11 @@ use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 use common::{interpreter, python, root, scratch};
-use plc_conformance::testing::backend::Backend;
-use plc_conformance::testing::judge::Verdict;
 use plc_conformance::testing::load::ENV_SELF;
 use plc_conformance::testing::model::project::{ExternalSettings, Launch};
 use plc_conformance::testing::session::{BackendSource, Session};
+use plc_conformance::Backend;
+use plc_conformance::Verdict;
 use plc_conformance::{run_one, verdicts as run_all, Paths, Project};
 
 const BIN: &str = env!("CARGO_BIN_EXE_plc-conformance");

@@ -14,10 +14,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use common::{failing_trials, reference, root, scratch, session, Mutant};
-use plc_conformance::testing::backend::{Backend, Request};
 use plc_conformance::testing::load::{load_corpus, load_profiles};
-use plc_conformance::testing::memory::Image;
-use plc_conformance::testing::model::cross_vendor::Operation;
 use plc_conformance::testing::session::{BackendSource, Session};
 use plc_conformance::testing::sweep::classes::ByteClasses;
 use plc_conformance::testing::sweep::generate::{Digits, Generator};
@@ -26,6 +23,9 @@ use plc_conformance::testing::sweep::input::{Data, Point};
 use plc_conformance::testing::sweep::shrink::candidates;
 use plc_conformance::testing::sweep::target::Target;
 use plc_conformance::testing::sweep::{emit, exhaustive, render, Results, Settings, Sweep};
+use plc_conformance::Image;
+use plc_conformance::Operation;
+use plc_conformance::{Backend, Request};
 use plc_conformance::{Paths, Project};
 
 fn no_stop() -> AtomicBool {
@@ -236,7 +236,7 @@ fn a_mutant_shrinks_to_a_minimal_input_that_still_differs_and_emits_a_failing_ve
     assert!(corpus
         .cases
         .iter()
-        .all(|c| c.basis != plc_conformance::testing::model::Basis::Manual));
+        .all(|c| c.basis != plc_conformance::Basis::Manual));
     let emitted_project = Project {
         profiles,
         corpus,
@@ -577,7 +577,7 @@ fn a_sweep_finds_every_known_difference_of_pymcprotocol() {
         .filter(|c| {
             known.entries.iter().any(|e| {
                 e.instruction.is_none()
-                    && e.matches(&plc_conformance::testing::model::known::Subject {
+                    && e.matches(&plc_conformance::Subject {
                         case: &c.id,
                         text: None,
                         instruction: &c.instructions[0],

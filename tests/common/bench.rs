@@ -5,10 +5,10 @@ use std::sync::Arc;
 
 use plc_conformance::testing::backend::bench::sim::{FaultAction, FaultRule};
 use plc_conformance::testing::backend::bench::BenchBackend;
-use plc_conformance::testing::backend::{Backend, Fault, Response};
 use plc_conformance::testing::execute::{images, requests};
-use plc_conformance::testing::plan::Trial;
 use plc_conformance::testing::session::Session;
+use plc_conformance::Trial;
+use plc_conformance::{Backend, Fault, Response};
 
 /// The first trial the live backend would run whose instruction is `instruction`.
 pub fn first_trial(project: &Session, backend: &Arc<BenchBackend>, instruction: &str) -> Trial {

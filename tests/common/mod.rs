@@ -8,9 +8,9 @@ use std::path::Path;
 use std::process::{Command, Output};
 use std::sync::{Arc, OnceLock};
 
-use plc_conformance::testing::backend::{Backend, Fault, Request, Response};
-use plc_conformance::testing::memory::Value;
 use plc_conformance::testing::session::Session;
+use plc_conformance::Value;
+use plc_conformance::{Backend, Fault, Request, Response};
 use plc_conformance::{Paths, Project};
 
 /// The project root: its `vendors/`, `vectors/` and project file.
@@ -107,9 +107,7 @@ impl Backend for Mutant {
 /// Changes a finished outcome (a mutant's one change to what the reference did).
 pub fn map_done(
     result: Result<Response, Fault>,
-    f: impl FnOnce(
-        plc_conformance::testing::backend::Outcome,
-    ) -> plc_conformance::testing::backend::Outcome,
+    f: impl FnOnce(plc_conformance::Outcome) -> plc_conformance::Outcome,
 ) -> Result<Response, Fault> {
     result.map(|r| match r {
         Response::Done(o) => Response::Done(f(o)),
@@ -124,17 +122,13 @@ pub fn with_memory(
     base: &dyn Backend,
     f: impl Fn(u16) -> u16,
 ) -> Result<Response, Fault> {
-    let units: std::collections::BTreeMap<plc_conformance::testing::device::Device, Value> = req
+    let units: std::collections::BTreeMap<plc_conformance::Device, Value> = req
         .memory
         .explicit()
         .iter()
         .map(|(d, v)| (d.clone(), Value::from(f(*v as u16))))
         .collect();
-    let memory = plc_conformance::testing::memory::Image::of_units(
-        units,
-        req.memory.fill(),
-        req.memory.unit(),
-    );
+    let memory = plc_conformance::Image::of_units(units, req.memory.fill(), req.memory.unit());
     base.execute(&Request {
         memory: &memory,
         ..*req
@@ -149,14 +143,11 @@ pub fn with_constant(
     name: &str,
     f: impl Fn(i64) -> i64,
 ) -> Result<Response, Fault> {
-    let Some(plc_conformance::testing::model::Operand::Constant(k)) = req.operands.get(name) else {
+    let Some(plc_conformance::Operand::Constant(k)) = req.operands.get(name) else {
         return base.execute(req);
     };
     let mut operands = req.operands.clone();
-    operands.insert(
-        name.into(),
-        plc_conformance::testing::model::Operand::Constant(f(*k)),
-    );
+    operands.insert(name.into(), plc_conformance::Operand::Constant(f(*k)));
     base.execute(&Request {
         operands: &operands,
         ..*req
@@ -283,8 +274,8 @@ cases:
 
 /// Whether a trial's case expects an operation error with a code, and is judged on it (not
 /// `unspecified`).
-pub fn expects_a_code(t: &plc_conformance::testing::plan::Trial) -> bool {
-    use plc_conformance::testing::model::{Basis, ErrorSignal};
+pub fn expects_a_code(t: &plc_conformance::Trial) -> bool {
+    use plc_conformance::{Basis, ErrorSignal};
     match &t.check {
         plc_conformance::testing::plan::Check::Native { case, .. } => {
             case.basis != Basis::Unspecified
@@ -299,10 +290,8 @@ pub fn expects_a_code(t: &plc_conformance::testing::plan::Trial) -> bool {
 
 /// The error registers that do not hold the code, with what they held, when a verdict differs
 /// on them alone (the words and the error signal as expected); `None` for any other verdict.
-pub fn registers_alone(
-    v: &plc_conformance::testing::judge::Verdict,
-) -> Option<Vec<(String, Option<Value>)>> {
-    use plc_conformance::testing::judge::{Difference, Verdict};
+pub fn registers_alone(v: &plc_conformance::Verdict) -> Option<Vec<(String, Option<Value>)>> {
+    use plc_conformance::{Difference, Verdict};
     let Verdict::Differs {
         difference: Difference::Words { mismatches },
     } = v
