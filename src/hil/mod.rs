@@ -23,7 +23,7 @@ use crate::backend::external::window;
 use crate::backend::Backend;
 use crate::device::Device;
 use crate::execute::{images, requests};
-use crate::model::profile::{Bench, Profile, ProgramForm};
+use crate::model::profile::{Bench, Profile, ProgramForm, Variant};
 use crate::model::Operand;
 use crate::project::Project;
 
@@ -288,19 +288,19 @@ fn error_devices(profile: &Profile, bench: &Bench) -> Result<ErrorDevices, LiveE
     })
 }
 
-/// A mailbox clear of every window: in the widest gap between the windows in D, at a round
-/// number (a multiple of 1000, else of 100) near its middle.
+/// A mailbox clear of every window and on every variant: in the widest gap between the windows
+/// in D whose words every variant has, at a round number (a multiple of 1000, else of 100) near
+/// its middle.
 fn choose_mailbox(
     profile: &Profile,
     variants: &[String],
     writes: &[WordRange],
 ) -> Result<Device, LiveError> {
-    let last = variants
-        .iter()
-        .filter_map(|v| profile.variant(v))
+    let variants: Vec<&Variant> = variants.iter().filter_map(|v| profile.variant(v)).collect();
+    let last = (variants.iter())
         .filter_map(|v| profile.ranges(v, "D"))
-        .map(|r| r.last)
-        .min()
+        .filter_map(|r| r.iter().map(|r| r.last).max())
+        .max()
         .ok_or_else(|| refused!("{} has no data registers (D) for a mailbox", profile.id))?;
     let mut taken: Vec<(u32, u32)> = writes
         .iter()
@@ -319,21 +319,34 @@ fn choose_mailbox(
     if from <= last {
         gaps.push((from, last));
     }
-    let (lo, hi) = gaps
-        .into_iter()
+    let on_every_variant = |at: u32| {
+        (variants.iter()).all(|v| profile.words_exist(v, &Device::new("D", at), mailbox::WORDS))
+    };
+    // The widest gaps first; in each, the roundest place near its middle that every variant has.
+    gaps.sort_by_key(|(lo, hi)| std::cmp::Reverse(hi - lo));
+    gaps.into_iter()
         .filter(|(lo, hi)| hi - lo + 1 >= mailbox::WORDS)
-        .max_by_key(|(lo, hi)| hi - lo)
+        .find_map(|(lo, hi)| {
+            let middle = lo + (hi - lo) / 2;
+            let fits = |at: u32| at >= lo && at + mailbox::WORDS - 1 <= hi && on_every_variant(at);
+            [1000, 100, 10, 1]
+                .into_iter()
+                .map(|step| middle / step * step)
+                .chain(lo..=hi - (mailbox::WORDS - 1))
+                .find(|at| fits(*at))
+        })
+        .map(|at| Device::new("D", at))
         .ok_or_else(|| {
-            refused!("no 32 free data registers outside the case windows for the mailbox")
-        })?;
-    let middle = lo + (hi - lo) / 2;
-    let fits = |at: u32| at >= lo && at + mailbox::WORDS - 1 <= hi;
-    let at = [1000, 100, 1]
-        .into_iter()
-        .map(|step| middle / step * step)
-        .find(|at| fits(*at))
-        .unwrap_or(lo);
-    Ok(Device::new("D", at))
+            refused!(
+                "no 32 free data registers outside the case windows for the mailbox on every \
+                 variant ({}); give --variant to generate for fewer, or --mailbox",
+                variants
+                    .iter()
+                    .map(|v| v.id.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        })
 }
 
 /// What a dry run found.
@@ -491,4 +504,41 @@ pub fn pulse_self_test(
         first: show(&first),
         second: show(&second),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::project::Paths;
+
+    /// Every variant of every profile with a bench gets a program, alone and with the others:
+    /// the mailbox finds 32 free words on the smallest CPU (an FC4A-C10R2 has D0-D399).
+    #[test]
+    fn every_bench_variant_gets_a_program() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let project = Project::load(&Paths::under(root)).expect("the project loads");
+        let benches: Vec<&Arc<Profile>> = (project.profiles.iter())
+            .filter(|p| p.bench.is_some())
+            .collect();
+        assert!(benches.len() >= 3, "{} bench profiles", benches.len());
+        for profile in benches {
+            let each = profile.variants.iter().map(|v| vec![v.id.clone()]);
+            for variants in std::iter::once(Vec::new()).chain(each) {
+                let options = GenerateOptions {
+                    profile: profile.id.clone(),
+                    variants: variants.clone(),
+                    mailbox: None,
+                    filter: None,
+                };
+                let generated = generate(&project, &options).unwrap_or_else(|e| {
+                    panic!(
+                        "{} {variants:?}: {}",
+                        profile.id,
+                        crate::error_chain::chain(&e)
+                    )
+                });
+                assert!(generated.trials > 0, "{} {variants:?}", profile.id);
+            }
+        }
+    }
 }

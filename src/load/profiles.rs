@@ -348,6 +348,14 @@ fn check_profile(p: &ProfileSpec, table: &DeviceTable, cx: &mut FileContext<'_>)
                     LoadErrorKind::Invalid("`constants` needs `constant: true`".into()),
                 );
             }
+            if def.count && !def.constant {
+                cx.error(
+                    format!("instructions.{name}.operands.{op}.count"),
+                    LoadErrorKind::Invalid(
+                        "`count` needs `constant: true`: only a constant is a length".into(),
+                    ),
+                );
+            }
             for code in def.limits.keys() {
                 if !def.devices.contains(code) {
                     cx.error(
@@ -452,5 +460,38 @@ fn check_ranges(key: &str, ranges: &DeviceRanges, def: &DeviceDef, cx: &mut File
                 );
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Only a constant is a length: `count` on an operand that takes none is refused with its key.
+    #[test]
+    fn a_count_needs_a_constant() {
+        let text = |operand: &str| {
+            format!(
+                "id: p\nname: P\nshort: p\nmanuals: {{}}\n\
+                 errors: {{signal: code, flag: SM0, register: SD0}}\n\
+                 devices: {{D: {{first: 0, last: 100}}}}\n\
+                 instructions: {{X: {{summary: x, operands: {{n: {operand}}}}}}}\n\
+                 variants: [{{id: v, description: v}}]\n"
+            )
+        };
+        let mut errors = Vec::new();
+        let good = "{devices: [D], constant: true, count: true}";
+        assert!(parse_profile(Path::new("p.yaml"), &text(good), &mut errors).is_some());
+        assert!(errors.is_empty(), "{errors:?}");
+        let bad = "{devices: [D], count: true}";
+        parse_profile(Path::new("p.yaml"), &text(bad), &mut errors);
+        let shown: Vec<String> = errors.iter().map(ToString::to_string).collect();
+        assert!(
+            shown
+                .iter()
+                .any(|e| e.contains("instructions.X.operands.n.count")
+                    && e.contains("`count` needs `constant: true`")),
+            "{shown:?}"
+        );
     }
 }

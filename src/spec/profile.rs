@@ -386,6 +386,11 @@ pub struct OperandDef {
     /// and takes the value from a register instead.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub constants: Option<ConstantRange>,
+    /// A constant here is a length (characters or digits, FX5 ASCI's `n`, IDEC ATOH's S2), so
+    /// the memory a case may touch reaches that many units past each device operand; a constant
+    /// that is a value (IDEC HTOA's S1) reaches nothing.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub count: bool,
     /// Numbers a device code may have in this operand, where the manual allows fewer than the
     /// device has (IDEC ATOH D1: M0-M1277 only).
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]

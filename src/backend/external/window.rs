@@ -3,8 +3,8 @@
 //! A reference model reads any word through [`crate::memory::Image`], which knows the fill; a
 //! process on the other side of a pipe gets only what the request carries. The window is
 //! generous so that a backend never has to compute the fill: from every device operand on, at
-//! least [`OPERAND_SPAN`] words (more when a constant operand asks for a longer run, as FX5
-//! character counts do), and around every word the case sets. Ranges are clipped to the words
+//! least [`OPERAND_SPAN`] words (more when a constant the profile marks as a length, `count:
+//! true`, asks for a longer run, as FX5 character counts do), and around every word the case sets. Ranges are clipped to the words
 //! that exist on the variant and merged. A backend that still reads past the window can compute
 //! the word from the fill formula in `docs/protocol.md`.
 
@@ -31,12 +31,20 @@ type Spans<'a> = (&'a Device, Vec<(u32, u32)>);
 /// units from `head` to the number `last` a unit apart ([`Device::points`]: every number for a
 /// plain device, every 16th for `K4M`). The head is numbered as the case's devices are.
 pub(crate) fn ranges(req: &Request<'_>) -> Vec<(Device, u32)> {
+    // Only a constant the profile calls a length reaches past the operands: a value (HTOA's
+    // S1 = K65535) would otherwise spread one case over thousands of words.
+    let definition = req.profile.instructions.get(req.instruction);
+    let is_count = |name: &str| {
+        definition
+            .and_then(|d| d.operands.get(name))
+            .is_some_and(|o| o.count)
+    };
     let longest_constant = req
         .operands
-        .values()
-        .filter_map(|o| match o {
-            Operand::Constant(k) => u32::try_from(k.unsigned_abs()).ok(),
-            Operand::Device(_) => None,
+        .iter()
+        .filter_map(|(name, o)| match o {
+            Operand::Constant(k) if is_count(name) => u32::try_from(k.unsigned_abs()).ok(),
+            _ => None,
         })
         .map(|k| k.min(CONSTANT_LIMIT))
         .max()
@@ -128,7 +136,9 @@ mod tests {
         crate::load::parse_profile(
             std::path::Path::new("p.yaml"),
             "id: p\nname: P\nshort: p\nmanuals: {}\nerrors: {signal: code, flag: SM0, register: SD0}\n\
-             devices: {D: {first: 0, last: 1000}}\ninstructions: {}\n\
+             devices: {D: {first: 0, last: 1000}}\n\
+             instructions: {X: {summary: x, operands: {s: {devices: [D]}, d: {devices: [D]}, \
+             n: {devices: [D], constant: true, count: true}, v: {devices: [D], constant: true}}}}\n\
              variants: [{id: v, description: v}, {id: small, description: s, devices: {D: {first: 0, last: 120}}}]\n",
             &mut errors,
         )
@@ -193,6 +203,14 @@ mod tests {
             &[],
         );
         assert_eq!(r, vec![("D".into(), 0, 163)]);
+        // A value (HTOA's S1 = K65535) is no length: the span stays the operand's.
+        let r = request_ranges(
+            &p,
+            "v",
+            &[("s", dev(0)), ("v", Operand::Constant(65535))],
+            &[],
+        );
+        assert_eq!(r, vec![("D".into(), 0, 63)]);
     }
 
     #[test]
