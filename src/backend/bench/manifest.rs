@@ -238,6 +238,20 @@ impl Manifest {
                 head.code()
             ));
         }
+        // Every word, not the head alone: on an IDEC CPU whose D runs on into its special
+        // registers, D7990 would put the program's words on D8000 on (D8002: the identity the
+        // interlock reads).
+        let special = (1..mailbox::WORDS)
+            .map(|i| head.with_index(head.index + i))
+            .find(|w| addressing.kind(w) != Kind::Data || addressing.unaddressable(w).is_some());
+        if let Some(word) = special {
+            return Err(refused!(
+                "`mailbox`: {head} runs into {word}, which is not a {}: every one of its {} \
+                 words lies where a sandbox may be",
+                addressing.data_devices(),
+                mailbox::WORDS
+            ));
+        }
         Ok(head)
     }
 
@@ -371,6 +385,47 @@ impl Manifest {
 mod tests {
     use super::*;
     use crate::backend::bench::addressing::Plain;
+
+    /// An IDEC-like CPU whose D runs on into its special registers at D8000.
+    struct SpecialFrom8000;
+
+    impl Addressing for SpecialFrom8000 {
+        fn hex_numbered(&self, _: &str) -> bool {
+            false
+        }
+        fn kind(&self, device: &Device) -> Kind {
+            match device.index {
+                8000..=8499 => Kind::Special,
+                _ => Kind::Data,
+            }
+        }
+        fn unaddressable(&self, _: &Device) -> Option<String> {
+            None
+        }
+        fn sandbox_devices(&self) -> &'static str {
+            "D"
+        }
+        fn data_devices(&self) -> &'static str {
+            "data register (D)"
+        }
+    }
+
+    /// The head alone is not enough: a mailbox at D7990 would put the program's words on the
+    /// special registers from D8000 (D8002 the identity the interlock reads).
+    #[test]
+    fn a_mailbox_running_into_special_registers_is_refused() {
+        let mut m = sample();
+        m.mailbox = "D7990".into();
+        let e = m
+            .mailbox_head(&SpecialFrom8000)
+            .expect_err("runs into D8000");
+        assert!(e.to_string().contains("D7990 runs into D8000"), "{e}");
+        m.mailbox = "D7968".into();
+        assert_eq!(
+            m.mailbox_head(&SpecialFrom8000).ok(),
+            Some(Device::new("D", 7968))
+        );
+    }
 
     pub(super) fn sample() -> Manifest {
         let mut m = Manifest {
