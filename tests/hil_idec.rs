@@ -454,6 +454,7 @@ fn the_hil_commands_through_the_binary() {
         manifest_file.display()
     );
     let doctor = common::cli(&["hil", "doctor", "--backend", &spec]);
+    let self_test = common::cli(&["hil", "doctor", "--self-test", "--backend", &spec]);
     let dry = common::cli(&["hil", "dry-run", "--backend", &spec]);
     let run = common::cli(&["run", "--backend", &spec]);
     let _ = child.kill();
@@ -468,6 +469,13 @@ fn the_hil_commands_through_the_binary() {
     ] {
         assert!(shown.contains(line), "{line}: {shown}");
     }
+    // The FC4A has no pulse form: a good bench passes the self-test, with the reason.
+    let shown = String::from_utf8_lossy(&self_test.stdout);
+    assert!(self_test.status.success(), "{shown}");
+    assert!(
+        shown.contains("ok    pulse self-test: nothing to fire twice: idec-fc4a has no pulse-form"),
+        "{shown}"
+    );
     let shown = String::from_utf8_lossy(&dry.stdout);
     assert!(dry.status.success(), "{shown}");
     assert!(

@@ -14,7 +14,7 @@ use crate::backend::bench::{fence, mailbox};
 use crate::backend::bench::{Addressing, BenchSettings};
 use crate::backend::simulate::{simulate, SimRequest};
 use crate::backend::slmp;
-use crate::hil::{dry_run, generate, pulse_self_test, GenerateOptions};
+use crate::hil::{dry_run, generate, GenerateOptions, SelfTest};
 use crate::session::Session;
 
 #[derive(Debug, clap::Subcommand)]
@@ -212,8 +212,15 @@ fn doctor_command(cli: &Cli, backend: &str, self_test: bool) -> Outcome {
         let live = session.live(settings)?;
         live.connect()?;
         let _ = writeln!(text);
-        match pulse_self_test(&session, &live) {
-            Ok(check) => {
+        match crate::hil::self_test(&session, &live) {
+            Ok(SelfTest::NoPulseForms { profile }) => {
+                let _ = write!(
+                    text,
+                    "ok    pulse self-test: nothing to fire twice: {profile} has no pulse-form \
+                     instruction, every rung runs its case while its enable is on"
+                );
+            }
+            Ok(SelfTest::Ran(check)) => {
                 ok = check.fired_twice;
                 let _ = write!(
                     text,

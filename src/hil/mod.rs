@@ -434,6 +434,35 @@ pub struct PulseCheck {
     pub second: String,
 }
 
+/// What `hil doctor --self-test` found.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) enum SelfTest {
+    /// The profile has no pulse-form instruction (IDEC ATOH and HTOA run on every scan their
+    /// enable is on): no rung can fire once only, so there is nothing to run twice.
+    NoPulseForms { profile: String },
+    /// A pulse-form case run twice.
+    Ran(PulseCheck),
+}
+
+/// The pulse self-test where the profile has pulse forms ([`pulse_self_test`]); a profile
+/// without any passes with the reason.
+pub(crate) fn self_test(
+    project: &Project,
+    backend: &Arc<BenchBackend>,
+) -> Result<SelfTest, LiveError> {
+    let profile = (project.profiles.get(backend.profile()))
+        .ok_or_else(|| refused!("profile `{}` is not loaded", backend.profile()))?;
+    let pulse_forms = (profile.instructions.keys())
+        .filter_map(|name| name.strip_suffix('P'))
+        .any(|base| profile.instructions.contains_key(base));
+    if !pulse_forms {
+        return Ok(SelfTest::NoPulseForms {
+            profile: profile.id.clone(),
+        });
+    }
+    pulse_self_test(project, backend).map(SelfTest::Ran)
+}
+
 /// Runs one pulse-form case twice in a row on a connected live backend and compares what the
 /// two executions did. A pulse form executes on its enable's rising edge; if the program on the
 /// CPU did not let the enable fall between two cases (rungs inside IF or CASE, or an engineering
