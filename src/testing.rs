@@ -7,20 +7,11 @@
 //! the manuals say, which the public interface has no reason to expose.
 
 pub mod backend {
-    pub use crate::backend::{fx5, reference_backends};
     pub mod external {
         pub use crate::backend::external::{ExternalBackend, ExternalErrorKind};
         pub mod protocol {
-            pub use crate::backend::external::protocol::{
-                protocol_schema, BackendMessage, HarnessMessage,
-            };
+            pub use crate::backend::external::protocol::protocol_schema;
         }
-        pub mod serve {
-            pub use crate::backend::external::serve::serve;
-        }
-    }
-    pub mod omron {
-        pub use crate::backend::omron::{Designator, Parity};
     }
     pub mod bench {
         pub use crate::backend::bench::tcp::TransportError;
@@ -61,9 +52,6 @@ pub mod backend {
 pub mod error_chain {
     pub use crate::error_chain::chain;
 }
-pub mod interrupt {
-    pub use crate::interrupt::install_panic_hook;
-}
 pub mod execute {
     pub use crate::execute::{execute_all, images, requests, Pace, Progress};
 }
@@ -91,26 +79,22 @@ pub mod libtest {
 pub mod load {
     pub use crate::load::{
         load_corpus, load_known, load_open_questions, load_profiles, load_project, parse_profile,
-        yaml_files, CorpusBuilder, LoadError, ENV_CONFIG, ENV_REQUIRE, ENV_SELF, FILE_NAME,
-        OPEN_QUESTIONS,
+        CorpusBuilder, LoadError, ENV_CONFIG, ENV_REQUIRE, ENV_SELF, FILE_NAME, OPEN_QUESTIONS,
     };
 }
 pub mod model {
     pub use crate::model::Citation;
-    pub mod cross_vendor {
-        pub use crate::model::cross_vendor::TextLayout;
-    }
     pub mod known {
         pub use crate::model::known::{Covers, Entry};
     }
     pub mod profile {
-        pub use crate::model::profile::{DeviceRange, DeviceRanges, Profiles};
+        pub use crate::model::profile::Profiles;
     }
     pub mod project {
         pub use crate::model::project::{ExternalSettings, Launch};
     }
     pub mod protocol {
-        pub use crate::model::protocol::{Field, Protocol, Rule};
+        pub use crate::model::protocol::{Field, Protocol};
     }
 }
 pub mod plan {
@@ -136,20 +120,14 @@ pub mod session {
 }
 pub mod spec {
     pub use crate::spec::{schema, SchemaKind};
-    pub mod profile {
-        pub use crate::spec::profile::DeviceRanges;
-    }
 }
 pub mod sweep {
-    pub use crate::sweep::{emit, exhaustive, render, Results, Settings, Sweep};
-    pub mod classes {
-        pub use crate::sweep::classes::{derive, ByteClasses};
-    }
+    pub use crate::sweep::{emit, render, Results, Settings, Sweep};
     pub mod generate {
-        pub use crate::sweep::generate::{Digits, Generator, BOUNDARIES};
+        pub use crate::sweep::generate::Generator;
     }
     pub mod group {
-        pub use crate::sweep::group::{labels, Groups, Reply};
+        pub use crate::sweep::group::{labels, Groups};
     }
     pub mod input {
         pub use crate::sweep::input::{Data, Point};
@@ -160,7 +138,4 @@ pub mod sweep {
     pub mod target {
         pub use crate::sweep::target::{Cases, Target};
     }
-}
-pub mod text {
-    pub use crate::text::digit_value;
 }

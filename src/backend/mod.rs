@@ -501,3 +501,6 @@ pub(crate) fn reference_model(profiles: &Profiles, profile: &str) -> Option<Arc<
         .into_iter()
         .find(|b| b.profile() == profile && b.codec().is_none())
 }
+
+#[cfg(test)]
+mod mutants;

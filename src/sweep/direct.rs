@@ -3,8 +3,8 @@
 //! `Backend::execute`, and recorded as the judge records an `unspecified` case — without
 //! building a trial per input. An instruction's memory images are built once per input and
 //! shared by every variant; a lowering's operands once per digit count, its two images share
-//! one set of words. `tests/sweep.rs` checks that this gives exactly the replies of the
-//! trial path (`runner::run_one`).
+//! one set of words. The sweep's white-box tests (`white_box.rs`) check that this gives exactly
+//! the replies of the trial path (`runner::run_one`).
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -164,7 +164,7 @@ pub(crate) fn reply(
 /// A codec column's replies to the points, asked in one batch (`Backend::convert_batch`, which
 /// a codec in another process answers in a few messages): `(point, reply)` per point, one outside
 /// its abilities skipped with the plan's reason. A reply is what the judge records of an
-/// `unspecified` codec trial (`tests/sweep.rs` checks it against the trial path); `None` for a
+/// `unspecified` codec trial (`white_box.rs` checks it against the trial path); `None` for a
 /// question the stop left unanswered.
 pub(crate) fn codec_replies(
     column: &Column,

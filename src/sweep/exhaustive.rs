@@ -20,9 +20,9 @@
 //!    (the direct path, `super::direct`) and grouped as any sweep groups, with its tuple's
 //!    count as its weight. Each of those texts' replies must be what the rules said; one that is
 //!    not stops the sweep with the text ([`Report::disagreement`]), the counts not trusted.
-//! 3. `tests/sweep.rs` proves the rules equal to the models on many random texts, on every
-//!    text made of class-boundary bytes, and — with the groups, counts, first inputs and classes
-//!    of the general path — on every text of a shard.
+//! 3. The sweep's white-box tests (`white_box.rs`) prove the rules equal to the models on many
+//!    random texts, on every text made of class-boundary bytes, and — with the groups, counts,
+//!    first inputs and classes of the general path — on every text of a shard.
 //!
 //! A codec written in Rust ([`crate::backend::Codec`], in process) joins them: its `convert` is
 //! called on each text as a rule is, its answer made a code, and its texts tallied and checked

@@ -696,3 +696,6 @@ fn range_ends(shape: &Shape) -> Vec<crate::device::Device> {
         .map(|i| crate::device::Device::new(head.code(), i))
         .collect()
 }
+
+#[cfg(test)]
+mod white_box;

@@ -630,3 +630,6 @@ fn with_stderr(fault: Fault, stderr: &str) -> Fault {
         Fault::Unreachable(s) => Fault::Unreachable(append_stderr(s, stderr)),
     }
 }
+
+#[cfg(test)]
+mod fuzz;

@@ -2,16 +2,15 @@
 //! plausible implementation mistake, and the corpus must tell every one of them apart from the
 //! manual. A mutant that survives means a vector is missing, not that the mutant is unfair.
 
-mod common;
-
+#[cfg(test)]
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
-use common::{assert_corpus_kills, failing_trials, reference, session, Mutant};
-use plc_conformance::Device;
-use plc_conformance::Image;
-use plc_conformance::{Backend, Fault, Outcome, Request, Response};
-use plc_conformance::{ErrorSignal, Operand};
+use super::{assert_corpus_kills, failing_trials, reference, session, Mutant};
+use crate::Device;
+use crate::Image;
+use crate::{Backend, Fault, Outcome, Request, Response};
+use crate::{ErrorSignal, Operand};
 
 type Answer = Result<Response, Fault>;
 

@@ -3,12 +3,11 @@
 //! (the low byte first, as MELSEC packs them), lowercase accepted, an invalid character passed
 //! over in silence, the register cleared instead of kept.
 
-mod common;
-
-use common::{assert_corpus_kills, map_done, reference, session, Mutant};
-use plc_conformance::Image;
-use plc_conformance::Operand;
-use plc_conformance::{Request, Response};
+#[cfg(test)]
+use super::{assert_corpus_kills, map_done, reference, session, Mutant};
+use crate::Image;
+use crate::Operand;
+use crate::{Request, Response};
 
 const PROFILE: &str = "keyence-kv";
 

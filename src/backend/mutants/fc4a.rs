@@ -5,19 +5,18 @@
 //! model is asked (operands, memory, device ranges) or what it answers, so that the mutants
 //! stay small and the reference stays the only full implementation.
 
-mod common;
-
+#[cfg(test)]
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
-use common::{assert_corpus_kills, failing_trials, map_done, reference, session, Mutant};
-use plc_conformance::testing::model::cross_vendor::TextLayout;
-use plc_conformance::testing::model::profile::{DeviceRange, DeviceRanges};
-use plc_conformance::testing::text::digit_value;
-use plc_conformance::Device;
-use plc_conformance::Operand;
-use plc_conformance::{Backend, Fault, Outcome, Request, Response};
-use plc_conformance::{Image, Unit};
+use super::{assert_corpus_kills, failing_trials, map_done, reference, session, Mutant};
+use crate::model::cross_vendor::TextLayout;
+use crate::model::profile::{DeviceRange, DeviceRanges};
+use crate::text::digit_value;
+use crate::Device;
+use crate::Operand;
+use crate::{Backend, Fault, Outcome, Request, Response};
+use crate::{Image, Unit};
 
 const PROFILE: &str = "idec-fc4a";
 
@@ -376,8 +375,8 @@ fn unspecified_upper_byte_is_not_asserted() {
         .into_iter()
         .find(|t| t.case_id() == "atoh-upper-byte-0131h")
         .expect("the 0131H case is in the corpus");
-    match plc_conformance::run_one(&probe) {
-        plc_conformance::Verdict::Recorded { observed, .. } => {
+    match crate::run_one(&probe) {
+        crate::Verdict::Recorded { observed, .. } => {
             let observed = observed.to_string();
             assert!(!observed.contains("error"), "recorded {observed}")
         }

@@ -2,20 +2,17 @@
 //! reference model with one behaviour changed, and a check that some vector catches each one.
 //! A survivor means the corpus has a gap: add the vector that tells it apart from the manual.
 
-// `Mutant::new` hands back the wrapper as a trait object, ready for the corpus runner.
-#[allow(clippy::new_ret_no_self)]
-mod common;
-
+#[cfg(test)]
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
-use common::{assert_corpus_kills, failing_trials, reference, session, Mutant};
-use plc_conformance::testing::backend::fx5::{self, Packing};
-use plc_conformance::Device;
-use plc_conformance::Image;
-use plc_conformance::Variant;
-use plc_conformance::{Backend, Fault, Outcome, Request, Response};
-use plc_conformance::{ErrorSignal, Operand};
+use super::{assert_corpus_kills, failing_trials, reference, session, Mutant};
+use crate::backend::fx5::{self, Packing};
+use crate::Device;
+use crate::Image;
+use crate::Variant;
+use crate::{Backend, Fault, Outcome, Request, Response};
+use crate::{ErrorSignal, Operand};
 
 type Answer = Result<Response, Fault>;
 

@@ -7,17 +7,16 @@
 //! the open question omron-hex-lowercase-cs-cj, whose probes record what a backend does rather
 //! than judge it.
 
-mod common;
-
+#[cfg(test)]
 use std::collections::BTreeMap;
 
-use common::{assert_corpus_kills, map_done, reference, session, Mutant};
-use plc_conformance::testing::backend::omron::{Designator, Parity};
-use plc_conformance::testing::spec::profile::DeviceRanges;
-use plc_conformance::Device;
-use plc_conformance::Image;
-use plc_conformance::Operand;
-use plc_conformance::{Backend, Fault, Request, Response};
+use super::{assert_corpus_kills, map_done, reference, session, Mutant};
+use crate::backend::omron::{Designator, Parity};
+use crate::spec::profile::DeviceRanges;
+use crate::Device;
+use crate::Image;
+use crate::Operand;
+use crate::{Backend, Fault, Request, Response};
 
 const PROFILE: &str = "omron-cs-cj";
 

@@ -4,14 +4,12 @@
 //! codec gets wrong (lowercase accepted, bytes swapped, the mode flag ignored). Both families
 //! share one model, so both corpora face the same mutants.
 
-mod common;
-
-use common::{
-    assert_corpus_kills, map_done, reference, session, with_constant, with_memory, Mutant,
-};
-use plc_conformance::Device;
-use plc_conformance::Operand;
-use plc_conformance::{Backend, Request, Response};
+#[cfg(test)]
+use super::{assert_corpus_kills, map_done, reference, session, Mutant};
+use super::{with_constant, with_memory};
+use crate::Device;
+use crate::Operand;
+use crate::{Backend, Request, Response};
 
 fn count(req: &Request<'_>) -> u32 {
     match req.operands.get("n") {

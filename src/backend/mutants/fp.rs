@@ -3,11 +3,10 @@
 //! first pair in the high byte, as Mitsubishi and Siemens read), or what a MEWTOCOL codec gets
 //! wrong (lowercase accepted, a zero count passed over, the digits of a byte swapped).
 
-mod common;
-
-use common::{assert_corpus_kills, map_done, reference, session, with_memory, Mutant};
-use plc_conformance::Operand;
-use plc_conformance::{Backend, Fault, Request, Response};
+#[cfg(test)]
+use super::{assert_corpus_kills, map_done, reference, session, with_memory, Mutant};
+use crate::Operand;
+use crate::{Backend, Fault, Request, Response};
 
 const PROFILE: &str = "panasonic-fp";
 

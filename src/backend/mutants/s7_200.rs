@@ -4,15 +4,14 @@
 //! byte-array codec gets wrong (lowercase accepted, an illegal character passed over in
 //! silence, a 00H taken for the end of the text).
 
-mod common;
-
+#[cfg(test)]
 use std::collections::BTreeMap;
 
-use common::{assert_corpus_kills, map_done, reference, session, with_constant, Mutant};
-use plc_conformance::Device;
-use plc_conformance::Image;
-use plc_conformance::Operand;
-use plc_conformance::{Backend, Fault, Request, Response};
+use super::{assert_corpus_kills, map_done, reference, session, with_constant, Mutant};
+use crate::Device;
+use crate::Image;
+use crate::Operand;
+use crate::{Backend, Fault, Request, Response};
 
 const PROFILE: &str = "siemens-s7-200";
 

@@ -5,15 +5,14 @@
 //! accepted is no mutant: it is the open question s7-ath-lowercase, whose probes record what a
 //! backend does rather than judge it.
 
-mod common;
-
+#[cfg(test)]
 use std::collections::BTreeMap;
 
-use common::{assert_corpus_kills, map_done, reference, session, Mutant};
-use plc_conformance::Device;
-use plc_conformance::Image;
-use plc_conformance::{Backend, Fault, Request, Response};
-use plc_conformance::{ErrorSignal, Operand};
+use super::{assert_corpus_kills, map_done, reference, session, Mutant};
+use crate::Device;
+use crate::Image;
+use crate::{Backend, Fault, Request, Response};
+use crate::{ErrorSignal, Operand};
 
 const PROFILE: &str = "siemens-s7-1200";
 

@@ -2,19 +2,21 @@
 //! any input — random text, damaged corpus files, damaged protocol lines, random JSON — they
 //! return a value or an error, never panic, and finish in bounded time.
 //!
-//! `cargo test --test fuzz` runs 256 cases per property (a few seconds); run longer with
-//! `PROPTEST_CASES=100000 cargo test --release --test fuzz`. A failing input is shrunk and saved
-//! under `tests/fuzz.proptest-regressions`, and replayed first on every later run.
+//! `cargo test --lib backend::external::fuzz` runs 256 cases per property (a few seconds); run
+//! longer with `PROPTEST_CASES=100000 cargo test --release --lib backend::external::fuzz`. A
+//! failing input is shrunk and saved under `proptest-regressions/backend/external/fuzz.txt`, and
+//! replayed first on every later run.
 
+#[cfg(test)]
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
-use plc_conformance::testing::backend::external::protocol::{BackendMessage, HarnessMessage};
-use plc_conformance::testing::backend::external::serve::serve;
-use plc_conformance::testing::backend::reference_backends;
-use plc_conformance::testing::load::{load_profiles, yaml_files, CorpusBuilder};
-use plc_conformance::testing::model::profile::Profiles;
+use crate::backend::external::protocol::{BackendMessage, HarnessMessage};
+use crate::backend::external::serve::serve;
+use crate::backend::reference_backends;
+use crate::load::{load_profiles, yaml_files, CorpusBuilder};
+use crate::model::profile::Profiles;
 use proptest::prelude::*;
 
 /// The longest any one input may take: far above the milliseconds each takes, far below a hang.
@@ -214,7 +216,7 @@ fn decode(line: &[u8]) {
 
 /// Lines into `plc-conformance serve`'s loop: it answers or stops with an error, never panics.
 fn serve_lines(lines: &[Vec<u8>]) {
-    static BACKENDS: OnceLock<Vec<std::sync::Arc<dyn plc_conformance::Backend>>> = OnceLock::new();
+    static BACKENDS: OnceLock<Vec<std::sync::Arc<dyn crate::Backend>>> = OnceLock::new();
     let backends = BACKENDS.get_or_init(|| reference_backends(profiles()));
     let Some(backend) = backends.iter().find(|b| b.profile() == "mitsubishi-iqr") else {
         panic!("no iQ-R model");
