@@ -53,7 +53,7 @@ pub(crate) fn interrupt(signal: i32) {
 /// Wraps the panic hook: a codec's panic, caught as its case's crash
 /// (`backend::convert_or_panic`), is kept with where it happened and not printed; any other
 /// panic, with `kill`, first kills every backend process group.
-pub fn install_panic_hook(kill: bool) {
+pub(crate) fn install_panic_hook(kill: bool) {
     let previous = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
         if crate::backend::asking_codec() {

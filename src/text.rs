@@ -4,7 +4,7 @@
 /// The value of a hex digit character. Only 30H-39H and 41H-46H are digits: lowercase is
 /// invalid in the manuals this project covers, except where a family's model says otherwise
 /// (Omron C200H-series HEX reads 61H-66H).
-pub fn digit_value(ch: u8) -> Option<u8> {
+pub(crate) fn digit_value(ch: u8) -> Option<u8> {
     match ch {
         b'0'..=b'9' => Some(ch - b'0'),
         b'A'..=b'F' => Some(ch - b'A' + 10),

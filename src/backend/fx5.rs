@@ -23,21 +23,21 @@ use crate::model::Operand;
 use crate::text::{digit_char, digit_value};
 
 /// The profile this model implements.
-pub const PROFILE: &str = "mitsubishi-fx5";
+pub(crate) const PROFILE: &str = "mitsubishi-fx5";
 
 /// A device past the end of its range (ASCI(P) error table).
-pub const ERR_DEVICE_RANGE: u16 = 0x2820;
+pub(crate) const ERR_DEVICE_RANGE: u16 = 0x2820;
 /// A character that is not a hex digit. The FX5 code for HEXA is not confirmed: 3401H is the
 /// family's "invalid data" code (`docs/semantics.md#fx5-hexa-rules`, inferred).
-pub const ERR_INVALID_DATA: u16 = 0x3401;
+pub(crate) const ERR_INVALID_DATA: u16 = 0x3401;
 /// n outside 1 to 32767 (ASCI(P) error table, erratum 2: "(s)" there means (n)).
-pub const ERR_COUNT: u16 = 0x3405;
+pub(crate) const ERR_COUNT: u16 = 0x3405;
 /// The largest character count n.
-pub const MAX_CHARS: u32 = 32767;
+pub(crate) const MAX_CHARS: u32 = 32767;
 
 /// How characters are stored in words, chosen by SM8161.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Packing {
+pub(crate) enum Packing {
     /// 16-bit mode (SM8161 off): two characters per word, first in the low byte.
     TwoPerWord,
     /// 8-bit mode (SM8161 on): one character per word in the low byte, high byte 00H.
@@ -45,7 +45,7 @@ pub enum Packing {
 }
 
 impl Packing {
-    pub fn from_sm8161(on: bool) -> Self {
+    pub(crate) fn from_sm8161(on: bool) -> Self {
         if on {
             Packing::OnePerWord
         } else {
@@ -54,7 +54,7 @@ impl Packing {
     }
 
     /// The words that hold `chars` characters.
-    pub fn words_for(self, chars: u32) -> u32 {
+    pub(crate) fn words_for(self, chars: u32) -> u32 {
         match self {
             Packing::TwoPerWord => chars.div_ceil(2),
             Packing::OnePerWord => chars,
@@ -63,21 +63,21 @@ impl Packing {
 }
 
 /// The words ASCI reads from (s): four hex digits per word.
-pub fn asci_source_words(n: u32) -> u32 {
+pub(crate) fn asci_source_words(n: u32) -> u32 {
     n.div_ceil(4)
 }
 
 /// The words ASCI occupies at (d): the characters, and the NULL when SM701 is off. This is the
 /// page's "number of devices occupied" table with erratum 3 applied (n / 2 rounds up; "n / 1"
 /// with SM701 off in 8-bit mode is n + 1).
-pub fn asci_destination_words(n: u32, packing: Packing, terminate: bool) -> u32 {
+pub(crate) fn asci_destination_words(n: u32, packing: Packing, terminate: bool) -> u32 {
     packing.words_for(n + u32::from(terminate))
 }
 
 /// The characters ASCI writes: the lowest `n` hex digits of the number whose words are
 /// `words` ((s) least significant), most significant digit first. Digits beyond the given
 /// words are 0, which is how a constant source (one word) reads for n > 4.
-pub fn asci_digits(words: &[u16], n: u32) -> Vec<u8> {
+pub(crate) fn asci_digits(words: &[u16], n: u32) -> Vec<u8> {
     (0..n)
         .rev()
         .map(|k| {
@@ -90,7 +90,7 @@ pub fn asci_digits(words: &[u16], n: u32) -> Vec<u8> {
 /// One store into a destination word: the bits in `mask` take `value`, the rest keep the word's
 /// old contents. A character count that ends in a low byte with SM701 on leaves the high byte.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Store {
+pub(crate) struct Store {
     pub value: u16,
     pub mask: u16,
 }
@@ -103,7 +103,7 @@ impl Store {
         }
     }
 
-    pub fn apply(self, old: u16) -> u16 {
+    pub(crate) fn apply(self, old: u16) -> u16 {
         (old & !self.mask) | (self.value & self.mask)
     }
 }
@@ -111,7 +111,7 @@ impl Store {
 /// The stores ASCI makes from (d) on, one per word: the characters, then the NULL unless
 /// SM701 is on. In 16-bit mode a NULL that would land in a low byte takes the whole word
 /// (0000H); in 8-bit mode it is the next word, 0000H.
-pub fn asci_stores(chars: &[u8], packing: Packing, terminate: bool) -> Vec<Store> {
+pub(crate) fn asci_stores(chars: &[u8], packing: Packing, terminate: bool) -> Vec<Store> {
     let mut bytes = chars.to_vec();
     if terminate {
         bytes.push(0);
@@ -139,7 +139,7 @@ pub fn asci_stores(chars: &[u8], packing: Packing, terminate: bool) -> Vec<Store
 
 /// The `n` characters HEXA reads from (s) on: low then high byte of each word in 16-bit mode,
 /// the low byte of each word in 8-bit mode (the high byte is not read).
-pub fn hex_chars(memory: &Image, s: &Device, n: u32, packing: Packing) -> Vec<u8> {
+pub(crate) fn hex_chars(memory: &Image, s: &Device, n: u32, packing: Packing) -> Vec<u8> {
     (0..n)
         .map(|k| match packing {
             Packing::TwoPerWord => TextLayout::Packed.char_in(memory, s, k).unwrap_or(0),
@@ -149,20 +149,20 @@ pub fn hex_chars(memory: &Image, s: &Device, n: u32, packing: Packing) -> Vec<u8
 }
 
 /// The words HEXA writes at (d): four digits per word.
-pub fn hex_destination_words(n: u32) -> u32 {
+pub(crate) fn hex_destination_words(n: u32) -> u32 {
     n.div_ceil(4)
 }
 
 /// The character at `position` (0 = first read) is not a hex digit.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct InvalidChar {
+pub(crate) struct InvalidChar {
     pub position: usize,
     pub byte: u8,
 }
 
 /// The number the characters spell, right-justified: the last character is the least
 /// significant digit of (d), and the high digits of the last word written are 0.
-pub fn hex_words(chars: &[u8]) -> Result<Vec<u16>, InvalidChar> {
+pub(crate) fn hex_words(chars: &[u8]) -> Result<Vec<u16>, InvalidChar> {
     let mut words = vec![0u16; chars.len().div_ceil(4)];
     for (position, &byte) in chars.iter().enumerate() {
         let digit = digit_value(byte).ok_or(InvalidChar { position, byte })?;
@@ -173,7 +173,7 @@ pub fn hex_words(chars: &[u8]) -> Result<Vec<u16>, InvalidChar> {
 }
 
 /// The FX5 reference backend.
-pub struct Fx5;
+pub(crate) struct Fx5;
 
 #[derive(Debug, Clone, Copy)]
 enum Op {

@@ -11,7 +11,7 @@ pub(crate) mod external;
 pub(crate) mod fc4a;
 pub(crate) mod fp;
 pub(crate) mod fx3;
-pub mod fx5;
+pub(crate) mod fx5;
 pub(crate) mod iqr;
 pub(crate) mod kv;
 pub(crate) mod modbus;
@@ -455,7 +455,7 @@ const MODELS: &[MakeBackend] = &[
 ];
 
 /// The reference models, one per profile that has one.
-pub fn reference_backends(profiles: &Profiles) -> Vec<Arc<dyn Backend>> {
+pub(crate) fn reference_backends(profiles: &Profiles) -> Vec<Arc<dyn Backend>> {
     MODELS.iter().filter_map(|make| make(profiles)).collect()
 }
 

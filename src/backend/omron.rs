@@ -54,7 +54,7 @@ impl Model for Omron {
 
 /// The parity Di digit 3 designates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Parity {
+pub(crate) enum Parity {
     None,
     Even,
     Odd,
@@ -63,7 +63,7 @@ pub enum Parity {
 impl Parity {
     /// Whether a byte as read (HEX) has the designated parity: with none, its leftmost bit is
     /// 0; with even or odd, the count of ON bits in the byte is even or odd.
-    pub fn accepts(self, byte: u8) -> bool {
+    pub(crate) fn accepts(self, byte: u8) -> bool {
         match self {
             Parity::None => byte & 0x80 == 0,
             Parity::Even => byte.count_ones() % 2 == 0,
@@ -73,7 +73,7 @@ impl Parity {
 
     /// A 7-bit character with its leftmost bit set so that the byte has the designated parity
     /// (ASC); 0 with none.
-    pub fn apply(self, ch: u8) -> u8 {
+    pub(crate) fn apply(self, ch: u8) -> u8 {
         let ch = ch & 0x7F;
         let odd = ch.count_ones() % 2 == 1;
         match self {
@@ -86,7 +86,7 @@ impl Parity {
 
 /// A digit designator, decoded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Designator {
+pub(crate) struct Designator {
     /// Digit 0: the first digit of D (HEX) or of S (ASC), 0-3.
     pub first_digit: u32,
     /// Digit 1 plus one: how many characters (HEX) or digits (ASC), 1-4.
@@ -100,7 +100,7 @@ pub struct Designator {
 impl Designator {
     /// Reads Di; `None` when a digit is outside its range ("Di must be within the values given
     /// below"), which is an instruction error.
-    pub fn decode(di: u16) -> Option<Self> {
+    pub(crate) fn decode(di: u16) -> Option<Self> {
         let digit = |k: u32| u32::from((di >> (4 * k)) & 0xF);
         let parity = match digit(3) {
             0 => Parity::None,
@@ -119,20 +119,20 @@ impl Designator {
     /// The words the bytes occupy from the head (S for HEX, D for ASC): the first byte's
     /// position plus the count, two bytes per word. Four bytes from a leftmost first byte take
     /// three words.
-    pub fn byte_words(&self) -> u32 {
+    pub(crate) fn byte_words(&self) -> u32 {
         (self.first_byte + self.count).div_ceil(2)
     }
 
     /// Where the `k`-th byte lives: the word offset from the head, and whether it is the
     /// leftmost byte of that word.
-    pub fn byte_at(&self, k: u32) -> (u32, bool) {
+    pub(crate) fn byte_at(&self, k: u32) -> (u32, bool) {
         let position = self.first_byte + k;
         (position / 2, position % 2 == 1)
     }
 
     /// The digit the `k`-th character goes to (HEX) or comes from (ASC): from the first digit
     /// leftwards, round to digit 0 after digit 3.
-    pub fn digit_at(&self, k: u32) -> u32 {
+    pub(crate) fn digit_at(&self, k: u32) -> u32 {
         (self.first_digit + k) % DIGITS
     }
 }

@@ -288,9 +288,10 @@ fn error_devices(profile: &Profile, bench: &Bench) -> Result<ErrorDevices, LiveE
     })
 }
 
-/// A mailbox clear of every window and on every variant: in the widest gap between the windows
-/// in D whose words every variant has, at a round number (a multiple of 1000, else of 100) near
-/// its middle.
+/// A mailbox clear of every window and on every variant: the highest round number in D (a
+/// multiple of 1000, else of 100, 10, 1) whose 32 words every variant has and no case window
+/// touches. The highest, so that a program generated for fewer cases (`--filter`, one variant)
+/// keeps the place of the whole one.
 fn choose_mailbox(
     profile: &Profile,
     variants: &[String],
@@ -302,37 +303,23 @@ fn choose_mailbox(
         .filter_map(|r| r.iter().map(|r| r.last).max())
         .max()
         .ok_or_else(|| refused!("{} has no data registers (D) for a mailbox", profile.id))?;
-    let mut taken: Vec<(u32, u32)> = writes
-        .iter()
+    let taken: Vec<(u32, u32)> = (writes.iter())
         .filter(|w| w.code == "D")
         .map(|w| (w.first, w.last))
         .collect();
-    taken.sort_unstable();
-    let mut gaps = Vec::new();
-    let mut from = 0u32;
-    for (first, end) in taken {
-        if first > from {
-            gaps.push((from, first - 1));
-        }
-        from = from.max(end.saturating_add(1));
-    }
-    if from <= last {
-        gaps.push((from, last));
-    }
-    let on_every_variant = |at: u32| {
-        (variants.iter()).all(|v| profile.words_exist(v, &Device::new("D", at), mailbox::WORDS))
+    let fits = |at: u32| {
+        let end = at + (mailbox::WORDS - 1);
+        end <= last
+            && taken.iter().all(|&(first, l)| end < first || at > l)
+            && (variants.iter())
+                .all(|v| profile.words_exist(v, &Device::new("D", at), mailbox::WORDS))
     };
-    // The widest gaps first; in each, the roundest place near its middle that every variant has.
-    gaps.sort_by_key(|(lo, hi)| std::cmp::Reverse(hi - lo));
-    gaps.into_iter()
-        .filter(|(lo, hi)| hi - lo + 1 >= mailbox::WORDS)
-        .find_map(|(lo, hi)| {
-            let middle = lo + (hi - lo) / 2;
-            let fits = |at: u32| at >= lo && at + mailbox::WORDS - 1 <= hi && on_every_variant(at);
-            [1000, 100, 10, 1]
-                .into_iter()
-                .map(|step| middle / step * step)
-                .chain(lo..=hi - (mailbox::WORDS - 1))
+    [1000, 100, 10, 1]
+        .into_iter()
+        .find_map(|step| {
+            (0..=last / step)
+                .rev()
+                .map(|k| k * step)
                 .find(|at| fits(*at))
         })
         .map(|at| Device::new("D", at))

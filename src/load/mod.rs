@@ -45,7 +45,7 @@ pub use vectors::{load_corpus, CorpusBuilder};
 /// corpus, never silently left out. A link that leads back to a folder it is in (a loop) and a
 /// link to nothing are errors; a file reached twice through links is read once. A path under
 /// `<embedded>` lists the files shipped in the binary.
-pub fn yaml_files(path: &Path) -> Result<Vec<PathBuf>, LoadError> {
+pub(crate) fn yaml_files(path: &Path) -> Result<Vec<PathBuf>, LoadError> {
     if let Some(files) = embedded_files(path) {
         if files.is_empty() {
             return Err(LoadError {

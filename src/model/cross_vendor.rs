@@ -17,7 +17,7 @@ use super::protocol::FieldRule;
 use super::{Basis, Citation, ErrorSignal, Location, Operand};
 use crate::device::Device;
 use crate::memory::{Image, Unit, Value};
-pub use crate::spec::cross_vendor::TextLayout;
+pub(crate) use crate::spec::cross_vendor::TextLayout;
 pub(crate) use crate::spec::cross_vendor::ValueOrder;
 pub use crate::spec::cross_vendor::{ErrorClass, Operation};
 

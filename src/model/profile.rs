@@ -13,11 +13,12 @@ use super::cross_vendor::CrossVendorSection;
 use super::ErrorSignal;
 use crate::device::{code_matches, Device, DeviceSyntaxError};
 use crate::memory::Unit;
+pub use crate::spec::profile::Variant;
 pub(crate) use crate::spec::profile::{Bench, LinkKind, ModbusRange, ProgramForm};
 pub(crate) use crate::spec::profile::{
     CallBasis, DeviceDef, FlagDef, InstructionDef, Manual, Numbering, SignalKind,
 };
-pub use crate::spec::profile::{DeviceRange, DeviceRanges, Variant};
+pub(crate) use crate::spec::profile::{DeviceRange, DeviceRanges};
 
 /// A vendor family as its profile (`vendors/<id>.yaml`) describes it: its manuals and what
 /// each covers, devices and their ranges, instructions and their operands, error signalling,

@@ -207,7 +207,7 @@ fn point(sweep: &Sweep, text: [u8; 4], pick: u64) -> Point {
 /// Splits [`ByteClasses::by_kind`] by what the sweep's columns do (step 2 above), under every
 /// setting of the space (digit counts, flags). Returns the classes and the number of texts
 /// asked; `None` if stopped.
-pub fn derive(sweep: &Sweep, stop: &AtomicBool) -> Option<(ByteClasses, u64)> {
+pub(crate) fn derive(sweep: &Sweep, stop: &AtomicBool) -> Option<(ByteClasses, u64)> {
     let start = ByteClasses::by_kind();
     let contexts: Vec<[u8; 3]> = CONTEXT
         .iter()

@@ -50,7 +50,7 @@ use crate::model::cross_vendor::{Answer, Operation};
 /// text's bytes. A digit is 30H-39H or 41H-46H (`crate::text::digit_value`), and for S7-1200 ATH
 /// 61H-66H too; each lowering has one error on such a text.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Rule {
+pub(crate) enum Rule {
     /// All four characters must be digits: their value, else the error. HABIN with SM705 off,
     /// FX5 HEXA, IDEC ATOH, S7-200 ATH, FX3 and Delta HEX, in either packing.
     Whole,
@@ -72,10 +72,10 @@ pub enum Rule {
 }
 
 /// The answer [`answer`] gives for the lowering's error (values are below 2^16).
-pub const ERROR: u32 = 1 << 16;
+pub(crate) const ERROR: u32 = 1 << 16;
 
 /// Added to a value by [`answer`] when the lowering gives the error with the value.
-pub const WITH_ERROR: u32 = 1 << 17;
+pub(crate) const WITH_ERROR: u32 = 1 << 17;
 
 /// Each byte's digit value, or 0xFF; with `lowercase`, a-f are digits too.
 const fn digits(lowercase: bool) -> [u8; 256] {
@@ -99,7 +99,7 @@ const DIGIT: [u8; 256] = digits(false);
 const DIGIT_ANY_CASE: [u8; 256] = digits(true);
 
 /// The rule of a lowering, by its key; `None` for a lowering this module does not know.
-pub fn rule(key: &str) -> Option<Rule> {
+pub(crate) fn rule(key: &str) -> Option<Rule> {
     Some(match key {
         "iqr/habin-fixed" | "fx5/hexa-16bit" | "fx5/hexa-8bit" | "fc4a/atoh" | "s7-200/ath"
         | "fx3/hex-16bit" | "fx3/hex-8bit" | "dvp/hex-16bit" | "dvp/hex-8bit" => Rule::Whole,
@@ -115,7 +115,7 @@ pub fn rule(key: &str) -> Option<Rule> {
 /// The answer of `rule` to `text` with a count of 4: the value, [`ERROR`], or the value plus
 /// [`WITH_ERROR`].
 #[inline]
-pub fn answer(rule: Rule, text: [u8; 4]) -> u32 {
+pub(crate) fn answer(rule: Rule, text: [u8; 4]) -> u32 {
     let d = text.map(|b| DIGIT[b as usize]);
     let whole = || {
         ((d[0] | d[1] | d[2] | d[3]) < 16).then(|| {
@@ -170,7 +170,7 @@ pub fn answer(rule: Rule, text: [u8; 4]) -> u32 {
 /// Whether a reply is the answer [`answer`] gave: the same value, for [`ERROR`] an error, for a
 /// value plus [`WITH_ERROR`] an error with that value (which error is checked across texts by
 /// the caller: a lowering has one).
-pub fn agrees(code: u32, reply: &Reply) -> bool {
+pub(crate) fn agrees(code: u32, reply: &Reply) -> bool {
     match reply {
         Reply::Answer {
             answer,
@@ -206,7 +206,7 @@ fn same_error(seen: &mut Option<Reply>, reply: &Reply) -> bool {
 }
 
 /// The inverse of `super::generate::scramble`: a text's number in the full generator's space.
-pub fn unscramble(x: u32) -> u32 {
+pub(crate) fn unscramble(x: u32) -> u32 {
     /// The inverse of an odd number modulo 2^32 (Newton's iteration).
     const fn inverse(a: u32) -> u32 {
         let mut x = a;
@@ -226,7 +226,7 @@ pub fn unscramble(x: u32) -> u32 {
 }
 
 /// A sweep this module can run: each column's rule, or its codec asked in process.
-pub struct Plan<'s> {
+pub(crate) struct Plan<'s> {
     /// The distinct rules of the columns.
     rules: Vec<Rule>,
     /// The codecs written in Rust among the columns, asked each text directly.
@@ -333,7 +333,7 @@ fn codec_agrees(code: u64, reply: &Reply) -> bool {
 /// The plan for `sweep`, when every text of it can be asked through the rules: the full
 /// generator asking each text, hex-to-value, a count of 4 and no flags, and every column a
 /// built-in lowering with a known rule, asked directly, or a codec written in Rust.
-pub fn plan(sweep: &Sweep) -> Option<Plan<'_>> {
+pub(crate) fn plan(sweep: &Sweep) -> Option<Plan<'_>> {
     let s = &sweep.settings;
     if !s.exhaustive
         || !s.direct
@@ -457,7 +457,7 @@ struct Tally {
 
 /// Runs the sweep through the rules (see the module's text). `None` when it cannot finish this
 /// way (too many texts apart from their tuple): the caller runs the general path.
-pub fn run(
+pub(crate) fn run(
     sweep: &Sweep,
     plan: &Plan,
     stop: &AtomicBool,

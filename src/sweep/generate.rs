@@ -29,7 +29,7 @@ use super::rng::Rng;
 use crate::device::Device;
 
 /// The default alphabet of the text generator: the boundaries of the byte classes.
-pub const BOUNDARIES: [u8; 17] = [
+pub(crate) const BOUNDARIES: [u8; 17] = [
     0x00, 0x20, 0x2F, b'0', b'9', 0x3A, 0x40, b'A', b'F', 0x47, 0x60, b'a', b'f', 0x67, 0x7F, 0x80,
     0xFF,
 ];

@@ -28,7 +28,7 @@
 pub(crate) mod classes;
 pub(crate) mod direct;
 pub mod emit;
-pub mod exhaustive;
+pub(crate) mod exhaustive;
 pub(crate) mod explain;
 pub(crate) mod generate;
 pub(crate) mod group;

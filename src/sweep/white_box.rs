@@ -1199,10 +1199,10 @@ impl crate::Codec for PanicsOnZ {
     fn convert(&self, q: &crate::Question<'_>) -> Result<crate::Answer, crate::Unsupported> {
         assert!(!q.text.contains(&b'Z'), "no Z here");
         Ok(
-            u16::from_str_radix(std::str::from_utf8(q.text).unwrap_or("?"), 16).map_or(
-                crate::Answer::Error(crate::ErrorClass::InvalidDigit),
-                |v| crate::Answer::Value(u64::from(v)),
-            ),
+            u16::from_str_radix(std::str::from_utf8(q.text).unwrap_or("?"), 16)
+                .map_or(crate::Answer::Error(crate::ErrorClass::InvalidDigit), |v| {
+                    crate::Answer::Value(u64::from(v))
+                }),
         )
     }
 }

@@ -45,7 +45,7 @@ const OPERAND_PATTERN: &str =
 /// A message from the harness to a backend.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
-pub enum HarnessMessage {
+pub(crate) enum HarnessMessage {
     /// The first message: the backend answers with its own `hello`.
     Hello {
         /// The protocol version the harness speaks.
@@ -81,7 +81,7 @@ pub enum HarnessMessage {
 /// One case to execute, with everything needed to execute it.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct CaseRequest {
+pub(crate) struct CaseRequest {
     /// Unique within the session; the answer repeats it.
     pub id: u64,
     /// The corpus case id (the same case runs under several fills, variants and instructions).
@@ -121,7 +121,7 @@ pub struct CaseRequest {
 
 impl CaseRequest {
     /// A device name of the case or of its answer, read with the case's numbering.
-    pub fn device(&self, text: &str) -> Result<Device, DeviceSyntaxError> {
+    pub(crate) fn device(&self, text: &str) -> Result<Device, DeviceSyntaxError> {
         // Most profiles number nothing in hexadecimal: read those names the short way, as
         // every request and answer names several.
         if self.hexadecimal.is_empty() {
@@ -134,7 +134,10 @@ impl CaseRequest {
 
     /// A device operand as the instruction reaches it: `D100` itself, or for `@D10` the device
     /// `addresses` gives for D10, with the pointer.
-    pub fn operand_device(&self, text: &str) -> Result<(Device, Option<Device>), OperandError> {
+    pub(crate) fn operand_device(
+        &self,
+        text: &str,
+    ) -> Result<(Device, Option<Device>), OperandError> {
         let Some(pointer) = text.strip_prefix('@') else {
             return Ok((self.device(text)?, None));
         };
@@ -158,7 +161,7 @@ impl CaseRequest {
 
     /// The words of the pointers in `addresses`: two from each, which hold an address in the
     /// backend's own encoding.
-    pub fn pointer_words(&self) -> Vec<Device> {
+    pub(crate) fn pointer_words(&self) -> Vec<Device> {
         let pointers: Vec<Device> = (self.addresses.keys())
             .filter_map(|name| self.device(name).ok())
             .collect();
@@ -170,20 +173,20 @@ impl CaseRequest {
 /// make (codec level, version 2).
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(untagged)]
-pub enum RunCase {
+pub(crate) enum RunCase {
     Instruction(CaseRequest),
     Codec(CodecRequest),
 }
 
 impl RunCase {
-    pub fn id(&self) -> u64 {
+    pub(crate) fn id(&self) -> u64 {
         match self {
             RunCase::Instruction(c) => c.id,
             RunCase::Codec(c) => c.id,
         }
     }
     /// The corpus case id.
-    pub fn case(&self) -> &str {
+    pub(crate) fn case(&self) -> &str {
         match self {
             RunCase::Instruction(c) => &c.case,
             RunCase::Codec(c) => &c.case,
@@ -194,7 +197,7 @@ impl RunCase {
 /// One cross-vendor conversion asked of a codec-level backend.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct CodecRequest {
+pub(crate) struct CodecRequest {
     pub id: u64,
     /// The cross-vendor case id.
     pub case: String,
@@ -215,7 +218,7 @@ pub struct CodecRequest {
 /// An operand: a device name or a constant.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(untagged)]
-pub enum OperandValue {
+pub(crate) enum OperandValue {
     /// A word device as the manuals write it, e.g. `D100`; `@D10` is the device whose address
     /// D10 holds (see `addresses`).
     Device(#[schemars(regex(pattern = OPERAND_PATTERN))] String),
@@ -225,7 +228,7 @@ pub enum OperandValue {
 
 /// The two fill patterns of [`crate::memory::Fill`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
-pub enum FillName {
+pub(crate) enum FillName {
     A,
     B,
 }
@@ -235,7 +238,7 @@ pub enum FillName {
 /// exactly one of `words`, `bytes` and `dwords`.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct MemoryRange {
+pub(crate) struct MemoryRange {
     /// The first device, e.g. `D100` or `DB1.DBB10`.
     #[schemars(regex(pattern = DEVICE_PATTERN))]
     pub start: String,
@@ -255,7 +258,7 @@ pub struct MemoryRange {
 
 impl MemoryRange {
     /// A range of units of memory.
-    pub fn new(start: String, unit: Unit, values: Vec<Value>) -> Self {
+    pub(crate) fn new(start: String, unit: Unit, values: Vec<Value>) -> Self {
         let mut range = MemoryRange {
             start,
             words: Vec::new(),
@@ -280,7 +283,7 @@ impl MemoryRange {
     }
 
     /// The range's values in `unit`s; an error names what does not fit.
-    pub fn values(&self, unit: Unit) -> Result<Vec<Value>, ProtocolViolation> {
+    pub(crate) fn values(&self, unit: Unit) -> Result<Vec<Value>, ProtocolViolation> {
         let refuse =
             |what: String| ProtocolViolation(format!("the range from {} {what}", self.start));
         let given: Vec<Unit> = [Unit::Byte, Unit::Word, Unit::Dword]
@@ -313,7 +316,7 @@ impl MemoryRange {
 
 /// What a message does wrong against the protocol: it becomes the case's protocol-error fault.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct ProtocolViolation(pub String);
+pub(crate) struct ProtocolViolation(pub String);
 
 impl std::fmt::Display for ProtocolViolation {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -327,7 +330,7 @@ impl std::fmt::Display for ProtocolViolation {
 #[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
-pub enum BackendMessage {
+pub(crate) enum BackendMessage {
     /// The answer to the harness's `hello`.
     Hello {
         /// The protocol version the backend speaks; must equal the harness's.
@@ -380,7 +383,7 @@ pub enum BackendMessage {
 /// Bytes carried as a JSON string of one character per byte (U+0000-U+00FF): what a codec's
 /// text is in a `convert` message, read with one call in any language (`latin-1`).
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Latin1(pub Vec<u8>);
+pub(crate) struct Latin1(pub Vec<u8>);
 
 impl Serialize for Latin1 {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
@@ -406,7 +409,7 @@ impl<'de> Deserialize<'de> for Latin1 {
 /// One answer of a `converted` line.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(untagged)]
-pub enum Converted {
+pub(crate) enum Converted {
     /// Hex-to-value: the value (a negative one is a difference, not garbage).
     Value(i64),
     /// Value-to-hex: the characters written, one per byte.
@@ -418,14 +421,14 @@ pub enum Converted {
 /// `{"error": "invalid-digit"}`.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct ConvertedError {
+pub(crate) struct ConvertedError {
     pub error: ErrorClass,
 }
 
 /// `{"unsupported": "why"}`.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct ConvertedUnsupported {
+pub(crate) struct ConvertedUnsupported {
     pub unsupported: String,
 }
 
@@ -588,7 +591,7 @@ pub enum ByteOrder {
 /// level, version 2).
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(untagged)]
-pub enum ErrorReport {
+pub(crate) enum ErrorReport {
     Signal(SignalReport),
     /// Codec level: `"invalid-digit"`, `"invalid-count"`, `"device-range"` or `"error"`.
     Class(ErrorClass),
@@ -597,7 +600,7 @@ pub enum ErrorReport {
 /// An instruction-level error signal.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "lowercase", deny_unknown_fields)]
-pub enum SignalReport {
+pub(crate) enum SignalReport {
     /// The error code, e.g. `13313` for 3401H.
     Code(u16),
     /// The error flag turned on, e.g. `"M8004"`.
@@ -660,7 +663,7 @@ impl HarnessMessage {
     /// Reads one line. Equivalent to deserializing the enum, but field by field: serde reads an
     /// internally tagged enum by buffering the whole message first, which for a batch of cases
     /// costs more than executing them.
-    pub fn from_line(line: &[u8]) -> Result<HarnessMessage, serde_json::Error> {
+    pub(crate) fn from_line(line: &[u8]) -> Result<HarnessMessage, serde_json::Error> {
         use serde::de::Error;
         #[derive(Deserialize)]
         #[serde(deny_unknown_fields)]
@@ -743,7 +746,7 @@ impl HarnessMessage {
 
 impl BackendMessage {
     /// Reads one line, field by field (see [`HarnessMessage::from_line`]).
-    pub fn from_line(line: &[u8]) -> Result<BackendMessage, serde_json::Error> {
+    pub(crate) fn from_line(line: &[u8]) -> Result<BackendMessage, serde_json::Error> {
         use serde::de::Error;
         #[derive(Deserialize)]
         #[serde(deny_unknown_fields)]
@@ -851,7 +854,7 @@ pub fn protocol_schema() -> serde_json::Value {
 
 /// Why an operand of a case does not name a device the backend can reach.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum OperandError {
+pub(crate) enum OperandError {
     /// Not a device.
     Device(DeviceSyntaxError),
     /// The device `addresses` gives for a pointer is not a device.

@@ -19,7 +19,7 @@ use crate::model::{ErrorSignal, Operand};
 
 /// Why serving ended early.
 #[derive(Debug)]
-pub enum ServeError {
+pub(crate) enum ServeError {
     Read(std::io::Error),
     Write(std::io::Error),
     /// A line that is not a message of the harness, with the start of it.
@@ -52,7 +52,7 @@ impl std::error::Error for ServeError {
 
 /// Serves one backend until `shutdown` or the end of input. Errors are I/O errors and messages
 /// that are not the harness's; both end the session.
-pub fn serve(
+pub(crate) fn serve(
     backend: &dyn Backend,
     profile: &Profile,
     input: impl BufRead,
