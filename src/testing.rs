@@ -3,8 +3,9 @@
 //! Nothing here is part of the supported interface: an emulator or codec author depends on the
 //! items at the crate root, which keep their names and meaning across releases; these paths
 //! follow the modules inside and may move with them. The tests of this repository use them to
-//! hold the simulated CPU, the SLMP client, the sweep's internals and the loaders to what
-//! the manuals say, which the public interface has no reason to expose.
+//! hold the simulated CPUs the command line runs against, the sweep's internals and the loaders
+//! to what the manuals say, which the public interface has no reason to expose. The bench's
+//! white-box tests (its clients, simulated CPUs and backend) live beside its code instead.
 
 pub mod backend {
     pub mod external {
@@ -14,37 +15,28 @@ pub mod backend {
         }
     }
     pub mod bench {
-        pub use crate::backend::bench::tcp::TransportError;
-        pub use crate::backend::bench::{
-            fence, mailbox, BenchBackend, Failure, LinkError, LinkSettings,
-        };
+        pub use crate::backend::bench::{fence, BenchBackend};
         pub mod manifest {
             pub use crate::backend::bench::manifest::Manifest;
         }
-        pub mod sim {
-            pub use crate::backend::bench::sim::{FaultAction, FaultRule};
-        }
     }
     pub mod modbus {
-        pub use crate::backend::modbus::{Map, ModbusBench, ModbusLinkSettings};
-        pub mod client {
-            pub use crate::backend::modbus::client::{ModbusClient, ModbusError, ModbusSettings};
-        }
+        pub use crate::backend::modbus::Map;
         pub mod sim {
             pub use crate::backend::modbus::sim::{ModbusSimSettings, ModbusSimulator};
         }
     }
     pub mod slmp {
-        pub use crate::backend::slmp::{fault_of, limits, SlmpBench, ADDRESSING};
+        pub use crate::backend::slmp::{limits, SlmpBench, ADDRESSING};
         pub mod client {
-            pub use crate::backend::slmp::client::{Client, ClientError, ClientSettings, Code};
+            pub use crate::backend::slmp::client::{ClientSettings, Code};
         }
         pub mod frame {
             pub use crate::backend::slmp::frame::{command, DeviceForm, FrameKind};
         }
         pub mod sim {
             pub use crate::backend::slmp::sim::{
-                FaultAction, FaultRule, RemoteProgram, SlmpSimSettings, SlmpSimulator,
+                FaultRule, RemoteProgram, SlmpSimSettings, SlmpSimulator,
             };
         }
     }
@@ -56,7 +48,7 @@ pub mod execute {
     pub use crate::execute::{execute_all, images, requests, Pace, Progress};
 }
 pub mod hil {
-    pub use crate::hil::{dry_run, generate, pulse_self_test, GenerateOptions};
+    pub use crate::hil::{generate, GenerateOptions};
 }
 pub mod known_draft {
     pub use crate::known_draft::draft;

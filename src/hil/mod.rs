@@ -338,7 +338,7 @@ fn choose_mailbox(
 
 /// What a dry run found.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct DryRun {
+pub(crate) struct DryRun {
     /// Trials the backend would run.
     pub trials: usize,
     /// Executions (trials times fills).
@@ -356,7 +356,7 @@ pub struct DryRun {
 /// Every trial of the corpus the backend would run, with what it would write: the plan the
 /// live backend makes for each execution, fence checked, and nothing sent (the backend opens no
 /// socket before its first case).
-pub fn dry_run(project: &Project, backend: &Arc<BenchBackend>) -> DryRun {
+pub(crate) fn dry_run(project: &Project, backend: &Arc<BenchBackend>) -> DryRun {
     let as_backend: Arc<dyn Backend> = backend.clone();
     let mut out = DryRun::default();
     let mut writes = Vec::new();
@@ -411,7 +411,7 @@ fn expects_writes(t: &crate::plan::Trial) -> bool {
 
 /// What the pulse self-test found.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct PulseCheck {
+pub(crate) struct PulseCheck {
     /// The trial it ran twice.
     pub trial: String,
     /// Whether the second execution did what the first did.
@@ -456,7 +456,7 @@ pub(crate) fn self_test(
 /// tool that treats pulse calls in structured text otherwise), the second execution does
 /// nothing and every later case of that rung would be judged on a stale result. Writes only
 /// what a case writes: its window (inside the fence) and the mailbox's PC words.
-pub fn pulse_self_test(
+pub(crate) fn pulse_self_test(
     project: &Project,
     backend: &Arc<BenchBackend>,
 ) -> Result<PulseCheck, LiveError> {

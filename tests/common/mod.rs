@@ -2,8 +2,6 @@
 //! a check that the corpus tells each of them apart from the manual.
 #![allow(dead_code)]
 
-pub mod bench;
-
 use std::path::Path;
 use std::process::{Command, Output};
 use std::sync::{Arc, OnceLock};

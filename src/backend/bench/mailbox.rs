@@ -17,70 +17,70 @@ use super::fence::WordRange;
 use crate::device::{Device, DeviceSyntaxError};
 
 /// The layout version the program and the PC agree on.
-pub const LAYOUT: u16 = 2;
+pub(crate) const LAYOUT: u16 = 2;
 /// Words in the mailbox.
-pub const WORDS: u32 = 32;
+pub(crate) const WORDS: u32 = 32;
 /// `'P','C'`, `'H','I'` as two characters per word, low byte first.
-pub const MAGIC: [u16; 2] = [0x4350, 0x4948];
+pub(crate) const MAGIC: [u16; 2] = [0x4350, 0x4948];
 /// `'S','I'`: what the simulated CPU writes at [`off::ORIGIN`], where the generated program on a
 /// CPU writes 0, so that nothing a simulator answered is ever taken for an observation.
-pub const SIMULATOR: u16 = 0x4953;
+pub(crate) const SIMULATOR: u16 = 0x4953;
 
 /// Word offsets from the mailbox head.
-pub mod off {
+pub(crate) mod off {
     /// Magic, two words (program).
-    pub const MAGIC: u32 = 0;
+    pub(crate) const MAGIC: u32 = 0;
     /// Layout version (program).
-    pub const LAYOUT: u32 = 2;
+    pub(crate) const LAYOUT: u32 = 2;
     /// Low and high word of the program hash's low 32 bits (program).
-    pub const HASH: u32 = 3;
+    pub(crate) const HASH: u32 = 3;
     /// Rung count (program).
-    pub const RUNGS: u32 = 5;
+    pub(crate) const RUNGS: u32 = 5;
     /// 0 from the program on a CPU, [`super::SIMULATOR`] from the simulated CPU (program).
-    pub const ORIGIN: u32 = 6;
+    pub(crate) const ORIGIN: u32 = 6;
     /// Sequence number of the case asked for, 1-65535 (PC; written last, alone).
-    pub const TRIGGER: u32 = 8;
+    pub(crate) const TRIGGER: u32 = 8;
     /// Sequence number of the case done (program).
-    pub const ACK: u32 = 9;
+    pub(crate) const ACK: u32 = 9;
     /// Rung to execute (PC).
-    pub const RUNG: u32 = 10;
+    pub(crate) const RUNG: u32 = 10;
     /// Flag bits, in the manifest's flag order (PC).
-    pub const FLAGS: u32 = 11;
+    pub(crate) const FLAGS: u32 = 11;
     /// The program's state, see [`super::state`] (program).
-    pub const STATE: u32 = 12;
+    pub(crate) const STATE: u32 = 12;
     /// Scan counter (program).
-    pub const SCANS: u32 = 13;
+    pub(crate) const SCANS: u32 = 13;
     /// The error flag this scan, 0 or 1 (program).
-    pub const FLAG_NOW: u32 = 14;
+    pub(crate) const FLAG_NOW: u32 = 14;
     /// The error flag after the reset, before the instruction (program).
-    pub const FLAG_BEFORE: u32 = 16;
+    pub(crate) const FLAG_BEFORE: u32 = 16;
     /// The error flag right after the instruction, same scan (program).
-    pub const FLAG_AFTER: u32 = 17;
+    pub(crate) const FLAG_AFTER: u32 = 17;
     /// The error register right after the instruction (program).
-    pub const CODE: u32 = 18;
+    pub(crate) const CODE: u32 = 18;
     /// The profile's further error register, same scan (program).
-    pub const CODE_EXTRA: u32 = 19;
+    pub(crate) const CODE_EXTRA: u32 = 19;
     /// The error register one scan later (program).
-    pub const CODE_NEXT: u32 = 20;
+    pub(crate) const CODE_NEXT: u32 = 20;
     /// The rung that ran, written by the rung itself in the scan it was enabled (program).
-    pub const RAN: u32 = 21;
+    pub(crate) const RAN: u32 = 21;
     /// The trigger that rung ran for (program).
-    pub const RAN_FOR: u32 = 22;
+    pub(crate) const RAN_FOR: u32 = 22;
     /// The rung's ENO in that scan, 0 or 1 (program).
-    pub const ENO: u32 = 23;
+    pub(crate) const ENO: u32 = 23;
 }
 
 /// The program's states.
-pub mod state {
-    pub const IDLE: u16 = 0;
-    pub const RESETTING: u16 = 1;
-    pub const EXECUTING: u16 = 2;
-    pub const DONE: u16 = 3;
+pub(crate) mod state {
+    pub(crate) const IDLE: u16 = 0;
+    pub(crate) const RESETTING: u16 = 1;
+    pub(crate) const EXECUTING: u16 = 2;
+    pub(crate) const DONE: u16 = 3;
     /// The error flag stayed on after the error reset: the case was not executed.
-    pub const RESET_FAILED: u16 = 8;
+    pub(crate) const RESET_FAILED: u16 = 8;
 
     /// A state's name, for messages.
-    pub fn name(state: u16) -> &'static str {
+    pub(crate) fn name(state: u16) -> &'static str {
         match state {
             IDLE => "idle",
             RESETTING => "resetting errors",
@@ -94,7 +94,7 @@ pub mod state {
 
 /// The words of the mailbox the PC writes: the trigger, the rung and the flags. Nothing else of
 /// the mailbox is in the write fence.
-pub fn pc_words(head: &Device) -> Vec<WordRange> {
+pub(crate) fn pc_words(head: &Device) -> Vec<WordRange> {
     vec![
         WordRange::within(head, head.index + off::TRIGGER, head.index + off::TRIGGER),
         WordRange::within(head, head.index + off::RUNG, head.index + off::FLAGS),
@@ -102,18 +102,21 @@ pub fn pc_words(head: &Device) -> Vec<WordRange> {
 }
 
 /// The whole mailbox.
-pub fn range(head: &Device) -> WordRange {
+pub(crate) fn range(head: &Device) -> WordRange {
     WordRange::within(head, head.index, head.index + WORDS - 1)
 }
 
 /// The mailbox head as `--mailbox` and a manifest write it, numbered as the CPU numbers the code
 /// (`W100` is W 256 where W is numbered in hexadecimal), as the program and the frames will.
-pub fn head(text: &str, addressing: &dyn Addressing) -> Result<Device, DeviceSyntaxError> {
+pub(crate) fn head(
+    text: &str,
+    addressing: &dyn Addressing,
+) -> Result<Device, DeviceSyntaxError> {
     Device::parse_numbered(text, |code| addressing.hex_numbered(code))
 }
 
 /// The device at an offset, numbered as the head is (`W100` + 8 is `W108`).
-pub fn at(head: &Device, offset: u32) -> Device {
+pub(crate) fn at(head: &Device, offset: u32) -> Device {
     head.with_index(head.index + offset)
 }
 
@@ -177,7 +180,7 @@ impl Signature {
 }
 
 /// The next trigger after `last`: 1-65535, never 0 (0 is what a cleared mailbox holds).
-pub fn next_trigger(last: u16) -> u16 {
+pub(crate) fn next_trigger(last: u16) -> u16 {
     match last.wrapping_add(1) {
         0 => 1,
         n => n,

@@ -32,7 +32,7 @@ pub(crate) mod doctor;
 pub(crate) mod error;
 pub mod fence;
 mod link;
-pub mod mailbox;
+pub(crate) mod mailbox;
 pub(crate) mod manifest;
 pub(crate) mod settings;
 pub(crate) mod sim;
@@ -45,8 +45,7 @@ use std::time::{Duration, Instant};
 
 pub(crate) use addressing::Addressing;
 use fence::{WordRange, WriteFence};
-pub use link::{Failure, LinkError, LinkSettings};
-pub(crate) use link::{Identity, Link, RunState};
+pub(crate) use link::{Failure, Identity, Link, LinkError, LinkSettings, RunState};
 use mailbox::{off, state, Signature};
 pub(crate) use settings::BenchSettings;
 
@@ -730,3 +729,6 @@ impl Backend for BenchBackend {
         }
     }
 }
+
+#[cfg(test)]
+mod end_to_end;

@@ -41,7 +41,7 @@ pub(crate) struct Connection {
 /// refuses to build. A protocol's own refusal (an SLMP end code, a Modbus exception) is a whole
 /// reply and belongs to its link's error.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum TransportError {
+pub(crate) enum TransportError {
     /// No connection could be made.
     Connect { address: String, error: String },
     /// No (whole) reply within the reply timeout; `hint` is what the link's devices do when

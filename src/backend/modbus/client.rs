@@ -21,7 +21,7 @@ use super::frame::{
 
 /// How much one request may carry on this link; every batch is split at these.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct ModbusLimits {
+pub(crate) struct ModbusLimits {
     pub read_registers: usize,
     pub write_registers: usize,
     pub read_coils: usize,
@@ -40,7 +40,7 @@ impl Default for ModbusLimits {
 
 /// How to reach and talk to one Modbus TCP server.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct ModbusSettings {
+pub(crate) struct ModbusSettings {
     /// `host:port`.
     pub address: String,
     pub unit: u8,
@@ -58,7 +58,7 @@ impl ModbusSettings {
     /// Unit 1 is a plain default, not the Messaging guide's 0xFF: a server that is the device
     /// itself ignores the field or answers only the station it is configured as, commonly 1,
     /// and a gateway needs the address of the device behind it; set it for either.
-    pub fn new(address: impl Into<String>) -> Self {
+    pub(crate) fn new(address: impl Into<String>) -> Self {
         ModbusSettings {
             address: address.into(),
             unit: 1,
@@ -70,7 +70,7 @@ impl ModbusSettings {
     }
 
     /// The transport as provenance names it: `Modbus TCP 127.0.0.1:502 unit 1`.
-    pub fn describe(&self) -> String {
+    pub(crate) fn describe(&self) -> String {
         format!("Modbus TCP {} unit {}", self.address, self.unit)
     }
 }
@@ -78,7 +78,7 @@ impl ModbusSettings {
 /// Why a request got no usable answer: the transport's ways, shared with every link, or the
 /// server's exception.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum ModbusError {
+pub(crate) enum ModbusError {
     Transport(TransportError),
     /// The server answered with an exception; `function` is the one requested.
     Exception {
@@ -116,7 +116,7 @@ impl fmt::Display for ModbusError {
 impl std::error::Error for ModbusError {}
 
 /// One connection to a server (made on first use, dropped after a fault).
-pub struct ModbusClient {
+pub(crate) struct ModbusClient {
     settings: ModbusSettings,
     connection: tcp::Connection,
     tid: u16,
@@ -124,7 +124,7 @@ pub struct ModbusClient {
 
 impl ModbusClient {
     /// A client that has not connected yet: nothing is opened until the first request.
-    pub fn new(settings: ModbusSettings) -> Self {
+    pub(crate) fn new(settings: ModbusSettings) -> Self {
         ModbusClient {
             settings,
             connection: tcp::Connection::default(),
@@ -132,26 +132,26 @@ impl ModbusClient {
         }
     }
 
-    pub fn settings(&self) -> &ModbusSettings {
+    pub(crate) fn settings(&self) -> &ModbusSettings {
         &self.settings
     }
 
-    pub fn is_connected(&self) -> bool {
+    pub(crate) fn is_connected(&self) -> bool {
         self.connection.is_connected()
     }
 
     /// Drops the connection; the next request makes a new one.
-    pub fn disconnect(&mut self) {
+    pub(crate) fn disconnect(&mut self) {
         self.connection.disconnect();
     }
 
     /// Requests sent, for a run's figures.
-    pub fn requests(&self) -> u64 {
+    pub(crate) fn requests(&self) -> u64 {
         self.connection.requests
     }
 
     /// Connections made, for a run's figures.
-    pub fn connections(&self) -> u64 {
+    pub(crate) fn connections(&self) -> u64 {
         self.connection.connections
     }
 
@@ -211,7 +211,11 @@ impl ModbusClient {
 
     /// FC03: `count` holding registers from wire address `address`, in batches of at most the
     /// link's limit. A range past 0xFFFF is refused before anything is sent.
-    pub fn read_holding(&mut self, address: u16, count: usize) -> Result<Vec<u16>, ModbusError> {
+    pub(crate) fn read_holding(
+        &mut self,
+        address: u16,
+        count: usize,
+    ) -> Result<Vec<u16>, ModbusError> {
         let mut out = Vec::with_capacity(count);
         let batch = self.settings.limits.read_registers.max(1);
         for (at, n) in batches(address, count, batch, "FC03 read", "registers")? {
@@ -229,7 +233,11 @@ impl ModbusClient {
     }
 
     /// FC01: `count` coils from wire address `address`, in batches of at most the link's limit.
-    pub fn read_coils(&mut self, address: u16, count: usize) -> Result<Vec<bool>, ModbusError> {
+    pub(crate) fn read_coils(
+        &mut self,
+        address: u16,
+        count: usize,
+    ) -> Result<Vec<bool>, ModbusError> {
         let mut out = Vec::with_capacity(count);
         let batch = self.settings.limits.read_coils.max(1);
         for (at, n) in batches(address, count, batch, "FC01 read", "coils")? {
@@ -249,7 +257,11 @@ impl ModbusClient {
     /// One value: FC06; more: FC16 in batches of at most the link's limit. Never sent twice; if
     /// a later batch fails, the earlier ones have landed and the error names the one that did
     /// not.
-    pub fn write_registers(&mut self, address: u16, values: &[u16]) -> Result<(), ModbusError> {
+    pub(crate) fn write_registers(
+        &mut self,
+        address: u16,
+        values: &[u16],
+    ) -> Result<(), ModbusError> {
         if let [value] = values {
             let what = describe("FC06 write", 1, "register", address);
             let request = Request::WriteSingle {

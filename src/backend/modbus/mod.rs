@@ -288,7 +288,7 @@ impl Link for ModbusLink {
 
 /// How to reach a CPU over Modbus TCP: the client's settings and the profile's map.
 #[derive(Debug, Clone)]
-pub struct ModbusLinkSettings {
+pub(crate) struct ModbusLinkSettings {
     pub client: ModbusSettings,
     pub map: Arc<Map>,
 }
@@ -318,7 +318,7 @@ impl LinkSettings for ModbusLinkSettings {
 }
 
 /// A bench over Modbus TCP, while its link settings may still change.
-pub type ModbusBench = BenchSettings<ModbusLinkSettings>;
+pub(crate) type ModbusBench = BenchSettings<ModbusLinkSettings>;
 
 /// The keys the Modbus link reads besides the bench's own.
 const LINK_KEYS: [&str; 2] = ["unit", "reply_ms"];
@@ -326,7 +326,7 @@ const LINK_KEYS: [&str; 2] = ["unit", "reply_ms"];
 impl BenchSettings<ModbusLinkSettings> {
     /// Settings with the link's defaults (unit 1, replies within 1 s) and the map of the
     /// manifest's profile.
-    pub fn modbus(
+    pub(crate) fn modbus(
         name: impl Into<String>,
         address: impl Into<String>,
         map: Arc<Map>,
@@ -347,7 +347,7 @@ impl BenchSettings<ModbusLinkSettings> {
     /// `sandbox` as for every bench, and optionally `variant`, `unit` (the unit id, 0-255),
     /// `reply_ms` (how long one reply may take), `timeout`, `max_faults`, `poll_ms`. The map is
     /// the manifest's profile's.
-    pub fn parse(
+    pub(crate) fn parse(
         text: &str,
         base: &Path,
         profiles: &Profiles,

@@ -74,7 +74,7 @@ impl ClientSettings {
 /// Why a request got no usable answer: the transport's ways, shared with every link, or the
 /// CPU's error end code.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum ClientError {
+pub(crate) enum ClientError {
     Transport(TransportError),
     /// The CPU answered with an error end code; `form` is the device form the request used.
     EndCode {
@@ -141,7 +141,7 @@ pub(crate) fn device_ref(device: &Device, what: &str) -> Result<DeviceRef, Clien
 }
 
 /// One connection to a CPU (made on first use, dropped after a fault).
-pub struct Client {
+pub(crate) struct Client {
     settings: ClientSettings,
     connection: tcp::Connection,
     serial: u16,
@@ -149,7 +149,7 @@ pub struct Client {
 
 impl Client {
     /// A client that has not connected yet: nothing is opened until the first request.
-    pub fn new(settings: ClientSettings) -> Self {
+    pub(crate) fn new(settings: ClientSettings) -> Self {
         Client {
             settings,
             connection: tcp::Connection::default(),
@@ -157,31 +157,26 @@ impl Client {
         }
     }
 
-    pub fn settings(&self) -> &ClientSettings {
+    pub(crate) fn settings(&self) -> &ClientSettings {
         &self.settings
     }
 
-    /// The settings, to change before the first request (a connection made keeps its frame).
-    pub fn settings_mut(&mut self) -> &mut ClientSettings {
-        &mut self.settings
-    }
-
-    pub fn is_connected(&self) -> bool {
+    pub(crate) fn is_connected(&self) -> bool {
         self.connection.is_connected()
     }
 
     /// Drops the connection; the next request makes a new one.
-    pub fn disconnect(&mut self) {
+    pub(crate) fn disconnect(&mut self) {
         self.connection.disconnect();
     }
 
     /// Requests sent, for a run's figures.
-    pub fn requests(&self) -> u64 {
+    pub(crate) fn requests(&self) -> u64 {
         self.connection.requests
     }
 
     /// Connections made, for a run's figures.
-    pub fn connections(&self) -> u64 {
+    pub(crate) fn connections(&self) -> u64 {
         self.connection.connections
     }
 
@@ -270,14 +265,18 @@ impl Client {
     }
 
     /// 0101: the CPU's type name.
-    pub fn type_name(&mut self) -> Result<TypeName, ClientError> {
+    pub(crate) fn type_name(&mut self) -> Result<TypeName, ClientError> {
         let what = "0101 (read type name)";
         let data = self.read_exchange(what, &frame::read_type_name())?;
         frame::type_name_of(&data).map_err(|e| garbled(what, e))
     }
 
     /// 0401: `count` words from `head`, in batches of at most the port's limit.
-    pub fn read_words(&mut self, head: &Device, count: u32) -> Result<Vec<u16>, ClientError> {
+    pub(crate) fn read_words(
+        &mut self,
+        head: &Device,
+        count: u32,
+    ) -> Result<Vec<u16>, ClientError> {
         let mut out = Vec::with_capacity(count as usize);
         let first = device_ref(head, &format!("reading {head}"))?;
         while out.len() < count as usize {
@@ -296,7 +295,7 @@ impl Client {
     }
 
     /// 0403: one word from each device, in one request (at most the port's limit).
-    pub fn random_read(&mut self, devices: &[Device]) -> Result<Vec<u16>, ClientError> {
+    pub(crate) fn random_read(&mut self, devices: &[Device]) -> Result<Vec<u16>, ClientError> {
         let names: Vec<String> = devices.iter().map(ToString::to_string).collect();
         let what = format!("0403 (read {})", names.join(" "));
         let refs = devices
@@ -317,7 +316,7 @@ impl Client {
     }
 
     /// 1401: one write the fence let through, encoded here and nowhere else; never sent twice.
-    pub fn write(&mut self, write: &FencedWrite) -> Result<(), ClientError> {
+    pub(crate) fn write(&mut self, write: &FencedWrite) -> Result<(), ClientError> {
         let what = format!("1401 (write {})", write.range());
         let body = device_ref(write.head(), &what).and_then(|head| {
             frame::write_words(self.settings.form, head, write.words())
@@ -392,6 +391,14 @@ fn reply_len(
         )));
     }
     message_len(frame_kind, header).map_err(|e| exchange.frame(tcp::received(&e, header)))
+}
+
+#[cfg(test)]
+impl Client {
+    /// The settings, to change before the first request (a connection made keeps its frame).
+    pub(crate) fn settings_mut(&mut self) -> &mut ClientSettings {
+        &mut self.settings
+    }
 }
 
 #[cfg(test)]

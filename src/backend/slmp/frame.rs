@@ -564,7 +564,7 @@ pub(crate) fn words_of(data: &[u8], count: usize) -> Result<Vec<u16>, FrameError
 
 /// The answer to 0101.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct TypeName {
+pub(crate) struct TypeName {
     /// The model name, trailing spaces removed (`FX5U-32MT/DS`).
     pub name: String,
     /// The model code.

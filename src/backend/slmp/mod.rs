@@ -26,7 +26,6 @@ use super::bench::settings::Spec;
 use super::bench::{
     Addressing, BenchSettings, Failure, Identity, Link, LinkError, LinkSettings, RunState,
 };
-use super::Fault;
 use crate::device::Device;
 
 /// How SLMP reaches a MELSEC CPU's devices.
@@ -122,11 +121,6 @@ impl From<ClientError> for LiveError {
     fn from(e: ClientError) -> Self {
         LiveError::Link(e.into())
     }
-}
-
-/// The fault kind of a client error.
-pub fn fault_of(e: &ClientError) -> Fault {
-    LinkError::from(e.clone()).fault()
 }
 
 /// The SLMP client as a bench's link.
@@ -295,6 +289,12 @@ impl BenchSettings<ClientSettings> {
         }
         Ok(Some(s))
     }
+}
+
+/// The fault kind of a client error.
+#[cfg(test)]
+pub(crate) fn fault_of(e: &ClientError) -> super::Fault {
+    LinkError::from(e.clone()).fault()
 }
 
 #[cfg(test)]

@@ -22,7 +22,8 @@ mod server;
 
 pub(crate) use cpu::Audit;
 pub(crate) use cpu::Cpu;
-pub use fault::{FaultAction, FaultRule};
+pub(crate) use fault::FaultAction;
+pub use fault::FaultRule;
 pub(crate) use scan::SimSettings;
 pub(crate) use scan::{scan, Program};
 pub(crate) use server::Running;

@@ -23,8 +23,8 @@ use super::frame::{
 };
 use super::limits::{Family, Limits};
 use crate::backend::bench::error::LiveError;
-use crate::backend::bench::sim::{Cpu, Program, Running};
-pub use crate::backend::bench::sim::{FaultAction, FaultRule};
+pub use crate::backend::bench::sim::FaultRule;
+use crate::backend::bench::sim::{Cpu, FaultAction, Program, Running};
 use crate::backend::Backend;
 use crate::device::Device;
 use crate::model::profile::Profile;

@@ -6,29 +6,27 @@
 //! `.venv-adapters` lacks it, and fail then when PLC_CONFORMANCE_REQUIRE_BACKENDS is set. All
 //! traffic stays on 127.0.0.1.
 
-mod common;
-
+#[cfg(test)]
 use std::io::{BufRead, BufReader};
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 
-use plc_conformance::testing::backend::bench::fence::{WordRange, WriteFence};
-use plc_conformance::testing::backend::bench::mailbox;
-use plc_conformance::testing::backend::bench::manifest::Manifest;
-use plc_conformance::testing::backend::bench::{Failure, LinkError, LinkSettings, TransportError};
-use plc_conformance::testing::backend::modbus::client::{
-    ModbusClient, ModbusError, ModbusSettings,
-};
-use plc_conformance::testing::backend::modbus::sim::{ModbusSimSettings, ModbusSimulator};
-use plc_conformance::testing::backend::modbus::{Map, ModbusLinkSettings};
-use plc_conformance::testing::hil::{generate, GenerateOptions};
-use plc_conformance::Device;
+use crate::backend::bench::fence::{WordRange, WriteFence};
+use crate::backend::bench::mailbox;
+use crate::backend::bench::manifest::Manifest;
+use crate::backend::bench::tcp::TransportError;
+use crate::backend::bench::{Failure, LinkError, LinkSettings};
+use crate::backend::modbus::client::{ModbusClient, ModbusError, ModbusSettings};
+use crate::backend::modbus::sim::{ModbusSimSettings, ModbusSimulator};
+use crate::backend::modbus::{Map, ModbusLinkSettings};
+use crate::hil::{generate, GenerateOptions};
+use crate::Device;
 
-use common::{reference, root, session};
+use super::{reference, root, session};
 
 /// The Python of `.venv-adapters` with pymodbus, or `None` (with a note).
 fn venv_python() -> Option<PathBuf> {
-    common::adapters_python("pymodbus", "pymodbus")
+    super::adapters_python("pymodbus", "pymodbus")
 }
 
 /// pymodbus's Modbus TCP server on 127.0.0.1; it ends when its stdin closes (on drop).
@@ -77,7 +75,7 @@ fn the_client_reads_and_writes_pymodbus_at_the_limits() {
     let Some(python) = venv_python() else {
         return;
     };
-    let dir = common::scratch();
+    let dir = super::scratch();
     let init = dir.path().join("init.json");
     std::fs::write(&init, r#"{"holding": {"100": 4660, "8002": 6}}"#).expect("write");
     let server = Pymodbus::start(
@@ -143,7 +141,7 @@ fn the_idec_link_names_the_cpu_and_writes_through_the_fence_on_pymodbus() {
     let Some(python) = venv_python() else {
         return;
     };
-    let dir = common::scratch();
+    let dir = super::scratch();
     let init = dir.path().join("init.json");
     std::fs::write(&init, r#"{"holding": {"8002": 6}}"#).expect("write");
     let server = Pymodbus::start(
