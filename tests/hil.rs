@@ -174,7 +174,7 @@ fn the_hil_commands_through_the_binary() {
         "--variant",
         "rcpu",
         "--mailbox",
-        "D11000",
+        "D18000",
         "--out",
         out_dir.to_str().expect("utf-8"),
     ]);
@@ -184,7 +184,7 @@ fn the_hil_commands_through_the_binary() {
         "{stdout}{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    assert!(stdout.contains("mailbox D11000"), "{stdout}");
+    assert!(stdout.contains("mailbox D18000"), "{stdout}");
     for f in ["executive.st", "manifest.json", "SETUP.md"] {
         assert!(out_dir.join(f).is_file(), "{f}");
     }

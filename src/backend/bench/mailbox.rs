@@ -108,10 +108,7 @@ pub(crate) fn range(head: &Device) -> WordRange {
 
 /// The mailbox head as `--mailbox` and a manifest write it, numbered as the CPU numbers the code
 /// (`W100` is W 256 where W is numbered in hexadecimal), as the program and the frames will.
-pub(crate) fn head(
-    text: &str,
-    addressing: &dyn Addressing,
-) -> Result<Device, DeviceSyntaxError> {
+pub(crate) fn head(text: &str, addressing: &dyn Addressing) -> Result<Device, DeviceSyntaxError> {
     Device::parse_numbered(text, |code| addressing.hex_numbered(code))
 }
 
