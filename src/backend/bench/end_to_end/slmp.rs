@@ -410,7 +410,7 @@ fn manifest_for(filter: &str) -> Manifest {
         &GenerateOptions {
             profile: "mitsubishi-iqr".into(),
             variants: vec!["rcpu".into()],
-            mailbox: Some(Device::new("D", 11000)),
+            mailbox: None,
             filter: Some(filter.into()),
         },
     )
