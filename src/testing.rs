@@ -5,14 +5,13 @@
 //! follow the modules inside and may move with them. The tests of this repository use them to
 //! hold the simulated CPUs the command line runs against, the sweep's internals and the loaders
 //! to what the manuals say, which the public interface has no reason to expose. The bench's
-//! white-box tests (its clients, simulated CPUs and backend) live beside its code instead.
+//! white-box tests (its clients, simulated CPUs and backend) and the external backends' that
+//! need no binary (the adapters and codecs written with the helpers, the protocol schema) live
+//! beside their code instead.
 
 pub mod backend {
     pub mod external {
         pub use crate::backend::external::{ExternalBackend, ExternalErrorKind};
-        pub mod protocol {
-            pub use crate::backend::external::protocol::protocol_schema;
-        }
     }
     pub mod bench {
         pub use crate::backend::bench::{fence, BenchBackend};

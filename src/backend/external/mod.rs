@@ -633,3 +633,6 @@ fn with_stderr(fault: Fault, stderr: &str) -> Fault {
 
 #[cfg(test)]
 mod fuzz;
+
+#[cfg(test)]
+mod white_box;

@@ -848,7 +848,7 @@ pub(crate) enum ProtocolMessage {
 
 /// The JSON Schema (draft-07) of the protocol's messages, as `plc-conformance schema --kind
 /// protocol` prints it.
-pub fn protocol_schema() -> serde_json::Value {
+pub(crate) fn protocol_schema() -> serde_json::Value {
     crate::spec::schema_of::<ProtocolMessage>()
 }
 
