@@ -252,6 +252,10 @@ pub struct Faulted {
 const CHUNK_EXTERNAL: usize = 4096;
 /// Inputs per round for the built-in models and codecs asked directly.
 const CHUNK_IN_PROCESS: usize = 1 << 16;
+/// Bytes of text per round, whatever the count: a round of million-byte random texts
+/// (`--length 1000000`) is made, held and asked a few at a time, so a stop is honoured within
+/// a round of any length.
+const ROUND_BYTES: usize = 1 << 22;
 
 /// Why a sweep cannot be set up as asked.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -415,6 +419,11 @@ impl Sweep {
                         let mut lowered: Vec<direct::Lowered> =
                             (0..n).map(|_| direct::Lowered::default()).collect();
                         for (row, (i, point)) in rows.iter_mut().zip(points) {
+                            // A row left unanswered is no result: the round ends as a stopped
+                            // one, and the inputs answered so far stand.
+                            if stop.load(Ordering::Relaxed) {
+                                break;
+                            }
                             // An instruction asked directly needs only its input, made once for
                             // every variant; the other ways need the point's cases.
                             let native = match (self.settings.direct, &self.shape) {
@@ -540,11 +549,17 @@ impl Sweep {
                 interrupted = true;
                 break;
             }
-            let points: Vec<(u64, Point)> = indices
-                .by_ref()
-                .take(chunk)
-                .map(|i| (i, space.point(i)))
-                .collect();
+            let mut points: Vec<(u64, Point)> = Vec::new();
+            let mut bytes = 0;
+            while points.len() < chunk && bytes < ROUND_BYTES && !stop.load(Ordering::Relaxed) {
+                let Some(i) = indices.next() else { break };
+                let point = space.point(i);
+                bytes += match &point.data {
+                    input::Data::Text(t) => t.len(),
+                    input::Data::Value(_) => 8,
+                };
+                points.push((i, point));
+            }
             if points.is_empty() {
                 break;
             }

@@ -361,6 +361,31 @@ fn a_stopped_sweep_reports_what_it_found() {
     assert!(render::text(&results).contains("(interrupted)"));
 }
 
+/// A round holds a bounded amount of text, not a fixed count of inputs: with texts of up to a
+/// million bytes, a stop set after the first round leaves most of a 200-input sweep unasked
+/// (rounds of 65,536 inputs asked all 200 before the stop was read).
+#[test]
+fn a_stop_is_honoured_within_a_round_of_long_texts() {
+    let project = session();
+    let settings = random(Operation::HexToValue, 200, 1_000_000, 3);
+    let sweep = Sweep::new(settings, &project.profiles, &project.backends).expect("sweep");
+    let stop = AtomicBool::new(false);
+    let mut rounds = 0;
+    let results = sweep.run(&stop, &mut |done, _| {
+        if done > 0 {
+            rounds += 1;
+            stop.store(true, Ordering::Relaxed);
+        }
+    });
+    assert!(results.interrupted);
+    assert_eq!(rounds, 1);
+    assert!(
+        results.swept > 0 && results.swept < 50,
+        "{} of 200 inputs swept in the first round",
+        results.swept
+    );
+}
+
 /// The cross-vendor corpus's behaviours, as the built-in models give them.
 fn corpus_behaviours(project: &Session, op: Operation) -> BTreeSet<Vec<String>> {
     let generator = match op {
