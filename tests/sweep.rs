@@ -1122,6 +1122,72 @@ fn four_shards_merged_are_the_whole_sweep() {
     }
 }
 
+/// A sweep by byte class is weighted: a shard holds the weight of every N-th class tuple, known
+/// only once the merge has found the classes again. Counts that add up within a shard but are
+/// not what this sweep's shard holds are another sweep's, and refused with the file named.
+#[test]
+fn a_merge_by_class_checks_each_shards_total() {
+    let dir = scratch();
+    let args = [
+        "sweep",
+        "--instruction",
+        "ATOH",
+        "--generator",
+        "full",
+        "--seed",
+        "1",
+        "--class-check",
+        "100",
+    ];
+    let shard = |k: u32| {
+        let path = dir.path().join(format!("shard-{k}.json"));
+        let mut all = args.to_vec();
+        let of = format!("{k}/2");
+        all.extend(["--shard", &of, "--format", "json", "--output"]);
+        all.push(path.to_str().expect("path"));
+        let o = common::cli(&all);
+        assert!(
+            o.status.code().is_some_and(|c| c <= 1),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        path
+    };
+    let (one, two) = (shard(1), shard(2));
+    let merge = |first: &std::path::Path| {
+        let mut all = args.to_vec();
+        all.extend([
+            "--merge",
+            first.to_str().expect("path"),
+            two.to_str().expect("path"),
+        ]);
+        common::cli(&all)
+    };
+    let whole = merge(&one);
+    assert!(
+        whole.status.code().is_some_and(|c| c <= 1),
+        "{}",
+        String::from_utf8_lossy(&whole.stderr)
+    );
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&one).expect("shard")).expect("JSON");
+    let held = v["shard_inputs"].as_u64().expect("shard_inputs");
+    v["shard_inputs"] = serde_json::json!(held + 5);
+    let edited = dir.path().join("edited.json");
+    std::fs::write(&edited, v.to_string()).expect("write");
+    let refused = merge(&edited);
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains(&format!(
+            "{}: it says shard 1/2 holds {} input(s)",
+            edited.display(),
+            held + 5
+        )) && stderr.contains("by class: its counts are not this sweep's"),
+        "{stderr}"
+    );
+}
+
 /// A merge refuses, with the file and the reason, what is not the whole of this sweep: a
 /// missing or repeated shard, another sweep's shards, and a file that is not sweep results.
 #[test]

@@ -175,6 +175,27 @@ pub(crate) fn merge(
     }
     // Every first input asked again, as the whole sweep would have found it.
     let (space, split_texts) = sweep.space_to_run(stop);
+    // A space weighted by class is known only now: each shard holds the weight of every N-th
+    // class tuple from the K-th, and counts that say otherwise are another sweep's.
+    if space.classes.is_some() {
+        for (path, file) in files {
+            let shard = (file.settings.get("shard"))
+                .and_then(|s| serde_json::from_value::<(u64, u64)>(s.clone()).ok())
+                .unwrap_or((1, 1));
+            let holds = (super::generate::shard_indices(space.points(), shard))
+                .fold(0u64, |total, i| total.saturating_add(space.weight(i)));
+            if file.shard_inputs != holds {
+                return Err(SweepError(format!(
+                    "{}: it says shard {}/{} holds {} input(s), where this sweep's holds \
+                     {holds} by class: its counts are not this sweep's",
+                    path.display(),
+                    shard.0,
+                    shard.1,
+                    file.shard_inputs
+                )));
+            }
+        }
+    }
     let mut wanted: Vec<u64> = tallies
         .values()
         .flat_map(|t| std::iter::once(t.first).chain(t.classes.values().map(|c| c.1)))
