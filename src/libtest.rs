@@ -41,18 +41,6 @@ use crate::session::{run_one, Asked, BackendSource, HelloCache, LazyStart, Sessi
 /// Names the file of [`Harness::hello_cache`] instead of the one the harness gives; empty, none.
 const ENV_HELLO_CACHE: &str = "PLC_CONFORMANCE_HELLO_CACHE";
 
-/// Runs the corpus under `root` as libtest trials: the built-in reference models, the project
-/// file's external backends, and `extra` backends. `binary` is the plc-conformance executable
-/// that project backends see as `$PLC_CONFORMANCE`. (What `tests/conformance.rs` calls; see
-/// [`Harness`] for the other choices.)
-pub fn main(root: &Path, binary: &Path, extra: Vec<Arc<dyn Backend>>) -> ExitCode {
-    let mut harness = Harness::new(root).project_file(binary);
-    for b in extra {
-        harness = harness.backend(b, None);
-    }
-    harness.run()
-}
-
 /// The corpus as libtest trials for a `harness = false` test of your own: an emulator or a
 /// library written in Rust implements [`Backend`] (or [`crate::Codec`], wrapped by
 /// [`crate::codec_backend`]) and gets one trial per case it implements, with diffs and

@@ -5,9 +5,9 @@
 //! follow the modules inside and may move with them. The tests of this repository use them to
 //! hold the simulated CPUs the command line runs against, the sweep's internals and the loaders
 //! to what the manuals say, which the public interface has no reason to expose. The bench's
-//! white-box tests (its clients, simulated CPUs and backend) and the external backends' that
-//! need no binary (the adapters and codecs written with the helpers, the protocol schema) live
-//! beside their code instead.
+//! white-box tests (its clients, simulated CPUs and backend), the loader's, the corpus's through
+//! the backends, and the external backends' that need no binary (the adapters and codecs written
+//! with the helpers, the protocol schema) live beside their code instead.
 
 pub mod backend {
     pub mod external {
@@ -53,8 +53,6 @@ pub mod known_draft {
     pub use crate::known_draft::draft;
 }
 pub mod libtest {
-    pub use crate::libtest::main;
-
     /// Runs a harness under libtest's arguments `args` (without the program name): libtest's
     /// conclusion, or the lines of why it refused to run anything.
     pub fn conclude(
@@ -69,23 +67,13 @@ pub mod libtest {
 }
 pub mod load {
     pub use crate::load::{
-        load_corpus, load_known, load_open_questions, load_profiles, load_project, parse_profile,
-        CorpusBuilder, LoadError, ENV_CONFIG, ENV_REQUIRE, ENV_SELF, FILE_NAME, OPEN_QUESTIONS,
+        load_corpus, load_known, load_open_questions, load_profiles, load_project, CorpusBuilder,
+        ENV_CONFIG, ENV_REQUIRE, ENV_SELF, FILE_NAME, OPEN_QUESTIONS,
     };
 }
 pub mod model {
-    pub use crate::model::Citation;
-    pub mod known {
-        pub use crate::model::known::{Covers, Entry};
-    }
-    pub mod profile {
-        pub use crate::model::profile::Profiles;
-    }
     pub mod project {
         pub use crate::model::project::{ExternalSettings, Launch};
-    }
-    pub mod protocol {
-        pub use crate::model::protocol::{Field, Protocol};
     }
 }
 pub mod plan {
@@ -96,21 +84,15 @@ pub mod report {
     pub mod progress {
         pub use crate::report::progress::ProgressReporter;
     }
-    pub mod record {
-        pub use crate::report::record::Record;
-    }
     pub mod sanitize {
         pub use crate::report::sanitize::forbidden_in_xml;
     }
     pub mod text {
-        pub use crate::report::text::{describe_setting, render, Palette};
+        pub use crate::report::text::describe_setting;
     }
 }
 pub mod session {
     pub use crate::session::{BackendSource, Session, SetupError};
-}
-pub mod spec {
-    pub use crate::spec::{schema, SchemaKind};
 }
 pub mod sweep {
     pub use crate::sweep::{emit, render, Results, Settings, Sweep};

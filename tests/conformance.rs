@@ -1,5 +1,5 @@
-//! The corpus as tests: see `plc_conformance::testing::libtest` for what each trial is and how the
-//! project file's external backends take part.
+//! The corpus as tests: see `src/libtest.rs` for what each trial is and how the project file's
+//! external backends take part.
 
 use std::path::Path;
 use std::process::ExitCode;

@@ -1,5 +1,7 @@
-//! The open questions are data: every question loads, names readings and probes that exist, and
-//! `run --probes` runs exactly the probe cases, so a bench run settles them in one go.
+//! `run --probes` runs exactly the probe cases of an open question, through the binary, so a
+//! bench run settles them in one go. The questions' own checks (every probe a case, one that
+//! decides between the readings, the reference model answering its reading) are white-box tests
+//! beside the loader, in src/load/white_box/open_questions.rs.
 
 mod common;
 
@@ -7,39 +9,6 @@ use std::collections::BTreeSet;
 
 use common::{cli, root, session};
 use plc_conformance::testing::load::{load_open_questions, OPEN_QUESTIONS};
-
-#[test]
-fn every_open_question_has_probes_in_the_corpus() {
-    let s = session();
-    let questions = load_open_questions(&root().join(OPEN_QUESTIONS), &s.profiles, &s.corpus)
-        .unwrap_or_else(|e| panic!("{e}"));
-    assert!(questions.len() >= 10, "{} questions", questions.len());
-    for q in &questions {
-        assert!(!q.probes.is_empty(), "{} has no probe", q.id);
-        assert!(q.readings.len() >= 2, "{}", q.id);
-    }
-}
-
-#[test]
-fn a_probe_that_is_not_a_case_is_a_load_error() {
-    let s = session();
-    let dir = common::scratch();
-    let file = dir.path().join("q.yaml");
-    std::fs::write(
-        &file,
-        "questions:\n  - id: q\n    title: t\n    profile: mitsubishi-iqr\n    instructions: [HABIN]\n    \
-         readings: [{id: a, text: a}, {id: b, text: b}]\n    model_takes: a\n    evidence: [x]\n    \
-         probes: [habin-fixed-4-digits-example, no-such-case]\n",
-    )
-    .expect("write");
-    let errors = load_open_questions(&file, &s.profiles, &s.corpus)
-        .expect_err("an unknown probe loaded")
-        .to_string();
-    assert!(
-        errors.contains(":9: questions[0].probes[1]: `no-such-case` is not a case id"),
-        "{errors}"
-    );
-}
 
 #[test]
 fn run_probes_runs_the_probes_of_a_question() {
@@ -75,124 +44,4 @@ fn run_probes_runs_the_probes_of_a_question() {
     let probes: BTreeSet<String> = q.probes.iter().cloned().collect();
     assert!(!cases.is_empty());
     assert!(cases.is_subset(&probes), "{cases:?} not within {probes:?}");
-}
-
-/// Every question names a probe that tells its readings apart (each reading predicts another
-/// outcome, which the loader checks), and the reference model's outcome on that probe is the
-/// one its own reading predicts, under every variant the question is about: the reading the
-/// model takes is asserted even where the probe is `unspecified`.
-#[test]
-fn every_question_has_a_probe_that_decides_and_the_model_answers_its_reading() {
-    use plc_conformance::testing::plan::Check;
-    use plc_conformance::Basis;
-    use plc_conformance::Verdict;
-    use std::sync::Arc;
-
-    let mut s = session();
-    let questions = load_open_questions(&root().join(OPEN_QUESTIONS), &s.profiles, &s.corpus)
-        .unwrap_or_else(|e| panic!("{e}"));
-    // Every case recorded rather than judged, so that the verdict says what the model did.
-    s.project.corpus.cases = s
-        .corpus
-        .cases
-        .iter()
-        .map(|c| {
-            Arc::new(plc_conformance::Case {
-                basis: Basis::Unspecified,
-                ..(**c).clone()
-            })
-        })
-        .collect();
-    s.project.corpus.cross_vendor = s
-        .corpus
-        .cross_vendor
-        .iter()
-        .map(|c| {
-            Arc::new(plc_conformance::CrossVendorCase {
-                basis: Basis::Unspecified,
-                ..(**c).clone()
-            })
-        })
-        .collect();
-    let mut problems = Vec::new();
-    for q in &questions {
-        let Some(decides) = &q.decides else {
-            problems.push(format!("{}: no probe decides between its readings", q.id));
-            continue;
-        };
-        let Some((_, predicted)) = decides.outcomes.iter().find(|(r, _)| *r == q.model_takes)
-        else {
-            continue; // `model_takes: none`: the model does not represent the fact.
-        };
-        let backends: Vec<_> = s
-            .backends
-            .iter()
-            .filter(|b| b.profile() == q.profile)
-            .cloned()
-            .collect();
-        let variants = q.variants.clone();
-        let trials: Vec<_> = s
-            .plan(&backends)
-            .into_iter()
-            .filter(|t| match &t.check {
-                Check::Native { case, .. } => case.id == decides.probe,
-                Check::CrossVendor { case, .. } | Check::Codec { case } => case.id == decides.probe,
-            })
-            .filter(|t| match &t.check {
-                Check::Native { .. } => true,
-                // A cross-vendor probe through the question's profile only.
-                _ => t.profile.as_ref().is_some_and(|p| p.id == q.profile),
-            })
-            .filter(|t| variants.as_ref().is_none_or(|v| v.contains(&t.variant)))
-            .filter(|t| t.skip.is_none())
-            .collect();
-        if trials.is_empty() {
-            problems.push(format!("{}: probe {} runs nowhere", q.id, decides.probe));
-        }
-        for t in &trials {
-            match plc_conformance::run_one(t) {
-                Verdict::Recorded {
-                    observed,
-                    fill_dependent: false,
-                } if observed.to_string() == *predicted => {}
-                other => problems.push(format!(
-                    "{}: {} predicts `{predicted}` of {}, the model ({}) gives {}",
-                    q.id,
-                    q.model_takes,
-                    decides.probe,
-                    t.name(),
-                    match other {
-                        Verdict::Recorded { observed, .. } => format!("`{observed}`"),
-                        v => format!("{v:?}"),
-                    }
-                )),
-            }
-        }
-    }
-    assert!(problems.is_empty(), "{problems:#?}");
-}
-
-/// A probe that "decides" but predicts one outcome under two readings, or leaves a reading out,
-/// is refused at load: it could not tell them apart.
-#[test]
-fn a_deciding_probe_that_cannot_tell_two_readings_apart_is_a_load_error() {
-    let s = session();
-    let dir = common::scratch();
-    let file = dir.path().join("q.yaml");
-    std::fs::write(
-        &file,
-        "questions:\n  - id: q\n    title: t\n    profile: mitsubishi-iqr\n    instructions: [HABIN]\n    \
-         readings: [{id: a, text: a}, {id: b, text: b}, {id: c, text: c}]\n    model_takes: a\n    \
-         evidence: [x]\n    probes: [habin-fixed-4-digits-example]\n    decides:\n      \
-         probe: habin-fixed-4-digits-example\n      outcomes: {a: \"D200=5A8DH\", b: \"D200=5A8DH\"}\n",
-    )
-    .expect("write");
-    let errors = load_open_questions(&file, &s.profiles, &s.corpus)
-        .expect_err("a probe that decides nothing loaded")
-        .to_string();
-    assert!(
-        errors.contains("readings `a` and `b` predict the same outcome `D200=5A8DH`"),
-        "{errors}"
-    );
-    assert!(errors.contains("reading `c` has no outcome"), "{errors}");
 }

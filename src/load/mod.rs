@@ -23,13 +23,13 @@ use std::path::{Path, PathBuf};
 
 use serde::de::DeserializeOwned;
 
-pub(crate) use error::LoadErrorKind;
-pub use error::{LoadError, LoadErrors};
+pub use error::LoadErrors;
+pub(crate) use error::{LoadError, LoadErrorKind};
 pub use known::load_known;
 pub(crate) use libraries::load_libraries;
 pub(crate) use locate::LineIndex;
 pub use open_questions::{load_open_questions, OPEN_QUESTIONS};
-pub use profiles::{load_profiles, parse_profile};
+pub use profiles::load_profiles;
 pub use project::{load_project, ENV_CONFIG, ENV_REQUIRE, ENV_SELF, FILE_NAME};
 pub(crate) use project::{locate_project, valid_name};
 pub(crate) use source::{
@@ -368,6 +368,10 @@ fn special_kind(_: &std::fs::FileType) -> &'static str {
     "not a file"
 }
 
+// Only tests parse a profile's text alone; the loader reaches it inside `profiles`.
+#[cfg(test)]
+pub(crate) use profiles::parse_profile;
+
 #[cfg(test)]
 mod tests {
     use std::path::{Path, PathBuf};
@@ -438,3 +442,6 @@ mod tests {
         assert!(refusals.is_empty(), "{}", refusals.join("\n"));
     }
 }
+
+#[cfg(test)]
+mod white_box;

@@ -74,7 +74,11 @@ pub fn load_profiles(dir: &Path) -> Result<Profiles, LoadErrors> {
 }
 
 /// Parses and checks one profile; problems go to `errors`.
-pub fn parse_profile(file: &Path, text: &str, errors: &mut Vec<LoadError>) -> Option<Profile> {
+pub(crate) fn parse_profile(
+    file: &Path,
+    text: &str,
+    errors: &mut Vec<LoadError>,
+) -> Option<Profile> {
     let before = errors.len();
     let mut cx = FileContext::new(file, text, errors);
     let spec = super::parse_document::<ProfileSpec>(text, &mut cx)?;

@@ -18,7 +18,7 @@ use crate::plan::{Check, Trial};
 
 /// One cell of the matrix.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Record {
+pub(crate) struct Record {
     /// A profile id for native cases, `cross-vendor <operation>` for cross-vendor ones.
     pub section: String,
     /// The case (native: `instruction::case-id::variant`).
@@ -52,7 +52,7 @@ pub struct Record {
 /// A verdict as a behaviour to compare and group by.
 #[derive(Debug, Clone, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case", tag = "behaviour")]
-pub enum Behaviour {
+pub(crate) enum Behaviour {
     Conforms,
     /// Native: other words than expected (the error as expected).
     WrongWords,
@@ -89,7 +89,7 @@ pub enum Behaviour {
 /// The kind of a cross-vendor answer, relative to the case's plain reading.
 #[derive(Debug, Clone, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case", tag = "class", content = "value")]
-pub enum AnswerClass {
+pub(crate) enum AnswerClass {
     /// The plain reading every vendor gives unless the case lists it as an exception.
     Plain,
     OtherValue,
@@ -156,7 +156,7 @@ mod seconds {
 
 impl Record {
     /// The record of a trial and its verdict.
-    pub fn of(trial: &Trial, verdict: &Verdict) -> Record {
+    pub(crate) fn of(trial: &Trial, verdict: &Verdict) -> Record {
         let (section, row, column) = match &trial.check {
             Check::Native { instruction, case } => (
                 trial

@@ -16,7 +16,7 @@ use crate::value::hex_word;
 /// Styles for the text report; all plain unless colour is on, so the same renderer serves a
 /// terminal, a log file and libtest's captured output.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct Palette {
+pub(crate) struct Palette {
     pub removed: Style,
     pub added: Style,
     pub heading: Style,
@@ -24,10 +24,10 @@ pub struct Palette {
 }
 
 impl Palette {
-    pub fn plain() -> Self {
+    pub(crate) fn plain() -> Self {
         Palette::default()
     }
-    pub fn coloured() -> Self {
+    pub(crate) fn coloured() -> Self {
         Palette {
             removed: AnsiColor::Red.on_default(),
             added: AnsiColor::Green.on_default(),
@@ -183,7 +183,7 @@ fn flags_text(trial: &Trial, profile: &crate::model::profile::Profile) -> String
 }
 
 /// The full report of one trial that did not conform, or of a recorded `unspecified` case.
-pub fn render(trial: &Trial, verdict: &Verdict, palette: Palette) -> String {
+pub(crate) fn render(trial: &Trial, verdict: &Verdict, palette: Palette) -> String {
     let mut out = String::new();
     let h = palette.heading;
     let _ = writeln!(

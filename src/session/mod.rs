@@ -394,3 +394,6 @@ impl BackendSource {
         }
     }
 }
+
+#[cfg(test)]
+mod white_box;

@@ -21,7 +21,7 @@ pub(crate) use vectors::ScalarSpec;
 /// The formats that have a JSON Schema: the on-disk files, the external-backend protocol's
 /// messages and the JSON report (the command line's `schema --kind` takes these names).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum SchemaKind {
+pub(crate) enum SchemaKind {
     /// Vector files (`vectors/<family>/*.yaml`).
     Vectors,
     /// Vendor profiles (`vendors/*.yaml`).
@@ -54,7 +54,7 @@ const RESULTS_SCHEMA: &str = include_str!("../../schema/results.schema.json");
 /// The JSON Schema (draft-07) of one format; `None` for the external-backend protocol's
 /// messages, whose types live with that backend (`backend::external::protocol`), above this
 /// layer.
-pub fn schema(kind: SchemaKind) -> Option<serde_json::Value> {
+pub(crate) fn schema(kind: SchemaKind) -> Option<serde_json::Value> {
     Some(match kind {
         SchemaKind::Vectors => schema_of::<vectors::VectorFileSpec>(),
         SchemaKind::Profile => schema_of::<profile::ProfileSpec>(),

@@ -1,17 +1,14 @@
 //! Every class of bad vector is a load error naming the file, the line and the key, and saying
 //! what was expected. Nothing panics and nothing is skipped.
 
+#[cfg(test)]
 use std::path::Path;
 
-use plc_conformance::testing::error_chain::chain;
-use plc_conformance::testing::load::{load_profiles, CorpusBuilder, LoadError};
-use plc_conformance::testing::model::profile::Profiles;
+use super::profiles;
+use crate::error_chain::chain;
+use crate::load::{load_profiles, CorpusBuilder, LoadError};
+use crate::model::profile::Profiles;
 use rstest::rstest;
-
-fn profiles() -> Profiles {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("vendors");
-    load_profiles(&dir).unwrap_or_else(|e| panic!("vendor profiles do not load:\n{e}"))
-}
 
 const HEADER: &str = "\
 instructions: [HABIN]
@@ -734,10 +731,7 @@ fn s7_case(cite: &str, variants: &str) -> String {
 }
 
 /// The cases an S7 vector file loads to under `profiles`, or every error.
-fn load_s7(
-    text: &str,
-    profiles: &plc_conformance::testing::model::profile::Profiles,
-) -> Result<usize, String> {
+fn load_s7(text: &str, profiles: &crate::model::profile::Profiles) -> Result<usize, String> {
     let mut builder = CorpusBuilder::default();
     builder.add_file(Path::new("s7.yaml"), text, profiles);
     builder

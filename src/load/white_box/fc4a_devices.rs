@@ -1,20 +1,13 @@
 //! FC4A device numbers as the profile describes them: the octal last digit of M, the 16 points a
 //! bit device takes as a word, and the slim types' second data register range.
 
+#[cfg(test)]
 use std::path::Path;
 
-use plc_conformance::testing::load::{load_profiles, parse_profile, CorpusBuilder};
-use plc_conformance::testing::model::profile::Profiles;
-use plc_conformance::Device;
+use super::profiles;
+use crate::load::{parse_profile, CorpusBuilder};
+use crate::Device;
 use rstest::rstest;
-
-fn profiles() -> Profiles {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    match load_profiles(&root.join("vendors")) {
-        Ok(p) => p,
-        Err(e) => panic!("the profiles do not load:\n{e}"),
-    }
-}
 
 /// An ATOH vector with the given destination, loaded against the real profile.
 fn load_with_d1(d1: &str) -> Result<(), String> {

@@ -1,9 +1,10 @@
 //! The JSON Schemas in `schema/` are what editors use to complete and check files; they must be
 //! exactly what the types generate, or an editor would accept what the loader rejects.
 
+#[cfg(test)]
 use std::path::Path;
 
-use plc_conformance::testing::spec::{schema, SchemaKind};
+use crate::spec::{schema, SchemaKind};
 use rstest::rstest;
 
 fn checked_in(name: &str) -> serde_json::Value {

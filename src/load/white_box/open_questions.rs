@@ -1,0 +1,161 @@
+//! The open questions are data: every question loads, names readings and probes that exist, and
+//! has a probe that decides between its readings, whose outcome on the reference model is the
+//! reading the model takes. That `run --probes` runs exactly the probe cases is checked through
+//! the binary, in tests/open_questions.rs.
+
+#[cfg(test)]
+use super::{root, scratch, session};
+use crate::load::{load_open_questions, OPEN_QUESTIONS};
+
+#[test]
+fn every_open_question_has_probes_in_the_corpus() {
+    let s = session();
+    let questions = load_open_questions(&root().join(OPEN_QUESTIONS), &s.profiles, &s.corpus)
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert!(questions.len() >= 10, "{} questions", questions.len());
+    for q in &questions {
+        assert!(!q.probes.is_empty(), "{} has no probe", q.id);
+        assert!(q.readings.len() >= 2, "{}", q.id);
+    }
+}
+
+#[test]
+fn a_probe_that_is_not_a_case_is_a_load_error() {
+    let s = session();
+    let dir = scratch();
+    let file = dir.path().join("q.yaml");
+    std::fs::write(
+        &file,
+        "questions:\n  - id: q\n    title: t\n    profile: mitsubishi-iqr\n    instructions: [HABIN]\n    \
+         readings: [{id: a, text: a}, {id: b, text: b}]\n    model_takes: a\n    evidence: [x]\n    \
+         probes: [habin-fixed-4-digits-example, no-such-case]\n",
+    )
+    .expect("write");
+    let errors = load_open_questions(&file, &s.profiles, &s.corpus)
+        .expect_err("an unknown probe loaded")
+        .to_string();
+    assert!(
+        errors.contains(":9: questions[0].probes[1]: `no-such-case` is not a case id"),
+        "{errors}"
+    );
+}
+
+/// Every question names a probe that tells its readings apart (each reading predicts another
+/// outcome, which the loader checks), and the reference model's outcome on that probe is the
+/// one its own reading predicts, under every variant the question is about: the reading the
+/// model takes is asserted even where the probe is `unspecified`.
+#[test]
+fn every_question_has_a_probe_that_decides_and_the_model_answers_its_reading() {
+    use crate::plan::Check;
+    use crate::Basis;
+    use crate::Verdict;
+    use std::sync::Arc;
+
+    let mut s = session();
+    let questions = load_open_questions(&root().join(OPEN_QUESTIONS), &s.profiles, &s.corpus)
+        .unwrap_or_else(|e| panic!("{e}"));
+    // Every case recorded rather than judged, so that the verdict says what the model did.
+    s.project.corpus.cases = s
+        .corpus
+        .cases
+        .iter()
+        .map(|c| {
+            Arc::new(crate::Case {
+                basis: Basis::Unspecified,
+                ..(**c).clone()
+            })
+        })
+        .collect();
+    s.project.corpus.cross_vendor = s
+        .corpus
+        .cross_vendor
+        .iter()
+        .map(|c| {
+            Arc::new(crate::CrossVendorCase {
+                basis: Basis::Unspecified,
+                ..(**c).clone()
+            })
+        })
+        .collect();
+    let mut problems = Vec::new();
+    for q in &questions {
+        let Some(decides) = &q.decides else {
+            problems.push(format!("{}: no probe decides between its readings", q.id));
+            continue;
+        };
+        let Some((_, predicted)) = decides.outcomes.iter().find(|(r, _)| *r == q.model_takes)
+        else {
+            continue; // `model_takes: none`: the model does not represent the fact.
+        };
+        let backends: Vec<_> = s
+            .backends
+            .iter()
+            .filter(|b| b.profile() == q.profile)
+            .cloned()
+            .collect();
+        let variants = q.variants.clone();
+        let trials: Vec<_> = s
+            .plan(&backends)
+            .into_iter()
+            .filter(|t| match &t.check {
+                Check::Native { case, .. } => case.id == decides.probe,
+                Check::CrossVendor { case, .. } | Check::Codec { case } => case.id == decides.probe,
+            })
+            .filter(|t| match &t.check {
+                Check::Native { .. } => true,
+                // A cross-vendor probe through the question's profile only.
+                _ => t.profile.as_ref().is_some_and(|p| p.id == q.profile),
+            })
+            .filter(|t| variants.as_ref().is_none_or(|v| v.contains(&t.variant)))
+            .filter(|t| t.skip.is_none())
+            .collect();
+        if trials.is_empty() {
+            problems.push(format!("{}: probe {} runs nowhere", q.id, decides.probe));
+        }
+        for t in &trials {
+            match crate::run_one(t) {
+                Verdict::Recorded {
+                    observed,
+                    fill_dependent: false,
+                } if observed.to_string() == *predicted => {}
+                other => problems.push(format!(
+                    "{}: {} predicts `{predicted}` of {}, the model ({}) gives {}",
+                    q.id,
+                    q.model_takes,
+                    decides.probe,
+                    t.name(),
+                    match other {
+                        Verdict::Recorded { observed, .. } => format!("`{observed}`"),
+                        v => format!("{v:?}"),
+                    }
+                )),
+            }
+        }
+    }
+    assert!(problems.is_empty(), "{problems:#?}");
+}
+
+/// A probe that "decides" but predicts one outcome under two readings, or leaves a reading out,
+/// is refused at load: it could not tell them apart.
+#[test]
+fn a_deciding_probe_that_cannot_tell_two_readings_apart_is_a_load_error() {
+    let s = session();
+    let dir = scratch();
+    let file = dir.path().join("q.yaml");
+    std::fs::write(
+        &file,
+        "questions:\n  - id: q\n    title: t\n    profile: mitsubishi-iqr\n    instructions: [HABIN]\n    \
+         readings: [{id: a, text: a}, {id: b, text: b}, {id: c, text: c}]\n    model_takes: a\n    \
+         evidence: [x]\n    probes: [habin-fixed-4-digits-example]\n    decides:\n      \
+         probe: habin-fixed-4-digits-example\n      outcomes: {a: \"D200=5A8DH\", b: \"D200=5A8DH\"}\n",
+    )
+    .expect("write");
+    let errors = load_open_questions(&file, &s.profiles, &s.corpus)
+        .expect_err("a probe that decides nothing loaded")
+        .to_string();
+    assert!(
+        errors.contains("readings `a` and `b` predict the same outcome `D200=5A8DH`"),
+        "{errors}"
+    );
+    assert!(errors.contains("reading `c` has no outcome"), "{errors}");
+}
