@@ -179,7 +179,6 @@ impl Codec for FieldCodec {
                     _ => Answer::Error(ErrorClass::BadCheck),
                 }
             }
-            _ => return Err(Unsupported("no such operation".into())),
         })
     }
 }
