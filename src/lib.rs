@@ -138,6 +138,8 @@ mod report;
 mod session;
 mod spec;
 mod sweep;
+#[cfg(test)]
+mod test_support;
 mod text;
 mod value;
 

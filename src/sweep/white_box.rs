@@ -8,11 +8,10 @@
 //! `cargo test --lib --test sweep --test readme -- --ignored`.
 
 #[cfg(test)]
+use crate::test_support::{failing_trials, python, reference, root, session, xml_elements, Mutant};
 use std::collections::BTreeSet;
-use std::path::Path;
-use std::process::Command;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, OnceLock};
+use std::sync::Arc;
 
 use crate::session::{BackendSource, Session};
 use crate::sweep::classes::ByteClasses;
@@ -24,148 +23,7 @@ use crate::sweep::target::Target;
 use crate::sweep::{exhaustive, render, Results, Settings, Sweep};
 use crate::Image;
 use crate::Operation;
-use crate::{Backend, Fault, Request, Response};
-use crate::{Paths, Project};
-
-/// The project root: its `vendors/`, `vectors/` and project file.
-fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn session() -> Session {
-    match Project::load(&Paths::under(root())) {
-        Ok(s) => Session::with_references(s),
-        Err(e) => panic!("the corpus does not load:\n{e}"),
-    }
-}
-
-/// The reference backend of a profile.
-fn reference(session: &Session, profile: &str) -> Arc<dyn Backend> {
-    session
-        .backends
-        .iter()
-        .find(|b| b.profile() == profile)
-        .cloned()
-        .unwrap_or_else(|| panic!("no reference backend for {profile}"))
-}
-
-type Behaviour = dyn Fn(&Request<'_>, &dyn Backend) -> Result<Response, Fault> + Send + Sync;
-
-/// A wrong implementation: the reference model with one behaviour changed.
-struct Mutant {
-    name: &'static str,
-    base: Arc<dyn Backend>,
-    behave: Box<Behaviour>,
-}
-
-impl Mutant {
-    /// Returns the mutant ready to run next to the other backends, hence not `Self`.
-    #[allow(clippy::new_ret_no_self)]
-    fn new(
-        name: &'static str,
-        base: &Arc<dyn Backend>,
-        behave: impl Fn(&Request<'_>, &dyn Backend) -> Result<Response, Fault> + Send + Sync + 'static,
-    ) -> Arc<dyn Backend> {
-        Arc::new(Mutant {
-            name,
-            base: base.clone(),
-            behave: Box::new(behave),
-        })
-    }
-}
-
-impl Backend for Mutant {
-    fn name(&self) -> &str {
-        self.name
-    }
-    fn profile(&self) -> &str {
-        self.base.profile()
-    }
-    fn describe(&self) -> String {
-        format!("mutant {}", self.name)
-    }
-    fn claims(&self, instruction: &str, variant: &str) -> bool {
-        self.base.claims(instruction, variant)
-    }
-    fn execute(&self, request: &Request<'_>) -> Result<Response, Fault> {
-        (self.behave)(request, self.base.as_ref())
-    }
-}
-
-/// The trials of the corpus that fail on a backend (recorded `unspecified` cases never do).
-fn failing_trials(session: &Project, backend: &Arc<dyn Backend>) -> Vec<String> {
-    session
-        .plan(std::slice::from_ref(backend))
-        .into_iter()
-        .filter(|t| t.skip.is_none())
-        .filter(|t| crate::run_one(t).is_failure())
-        .map(|t| t.name())
-        .collect()
-}
-
-/// The Python interpreter itself (not a launcher script in front of it, which would add a
-/// shell start to every restart), or `None` on a machine without python3.
-fn interpreter() -> Option<&'static str> {
-    static PATH: OnceLock<Option<String>> = OnceLock::new();
-    PATH.get_or_init(|| {
-        let out = Command::new("python3")
-            .args(["-c", "import sys; print(sys.executable)"])
-            .output()
-            .ok()?;
-        let path = String::from_utf8_lossy(&out.stdout).trim().to_string();
-        (out.status.success() && !path.is_empty()).then_some(path)
-    })
-    .as_deref()
-}
-
-/// Python runs the fixture adapters; a machine without it cannot run these tests.
-fn python() -> bool {
-    let ok = interpreter().is_some();
-    // CI sets PLC_CONFORMANCE_REQUIRE_BACKENDS: there a missing interpreter is a failure.
-    assert!(
-        ok || std::env::var_os("PLC_CONFORMANCE_REQUIRE_BACKENDS").is_none(),
-        "python3 is required for the fixture adapters"
-    );
-    if !ok {
-        eprintln!("skipped: python3 is not installed; the fixture adapters need it");
-    }
-    ok
-}
-
-/// Every element with its attributes, in document order, from a document that must be
-/// well-formed XML (a panic says where it is not).
-fn xml_elements(text: &str) -> Vec<(String, Vec<(String, String)>)> {
-    let mut reader = quick_xml::Reader::from_str(text);
-    let mut out = Vec::new();
-    loop {
-        match reader.read_event() {
-            Ok(quick_xml::events::Event::Start(e)) | Ok(quick_xml::events::Event::Empty(e)) => {
-                out.push((
-                    String::from_utf8_lossy(e.name().as_ref()).into_owned(),
-                    xml_attributes(&e),
-                ));
-            }
-            Ok(quick_xml::events::Event::Eof) => break,
-            Ok(_) => {}
-            Err(e) => panic!("not well-formed XML at {}: {e}", reader.buffer_position()),
-        }
-    }
-    out
-}
-
-/// An element's attributes, raw: the attributes the tests read (names, classes, paths) hold no
-/// escapes.
-fn xml_attributes(e: &quick_xml::events::BytesStart<'_>) -> Vec<(String, String)> {
-    e.attributes()
-        .filter_map(Result::ok)
-        .map(|a| {
-            (
-                String::from_utf8_lossy(a.key.as_ref()).into_owned(),
-                String::from_utf8_lossy(&a.value).into_owned(),
-            )
-        })
-        .collect()
-}
+use crate::{Backend, Request};
 
 fn no_stop() -> AtomicBool {
     AtomicBool::new(false)

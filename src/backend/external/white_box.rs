@@ -7,21 +7,17 @@
 //! `tests/external.rs`.
 
 #[cfg(test)]
+use crate::test_support::{expects_a_code, interpreter, python, registers_alone, root};
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::sync::{Arc, OnceLock};
+use std::sync::Arc;
 use std::time::Duration;
 
 use crate::backend::external::ExternalErrorKind;
 use crate::model::project::{ExternalSettings, Launch};
-use crate::plan::Check;
 use crate::session::{BackendSource, Session, SetupError};
 use crate::{verdicts as run_all, Paths, Project};
-use crate::{Backend, Basis, Difference, ErrorSignal, Trial, Value, Verdict};
-
-fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
+use crate::{Backend, Trial, Verdict};
 
 fn fixtures() -> PathBuf {
     root().join("tests/fixtures/external")
@@ -74,67 +70,6 @@ fn start_error(spec: ExternalSettings) -> (ExternalErrorKind, String) {
         Err(other) => panic!("unexpected error: {other}"),
         Ok(_) => panic!("the backend started"),
     }
-}
-
-/// The Python interpreter itself (not a launcher script in front of it, which would add a
-/// shell start to every restart), or `None` on a machine without python3.
-fn interpreter() -> Option<&'static str> {
-    static PATH: OnceLock<Option<String>> = OnceLock::new();
-    PATH.get_or_init(|| {
-        let out = Command::new("python3")
-            .args(["-c", "import sys; print(sys.executable)"])
-            .output()
-            .ok()?;
-        let path = String::from_utf8_lossy(&out.stdout).trim().to_string();
-        (out.status.success() && !path.is_empty()).then_some(path)
-    })
-    .as_deref()
-}
-
-/// Python runs the fixture adapters; a machine without it cannot run these tests.
-fn python() -> bool {
-    let ok = interpreter().is_some();
-    // CI sets PLC_CONFORMANCE_REQUIRE_BACKENDS: there a missing interpreter is a failure.
-    assert!(
-        ok || std::env::var_os("PLC_CONFORMANCE_REQUIRE_BACKENDS").is_none(),
-        "python3 is required for the fixture adapters"
-    );
-    if !ok {
-        eprintln!("skipped: python3 is not installed; the fixture adapters need it");
-    }
-    ok
-}
-
-/// Whether a trial's case expects an operation error with a code, and is judged on it (not
-/// `unspecified`).
-fn expects_a_code(t: &Trial) -> bool {
-    match &t.check {
-        Check::Native { case, .. } => {
-            case.basis != Basis::Unspecified
-                && case
-                    .expect
-                    .as_ref()
-                    .is_some_and(|e| matches!(e.error, Some(ErrorSignal::Code(_))))
-        }
-        _ => false,
-    }
-}
-
-/// The error registers that do not hold the code, with what they held, when a verdict differs
-/// on them alone (the words and the error signal as expected); `None` for any other verdict.
-fn registers_alone(v: &Verdict) -> Option<Vec<(String, Option<Value>)>> {
-    let Verdict::Differs {
-        difference: Difference::Words { mismatches },
-    } = v
-    else {
-        return None;
-    };
-    let m = mismatches.first()?;
-    (!m.words_differ() && !m.error_differs()).then(|| {
-        m.wrong_registers()
-            .map(|r| (r.device.to_string(), r.actual))
-            .collect()
-    })
 }
 
 #[test]
