@@ -210,6 +210,125 @@ fn a_fifo_is_refused_in_bounded_time_wherever_a_file_is_read_or_written() {
     assert!(fifo.exists(), "the FIFO is left where it was");
 }
 
+/// A link planted where any command writes — a report, a saved run, a sweep's results and
+/// vectors, a bench program, a scaffold, a recorded vector file — is refused with exit 2, and
+/// the file it leads to is left as it was.
+#[cfg(unix)]
+#[test]
+fn a_link_planted_at_any_output_leaves_its_decoy_unchanged() {
+    use std::os::unix::fs::symlink;
+    let scratch_dir = scratch();
+    let dir = scratch_dir.path();
+    let decoy = dir.join("decoy");
+    std::fs::write(&decoy, "keep").expect("write");
+    let plant = |name: &str| {
+        let at = dir.join(name);
+        std::fs::create_dir_all(at.parent().expect("parent")).expect("dir");
+        symlink(&decoy, &at).expect("link");
+        at
+    };
+    // `record` writes the vector files it reads: one linked in a folder of its own.
+    let vectors = dir.join("vectors");
+    std::fs::create_dir_all(&vectors).expect("dir");
+    // A file with `unspecified` cases, which `record` would write observations into.
+    let recorded = std::fs::read_to_string(root().join("vectors/mitsubishi-iqr/binha.yaml"))
+        .expect("vector file");
+    std::fs::write(dir.join("real.yaml"), &recorded).expect("write");
+    symlink(dir.join("real.yaml"), vectors.join("case.yaml")).expect("link");
+    let (report, saved, results, emitted) = (
+        plant("report.txt"),
+        plant("saved.json"),
+        plant("sweep.txt"),
+        plant("emitted.yaml"),
+    );
+    plant("bench/manifest.json");
+    plant("scaffold/mylib_adapter.py");
+    let (bench, scaffold) = (dir.join("bench"), dir.join("scaffold"));
+    // An emulator that is no built-in model (which `record` refuses for another reason).
+    let emulator = format!(
+        "external:emulator=\"{}\" serve --profile mitsubishi-iqr",
+        env!("CARGO_BIN_EXE_plc-conformance")
+    );
+    // Each refused with what it found: a link where an output goes, or (`init`, which writes
+    // only where no file is) a file already there.
+    let link = "a symbolic link";
+    let commands: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["run", "--backend", "iqr", "--output", path(&report)],
+            link,
+        ),
+        (
+            vec!["run", "--backend", "iqr", "--save", path(&saved)],
+            link,
+        ),
+        (
+            vec!["diff", "--backend", "iqr", "--output", path(&report)],
+            link,
+        ),
+        (
+            vec![
+                "sweep",
+                "--operation",
+                "value-to-hex",
+                "--output",
+                path(&results),
+            ],
+            link,
+        ),
+        (
+            vec![
+                "sweep",
+                "--operation",
+                "value-to-hex",
+                "--emit",
+                path(&emitted),
+            ],
+            link,
+        ),
+        (
+            vec![
+                "hil",
+                "generate",
+                "--profile",
+                "mitsubishi-iqr",
+                "--out",
+                path(&bench),
+            ],
+            link,
+        ),
+        (
+            vec!["init", "codec", "--python", "--dir", path(&scaffold)],
+            "init writes only where no file is",
+        ),
+        (
+            vec![
+                "record",
+                "--backend",
+                &emulator,
+                "--vectors",
+                path(&vectors),
+            ],
+            link,
+        ),
+    ];
+    for (args, message) in commands {
+        let out = cli_within(&args, LIMIT);
+        let err = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(message), "{args:?}: {err}");
+        assert_eq!(
+            std::fs::read_to_string(&decoy).expect("decoy"),
+            "keep",
+            "{args:?} wrote through the link"
+        );
+    }
+    assert_eq!(
+        std::fs::read_to_string(dir.join("real.yaml")).expect("vector file"),
+        recorded,
+        "record wrote through the linked vector file"
+    );
+}
+
 #[test]
 fn a_device_or_a_read_fifo_is_written_in_place() {
     let out = cli_within(&["run", "--backend", "iqr", "--output", "/dev/null"], LIMIT);

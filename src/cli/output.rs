@@ -24,8 +24,9 @@ pub(super) enum Sink {
     },
 }
 
-/// Refuses, before any work, an output that cannot be written: a folder, or a file in a folder
-/// that does not exist.
+/// Refuses, before any work, an output that cannot be written: a folder, a file in a folder
+/// that does not exist, or one the staged rename would wrongly replace (a link, a read-only
+/// file).
 pub(super) fn check(path: &Path) -> Result<(), CliError> {
     if path.is_dir() {
         return Err(CliError::input(format!(
@@ -33,6 +34,7 @@ pub(super) fn check(path: &Path) -> Result<(), CliError> {
             path.display()
         )));
     }
+    refuse_link_or_read_only(path)?;
     if !path.exists() {
         let parent = parent(path);
         if !parent.is_dir() {
