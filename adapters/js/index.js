@@ -24,7 +24,8 @@
 
 const readline = require('node:readline');
 
-const VERSION = '0.2.0';
+// The package's version, one with the plc-conformance crate and wheel (tests/versions.rs).
+const VERSION = require('./package.json').version;
 /**
  * The protocol versions this module speaks: 1 (instruction level), 2 (adds codec level), 3
  * (byte-addressed families), 4 (families whose unit is a 32-bit word) and 5 (adds `convert`:

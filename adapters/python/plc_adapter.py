@@ -49,7 +49,7 @@ import sys
 from collections import namedtuple
 from itertools import repeat
 
-__version__ = "0.2.0"
+__version__ = "0.1.0"
 
 # The protocol versions this module speaks: 1 (instruction level), 2 (adds codec level), 3
 # (byte-addressed families), 4 (families whose unit is a 32-bit word) and 5 (adds `convert`:

@@ -59,55 +59,8 @@ const CI_RUST: &str = include_str!("../../templates/init/ci-rust.yml");
 pub(super) fn init(command: &InitCommand) -> Outcome {
     let InitCommand::Codec(args) = command;
     let name = &args.name;
-    if !valid_name(name) {
-        return Err(CliError::input(format!(
-            "--name {name}: use lowercase letters, digits, `-` and `_`"
-        )));
-    }
-    if let Some(protocol) = &args.protocol {
-        let known = crate::load::load_profiles(&crate::load::embedded_vendors())?
-            .protocols
-            .ids();
-        if !known.contains(protocol) {
-            return Err(CliError::input(format!(
-                "--protocol {protocol}: no protocol profile has that id; the protocols are: {}",
-                known.join(", ")
-            )));
-        }
-    }
-    // An adapter that a process runs: its file, and the command that runs it.
-    let script = |extension: &str, interpreter: &str, text: &'static str| {
-        let path = format!("{name}_adapter.{extension}");
-        let run = format!(
-            "plc-conformance run --backend 'external:{name}={interpreter} {path}' \
-             --known-differences {name}={name}.known.yaml"
-        );
-        (Template { path, text }, run)
-    };
-    let ((adapter, run), ci) = if args.python {
-        (script("py", "python3", PYTHON), CI_PYTHON)
-    } else if args.js {
-        (script("js", "node", JS), CI_JS)
-    } else {
-        let test = Template {
-            path: "tests/conformance.rs".into(),
-            text: RUST,
-        };
-        let run = "cargo test --test conformance (after the Cargo.toml lines at the top of \
-                   tests/conformance.rs)";
-        ((test, run.to_string()), CI_RUST)
-    };
-    let files = [
-        adapter,
-        Template {
-            path: format!("{name}.known.yaml"),
-            text: KNOWN,
-        },
-        Template {
-            path: ".github/workflows/plc-conformance.yml".into(),
-            text: ci,
-        },
-    ];
+    check_arguments(args)?;
+    let (files, run) = scaffold(args);
     // Nothing is written when anything would be replaced: a scaffold is a start, not an edit.
     let taken: Vec<String> = (files.iter())
         .map(|f| args.dir.join(&f.path))
@@ -147,6 +100,68 @@ pub(super) fn init(command: &InitCommand) -> Outcome {
     );
     output::write(None, &said)?;
     Ok(EXIT_OK)
+}
+
+/// The name a backend can have, and a protocol a profile defines.
+fn check_arguments(args: &CodecArgs) -> Result<(), CliError> {
+    let name = &args.name;
+    if !valid_name(name) {
+        return Err(CliError::input(format!(
+            "--name {name}: use lowercase letters, digits, `-` and `_`"
+        )));
+    }
+    if let Some(protocol) = &args.protocol {
+        let known = crate::load::load_profiles(&crate::load::embedded_vendors())?
+            .protocols
+            .ids();
+        if !known.contains(protocol) {
+            return Err(CliError::input(format!(
+                "--protocol {protocol}: no protocol profile has that id; the protocols are: {}",
+                known.join(", ")
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The scaffold's files for the language asked (the adapter or test, the known-differences
+/// file, the CI job) and the command that runs it.
+fn scaffold(args: &CodecArgs) -> ([Template; 3], String) {
+    let name = &args.name;
+    // An adapter that a process runs: its file, and the command that runs it.
+    let script = |extension: &str, interpreter: &str, text: &'static str| {
+        let path = format!("{name}_adapter.{extension}");
+        let run = format!(
+            "plc-conformance run --backend 'external:{name}={interpreter} {path}' \
+             --known-differences {name}={name}.known.yaml"
+        );
+        (Template { path, text }, run)
+    };
+    let ((adapter, run), ci) = if args.python {
+        (script("py", "python3", PYTHON), CI_PYTHON)
+    } else if args.js {
+        (script("js", "node", JS), CI_JS)
+    } else {
+        let test = Template {
+            path: "tests/conformance.rs".into(),
+            text: RUST,
+        };
+        let run = "cargo test --test conformance (after the Cargo.toml lines at the top of \
+                   tests/conformance.rs)";
+        ((test, run.to_string()), CI_RUST)
+    };
+    let files = [
+        adapter,
+        Template {
+            path: format!("{name}.known.yaml"),
+            text: KNOWN,
+        },
+        Template {
+            path: ".github/workflows/plc-conformance.yml".into(),
+            text: ci,
+        },
+    ];
+    (files, run)
 }
 
 /// Refuses a folder on the way from `dir` to `relative`'s file that is a link (which would

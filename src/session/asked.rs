@@ -43,7 +43,7 @@ pub(crate) struct Chosen {
 }
 
 /// A backend text read on its own: what it names before the session is asked about it.
-#[allow(clippy::large_enum_variant)] // one a text, read once
+#[allow(clippy::large_enum_variant)] // one per text, read once: not worth a box
 enum Spec {
     External(ExternalSettings),
     Bench(crate::backend::bench::BenchSettings),

@@ -86,7 +86,7 @@ pub struct Settings {
     /// What codec columns are judged against (operation sweeps).
     pub oracle: Oracle,
     /// The full generator asking each text of hex-to-value over the built-in lowerings asks
-    /// them through the lowerings' rules ([`exhaustive`]); the results are the same.
+    /// them through the lowerings' rules (`exhaustive`); the results are the same.
     #[serde(skip)]
     pub exhaustive: bool,
 }
@@ -175,7 +175,7 @@ pub struct Results {
     /// The full generator by class: the classes and their check.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub classes: Option<classes::Report>,
-    /// Every text asked through the built-in lowerings' rules ([`exhaustive`]): how.
+    /// Every text asked through the built-in lowerings' rules (`exhaustive`): how.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub exhaustive: Option<exhaustive::Report>,
     /// Field shapes that would describe a judged codec's differences (`sweep::explain`).

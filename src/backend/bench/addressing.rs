@@ -4,7 +4,7 @@
 use crate::device::Device;
 
 /// What a word is to a sandbox: the harness writes word devices only, and a special one only
-/// when the user names it. The link's [`Addressing::kind`] says which a device is.
+/// when the user names it. The link's `Addressing::kind` says which a device is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Kind {
     /// Data registers and their like: memory a test program may own.
