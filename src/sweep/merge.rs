@@ -101,6 +101,14 @@ struct Tally {
     shard: usize,
 }
 
+impl ShardFile {
+    /// Which shard of how many the file says it is (`settings.shard`).
+    fn shard(&self) -> Option<(u64, u64)> {
+        let shard = self.settings.get("shard")?;
+        serde_json::from_value(shard.clone()).ok()
+    }
+}
+
 /// The largest shard file a merge reads.
 pub(crate) const MAX_SHARD_BYTES: u64 = 1 << 30;
 
@@ -179,9 +187,8 @@ pub(crate) fn merge(
     // class tuple from the K-th, and counts that say otherwise are another sweep's.
     if space.classes.is_some() {
         for (path, file) in files {
-            let shard = (file.settings.get("shard"))
-                .and_then(|s| serde_json::from_value::<(u64, u64)>(s.clone()).ok())
-                .unwrap_or((1, 1));
+            // Every file's shard was read when the files were checked.
+            let shard = file.shard().unwrap_or((1, 1));
             let holds = (super::generate::shard_indices(space.points(), shard))
                 .fold(0u64, |total, i| total.saturating_add(space.weight(i)));
             if file.shard_inputs != holds {
@@ -350,9 +357,7 @@ fn check(sweep: &Sweep, files: &[(PathBuf, ShardFile)]) -> Result<(), SweepError
             )));
         }
         let shard = file
-            .settings
-            .get("shard")
-            .and_then(|s| serde_json::from_value::<(u64, u64)>(s.clone()).ok())
+            .shard()
             .ok_or_else(|| at("no shard in its settings".into()))?;
         let mut theirs = file.settings.clone();
         without_shard(&mut theirs);
