@@ -172,6 +172,16 @@ impl Space {
         }
     }
 
+    /// How many inputs shard `(k, n)` holds: every n-th point from the k-th, each standing for
+    /// its weight (one input, or the texts of a tuple of classes).
+    pub(crate) fn held_by(&self, shard: (u64, u64)) -> u64 {
+        match &self.classes {
+            Some(_) => shard_indices(self.points(), shard)
+                .fold(0u64, |total, i| total.saturating_add(self.weight(i))),
+            None => self.total().saturating_sub(shard.0 - 1).div_ceil(shard.1),
+        }
+    }
+
     fn data_count(&self) -> u64 {
         match &self.generator {
             Generator::Values { bits: 16 } => 1 << 16,

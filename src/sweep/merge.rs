@@ -189,8 +189,7 @@ pub(crate) fn merge(
         for (path, file) in files {
             // Every file's shard was read when the files were checked.
             let shard = file.shard().unwrap_or((1, 1));
-            let holds = (super::generate::shard_indices(space.points(), shard))
-                .fold(0u64, |total, i| total.saturating_add(space.weight(i)));
+            let holds = space.held_by(shard);
             if file.shard_inputs != holds {
                 return Err(SweepError(format!(
                     "{}: it says shard {}/{} holds {} input(s), where this sweep's holds \
@@ -475,7 +474,7 @@ fn check(sweep: &Sweep, files: &[(PathBuf, ShardFile)]) -> Result<(), SweepError
     if sweep.space.classes.is_none() && !matches!(sweep.settings.generator, Generator::Full { .. })
     {
         for (k, (path, file)) in &shards {
-            let holds = sweep.space.total().saturating_sub(k - 1).div_ceil(n);
+            let holds = sweep.space.held_by((*k, n));
             if file.shard_inputs != holds {
                 return Err(SweepError(format!(
                     "{}: it says shard {k}/{n} holds {} input(s), where this sweep's holds \

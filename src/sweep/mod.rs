@@ -513,16 +513,9 @@ impl Sweep {
         let started = Instant::now();
         let by_class = matches!(self.settings.generator, Generator::Full { by_class: true });
         let (space, split_texts) = self.space_to_run(stop);
-        let total = space.total();
         let weighted = space.classes.is_some();
         let shard = self.settings.shard;
-        let shard_inputs = if weighted {
-            shard_indices(space.points(), shard)
-                .map(|i| space.weight(i))
-                .sum()
-        } else {
-            total.saturating_sub(shard.0 - 1).div_ceil(shard.1)
-        };
+        let shard_inputs = space.held_by(shard);
         // Codecs asked directly take a round's questions in bulk, as the models do; trials go
         // in smaller rounds, so that progress and a stop stay close to them.
         let chunk = if (self.columns.iter())
