@@ -93,6 +93,27 @@ impl fmt::Display for TransportError {
 impl std::error::Error for TransportError {}
 
 impl TransportError {
+    /// A request the client refuses to build: nothing was sent.
+    pub(crate) fn refused(what: impl Into<String>, detail: impl Display) -> Self {
+        TransportError::Request {
+            what: what.into(),
+            detail: detail.to_string(),
+        }
+    }
+
+    /// A reply (or part of one) in `protocol` that does not decode, or answers another request.
+    pub(crate) fn garbled(
+        what: impl Into<String>,
+        detail: impl Display,
+        protocol: &'static str,
+    ) -> Self {
+        TransportError::Frame {
+            what: what.into(),
+            detail: detail.to_string(),
+            protocol,
+        }
+    }
+
     /// How a bench backend reports it.
     pub(crate) fn failure(&self) -> super::Failure {
         match self {
@@ -129,19 +150,12 @@ pub(crate) struct Exchange<'a> {
 impl Exchange<'_> {
     /// A reply (or part of one) that does not decode.
     pub(crate) fn frame(&self, detail: String) -> TransportError {
-        TransportError::Frame {
-            what: self.what.into(),
-            detail,
-            protocol: self.protocol,
-        }
+        TransportError::garbled(self.what, detail, self.protocol)
     }
 
     /// A request the client refuses to build.
     pub(crate) fn refused(&self, detail: impl Display) -> TransportError {
-        TransportError::Request {
-            what: self.what.into(),
-            detail: detail.to_string(),
-        }
+        TransportError::refused(self.what, detail)
     }
 }
 

@@ -299,10 +299,10 @@ fn batches(
     unit: &str,
 ) -> Result<Vec<(u16, usize)>, ModbusError> {
     if usize::from(address) + count > 0x1_0000 {
-        return Err(ModbusError::Transport(TransportError::Request {
-            what: describe(action, count, unit, address),
-            detail: "the range runs past address 0xFFFF".into(),
-        }));
+        return Err(ModbusError::Transport(TransportError::refused(
+            describe(action, count, unit, address),
+            "the range runs past address 0xFFFF",
+        )));
     }
     Ok((0..count)
         .step_by(batch)
@@ -316,11 +316,11 @@ fn batches(
 }
 
 fn unexpected(what: String, response: &Response) -> ModbusError {
-    ModbusError::Transport(TransportError::Frame {
+    ModbusError::Transport(TransportError::garbled(
         what,
-        detail: format!("decoded as {response:?}"),
-        protocol: "Modbus TCP",
-    })
+        format!("decoded as {response:?}"),
+        "Modbus TCP",
+    ))
 }
 
 #[cfg(test)]

@@ -212,10 +212,10 @@ impl ModbusLink {
         self.map.register(device).ok_or_else(|| {
             LinkError::new(
                 Failure::Protocol,
-                ModbusError::Transport(TransportError::Request {
-                    what: format!("an access to {device}"),
-                    detail: self.map.unaddressable(device).unwrap_or_default(),
-                }),
+                ModbusError::Transport(TransportError::refused(
+                    format!("an access to {device}"),
+                    self.map.unaddressable(device).unwrap_or_default(),
+                )),
             )
         })
     }
@@ -238,10 +238,10 @@ impl Link for ModbusLink {
         let at = self.map.coil(&relay).ok_or_else(|| {
             LinkError::new(
                 Failure::Protocol,
-                ModbusError::Transport(TransportError::Request {
-                    what: format!("a read of {relay}"),
-                    detail: "the relay is not a coil of the Modbus map".into(),
-                }),
+                ModbusError::Transport(TransportError::refused(
+                    format!("a read of {relay}"),
+                    "the relay is not a coil of the Modbus map",
+                )),
             )
         })?;
         let on = (self.client.read_coils(at, 1)?.first().copied()).unwrap_or(false);

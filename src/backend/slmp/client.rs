@@ -337,19 +337,12 @@ impl Client {
 
 /// A request refused before anything is sent.
 fn refused(what: impl Into<String>, detail: impl fmt::Display) -> ClientError {
-    ClientError::Transport(TransportError::Request {
-        what: what.into(),
-        detail: detail.to_string(),
-    })
+    ClientError::Transport(TransportError::refused(what, detail))
 }
 
 /// A reply that does not decode, or answers another request.
 fn garbled(what: impl Into<String>, detail: impl fmt::Display) -> ClientError {
-    ClientError::Transport(TransportError::Frame {
-        what: what.into(),
-        detail: detail.to_string(),
-        protocol: "SLMP",
-    })
+    ClientError::Transport(TransportError::garbled(what, detail, "SLMP"))
 }
 
 /// How many bytes of a reply say how long it is.
