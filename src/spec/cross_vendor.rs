@@ -123,7 +123,6 @@ pub(crate) struct LoweringSpec {
     pub operation: Operation,
     pub instruction: String,
     /// The variant to run on; the profile's first when absent.
-    #[serde(default)]
     pub variant: Option<String>,
     /// Mode flags, e.g. `{SM705: true}`.
     #[serde(default)]
@@ -137,14 +136,11 @@ pub(crate) struct LoweringSpec {
     /// How the characters are stored: two per word low byte first, or one per word.
     pub text: TextLayout,
     /// The operand that receives the digit count (`n`, `S2`), for instructions that take one.
-    #[serde(default)]
     pub count: Option<String>,
     /// Where the count goes when the instruction cannot take it as a constant (IDEC S2: only
     /// constants 1-4 can be programmed, so a count of 0 or 5 is read from this register).
-    #[serde(default)]
     pub count_register: Option<String>,
     /// The digits the instruction handles when it takes no count (HABIN, BINHA: 4).
-    #[serde(default)]
     pub width: Option<u32>,
     /// The order of the value's units at the source (value-to-hex) or destination
     /// (hex-to-value): `low-first` (the default) or `high-first`.
@@ -163,7 +159,6 @@ pub(crate) struct CrossVendorFileSpec {
     pub operation: Operation,
     /// Where the cases' expectations come from, in words (they span several manuals).
     pub source: String,
-    #[serde(default)]
     pub description: Option<String>,
     /// Texts several cases share, to be named with YAML anchors (`- &idec "..."`) and used as
     /// aliases (`why: *idec`); not read otherwise.
@@ -178,23 +173,18 @@ pub(crate) struct CrossVendorCaseSpec {
     /// Unique in the whole corpus.
     pub id: String,
     pub basis: Basis,
-    #[serde(default)]
     pub cite: Option<String>,
     /// hex-to-value: the characters (`\0` for NUL).
-    #[serde(default)]
     pub text: Option<String>,
     /// value-to-hex: the value (`0ABCH`, `K100`).
-    #[serde(default)]
     pub value: Option<ScalarSpec>,
     /// The digit count, for instructions that take one (FX5 `n`, IDEC `S2`).
     pub digits: u32,
     /// What every lowering answers unless listed in `except`.
-    #[serde(default)]
     pub expect: Option<CrossVendorExpectSpec>,
     /// Lowerings that answer differently, by `<profile short>/<lowering name>`.
     #[serde(default)]
     pub except: BTreeMap<String, CrossVendorExceptSpec>,
-    #[serde(default)]
     pub note: Option<String>,
 }
 
@@ -202,14 +192,10 @@ pub(crate) struct CrossVendorCaseSpec {
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct CrossVendorExpectSpec {
-    #[serde(default)]
     pub value: Option<ScalarSpec>,
-    #[serde(default)]
     pub text: Option<String>,
-    #[serde(default)]
     pub error: Option<ErrorClass>,
     /// A protocol's `verify` only: the check characters match.
-    #[serde(default)]
     pub accepted: Option<bool>,
 }
 
@@ -217,11 +203,8 @@ pub(crate) struct CrossVendorExpectSpec {
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct CrossVendorExceptSpec {
-    #[serde(default)]
     pub value: Option<ScalarSpec>,
-    #[serde(default)]
     pub text: Option<String>,
-    #[serde(default)]
     pub error: Option<ErrorClass>,
     /// No rule fixes this vendor's answer: it is recorded, never judged (instead of `value`,
     /// `text` or `error`).

@@ -16,7 +16,6 @@ pub(crate) struct KnownFileSpec {
 #[serde(deny_unknown_fields)]
 pub(crate) struct EntrySpec {
     /// A case id of the corpus (a cross-vendor case id too).
-    #[serde(default)]
     pub case: Option<String>,
     /// An entry by cause: case id patterns it covers, `*` standing for any characters
     /// (`xv-h2v-6*h`, `habin-fixed-*-is-invalid`).
@@ -27,24 +26,18 @@ pub(crate) struct EntrySpec {
     pub input: Vec<InputClass>,
     /// Only this instruction of the case's file (for a cross-vendor case: only this lowering of
     /// the profile, e.g. `habin-fixed`).
-    #[serde(default)]
     pub instruction: Option<String>,
     /// Only this variant of the profile.
-    #[serde(default)]
     pub variant: Option<String>,
     /// An entry by cause: the cause, in one line (what the implementation does).
-    #[serde(default)]
     pub cause: Option<String>,
     /// Whether the difference is a bug or a deliberate choice of the implementation.
-    #[serde(default)]
     pub kind: Option<Kind>,
     /// The protocol rule the difference breaks, `<protocol>/<rule>` (`modbus-ascii/B3`):
     /// required for an entry that covers protocol-field cases, and the rule of one of them.
-    #[serde(default)]
     pub rule: Option<String>,
     /// Why the backend differs: shown with the trial. Required for a single case; for an entry
     /// by cause, more detail after the cause.
-    #[serde(default)]
     pub reason: Option<String>,
 }
 

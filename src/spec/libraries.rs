@@ -24,7 +24,6 @@ pub(crate) struct LibrarySpec {
     pub licence: String,
     /// The protocol whose corpus judges it (`mc-ascii`); none for a library judged at the
     /// instruction level only.
-    #[serde(default)]
     pub protocol: Option<String>,
     /// The library's functions the adapter calls, with the pinned version's file and line.
     pub wired: String,

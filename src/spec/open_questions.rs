@@ -26,17 +26,14 @@ pub(crate) struct QuestionSpec {
     /// The question, in one line.
     pub title: String,
     /// The profile it is about (a question of an instruction).
-    #[serde(default)]
     pub profile: Option<String>,
     /// The instructions it is about, as the profile spells them.
     #[serde(default)]
     pub instructions: Vec<String>,
     /// The protocol it is about (a question of a protocol's field, settled by a device's
     /// answer to a request), instead of `profile` and `instructions`.
-    #[serde(default)]
     pub protocol: Option<String>,
     /// The profile variants it is about; all when absent.
-    #[serde(default)]
     pub variants: Option<Vec<String>>,
     /// The competing answers, at least two.
     pub readings: Vec<ReadingSpec>,
@@ -47,9 +44,7 @@ pub(crate) struct QuestionSpec {
     /// Case ids whose outcome on a real CPU tells the readings apart.
     pub probes: Vec<String>,
     /// The probe that tells every reading apart, and its outcome under each reading.
-    #[serde(default)]
     pub decides: Option<DecidesSpec>,
-    #[serde(default)]
     pub note: Option<String>,
     /// What CPUs on the bench answered.
     #[serde(default)]
@@ -95,6 +90,5 @@ pub(crate) struct ObservationSpec {
     #[schemars(regex(pattern = r"^[0-9]{4}-[0-9]{2}-[0-9]{2}$"))]
     pub date: String,
     pub by: String,
-    #[serde(default)]
     pub note: Option<String>,
 }

@@ -28,7 +28,6 @@ pub(crate) struct ProfileSpec {
     /// How the CPU signals an operation error.
     pub errors: ErrorSignallingSpec,
     /// How characters are stored in words (for readers; the instructions' semantics say it too).
-    #[serde(default)]
     pub text_layout: Option<String>,
     /// Mode flags the instructions read.
     #[serde(default)]
@@ -46,7 +45,6 @@ pub(crate) struct ProfileSpec {
     /// The variants; every case runs on each one unless the case restricts it.
     pub variants: Vec<Variant>,
     /// How the profile answers the cross-vendor operations.
-    #[serde(default)]
     pub cross_vendor: Option<CrossVendorSectionSpec>,
     /// The structured-text call of each instruction a program on the CPU writes (the
     /// instructions under test, and helpers such as ADRSET), as the manual prints it: the
@@ -57,7 +55,6 @@ pub(crate) struct ProfileSpec {
     /// How a bench with one of the family's CPUs runs the corpus (`plc-conformance hil`): the
     /// link the PC reaches the CPU by, the form of the test program, and how the program
     /// resets the error flag. A family without it has no bench support.
-    #[serde(default)]
     pub bench: Option<Bench>,
 }
 
@@ -77,7 +74,6 @@ pub(crate) struct Bench {
     /// The evidence for the reset: the manual page, or why it is inferred.
     pub source: String,
     /// For `modbus-tcp`: where the CPU's Modbus TCP server puts its devices.
-    #[serde(default)]
     pub modbus: Option<ModbusMap>,
 }
 
@@ -165,9 +161,7 @@ pub enum CallBasis {
 #[serde(deny_unknown_fields)]
 pub struct Manual {
     pub title: String,
-    #[serde(default)]
     pub number: Option<String>,
-    #[serde(default)]
     pub language: Option<String>,
     /// The variants whose own manual this is, said for every manual (`[]`: a manual of other
     /// CPUs, read for inferences only): a `manual` case citing it may run only on these, since
@@ -182,14 +176,11 @@ pub(crate) struct ErrorSignallingSpec {
     /// Whether a program sees an error code or only a flag.
     pub signal: SignalKind,
     /// The flag an error turns on (MELSEC SM0, IDEC M8004); required when `signal: flag`.
-    #[serde(default)]
     pub flag: Option<String>,
     /// The register holding the code (MELSEC SD0); with `signal: code`, this or `returned`.
-    #[serde(default)]
     pub register: Option<String>,
     /// Where the code is returned when no register holds it, in words (Siemens: the
     /// instruction's RET_VAL, with ENO FALSE).
-    #[serde(default)]
     pub returned: Option<String>,
     /// Further registers that receive the code (FX5: SD8067 for FX compatibility).
     #[serde(default)]
@@ -341,7 +332,6 @@ pub struct DeviceDef {
     pub points_per_word: u32,
     /// What a word of this code is when an instruction reads or writes it, where that is not
     /// obvious (IDEC T/C: the preset value when written, the current value when read).
-    #[serde(default)]
     pub meaning: Option<String>,
 }
 
@@ -431,7 +421,6 @@ pub struct Variant {
     #[serde(default)]
     pub ignores_flags: Vec<String>,
     /// The instructions this variant has; all of the profile's when absent.
-    #[serde(default)]
     pub instructions: Option<Vec<String>>,
     /// Rules in which this variant's instructions differ from the rest of its family, by name,
     /// for the family's reference model to read (Omron C200H-series HEX: `lowercase-hex`,

@@ -22,7 +22,6 @@ pub(crate) struct BackendSpec {
     /// A command line run by `sh -c`, or a list of program and arguments run directly.
     pub command: CommandSpec,
     /// The profile family the backend implements; its handshake must claim the same.
-    #[serde(default)]
     pub profile: Option<String>,
     /// The backend is codec-level (it answers the cross-vendor operations directly); its
     /// handshake must claim the codec level. Declared here, as `profile` is for an
@@ -31,19 +30,15 @@ pub(crate) struct BackendSpec {
     pub codec: bool,
     /// A codec-level backend that implements a protocol's fields (`mc-ascii`, `modbus-ascii`):
     /// it is judged by that protocol's corpus, and its handshake must name the same protocol.
-    #[serde(default)]
     pub protocol: Option<String>,
     /// With `protocol`: also run the cross-vendor (instruction) corpus.
     #[serde(default)]
     pub cross_vendor: bool,
     /// Seconds to wait for one case's answer.
-    #[serde(default)]
     pub timeout: Option<f64>,
     /// Seconds to wait for the backend to start and answer `hello`.
-    #[serde(default)]
     pub startup_timeout: Option<f64>,
     /// The backend's known-differences file.
-    #[serde(default)]
     pub known_differences: Option<PathBuf>,
     /// Files the backend needs (an interpreter in a virtual environment, a built binary). When
     /// one is missing the backend is skipped with a message, or is an error when
@@ -51,11 +46,9 @@ pub(crate) struct BackendSpec {
     #[serde(default)]
     pub requires: Vec<PathBuf>,
     /// Cases per `run` message.
-    #[serde(default)]
     pub batch: Option<usize>,
     /// Faults (crash, timeout, protocol error) in a row after which the backend's remaining
     /// trials are reported as not run, as failures with the reason (default 5).
-    #[serde(default)]
     pub max_consecutive_faults: Option<usize>,
     /// Run only when named with `--backend`: for a check of the harness itself (the built-in
     /// models served through the protocol) rather than an implementation under test. Such a

@@ -26,7 +26,6 @@ pub(crate) struct ProtocolSpec {
     pub protocol: String,
     /// Its name as its manuals give it.
     pub name: String,
-    #[serde(default)]
     pub description: Option<String>,
     /// The manuals its rules cite, by the id a cite uses (`mbsl p.16`): the document's title
     /// and number.
@@ -47,17 +46,14 @@ pub(crate) struct FieldSpec {
     /// Its digits on the wire.
     pub digits: u32,
     /// The value width in bits (8, 16 or 32); absent for a check character.
-    #[serde(default)]
     pub width: Option<u32>,
     /// `high-first` (the most significant digit first, the default) or `low-byte-first` (the
     /// first character pair is the low byte: MEWTOCOL's data words).
     #[serde(default)]
     pub order: FieldOrder,
     /// A check character: how it is computed over the checked span.
-    #[serde(default)]
     pub check: Option<CheckAlgorithm>,
     /// The characters that stand for "no check" in place of a check character (MEWTOCOL `**`).
-    #[serde(default)]
     pub skip: Option<String>,
     /// The rules that define the field, by id.
     pub rules: Vec<String>,
@@ -101,7 +97,6 @@ pub(crate) struct RuleSpec {
     /// `<manual> p.<page>` (a key of `manuals`), or the reasoning of an inferred rule.
     pub cite: String,
     /// The manual's words, short and verbatim: docs/semantics.md#protocols carries every one.
-    #[serde(default)]
     pub quote: Option<String>,
 }
 
@@ -113,7 +108,6 @@ pub(crate) struct RuleSpec {
 pub(crate) struct ProtocolFileSpec {
     /// The protocol profile's id.
     pub protocol: String,
-    #[serde(default)]
     pub description: Option<String>,
     /// Texts several cases share, named with YAML anchors; not read otherwise.
     #[serde(default)]
@@ -138,18 +132,13 @@ pub(crate) struct ProtocolCaseSpec {
     pub basis: Basis,
     /// For `inferred` and `unspecified` cases, what the expectation rests on (a `manual` case
     /// takes its rule's cite and quote).
-    #[serde(default)]
     pub cite: Option<String>,
     /// hex-to-value, check, verify: the characters (`\0` for NUL).
-    #[serde(default)]
     pub text: Option<String>,
     /// value-to-hex: the value (`0ABCH`, `K100`).
-    #[serde(default)]
     pub value: Option<ScalarSpec>,
     /// The protocol's answer: `value`, `text`, `error` or `accepted: true`; absent for an
     /// `unspecified` case.
-    #[serde(default)]
     pub expect: Option<CrossVendorExpectSpec>,
-    #[serde(default)]
     pub note: Option<String>,
 }

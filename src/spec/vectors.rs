@@ -28,7 +28,6 @@ pub(crate) struct VectorFileSpec {
     /// Where the cases come from unless a case says otherwise.
     pub source: SourceSpec,
     /// Free text for readers of the file.
-    #[serde(default)]
     pub description: Option<String>,
     pub cases: Vec<CaseSpec>,
 }
@@ -94,13 +93,10 @@ pub(crate) struct CaseSpec {
     pub basis: Basis,
     /// Where the expectation comes from: page, table row, quote, or an erratum it relies on.
     /// Required unless the basis is `unspecified`.
-    #[serde(default)]
     pub cite: Option<String>,
     /// Overrides the file's `source`.
-    #[serde(default)]
     pub source: Option<SourceSpec>,
     /// Restricts the case to these profile variants; all variants when absent.
-    #[serde(default)]
     pub variants: Option<Vec<String>>,
     /// Mode flags, e.g. `{SM705: on}`. Flags not given hold the profile's default.
     #[serde(default)]
@@ -122,13 +118,10 @@ pub(crate) struct CaseSpec {
     #[schemars(extend("propertyNames" = {"pattern": crate::device::PATTERN}))]
     pub before: BTreeMap<String, ValueSpec>,
     /// The expected outcome; optional only for `basis: unspecified`.
-    #[serde(default)]
     pub expect: Option<ExpectSpec>,
     /// Free text for readers.
-    #[serde(default)]
     pub note: Option<String>,
     /// Where an `observed` expectation was observed (written by `plc-conformance record`).
-    #[serde(default)]
     pub provenance: Option<ProvenanceSpec>,
 }
 
@@ -143,7 +136,6 @@ pub(crate) struct ProvenanceSpec {
     /// The backend's name, as `plc-conformance list` shows it.
     pub backend: String,
     /// What the backend says of itself, with its version.
-    #[serde(default)]
     pub version: Option<String>,
     /// The date of the recording, `YYYY-MM-DD`.
     pub date: String,
@@ -151,7 +143,6 @@ pub(crate) struct ProvenanceSpec {
     #[serde(default)]
     pub variants: Vec<String>,
     /// The model or firmware of those variants, from the profile.
-    #[serde(default)]
     pub model: Option<String>,
 }
 
