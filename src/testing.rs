@@ -14,7 +14,6 @@ pub mod backend {
         pub use crate::backend::external::{ExternalBackend, ExternalErrorKind};
     }
     pub mod bench {
-        pub use crate::backend::bench::{fence, BenchBackend};
         pub mod manifest {
             pub use crate::backend::bench::manifest::Manifest;
         }
@@ -26,17 +25,12 @@ pub mod backend {
         }
     }
     pub mod slmp {
-        pub use crate::backend::slmp::{limits, SlmpBench, ADDRESSING};
-        pub mod client {
-            pub use crate::backend::slmp::client::{ClientSettings, Code};
-        }
+        pub use crate::backend::slmp::ADDRESSING;
         pub mod frame {
-            pub use crate::backend::slmp::frame::{command, DeviceForm, FrameKind};
+            pub use crate::backend::slmp::frame::command;
         }
         pub mod sim {
-            pub use crate::backend::slmp::sim::{
-                FaultRule, RemoteProgram, SlmpSimSettings, SlmpSimulator,
-            };
+            pub use crate::backend::slmp::sim::{FaultRule, SlmpSimSettings, SlmpSimulator};
         }
     }
 }
@@ -67,8 +61,8 @@ pub mod libtest {
 }
 pub mod load {
     pub use crate::load::{
-        load_corpus, load_known, load_open_questions, load_profiles, load_project, CorpusBuilder,
-        ENV_CONFIG, ENV_REQUIRE, ENV_SELF, FILE_NAME, OPEN_QUESTIONS,
+        load_corpus, load_known, load_profiles, load_project, ENV_CONFIG, ENV_REQUIRE, ENV_SELF,
+        FILE_NAME,
     };
 }
 pub mod model {
@@ -83,12 +77,6 @@ pub mod report {
     pub use crate::report::{Event, Reporter};
     pub mod progress {
         pub use crate::report::progress::ProgressReporter;
-    }
-    pub mod sanitize {
-        pub use crate::report::sanitize::forbidden_in_xml;
-    }
-    pub mod text {
-        pub use crate::report::text::describe_setting;
     }
 }
 pub mod session {

@@ -332,21 +332,3 @@ fn the_results_schema_is_printed_and_open_to_added_fields() {
         "the strict check sees the added field"
     );
 }
-
-/// An operand given by indirect specification is shown as the vector writes it, with the
-/// device it addresses: `s=@D150 (D100)`.
-#[test]
-fn the_setting_shows_an_indirect_operand_with_what_it_addresses() {
-    let project = common::session();
-    let model = common::reference(&project, "mitsubishi-fx5");
-    let trials = project.plan(&[model]);
-    let trial = trials
-        .iter()
-        .find(|t| t.case_id() == "asci-indirect-source")
-        .expect("the indirect case is planned");
-    let text = plc_conformance::testing::report::text::describe_setting(trial);
-    assert!(
-        text.contains("operands:    d=D200 n=K4 s=@D150 (D100)"),
-        "{text}"
-    );
-}

@@ -28,7 +28,7 @@ pub(crate) use error::{LoadError, LoadErrorKind};
 pub use known::load_known;
 pub(crate) use libraries::load_libraries;
 pub(crate) use locate::LineIndex;
-pub use open_questions::{load_open_questions, OPEN_QUESTIONS};
+pub(crate) use open_questions::{load_open_questions, OPEN_QUESTIONS};
 pub use profiles::load_profiles;
 pub use project::{load_project, ENV_CONFIG, ENV_REQUIRE, ENV_SELF, FILE_NAME};
 pub(crate) use project::{locate_project, valid_name};
@@ -36,7 +36,8 @@ pub(crate) use source::{
     embedded_files, embedded_text, embedded_vectors, embedded_vendors, find_project_root,
     is_project_root, EMBEDDED,
 };
-pub use vectors::{load_corpus, CorpusBuilder};
+pub use vectors::load_corpus;
+pub(crate) use vectors::CorpusBuilder;
 
 /// The YAML files under a path: the file itself, or every `.yaml`/`.yml` below a folder, in a
 /// stable order. Other files in a corpus folder (READMEs) are not vectors.

@@ -11,9 +11,9 @@ use crate::model::Corpus;
 use crate::spec::open_questions::OpenQuestionsSpec;
 
 /// Where a project keeps its open questions.
-pub const OPEN_QUESTIONS: &str = "docs/open-questions.yaml";
+pub(crate) const OPEN_QUESTIONS: &str = "docs/open-questions.yaml";
 
-pub fn load_open_questions(
+pub(crate) fn load_open_questions(
     file: &Path,
     profiles: &Profiles,
     corpus: &Corpus,

@@ -123,7 +123,7 @@ impl FileRead {
 
 /// Accumulates cases from vector files, checking ids across the whole corpus.
 #[derive(Default)]
-pub struct CorpusBuilder {
+pub(crate) struct CorpusBuilder {
     cases: Vec<Arc<Case>>,
     cross_vendor: Vec<Arc<crate::model::cross_vendor::CrossVendorCase>>,
     protocol_fields: Vec<Arc<crate::model::cross_vendor::CrossVendorCase>>,
@@ -133,7 +133,7 @@ pub struct CorpusBuilder {
 
 impl CorpusBuilder {
     /// Adds one vector file given as text; `file` is the name errors will show.
-    pub fn add_file(&mut self, file: &Path, text: &str, profiles: &Profiles) {
+    pub(crate) fn add_file(&mut self, file: &Path, text: &str, profiles: &Profiles) {
         self.take(FileRead::new(file, text, profiles));
     }
 
@@ -179,7 +179,7 @@ impl CorpusBuilder {
         }
     }
 
-    pub fn finish(self) -> Result<Corpus, LoadErrors> {
+    pub(crate) fn finish(self) -> Result<Corpus, LoadErrors> {
         if self.errors.is_empty() {
             Ok(Corpus {
                 cases: self.cases,

@@ -2,8 +2,11 @@
 
 use super::Location;
 
+// The run reads a question's id and probes; the other fields are the question as the loader
+// checked it, which the corpus's own tests hold to its probes and readings.
 #[derive(Debug, Clone)]
-pub struct OpenQuestion {
+#[allow(dead_code)]
+pub(crate) struct OpenQuestion {
     pub id: String,
     pub title: String,
     /// The profile of an instruction's question; empty for a protocol's.
@@ -24,7 +27,8 @@ pub struct OpenQuestion {
 }
 
 #[derive(Debug, Clone)]
-pub struct Decides {
+#[allow(dead_code)]
+pub(crate) struct Decides {
     pub probe: String,
     /// By reading id, in the readings' order.
     pub outcomes: Vec<(String, String)>,

@@ -21,7 +21,7 @@ pub(crate) fn xml(text: &str) -> Cow<'_, str> {
 }
 
 /// Whether a character cannot appear in an XML 1.0 document, even as a reference.
-pub fn forbidden_in_xml(c: char) -> bool {
+pub(crate) fn forbidden_in_xml(c: char) -> bool {
     matches!(c, '\u{0}'..='\u{8}' | '\u{b}' | '\u{c}' | '\u{e}'..='\u{1f}' | '\u{fffe}' | '\u{ffff}')
 }
 

@@ -57,7 +57,7 @@ fn show_byte(b: u8) -> String {
 }
 
 /// The trial's setting: what ran, with which flags, operands and memory.
-pub fn describe_setting(trial: &Trial) -> String {
+pub(crate) fn describe_setting(trial: &Trial) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -476,6 +476,24 @@ mod tests {
         assert_eq!(
             render_mismatch(&m, Palette::plain()),
             "  SD8067 (where the error code lands): expected 3401H, actual not reported\n"
+        );
+    }
+
+    /// An operand given by indirect specification is shown as the vector writes it, with the
+    /// device it addresses: `s=@D150 (D100)`.
+    #[test]
+    fn the_setting_shows_an_indirect_operand_with_what_it_addresses() {
+        let project = crate::test_support::session();
+        let model = crate::test_support::reference(&project, "mitsubishi-fx5");
+        let trials = project.plan(&[model]);
+        let trial = trials
+            .iter()
+            .find(|t| t.case_id() == "asci-indirect-source")
+            .expect("the indirect case is planned");
+        let text = describe_setting(trial);
+        assert!(
+            text.contains("operands:    d=D200 n=K4 s=@D150 (D100)"),
+            "{text}"
         );
     }
 }

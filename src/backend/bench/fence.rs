@@ -10,7 +10,7 @@
 use std::fmt;
 
 use super::addressing::Addressing;
-pub use super::addressing::Kind;
+pub(crate) use super::addressing::Kind;
 use crate::device::{Device, DeviceSyntaxError};
 
 /// A run of words of one device code, both ends included: `D0-D11999`, or `D12000` alone.
@@ -160,7 +160,7 @@ impl WordRange {
 
 /// Why a range cannot be part of a sandbox, if it cannot: a bit device (an output, a relay; a
 /// word of one is 16 points) is never written, whatever the sandbox says.
-pub fn sandbox_refuses(range: &WordRange, addressing: &dyn Addressing) -> Option<String> {
+pub(crate) fn sandbox_refuses(range: &WordRange, addressing: &dyn Addressing) -> Option<String> {
     (addressing.kind(&range.head()) == Kind::Bit).then(|| {
         format!(
             "{range}: a sandbox holds word devices only ({}); the live backend never writes a \
@@ -171,7 +171,10 @@ pub fn sandbox_refuses(range: &WordRange, addressing: &dyn Addressing) -> Option
 }
 
 /// Reads a comma-separated list of ranges.
-pub fn parse_ranges(text: &str, addressing: &dyn Addressing) -> Result<Vec<WordRange>, RangeError> {
+pub(crate) fn parse_ranges(
+    text: &str,
+    addressing: &dyn Addressing,
+) -> Result<Vec<WordRange>, RangeError> {
     text.split(',')
         .filter(|t| !t.trim().is_empty())
         .map(|t| WordRange::parse(t, addressing))
@@ -179,7 +182,7 @@ pub fn parse_ranges(text: &str, addressing: &dyn Addressing) -> Result<Vec<WordR
 }
 
 /// Ranges sorted and merged where they touch or overlap.
-pub fn merged(mut ranges: Vec<WordRange>) -> Vec<WordRange> {
+pub(crate) fn merged(mut ranges: Vec<WordRange>) -> Vec<WordRange> {
     ranges.sort();
     let mut out: Vec<WordRange> = Vec::with_capacity(ranges.len());
     for r in ranges {
@@ -221,7 +224,7 @@ impl fmt::Display for Refused {
 impl std::error::Error for Refused {}
 
 /// Ranges as one line.
-pub fn list(ranges: &[WordRange]) -> String {
+pub(crate) fn list(ranges: &[WordRange]) -> String {
     if ranges.is_empty() {
         return "none".into();
     }
@@ -234,7 +237,7 @@ pub fn list(ranges: &[WordRange]) -> String {
 
 /// The words the harness may write.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct WriteFence {
+pub(crate) struct WriteFence {
     allowed: Vec<WordRange>,
 }
 
@@ -260,18 +263,19 @@ impl FencedWrite {
 }
 
 impl WriteFence {
-    pub fn new(allowed: Vec<WordRange>) -> Self {
+    pub(crate) fn new(allowed: Vec<WordRange>) -> Self {
         WriteFence {
             allowed: merged(allowed),
         }
     }
 
-    pub fn allowed(&self) -> &[WordRange] {
+    #[cfg(test)]
+    pub(crate) fn allowed(&self) -> &[WordRange] {
         &self.allowed
     }
 
     /// Whether every word of `asked` may be written.
-    pub fn check(&self, asked: &WordRange) -> Result<(), Refused> {
+    pub(crate) fn check(&self, asked: &WordRange) -> Result<(), Refused> {
         if self.allowed.iter().any(|r| r.contains(asked)) {
             Ok(())
         } else {
@@ -285,7 +289,7 @@ impl WriteFence {
 
     /// The writes of `words` from `head`, at most `batch` words each (the link's limit), once
     /// every word is inside the fence; nothing is built when one is not.
-    pub fn writes(
+    pub(crate) fn writes(
         &self,
         batch: usize,
         head: &Device,

@@ -30,7 +30,7 @@
 mod addressing;
 pub(crate) mod doctor;
 pub(crate) mod error;
-pub mod fence;
+pub(crate) mod fence;
 mod link;
 pub(crate) mod mailbox;
 pub(crate) mod manifest;
@@ -61,7 +61,7 @@ use crate::model::profile::{Profile, Profiles, Variant};
 use manifest::Call;
 
 /// A live CPU backend, over any link.
-pub struct BenchBackend {
+pub(crate) struct BenchBackend {
     settings: BenchSettings,
     profile: Arc<Profile>,
     rungs: HashMap<String, u16>,
@@ -126,7 +126,7 @@ impl From<LinkError> for CaseError {
 }
 
 /// What a case writes: its window with the values before execution.
-pub struct Plan {
+pub(crate) struct Plan {
     pub rung: u16,
     pub flags: u16,
     /// Each window range with its words.
@@ -168,7 +168,7 @@ fn variant_of<'p>(profile: &'p Profile, variant: &str) -> Result<&'p Variant, Li
 
 impl BenchBackend {
     /// The backend, checked against the profiles, without any connection.
-    pub fn new<L: LinkSettings + Clone + 'static>(
+    pub(crate) fn new<L: LinkSettings + Clone + 'static>(
         settings: BenchSettings<L>,
         profiles: &Profiles,
     ) -> Result<BenchBackend, LiveError> {
@@ -263,11 +263,12 @@ impl BenchBackend {
         })
     }
 
-    pub fn settings(&self) -> &BenchSettings {
+    pub(crate) fn settings(&self) -> &BenchSettings {
         &self.settings
     }
 
-    pub fn fence(&self) -> &WriteFence {
+    #[cfg(test)]
+    pub(crate) fn fence(&self) -> &WriteFence {
         &self.fence
     }
 
@@ -277,7 +278,7 @@ impl BenchBackend {
 
     /// Connects and runs the interlocks now, so that a bench that is not ready is an error
     /// before the first case. Writes nothing.
-    pub fn connect(&self) -> Result<(), LiveError> {
+    pub(crate) fn connect(&self) -> Result<(), LiveError> {
         let mut live = self.lock();
         self.verify(&mut live).map_err(|e| match e {
             CaseError::Link(c) => LiveError::Link(c),
@@ -293,25 +294,21 @@ impl BenchBackend {
         }
     }
 
-    /// The CPU's type name as read by the interlocks (after [`BenchBackend::connect`]).
-    pub fn cpu(&self) -> Option<String> {
-        self.lock().cpu.clone()
-    }
-
     /// The rung the last case's proof of execution found not executed, taken once: what the
     /// pulse self-test tells from any other fault.
-    pub fn take_not_executed(&self) -> Option<u16> {
+    pub(crate) fn take_not_executed(&self) -> Option<u16> {
         self.lock().not_executed.take()
     }
 
     /// Requests sent so far.
-    pub fn requests(&self) -> u64 {
+    #[cfg(test)]
+    pub(crate) fn requests(&self) -> u64 {
         self.lock().link.requests()
     }
 
     /// The rung, flags and window a request would run with, each window range checked against
     /// the fence; no socket is involved. `Err` is why the case cannot run on this program.
-    pub fn plan(&self, req: &Request<'_>) -> Result<Plan, LiveError> {
+    pub(crate) fn plan(&self, req: &Request<'_>) -> Result<Plan, LiveError> {
         let key = Call::new(req.operands, req.indirect).key(req.instruction);
         let Some(&rung) = self.rungs.get(&key) else {
             return Err(LiveError::Refused(self.no_rung(&key)));

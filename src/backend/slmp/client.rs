@@ -15,7 +15,7 @@ use std::time::Duration;
 use crate::backend::bench::tcp::{self, hex, TransportError};
 
 use super::ascii;
-pub use super::frame::Code;
+pub(crate) use super::frame::Code;
 use super::frame::{
     self, message_len, DeviceForm, DeviceRef, FrameError, FrameKind, Request, Response, Route,
     TypeName,

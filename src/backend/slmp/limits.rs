@@ -7,7 +7,7 @@ use super::frame::{Code, DeviceForm};
 
 /// The CPU families the live backend reaches, as their limits differ.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Family {
+pub(crate) enum Family {
     /// MELSEC iQ-R (and the Q/L CPUs the same reference manual covers).
     Iqr,
     /// MELSEC iQ-F FX5 CPU modules, built-in Ethernet port.
@@ -16,7 +16,7 @@ pub enum Family {
 
 impl Family {
     /// The family of a profile id: FX5 for `mitsubishi-fx5`, iQ-R otherwise.
-    pub fn of_profile(profile: &str) -> Family {
+    pub(crate) fn of_profile(profile: &str) -> Family {
         match profile {
             "mitsubishi-fx5" => Family::Fx5,
             _ => Family::Iqr,
@@ -45,7 +45,7 @@ pub struct Limits {
 ///   read 192 points in binary code, and half as many in ASCII code, where the manual counts
 ///   (word points + double-word points) x 2 against 192 (inferred from that rule as the aslmp
 ///   project reads it; the other FX5 figures measured on an FX5U-32MT/DS by the same project).
-pub fn limits(family: Family, code: Code, form: DeviceForm) -> Limits {
+pub(crate) fn limits(family: Family, code: Code, form: DeviceForm) -> Limits {
     match (family, code) {
         (Family::Fx5, Code::Binary) => Limits {
             batch_words: 960,
@@ -72,7 +72,7 @@ pub fn limits(family: Family, code: Code, form: DeviceForm) -> Limits {
 ///   for the connected station.
 /// - FX5: 0. The FX5 SLMP manual's message format: "Set 0000H (0)" for the field (the
 ///   CPU module does not time its own processing).
-pub fn monitoring_timer(family: Family) -> u16 {
+pub(crate) fn monitoring_timer(family: Family) -> u16 {
     match family {
         Family::Iqr => 8,
         Family::Fx5 => 0,

@@ -8,7 +8,7 @@
 pub(crate) mod ascii;
 pub(crate) mod client;
 pub(crate) mod frame;
-pub mod limits;
+pub(crate) mod limits;
 pub(crate) mod probe;
 pub(crate) mod sim;
 
@@ -200,7 +200,7 @@ impl LinkSettings for ClientSettings {
 }
 
 /// A bench over SLMP, while its link settings may still change.
-pub type SlmpBench = BenchSettings<ClientSettings>;
+pub(crate) type SlmpBench = BenchSettings<ClientSettings>;
 
 /// The keys the SLMP link reads besides the bench's own.
 const LINK_KEYS: [&str; 4] = ["frame", "code", "form", "monitor"];

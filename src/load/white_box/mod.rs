@@ -11,6 +11,7 @@ use crate::model::profile::Profiles;
 
 mod citations;
 mod fc4a_devices;
+mod fx5_operands;
 mod load_errors;
 mod open_questions;
 mod schema;

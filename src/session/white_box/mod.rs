@@ -7,4 +7,5 @@
 pub(super) use crate::test_support::{reference, root, session, Mutant};
 
 mod cross_vendor;
+mod fc4a_errors;
 mod protocols;

@@ -20,10 +20,13 @@ mod fault;
 mod scan;
 mod server;
 
+#[cfg(test)]
 pub(crate) use cpu::Audit;
 pub(crate) use cpu::Cpu;
 pub(crate) use fault::FaultAction;
 pub use fault::FaultRule;
+#[cfg(test)]
+pub(crate) use scan::scan;
+pub(crate) use scan::Program;
 pub(crate) use scan::SimSettings;
-pub(crate) use scan::{scan, Program};
 pub(crate) use server::Running;

@@ -8,9 +8,11 @@
 //! capitals only, so a character the manual does not list — a lowercase letter included, which
 //! no manual settles — is C050H, ASCII that cannot be converted.
 
+#[cfg(test)]
 mod remote;
 
-pub use remote::RemoteProgram;
+#[cfg(test)]
+pub(crate) use remote::RemoteProgram;
 
 use std::io::Write;
 use std::net::TcpStream;

@@ -22,7 +22,7 @@ use crate::error_chain::chain;
 use crate::model::profile::Profile;
 
 /// The program running on a remote server's memory; dropping it stops it.
-pub struct RemoteProgram {
+pub(crate) struct RemoteProgram {
     shared: Arc<Program<SlmpSim>>,
     thread: Option<JoinHandle<()>>,
 }
@@ -30,7 +30,7 @@ pub struct RemoteProgram {
 impl RemoteProgram {
     /// Starts scanning the memory of the server `client` reaches. The settings' port, faults
     /// and protocol options do not apply: the server is someone else's.
-    pub fn start(
+    pub(crate) fn start(
         settings: SlmpSimSettings,
         profile: Arc<Profile>,
         model: Arc<dyn Backend>,
@@ -66,7 +66,7 @@ impl RemoteProgram {
         })
     }
 
-    pub fn audit(&self) -> Audit {
+    pub(crate) fn audit(&self) -> Audit {
         self.shared.lock().audit.clone()
     }
 }

@@ -1,42 +1,37 @@
-//! A live run through the binary against aslmp's simulated CPUs (a third-party SLMP server,
-//! pinned in adapters/python/requirements.txt), `hil doctor` first; skipped with a note when
-//! `.venv-adapters` is missing, and failing then when PLC_CONFORMANCE_REQUIRE_BACKENDS is set.
-//! All traffic stays on 127.0.0.1. The cross-checks of the SLMP codec that need no binary are in
-//! src/backend/bench/end_to_end/slmp_cross.rs.
+//! A live run against aslmp's simulated CPUs (a third-party SLMP server, pinned in
+//! adapters/python/requirements.txt), the doctor first; skipped with a note when `.venv-adapters`
+//! is missing, and failing then when PLC_CONFORMANCE_REQUIRE_BACKENDS is set. All traffic stays
+//! on 127.0.0.1. The bench is read from the same `--backend` text `hil doctor` and `run` read.
 
-mod common;
-
+#[cfg(test)]
 use std::io::{BufRead, BufReader};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::Arc;
 use std::time::Duration;
 
-use plc_conformance::testing::backend::bench::fence;
-use plc_conformance::testing::backend::bench::manifest::Manifest;
-use plc_conformance::testing::backend::bench::BenchBackend;
-use plc_conformance::testing::backend::slmp::client::{ClientSettings, Code};
-use plc_conformance::testing::backend::slmp::frame::{DeviceForm, FrameKind};
-use plc_conformance::testing::backend::slmp::limits::{self, Family};
-use plc_conformance::testing::backend::slmp::sim::{RemoteProgram, SlmpSimSettings};
-use plc_conformance::testing::backend::slmp::{SlmpBench, ADDRESSING};
-use plc_conformance::testing::hil::{generate, GenerateOptions};
-use plc_conformance::verdicts;
-use plc_conformance::Backend;
-use plc_conformance::Trial;
-
-use common::{reference, session};
+use super::{adapters_python, reference, scratch, session};
+use crate::backend::bench::doctor::doctor;
+use crate::backend::bench::manifest::Manifest;
+use crate::backend::bench::{fence, BenchBackend};
+use crate::backend::slmp::client::{ClientSettings, Code};
+use crate::backend::slmp::frame::{DeviceForm, FrameKind};
+use crate::backend::slmp::limits::{self, Family};
+use crate::backend::slmp::sim::{RemoteProgram, SlmpSimSettings};
+use crate::backend::slmp::{SlmpBench, ADDRESSING};
+use crate::hil::{generate, GenerateOptions};
+use crate::{verdicts, Backend, Trial};
 
 /// The Python of `.venv-adapters` with virtual-plc, pymcprotocol, aslmp and plc-comm-slmp, or `None` (with a note).
 fn venv_python() -> Option<PathBuf> {
-    common::adapters_python(
+    adapters_python(
         "virtual_plc, pymcprotocol, aslmp, slmp",
         "virtual-plc, pymcprotocol, aslmp and plc-comm-slmp",
     )
 }
 
 /// The manifest of the program generated for one variant of a profile.
-fn generated(project: &plc_conformance::Project, profile: &str, variant: &str) -> Manifest {
+fn generated(project: &crate::Project, profile: &str, variant: &str) -> Manifest {
     generate(
         project,
         &GenerateOptions {
@@ -189,7 +184,7 @@ fn a_live_run_against_aslmps_simulated_cpu(
         ),
     )
     .expect("the program scans");
-    let dir = common::scratch();
+    let dir = scratch();
     let file = dir.path().join("manifest.json");
     std::fs::write(
         &file,
@@ -209,11 +204,20 @@ fn a_live_run_against_aslmps_simulated_cpu(
         server.address(entry),
         file.display()
     );
-    // `hil doctor` first: an FX5U takes one connection a port at a time.
-    let doctor = common::cli(&["hil", "doctor", "--backend", &spec]);
-    let shown = String::from_utf8_lossy(&doctor.stdout);
-    assert!(doctor.status.success(), "{shown}");
-    assert!(shown.contains("ok    program signature"), "{shown}");
+    // The doctor first (an FX5U takes one connection a port at a time), on the bench the
+    // `--backend` text names, as `hil doctor` reads it.
+    let settings = crate::backend::bench_settings(&spec, Path::new("."), &project.profiles)
+        .unwrap_or_else(|e| panic!("{spec}: {e}"))
+        .expect("a live backend");
+    let (findings, _) = doctor(&settings);
+    for f in &findings {
+        assert!(f.result.is_ok(), "{}: {:?}", f.what, f.result);
+    }
+    assert!(
+        findings.iter().any(|f| f.what == "program signature"),
+        "{:?}",
+        findings.iter().map(|f| f.what).collect::<Vec<_>>()
+    );
     let sandbox = fence::parse_ranges(&manifest.writes.join(","), &ADDRESSING).expect("writes");
     let mut s = SlmpBench::new(
         "aslmp",

@@ -5,21 +5,14 @@
 //! case that expects M8004 and still pass the cases that expect none; and a vector cannot write
 //! a code for a profile that signals with a flag.
 
-mod common;
-
+#[cfg(test)]
 use std::path::Path;
-
-use common::{reference, session, Mutant};
-use plc_conformance::run_one;
-use plc_conformance::testing::load::{load_profiles, CorpusBuilder};
-use plc_conformance::testing::plan::Check;
-use plc_conformance::Difference;
-use plc_conformance::Project;
-use plc_conformance::Trial;
-use plc_conformance::Verdict;
-use plc_conformance::{Backend, Response};
-use plc_conformance::{Basis, ErrorSignal};
 use std::sync::Arc;
+
+use super::{reference, root, session, Mutant};
+use crate::load::{load_profiles, CorpusBuilder};
+use crate::plan::Check;
+use crate::{run_one, Backend, Basis, Difference, ErrorSignal, Project, Response, Trial, Verdict};
 
 const PROFILE: &str = "idec-fc4a";
 
@@ -143,8 +136,7 @@ fn the_reference_signals_m8004() {
 
 #[test]
 fn a_vector_cannot_expect_a_code_from_fc4a() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let profiles = load_profiles(&root.join("vendors")).expect("the profiles load");
+    let profiles = load_profiles(&root().join("vendors")).expect("the profiles load");
     let text = r#"
 instructions: [ATOH]
 profiles: [idec-fc4a]

@@ -5,10 +5,13 @@
 //! and one whose digit-designated words share points (K4M0 with K4M8). Indirect specification
 //! (`@D10`) is accepted with the device its pointer addresses, and refused without it.
 
+#[cfg(test)]
 use std::path::Path;
 
-use plc_conformance::testing::load::{load_profiles, CorpusBuilder};
 use rstest::rstest;
+
+use super::profiles;
+use crate::load::CorpusBuilder;
 
 /// An ASCI vector with the given source and destination, loaded against the real profile.
 fn load_asci(s: &str, d: &str) -> Result<(), String> {
@@ -25,8 +28,7 @@ fn load_asci_with(s: &str, d: &str, more: &str) -> Result<(), String> {
     let more: String = (more.lines().chain([expect]))
         .map(|l| format!("    {l}\n"))
         .collect();
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let profiles = load_profiles(&root.join("vendors")).map_err(|e| e.to_string())?;
+    let profiles = profiles();
     let text = format!(
         r#"
 instructions: [ASCI]
