@@ -10,59 +10,17 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use super::{assert_corpus_kills, failing_trials, map_done, reference, session, Mutant};
+use super::{device, hex_lower, map_writes, with_d_ranges, with_operands, with_units};
+use super::{without_error, word_of};
 use crate::model::cross_vendor::TextLayout;
 use crate::model::profile::{DeviceRange, DeviceRanges};
 use crate::text::digit_value;
 use crate::Device;
 use crate::Operand;
+use crate::Unit;
 use crate::{Backend, Fault, Outcome, Request, Response};
-use crate::{Image, Unit};
 
 const PROFILE: &str = "idec-fc4a";
-
-/// The value of a word operand as the CPU reads it.
-fn word_of(req: &Request<'_>, name: &str) -> Option<u16> {
-    match req.operands.get(name)? {
-        Operand::Constant(k) => u16::try_from(*k).ok(),
-        Operand::Device(d) => Some(req.memory.word(d)),
-    }
-}
-
-fn device_of(req: &Request<'_>, name: &str) -> Option<Device> {
-    match req.operands.get(name)? {
-        Operand::Device(d) => Some(d.clone()),
-        Operand::Constant(_) => None,
-    }
-}
-
-/// Runs the base on the same request with some operands replaced.
-fn with_operands(
-    req: &Request<'_>,
-    base: &dyn Backend,
-    replace: &[(&str, Operand)],
-) -> Result<Response, Fault> {
-    let mut operands = req.operands.clone();
-    for (name, op) in replace {
-        operands.insert((*name).to_string(), op.clone());
-    }
-    base.execute(&Request {
-        operands: &operands,
-        ..*req
-    })
-}
-
-/// Runs the base on the same request over different memory contents.
-fn with_memory(
-    req: &Request<'_>,
-    base: &dyn Backend,
-    words: BTreeMap<Device, u32>,
-) -> Result<Response, Fault> {
-    let memory = Image::new(words, req.memory.fill());
-    base.execute(&Request {
-        memory: &memory,
-        ..*req
-    })
-}
 
 /// Runs the base with every data register range of the variant moved by `delta` at its end.
 fn with_d_ranges_moved(
@@ -80,19 +38,15 @@ fn with_d_ranges_moved(
             last: (i64::from(r.last) + delta).max(0) as u32,
         })
         .collect();
-    let mut variant = req.variant.clone();
-    variant.devices.insert(
-        "D".into(),
+    with_d_ranges(
+        req,
+        base,
         DeviceRanges {
             first: moved[0].first,
             last: moved[0].last,
             also: moved[1..].to_vec(),
         },
-    );
-    base.execute(&Request {
-        variant: &variant,
-        ..*req
-    })
+    )
 }
 
 fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
@@ -102,7 +56,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
             if req.instruction != "ATOH" {
                 return base.execute(req);
             }
-            let (Some(s1), Some(n)) = (device_of(req, "S1"), word_of(req, "S2")) else {
+            let (Some(s1), Some(n)) = (device(req, "S1"), word_of(req, "S2")) else {
                 return base.execute(req);
             };
             let mut words = req.memory.explicit().clone();
@@ -112,7 +66,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                     words.insert(dev, u32::from(ch));
                 }
             }
-            with_memory(req, base, words)
+            with_units(req, base, words)
         }),
         // S2 ignored: always 4 digits.
         Mutant::new("s2-ignored-always-4", base, |req, base| {
@@ -132,7 +86,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
             if req.instruction != "ATOH" {
                 return base.execute(req);
             }
-            let (Some(s1), Some(n)) = (device_of(req, "S1"), word_of(req, "S2")) else {
+            let (Some(s1), Some(n)) = (device(req, "S1"), word_of(req, "S2")) else {
                 return base.execute(req);
             };
             let n = u32::from(n.min(4));
@@ -141,7 +95,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
             for (dev, from) in devs.iter().zip(devs.iter().rev()) {
                 words.insert(dev.clone(), req.memory.read(from));
             }
-            with_memory(req, base, words)
+            with_units(req, base, words)
         }),
         // Lowercase a-f taken as digits.
         Mutant::new("atoh-lowercase-accepted", base, |req, base| {
@@ -151,11 +105,11 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                     *w -= 0x20;
                 }
             }
-            with_memory(req, base, words)
+            with_units(req, base, words)
         }),
         // The destination written although the instruction failed.
         Mutant::new("d1-written-on-error", base, |req, base| {
-            let d1 = device_of(req, "D1");
+            let d1 = device(req, "D1");
             map_done(base.execute(req), |mut o| {
                 if let (Some(_), Some(d1)) = (&o.error, d1) {
                     o.writes.insert(d1, 0);
@@ -164,12 +118,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
             })
         }),
         // The error not signalled: M8004 stays off.
-        Mutant::new("m8004-not-set", base, |req, base| {
-            map_done(base.execute(req), |mut o| {
-                o.error = None;
-                o
-            })
-        }),
+        Mutant::new("m8004-not-set", base, without_error),
         // S2 = 0 accepted as "no digits": ATOH stores 0, HTOA writes nothing, no error.
         Mutant::new("s2-zero-accepted", base, |req, base| {
             if word_of(req, "S2") != Some(0) {
@@ -177,7 +126,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
             }
             let mut writes = BTreeMap::new();
             if req.instruction == "ATOH" {
-                if let Some(d1) = device_of(req, "D1") {
+                if let Some(d1) = device(req, "D1") {
                     writes.insert(d1, 0);
                 }
             }
@@ -196,19 +145,15 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                 return base.execute(req);
             };
             let last = ranges.iter().map(|r| r.last).max().unwrap_or(ranges.last);
-            let mut variant = req.variant.clone();
-            variant.devices.insert(
-                "D".into(),
+            with_d_ranges(
+                req,
+                base,
                 DeviceRanges {
                     first: ranges.first,
                     last,
                     also: Vec::new(),
                 },
-            );
-            base.execute(&Request {
-                variant: &variant,
-                ..*req
-            })
+            )
         }),
         // HTOA taking the leftmost S2 digits of the word instead of the lowest.
         Mutant::new("htoa-leftmost-digits", base, |req, base| {
@@ -236,20 +181,11 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
         }),
         // HTOA writing lowercase letters.
         Mutant::new("htoa-lowercase-letters", base, |req, base| {
-            map_done(base.execute(req), |mut o| {
-                if req.instruction == "HTOA" {
-                    for w in o.writes.values_mut() {
-                        if (0x41..=0x46).contains(w) {
-                            *w += 0x20;
-                        }
-                    }
-                }
-                o
-            })
+            map_writes(base.execute(req), req.instruction == "HTOA", hex_lower)
         }),
         // HTOA packing two characters per word, low byte first.
         Mutant::new("htoa-two-chars-per-word", base, |req, base| {
-            let d1 = device_of(req, "D1");
+            let d1 = device(req, "D1");
             map_done(base.execute(req), |mut o| {
                 if let (true, Some(d1)) = (req.instruction == "HTOA", d1) {
                     let chars: Vec<u8> = o.writes.values().map(|w| *w as u8).collect();
@@ -265,7 +201,7 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
         }),
         // HTOA that drops leading zeros (as MELSEC BINHA with SM705 on does).
         Mutant::new("htoa-leading-zeros-dropped", base, |req, base| {
-            let d1 = device_of(req, "D1");
+            let d1 = device(req, "D1");
             map_done(base.execute(req), |mut o| {
                 if let (true, Some(d1)) = (req.instruction == "HTOA", d1) {
                     let mut chars: Vec<u32> = o.writes.values().copied().collect();
@@ -362,7 +298,7 @@ fn unspecified_upper_byte_is_not_asserted() {
                 *w &= 0xFF;
             }
         }
-        with_memory(req, base, words)
+        with_units(req, base, words)
     });
     let failing = failing_trials(&session, &low_byte);
     assert!(

@@ -4,9 +4,12 @@
 //! wrong (lowercase accepted, a zero count passed over, the digits of a byte swapped).
 
 #[cfg(test)]
-use super::{assert_corpus_kills, map_done, reference, session, with_memory, Mutant};
+use std::sync::Arc;
+
+use super::{assert_kills, map_done, with_memory, Mutant};
+use super::{device, hex_upper_bytes, map_writes, without_error};
 use crate::Operand;
-use crate::{Backend, Fault, Request, Response};
+use crate::{Backend, Request, Response};
 
 const PROFILE: &str = "panasonic-fp";
 
@@ -18,49 +21,29 @@ fn count(req: &Request<'_>) -> i64 {
     }
 }
 
-fn swap_written(
-    req: &Request<'_>,
-    base: &dyn Backend,
-    instruction: &str,
-) -> Result<Response, Fault> {
-    let swap = req.instruction == instruction;
-    map_done(base.execute(req), |mut o| {
-        if swap {
-            for v in o.writes.values_mut() {
-                *v = v.swap_bytes();
-            }
-        }
-        o
-    })
-}
-
-#[test]
-fn the_panasonic_corpus_kills_every_mutant() {
-    let project = session();
-    let base = reference(&project, PROFILE);
-    let mutants = vec![
+fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
+    vec![
         // F72 bytes in the other order: the first pair in the high byte.
-        Mutant::new("f72-first-pair-high", &base, |req, base| {
-            swap_written(req, base, "F72")
+        Mutant::new("f72-first-pair-high", base, |req, base| {
+            map_writes(base.execute(req), req.instruction == "F72", u32::swap_bytes)
         }),
         // F71 characters the other way round in each word: the low digit's in the low byte.
-        Mutant::new("f71-low-digit-first", &base, |req, base| {
-            swap_written(req, base, "F71")
+        Mutant::new("f71-low-digit-first", base, |req, base| {
+            map_writes(base.execute(req), req.instruction == "F71", u32::swap_bytes)
         }),
         // F71 reads the high byte of each source word first.
-        Mutant::new("f71-high-byte-first", &base, |req, base| {
+        Mutant::new("f71-high-byte-first", base, |req, base| {
             if req.instruction != "F71" {
                 return base.execute(req);
             }
             with_memory(req, base, u16::swap_bytes)
         }),
         // An odd count keeps the last low nibble instead of writing 0 there.
-        Mutant::new("f72-odd-keeps-nibble", &base, |req, base| {
+        Mutant::new("f72-odd-keeps-nibble", base, |req, base| {
             let n = count(req);
             let odd = req.instruction == "F72" && n > 0 && n % 2 == 1;
-            let d = match req.operands.get("d") {
-                Some(Operand::Device(d)) => d.clone(),
-                _ => return base.execute(req),
+            let Some(d) = device(req, "d") else {
+                return base.execute(req);
             };
             let bytes = (n as u32).div_ceil(2);
             let last = d.offset((bytes - u32::from(bytes > 0)) / 2);
@@ -77,41 +60,24 @@ fn the_panasonic_corpus_kills_every_mutant() {
             })
         }),
         // Lowercase a-f read as digits.
-        Mutant::new("f72-lowercase-accepted", &base, |req, base| {
+        Mutant::new("f72-lowercase-accepted", base, |req, base| {
             if req.instruction != "F72" {
                 return base.execute(req);
             }
-            with_memory(req, base, |w| {
-                let up = |b: u16| {
-                    if (0x61..=0x66).contains(&b) {
-                        b - 0x20
-                    } else {
-                        b
-                    }
-                };
-                up(w & 0xFF) | up(w >> 8) << 8
-            })
+            with_memory(req, base, hex_upper_bytes)
         }),
         // An operation error reported nowhere.
-        Mutant::new("error-silent", &base, |req, base| {
-            map_done(base.execute(req), |mut o| {
-                o.error = None;
-                o
-            })
-        }),
+        Mutant::new("error-silent", base, without_error),
         // A count of 0 converts nothing, without an error.
-        Mutant::new("count-zero-silent", &base, |req, base| {
+        Mutant::new("count-zero-silent", base, |req, base| {
             if count(req) == 0 {
                 return Ok(Response::Done(Default::default()));
             }
             base.execute(req)
         }),
         // On an error, the destination is cleared as well.
-        Mutant::new("error-clears-destination", &base, |req, base| {
-            let d = match req.operands.get("d") {
-                Some(Operand::Device(d)) => Some(d.clone()),
-                _ => None,
-            };
+        Mutant::new("error-clears-destination", base, |req, base| {
+            let d = device(req, "d");
             map_done(base.execute(req), |mut o| {
                 if let (Some(_), Some(d)) = (&o.error, d) {
                     o.writes.insert(d, 0);
@@ -119,6 +85,10 @@ fn the_panasonic_corpus_kills_every_mutant() {
                 o
             })
         }),
-    ];
-    assert_corpus_kills(&project, &base, &mutants);
+    ]
+}
+
+#[test]
+fn the_panasonic_corpus_kills_every_mutant() {
+    assert_kills(PROFILE, mutants);
 }

@@ -6,25 +6,10 @@
 
 #[cfg(test)]
 use super::{assert_corpus_kills, map_done, reference, session, Mutant};
+use super::{count, device, hex_upper_bytes, map_writes, with_flag, without_error};
 use super::{with_constant, with_memory};
-use crate::Device;
 use crate::Operand;
 use crate::{Backend, Request, Response};
-
-fn count(req: &Request<'_>) -> u32 {
-    match req.operands.get("n") {
-        Some(Operand::Constant(k)) => u32::try_from(*k).unwrap_or(0),
-        Some(Operand::Device(d)) => req.memory.read(d),
-        None => 0,
-    }
-}
-
-fn device(req: &Request<'_>, name: &str) -> Option<Device> {
-    match req.operands.get(name)? {
-        Operand::Device(d) => Some(d.clone()),
-        Operand::Constant(_) => None,
-    }
-}
 
 fn is_hex(req: &Request<'_>) -> bool {
     req.instruction.starts_with("HEX")
@@ -37,7 +22,7 @@ fn mutants(
     vec![
         // ASCI stores a NULL after the last character (the FX5 with SM701 off).
         Mutant::new("asci-terminated", base, move |req, base| {
-            let (asci, n, eight) = (!is_hex(req), count(req), req.flag(mode_flag));
+            let (asci, n, eight) = (!is_hex(req), count(req, "n"), req.flag(mode_flag));
             let d = device(req, "d");
             map_done(base.execute(req), |mut o| {
                 if let (true, Some(d), None) = (asci, d, &o.error) {
@@ -58,50 +43,24 @@ fn mutants(
         // Two characters per word, the first in the high byte.
         Mutant::new("asci-high-byte-first", base, move |req, base| {
             let swap = !is_hex(req) && !req.flag(mode_flag);
-            map_done(base.execute(req), |mut o| {
-                if swap {
-                    for v in o.writes.values_mut() {
-                        *v = v.swap_bytes();
-                    }
-                }
-                o
-            })
+            map_writes(base.execute(req), swap, u32::swap_bytes)
         }),
         // The mode flag ignored: always 16-bit mode.
         Mutant::new("mode-flag-ignored", base, move |req, base| {
-            let mut flags = req.flags.clone();
-            flags.insert(mode_flag.to_string(), false);
-            base.execute(&Request {
-                flags: &flags,
-                ..*req
-            })
+            with_flag(req, base, mode_flag, false)
         }),
         // HEX reads lowercase a-f as digits.
         Mutant::new("hex-lowercase-accepted", base, |req, base| {
             if !is_hex(req) {
                 return base.execute(req);
             }
-            with_memory(req, base, |w| {
-                let up = |b: u16| {
-                    if (0x61..=0x66).contains(&b) {
-                        b - 0x20
-                    } else {
-                        b
-                    }
-                };
-                up(w & 0xFF) | up(w >> 8) << 8
-            })
+            with_memory(req, base, hex_upper_bytes)
         }),
         // An invalid character converted and reported nowhere.
-        Mutant::new("error-silent", base, |req, base| {
-            map_done(base.execute(req), |mut o| {
-                o.error = None;
-                o
-            })
-        }),
+        Mutant::new("error-silent", base, without_error),
         // HEX keeps the old high digits of the last word instead of zeroing them.
         Mutant::new("hex-high-digits-kept", base, |req, base| {
-            let (hex, n, d) = (is_hex(req), count(req), device(req, "d"));
+            let (hex, n, d) = (is_hex(req), count(req, "n"), device(req, "d"));
             let last = d.and_then(|d| d.offset(n.div_ceil(4).saturating_sub(1)));
             let old = last.as_ref().map(|l| req.memory.read(l));
             map_done(base.execute(req), |mut o| {

@@ -6,13 +6,11 @@
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
-use super::{assert_corpus_kills, failing_trials, reference, session, Mutant};
+use super::{assert_kills_counted, map_done, Mutant};
+use super::{map_bytes, map_done_if, map_writes, with_bytes, with_d_last, with_flag, with_units};
 use crate::Device;
-use crate::Image;
-use crate::{Backend, Fault, Outcome, Request, Response};
+use crate::{Backend, Outcome, Request};
 use crate::{ErrorSignal, Operand};
-
-type Answer = Result<Response, Fault>;
 
 /// HABIN(P) and DHABIN(P): text in, number out.
 fn from_ascii(req: &Request<'_>) -> bool {
@@ -26,59 +24,6 @@ fn to_ascii(req: &Request<'_>) -> bool {
 
 fn double(req: &Request<'_>) -> bool {
     req.instruction.starts_with('D')
-}
-
-fn map_bytes(word: u32, f: &impl Fn(u8) -> u8) -> u32 {
-    let [lo, hi, ..] = word.to_le_bytes();
-    u32::from(u16::from_le_bytes([f(lo), f(hi)]))
-}
-
-/// Runs the base on the vector's words with every byte rewritten: how a backend that
-/// misreads characters sees the source.
-fn with_bytes(req: &Request<'_>, base: &dyn Backend, f: impl Fn(u8) -> u8) -> Answer {
-    let words = req
-        .memory
-        .explicit()
-        .iter()
-        .map(|(d, w)| (d.clone(), map_bytes(*w, &f)))
-        .collect();
-    let image = Image::new(words, req.memory.fill());
-    base.execute(&Request {
-        memory: &image,
-        ..*req
-    })
-}
-
-/// Runs the base with a flag forced, as a backend that misreads the flag would.
-fn with_flag(req: &Request<'_>, base: &dyn Backend, name: &str, value: bool) -> Answer {
-    let mut flags = req.flags.clone();
-    flags.insert(name.to_string(), value);
-    base.execute(&Request {
-        flags: &flags,
-        ..*req
-    })
-}
-
-/// Runs the base with the last D register moved: a backend with a wrong range check.
-fn with_d_last(req: &Request<'_>, base: &dyn Backend, last: impl Fn(u32) -> u32) -> Answer {
-    let Some(mut ranges) = req.profile.ranges(req.variant, "D") else {
-        return base.execute(req);
-    };
-    ranges.last = last(ranges.last);
-    let mut variant = req.variant.clone();
-    variant.devices.insert("D".to_string(), ranges);
-    base.execute(&Request {
-        variant: &variant,
-        ..*req
-    })
-}
-
-/// Rewrites a completed outcome; other answers pass through.
-fn map_done(answer: Answer, f: impl FnOnce(Outcome) -> Outcome) -> Answer {
-    answer.map(|r| match r {
-        Response::Done(o) => Response::Done(f(o)),
-        other => other,
-    })
 }
 
 fn destination(req: &Request<'_>) -> Option<Device> {
@@ -131,18 +76,10 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
                 .iter()
                 .map(|(d, w)| (d.clone(), w.swap_bytes()))
                 .collect();
-            let image = Image::new(words, req.memory.fill());
-            base.execute(&Request {
-                memory: &image,
-                ..*req
-            })
+            with_units(req, base, words)
         }),
         Mutant::new("reads-digits-from-the-wrong-end", base, |req, base| {
-            let answer = base.execute(req);
-            if !from_ascii(req) {
-                return answer;
-            }
-            map_done(answer, |mut o| {
+            map_done_if(base.execute(req), from_ascii(req), |mut o| {
                 if let Some((devices, value)) = result_words(req, &o) {
                     let nibbles = 4 * devices.len() as u32;
                     let reversed = (0..nibbles).fold(0u64, |acc, i| {
@@ -157,11 +94,8 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
             })
         }),
         Mutant::new("dhabin-words-swapped", base, |req, base| {
-            let answer = base.execute(req);
-            if !(from_ascii(req) && double(req)) {
-                return answer;
-            }
-            map_done(answer, |mut o| {
+            let on = from_ascii(req) && double(req);
+            map_done_if(base.execute(req), on, |mut o| {
                 if let Some((devices, value)) = result_words(req, &o) {
                     o.writes
                         .insert(devices[0].clone(), u32::from((value >> 16) as u16));
@@ -185,33 +119,17 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
         }),
         // --- writing characters -----------------------------------------------------------
         Mutant::new("writes-high-byte-first", base, |req, base| {
-            let answer = base.execute(req);
-            if !to_ascii(req) {
-                return answer;
-            }
-            map_done(answer, |mut o| {
-                o.writes.values_mut().for_each(|w| *w = w.swap_bytes());
-                o
-            })
+            map_writes(base.execute(req), to_ascii(req), u32::swap_bytes)
         }),
         Mutant::new("writes-lowercase", base, |req, base| {
-            let answer = base.execute(req);
-            if !to_ascii(req) {
-                return answer;
-            }
-            map_done(answer, |mut o| {
-                let lower = |b: u8| {
-                    if (b'A'..=b'F').contains(&b) {
-                        b + 0x20
-                    } else {
-                        b
-                    }
-                };
-                o.writes
-                    .values_mut()
-                    .for_each(|w| *w = map_bytes(*w, &lower));
-                o
-            })
+            let lower = |b: u8| {
+                if (b'A'..=b'F').contains(&b) {
+                    b + 0x20
+                } else {
+                    b
+                }
+            };
+            map_writes(base.execute(req), to_ascii(req), |w| map_bytes(w, &lower))
         }),
         Mutant::new("dbinha-source-words-swapped", base, |req, base| {
             let Ok(Operand::Device(s)) = req.operand("s") else {
@@ -223,18 +141,11 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
             let mut words: BTreeMap<Device, u32> = req.memory.explicit().clone();
             words.insert(s.clone(), req.memory.read(&high));
             words.insert(high.clone(), req.memory.read(s));
-            let image = Image::new(words, req.memory.fill());
-            base.execute(&Request {
-                memory: &image,
-                ..*req
-            })
+            with_units(req, base, words)
         }),
         Mutant::new("terminator-low-byte-keeps-high-byte", base, |req, base| {
-            let answer = base.execute(req);
-            if !(to_ascii(req) && req.flag("SM705")) {
-                return answer;
-            }
-            map_done(answer, |mut o| {
+            let on = to_ascii(req) && req.flag("SM705");
+            map_done_if(base.execute(req), on, |mut o| {
                 if let Some((dev, word)) = o.writes.iter_mut().next_back() {
                     if *word == 0 {
                         *word = req.memory.read(dev) & 0xFF00;
@@ -247,11 +158,8 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
             "short-result-unterminated-with-sm701-on",
             base,
             |req, base| {
-                let answer = base.execute(req);
-                if !(to_ascii(req) && req.flag("SM705") && req.flag("SM701")) {
-                    return answer;
-                }
-                map_done(answer, |mut o| {
+                let on = to_ascii(req) && req.flag("SM705") && req.flag("SM701");
+                map_done_if(base.execute(req), on, |mut o| {
                     if let Some((dev, word)) = o.writes.pop_last() {
                         let before = req.memory.read(&dev);
                         match (word & 0xFF, word >> 8) {
@@ -366,15 +274,5 @@ fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
 
 #[test]
 fn the_iqr_corpus_kills_every_mutant() {
-    let session = session();
-    let reference = reference(&session, "mitsubishi-iqr");
-    let mutants = mutants(&reference);
-    for m in &mutants {
-        eprintln!(
-            "{:<45} killed by {} trials",
-            m.name(),
-            failing_trials(&session, m).len()
-        );
-    }
-    assert_corpus_kills(&session, &reference, &mutants);
+    assert_kills_counted("mitsubishi-iqr", mutants);
 }

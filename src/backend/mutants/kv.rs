@@ -4,10 +4,12 @@
 //! over in silence, the register cleared instead of kept.
 
 #[cfg(test)]
-use super::{assert_corpus_kills, map_done, reference, session, Mutant};
-use crate::Image;
+use std::sync::Arc;
+
+use super::{assert_kills, map_done, Mutant};
+use super::{hex_upper_bytes, map_writes, with_operands, with_units, without_error};
 use crate::Operand;
-use crate::{Request, Response};
+use crate::{Backend, Request, Response};
 
 const PROFILE: &str = "keyence-kv";
 
@@ -19,25 +21,14 @@ fn loaded(req: &Request<'_>) -> Option<u16> {
     }
 }
 
-#[test]
-fn the_keyence_corpus_kills_every_mutant() {
-    let project = session();
-    let base = reference(&project, PROFILE);
-    let mutants = vec![
+fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
+    vec![
         // ASC stores the first character in the low byte.
-        Mutant::new("asc-low-byte-first", &base, |req, base| {
-            let asc = req.instruction == "ASC";
-            map_done(base.execute(req), |mut o| {
-                if asc {
-                    for v in o.writes.values_mut() {
-                        *v = v.swap_bytes();
-                    }
-                }
-                o
-            })
+        Mutant::new("asc-low-byte-first", base, |req, base| {
+            map_writes(base.execute(req), req.instruction == "ASC", u32::swap_bytes)
         }),
         // RASC reads the low byte as the first character.
-        Mutant::new("rasc-low-byte-first", &base, |req, base| {
+        Mutant::new("rasc-low-byte-first", base, |req, base| {
             let (true, Some(Operand::Device(s))) =
                 (req.instruction == "RASC", req.operands.get("s"))
             else {
@@ -46,11 +37,7 @@ fn the_keyence_corpus_kills_every_mutant() {
             let mut words = req.memory.explicit().clone();
             let w = req.memory.read(s);
             words.insert(s.clone(), w.swap_bytes());
-            let memory = Image::of_units(words, req.memory.fill(), req.memory.unit());
-            let answer = base.execute(&Request {
-                memory: &memory,
-                ..*req
-            });
+            let answer = with_units(req, base, words);
             // Only the conversion swaps: what STA stores on an error is the word as loaded.
             map_done(answer, |mut o| {
                 if o.error.is_some() {
@@ -62,37 +49,20 @@ fn the_keyence_corpus_kills_every_mutant() {
             })
         }),
         // RASC reads lowercase a-f as digits.
-        Mutant::new("rasc-lowercase-accepted", &base, |req, base| {
+        Mutant::new("rasc-lowercase-accepted", base, |req, base| {
             let Some(w) = loaded(req).filter(|_| req.instruction == "RASC") else {
                 return base.execute(req);
             };
-            let up = |b: u16| {
-                if (0x61..=0x66).contains(&b) {
-                    b - 0x20
-                } else {
-                    b
-                }
-            };
-            let fixed = up(w >> 8) << 8 | up(w & 0xFF);
+            let fixed = hex_upper_bytes(w);
             if fixed == w {
                 return base.execute(req);
             }
-            let mut operands = req.operands.clone();
-            operands.insert("s".into(), Operand::Constant(i64::from(fixed)));
-            base.execute(&Request {
-                operands: &operands,
-                ..*req
-            })
+            with_operands(req, base, &[("s", Operand::Constant(i64::from(fixed)))])
         }),
         // An invalid character passed over in silence.
-        Mutant::new("rasc-error-silent", &base, |req, base| {
-            map_done(base.execute(req), |mut o| {
-                o.error = None;
-                o
-            })
-        }),
+        Mutant::new("rasc-error-silent", base, without_error),
         // On an error the register is cleared, and STA stores 0.
-        Mutant::new("rasc-error-clears", &base, |req, base| {
+        Mutant::new("rasc-error-clears", base, |req, base| {
             map_done(base.execute(req), |mut o| {
                 if o.error.is_some() {
                     for v in o.writes.values_mut() {
@@ -103,13 +73,17 @@ fn the_keyence_corpus_kills_every_mutant() {
             })
         }),
         // ASC converts the high-order byte too (four characters' worth, the low word kept).
-        Mutant::new("asc-reads-high-byte", &base, |req, base| {
+        Mutant::new("asc-reads-high-byte", base, |req, base| {
             let high = loaded(req).is_some_and(|w| w >> 8 != 0) && req.instruction == "ASC";
             if high {
                 return Ok(Response::Done(Default::default()));
             }
             base.execute(req)
         }),
-    ];
-    assert_corpus_kills(&project, &base, &mutants);
+    ]
+}
+
+#[test]
+fn the_keyence_corpus_kills_every_mutant() {
+    assert_kills(PROFILE, mutants);
 }

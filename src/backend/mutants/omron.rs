@@ -9,8 +9,10 @@
 
 #[cfg(test)]
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
-use super::{assert_corpus_kills, map_done, reference, session, Mutant};
+use super::{assert_kills, map_done, Mutant};
+use super::{device, map_writes, with_d_ranges, with_operands, with_units, without_error, word_of};
 use crate::backend::omron::{Designator, Parity};
 use crate::spec::profile::DeviceRanges;
 use crate::Device;
@@ -20,29 +22,23 @@ use crate::{Backend, Fault, Request, Response};
 
 const PROFILE: &str = "omron-cs-cj";
 
-fn device(req: &Request<'_>, name: &str) -> Option<Device> {
-    match req.operands.get(name)? {
-        Operand::Device(d) => Some(d.clone()),
-        Operand::Constant(_) => None,
-    }
-}
-
 /// The digit designator word as the case gives it.
 fn di_word(req: &Request<'_>) -> Option<u16> {
-    match req.operands.get("Di")? {
-        Operand::Constant(k) => u16::try_from(*k).ok(),
-        Operand::Device(d) => Some(req.memory.word(d)),
-    }
+    word_of(req, "Di")
+}
+
+/// The operand `name` as a device, with the designator Di decodes to, when it is one and Di
+/// decodes.
+fn designated(req: &Request<'_>, name: &str) -> Option<(Device, Designator)> {
+    Some((
+        device(req, name)?,
+        di_word(req).and_then(Designator::decode)?,
+    ))
 }
 
 /// Runs the base with Di replaced by a constant.
 fn with_di(req: &Request<'_>, base: &dyn Backend, di: u16) -> Result<Response, Fault> {
-    let mut operands = req.operands.clone();
-    operands.insert("Di".into(), Operand::Constant(i64::from(di)));
-    base.execute(&Request {
-        operands: &operands,
-        ..*req
-    })
+    with_operands(req, base, &[("Di", Operand::Constant(i64::from(di)))])
 }
 
 /// Runs the base with memory rewritten by `f`.
@@ -57,11 +53,7 @@ fn with_memory(
         .collect();
     f(&mut words);
     let words = words.into_iter().map(|(d, v)| (d, u32::from(v))).collect();
-    let memory = Image::of_units(words, req.memory.fill(), req.memory.unit());
-    base.execute(&Request {
-        memory: &memory,
-        ..*req
-    })
+    with_units(req, base, words)
 }
 
 /// The word and byte the `k`-th byte of a designator lives in, from `head`.
@@ -101,7 +93,7 @@ fn hex_bytes(
     base: &dyn Backend,
     f: impl Fn(u32, u8) -> u8,
 ) -> Result<Response, Fault> {
-    let (Some(s), Some(di)) = (device(req, "S"), di_word(req).and_then(Designator::decode)) else {
+    let Some((s, di)) = designated(req, "S") else {
         return base.execute(req);
     };
     with_memory(req, base, |words| {
@@ -118,20 +110,16 @@ fn lowercase(b: u8) -> bool {
     (0x61..=0x66).contains(&(b & 0x7F))
 }
 
-#[test]
-fn the_omron_corpus_kills_every_mutant() {
-    let project = session();
-    let base = reference(&project, PROFILE);
+fn mutants(base: &Arc<dyn Backend>) -> Vec<Arc<dyn Backend>> {
     let hex = |req: &Request<'_>| req.instruction == "HEX";
     let asc = |req: &Request<'_>| req.instruction == "ASC";
-    let mutants = vec![
+    vec![
         // HEX puts the first character in the highest digit converted, as MELSEC does.
-        Mutant::new("hex-first-character-highest", &base, move |req, base| {
+        Mutant::new("hex-first-character-highest", base, move |req, base| {
             if !hex(req) {
                 return base.execute(req);
             }
-            let (Some(s), Some(di)) = (device(req, "S"), di_word(req).and_then(Designator::decode))
-            else {
+            let Some((s, di)) = designated(req, "S") else {
                 return base.execute(req);
             };
             with_memory(req, base, |words| {
@@ -148,7 +136,7 @@ fn the_omron_corpus_kills_every_mutant() {
             })
         }),
         // HEX reads the leftmost byte of a word first (text stored high byte first).
-        Mutant::new("hex-leftmost-byte-first", &base, move |req, base| {
+        Mutant::new("hex-leftmost-byte-first", base, move |req, base| {
             if !hex(req) {
                 return base.execute(req);
             }
@@ -168,7 +156,7 @@ fn the_omron_corpus_kills_every_mutant() {
             })
         }),
         // No wrap-round: digits past digit 3 are not converted (HEX) or not read (ASC).
-        Mutant::new("no-wrap-round", &base, |req, base| {
+        Mutant::new("no-wrap-round", base, |req, base| {
             match di_word(req).and_then(Designator::decode) {
                 Some(di) if di.first_digit + di.count > 4 => {
                     let count = 4 - di.first_digit;
@@ -179,7 +167,7 @@ fn the_omron_corpus_kills_every_mutant() {
             }
         }),
         // HEX clears the digits it does not write.
-        Mutant::new("hex-clears-other-digits", &base, move |req, base| {
+        Mutant::new("hex-clears-other-digits", base, move |req, base| {
             let di = di_word(req).and_then(Designator::decode);
             let is_hex = hex(req);
             map_done(base.execute(req), |mut o| {
@@ -193,21 +181,21 @@ fn the_omron_corpus_kills_every_mutant() {
             })
         }),
         // HEX takes lowercase a-f on every CPU model.
-        Mutant::new("hex-lowercase-everywhere", &base, move |req, base| {
+        Mutant::new("hex-lowercase-everywhere", base, move |req, base| {
             if !hex(req) {
                 return base.execute(req);
             }
             hex_bytes(req, base, |_, b| if lowercase(b) { b - 0x20 } else { b })
         }),
         // HEX refuses lowercase a-f on the C200H series too.
-        Mutant::new("hex-lowercase-nowhere", &base, move |req, base| {
+        Mutant::new("hex-lowercase-nowhere", base, move |req, base| {
             if !hex(req) || req.variant.id != "c200h" {
                 return base.execute(req);
             }
             hex_bytes(req, base, |_, b| if lowercase(b) { b'G' } else { b })
         }),
         // HEX ignores the parity bit and the designated parity.
-        Mutant::new("hex-parity-ignored", &base, move |req, base| {
+        Mutant::new("hex-parity-ignored", base, move |req, base| {
             if !hex(req) {
                 return base.execute(req);
             }
@@ -221,7 +209,7 @@ fn the_omron_corpus_kills_every_mutant() {
             hex_bytes(&req, base, |_, b| b & 0x7F)
         }),
         // HEX with parity keeps the parity bit as part of the character (B1H is no digit).
-        Mutant::new("hex-parity-bit-not-stripped", &base, move |req, base| {
+        Mutant::new("hex-parity-bit-not-stripped", base, move |req, base| {
             let parity = di_word(req).and_then(Designator::decode).map(|d| d.parity);
             if !hex(req) || parity == Some(Parity::None) {
                 return base.execute(req);
@@ -229,7 +217,7 @@ fn the_omron_corpus_kills_every_mutant() {
             hex_bytes(req, base, |_, b| if b & 0x80 != 0 { b'G' } else { b })
         }),
         // HEX writes the characters before the first bad byte, then signals ER.
-        Mutant::new("hex-partial-write-on-error", &base, move |req, base| {
+        Mutant::new("hex-partial-write-on-error", base, move |req, base| {
             let result = base.execute(req);
             let failed = matches!(&result, Ok(Response::Done(o)) if o.error.is_some());
             let (true, true, Some(word), Some(di)) = (
@@ -262,7 +250,7 @@ fn the_omron_corpus_kills_every_mutant() {
             }
         }),
         // The digits of Di are masked into range instead of checked.
-        Mutant::new("di-unchecked", &base, |req, base| match di_word(req) {
+        Mutant::new("di-unchecked", base, |req, base| match di_word(req) {
             Some(word) if Designator::decode(word).is_none() => {
                 let parity = if (word >> 12) > 2 { 0 } else { word >> 12 };
                 let masked = (parity << 12) | (word & 0x0100) | (word & 0x0030) | (word & 0x0003);
@@ -271,53 +259,37 @@ fn the_omron_corpus_kills_every_mutant() {
             _ => base.execute(req),
         }),
         // The data area is not checked: words past D32767 read as the fill and are written.
-        Mutant::new("no-data-area-check", &base, |req, base| {
-            let mut variant = req.variant.clone();
-            variant.devices.insert(
-                "D".into(),
+        Mutant::new("no-data-area-check", base, |req, base| {
+            with_d_ranges(
+                req,
+                base,
                 DeviceRanges {
                     first: 0,
                     last: 65535,
                     also: Vec::new(),
                 },
-            );
-            base.execute(&Request {
-                variant: &variant,
-                ..*req
-            })
+            )
         }),
         // The last word of the data area taken for past its end.
-        Mutant::new("data-area-one-short", &base, |req, base| {
-            let mut variant = req.variant.clone();
-            if let Some(r) = req.profile.ranges(req.variant, "D") {
-                variant.devices.insert(
-                    "D".into(),
-                    DeviceRanges {
-                        first: r.first,
-                        last: r.last - 1,
-                        also: Vec::new(),
-                    },
-                );
-            }
-            base.execute(&Request {
-                variant: &variant,
-                ..*req
-            })
+        Mutant::new("data-area-one-short", base, |req, base| {
+            let Some(r) = req.profile.ranges(req.variant, "D") else {
+                return base.execute(req);
+            };
+            with_d_ranges(
+                req,
+                base,
+                DeviceRanges {
+                    first: r.first,
+                    last: r.last - 1,
+                    also: Vec::new(),
+                },
+            )
         }),
         // ER is never signalled: an error writes nothing and says nothing.
-        Mutant::new("er-silent", &base, |req, base| {
-            map_done(base.execute(req), |mut o| {
-                o.error = None;
-                o
-            })
-        }),
+        Mutant::new("er-silent", base, without_error),
         // ASC writes the highest digit first, as MELSEC BINHA does.
-        Mutant::new("asc-first-digit-highest", &base, move |req, base| {
-            let (true, Some(s), Some(di)) = (
-                asc(req),
-                device(req, "S"),
-                di_word(req).and_then(Designator::decode),
-            ) else {
+        Mutant::new("asc-first-digit-highest", base, move |req, base| {
+            let (true, Some((s, di))) = (asc(req), designated(req, "S")) else {
                 return base.execute(req);
             };
             with_memory(req, base, |words| {
@@ -336,7 +308,7 @@ fn the_omron_corpus_kills_every_mutant() {
             })
         }),
         // ASC starts at the other byte of D.
-        Mutant::new("asc-first-byte-flipped", &base, move |req, base| {
+        Mutant::new("asc-first-byte-flipped", base, move |req, base| {
             match (asc(req), di_word(req)) {
                 (true, Some(word)) if Designator::decode(word).is_some() => {
                     with_di(req, base, word ^ 0x0100)
@@ -345,32 +317,22 @@ fn the_omron_corpus_kills_every_mutant() {
             }
         }),
         // ASC writes lowercase letters.
-        Mutant::new("asc-lowercase", &base, move |req, base| {
-            let is_asc = asc(req);
-            map_done(base.execute(req), |mut o| {
-                if is_asc {
-                    for v in o.writes.values_mut() {
-                        let [lo, hi] = (*v as u16).to_le_bytes();
-                        let low = |b: u8| {
-                            if (0x41..=0x46).contains(&(b & 0x7F)) {
-                                b + 0x20
-                            } else {
-                                b
-                            }
-                        };
-                        *v = u32::from(u16::from_le_bytes([low(lo), low(hi)]));
+        Mutant::new("asc-lowercase", base, move |req, base| {
+            map_writes(base.execute(req), asc(req), |v| {
+                let [lo, hi] = (v as u16).to_le_bytes();
+                let low = |b: u8| {
+                    if (0x41..=0x46).contains(&(b & 0x7F)) {
+                        b + 0x20
+                    } else {
+                        b
                     }
-                }
-                o
+                };
+                u32::from(u16::from_le_bytes([low(lo), low(hi)]))
             })
         }),
         // ASC clears the other byte of a word it writes in part.
-        Mutant::new("asc-clears-other-byte", &base, move |req, base| {
-            let (true, Some(d), Some(di)) = (
-                asc(req),
-                device(req, "D"),
-                di_word(req).and_then(Designator::decode),
-            ) else {
+        Mutant::new("asc-clears-other-byte", base, move |req, base| {
+            let (true, Some((d, di))) = (asc(req), designated(req, "D")) else {
                 return base.execute(req);
             };
             let places: Vec<(Device, bool)> = (0..di.count)
@@ -391,19 +353,11 @@ fn the_omron_corpus_kills_every_mutant() {
             })
         }),
         // ASC never sets the parity bit.
-        Mutant::new("asc-parity-ignored", &base, move |req, base| {
-            let is_asc = asc(req);
-            map_done(base.execute(req), |mut o| {
-                if is_asc {
-                    for v in o.writes.values_mut() {
-                        *v &= 0x7F7F;
-                    }
-                }
-                o
-            })
+        Mutant::new("asc-parity-ignored", base, move |req, base| {
+            map_writes(base.execute(req), asc(req), |v| v & 0x7F7F)
         }),
         // ASC with even and odd parity the other way round.
-        Mutant::new("asc-parity-inverted", &base, move |req, base| {
+        Mutant::new("asc-parity-inverted", base, move |req, base| {
             match (asc(req), di_word(req)) {
                 (true, Some(word)) if matches!(word >> 12, 1 | 2) => {
                     with_di(req, base, word ^ 0x3000)
@@ -411,6 +365,10 @@ fn the_omron_corpus_kills_every_mutant() {
                 _ => base.execute(req),
             }
         }),
-    ];
-    assert_corpus_kills(&project, &base, &mutants);
+    ]
+}
+
+#[test]
+fn the_omron_corpus_kills_every_mutant() {
+    assert_kills(PROFILE, mutants);
 }
