@@ -498,17 +498,6 @@ fn the_direct_path_gives_the_replies_of_the_trial_path() {
     }
 }
 
-fn full_by_class(check: u64) -> Settings {
-    let mut settings = Settings::new(
-        operation(Operation::HexToValue),
-        Generator::Full { by_class: true },
-        5,
-    );
-    settings.shrink = 0;
-    settings.class_check = check;
-    settings
-}
-
 /// The group whose signature is `signature`, column by column.
 fn inputs_with(r: &Results, signature: &[&str]) -> u64 {
     r.groups
@@ -517,6 +506,24 @@ fn inputs_with(r: &Results, signature: &[&str]) -> u64 {
         .filter(|g| g.key.signature == signature)
         .map(|g| g.inputs)
         .sum()
+}
+
+/// A full sweep of hex-to-value, text by text or (`by_class`) class by class, from `seed`,
+/// shrinking `shrink` steps.
+fn full(by_class: bool, seed: u64, shrink: usize) -> Settings {
+    let mut settings = Settings::new(
+        operation(Operation::HexToValue),
+        Generator::Full { by_class },
+        seed,
+    );
+    settings.shrink = shrink;
+    settings
+}
+
+fn full_by_class(check: u64) -> Settings {
+    let mut settings = full(true, 5, 0);
+    settings.class_check = check;
+    settings
 }
 
 #[test]
@@ -688,12 +695,7 @@ fn a_full_sweep_by_class_of_an_instruction_covers_every_flag_setting() {
 #[test]
 fn the_lowerings_rules_are_their_models_answers() {
     let project = session();
-    let mut settings = Settings::new(
-        operation(Operation::HexToValue),
-        Generator::Full { by_class: false },
-        1,
-    );
-    settings.shrink = 0;
+    let settings = full(false, 1, 0);
     let sweep = Sweep::new(settings, &project.profiles, &project.backends).expect("sweep");
     let rules: Vec<exhaustive::Rule> = sweep
         .columns
@@ -764,12 +766,7 @@ fn the_lowerings_rules_are_their_models_answers() {
 #[ignore = "exhaustive: derives the byte classes of 14 columns twice (CI runs it: -- --ignored)"]
 fn each_text_through_the_rules_is_each_text_through_the_models() {
     let project = session();
-    let mut settings = Settings::new(
-        operation(Operation::HexToValue),
-        Generator::Full { by_class: false },
-        1,
-    );
-    settings.shrink = 1;
+    let mut settings = full(false, 1, 1);
     settings.shard = (5, 1 << 15);
     let (_, fast) = run(&project, &project.backends, settings.clone());
     settings.exhaustive = false;
@@ -818,12 +815,7 @@ fn a_model_unlike_its_rule_stops_an_each_text_sweep() {
             }
         })
         .collect();
-    let mut settings = Settings::new(
-        operation(Operation::HexToValue),
-        Generator::Full { by_class: false },
-        1,
-    );
-    settings.shrink = 0;
+    let mut settings = full(false, 1, 0);
     settings.shard = (1, 4096);
     let (_, r) = run(&project, &backends, settings);
     let report = r.exhaustive.as_ref().expect("asked through the rules");
@@ -888,12 +880,7 @@ fn a_codec_in_process_sweeps_each_text_as_the_general_path_does() {
     let project = session();
     let mut backends = project.backends.clone();
     backends.push(crate::codec_backend(Lenient));
-    let mut settings = Settings::new(
-        operation(Operation::HexToValue),
-        Generator::Full { by_class: false },
-        1,
-    );
-    settings.shrink = 1;
+    let mut settings = full(false, 1, 1);
     // The shard that holds "~~~~", the one text answered with a text.
     let tilde = u64::from(exhaustive::unscramble(u32::from_be_bytes(*b"~~~~")));
     settings.shard = (tilde % (1 << 15) + 1, 1 << 15);

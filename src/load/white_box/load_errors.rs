@@ -36,6 +36,16 @@ fn load(text: &str) -> Result<usize, Vec<LoadError>> {
     builder.finish().map(|c| c.cases.len()).map_err(|e| e.0)
 }
 
+/// The good case with each `(from, to)` of `changes` replaced once, in order, loaded.
+fn load_changed(changes: &[(&str, &str)]) -> Result<usize, Vec<LoadError>> {
+    let case = changes
+        .iter()
+        .fold(GOOD_CASE.to_string(), |case, (from, to)| {
+            case.replacen(*from, to, 1)
+        });
+    load(&format!("{HEADER}{case}"))
+}
+
 #[test]
 fn the_good_case_loads() {
     assert_eq!(load(&format!("{HEADER}{GOOD_CASE}")), Ok(1));
@@ -415,11 +425,12 @@ fn every_problem_in_a_file_is_reported_not_just_the_first() {
 
 #[test]
 fn unspecified_cases_need_no_cite_or_expectation() {
-    let case = GOOD_CASE
-        .replacen("basis: manual", "basis: unspecified", 1)
-        .replacen("    cite: example\n", "", 1)
-        .replacen("    expect:\n      after: {D200: 5A8DH}\n", "", 1);
-    assert_eq!(load(&format!("{HEADER}{case}")), Ok(1));
+    let changes = [
+        ("basis: manual", "basis: unspecified"),
+        ("    cite: example\n", ""),
+        ("    expect:\n      after: {D200: 5A8DH}\n", ""),
+    ];
+    assert_eq!(load_changed(&changes), Ok(1));
 }
 
 /// A constant the manual does not allow for an operand describes a program that cannot exist:
@@ -459,11 +470,12 @@ cases:
 /// its line and key, and an unknown key that is a typo names the key meant.
 #[test]
 fn three_shape_errors_are_reported_in_one_pass() {
-    let case = GOOD_CASE
-        .replacen("    operands:", "    oprands:", 1)
-        .replacen("    cite: example", "    cite: example\n    colour: red", 1)
-        .replacen("      after: {D200: 5A8DH}", "      after: [D200]", 1);
-    let errors = load(&format!("{HEADER}{case}")).expect_err("loaded");
+    let errors = load_changed(&[
+        ("    operands:", "    oprands:"),
+        ("    cite: example", "    cite: example\n    colour: red"),
+        ("      after: {D200: 5A8DH}", "      after: [D200]"),
+    ])
+    .expect_err("loaded");
     let rendered: Vec<String> = errors.iter().map(|e| chain(e)).collect();
     assert_eq!(errors.len(), 3, "{rendered:#?}");
     for (line, needle) in [
@@ -526,12 +538,28 @@ fn load_profile_text(file: &str, text: &str) -> Result<Profiles, String> {
     load_profiles(scratch.path()).map_err(|e| e.to_string())
 }
 
+/// A vendor profile as the project ships it, which must hold `marker` (else the `which`
+/// profile changed), and the line on which `marker`, which opens a line, starts.
+fn vendor_profile_at(file: &str, marker: &str, which: &str) -> (String, usize) {
+    let text = vendor_profile(file);
+    assert!(text.contains(marker), "the {which} profile changed");
+    let line = text[..text.find(marker).expect("found")].lines().count() + 1;
+    (text, line)
+}
+
+/// Asserts that the profile load errors `errors` say `message` at `at`: `file:line`, and the key
+/// where `message` does not name it.
+fn assert_reported(errors: &str, at: &str, message: &str) {
+    assert!(
+        errors.contains(&format!("{at}: {message}")),
+        "{message}\nin:\n{errors}"
+    );
+}
+
 #[test]
 fn a_lowering_on_a_device_the_variant_lacks_is_a_profile_error() {
-    let iqr = vendor_profile("mitsubishi-iqr.yaml");
     let lowering = "      operands: {s: D100, d: D200}\n      source: s\n      destination: d\n      text: packed\n      width: 4\n    - name: habin-terminated";
-    assert!(iqr.contains(lowering), "the iQ-R profile changed");
-    let line = iqr[..iqr.find(lowering).expect("found")].lines().count() + 1;
+    let (iqr, line) = vendor_profile_at("mitsubishi-iqr.yaml", lowering, "iQ-R");
     for (operands, message) in [
         (
             "{s: D99999, d: D200}",
@@ -548,10 +576,7 @@ fn a_lowering_on_a_device_the_variant_lacks_is_a_profile_error() {
             1,
         );
         let errors = load_profile_text("mitsubishi-iqr.yaml", &changed).expect_err("the profile loaded");
-        assert!(
-            errors.contains(&format!("mitsubishi-iqr.yaml:{line}: {message}")),
-            "{message}\nin:\n{errors}"
-        );
+        assert_reported(&errors, &format!("mitsubishi-iqr.yaml:{line}"), message);
     }
 }
 
@@ -577,21 +602,14 @@ fn a_lowering_reads_device_numbers_as_the_profile_numbers_them() {
     };
     with("W1F0").expect("W1F0 is W 496, which exists");
     let errors = with("W200").expect_err("W200 is W 512");
-    let message = "W200 does not exist";
-    assert!(
-        errors.contains(&format!(
-            "mitsubishi-fx5.yaml:{line}: cross_vendor.lowerings[2].operands.d: {message}"
-        )),
-        "{message}\nin:\n{errors}"
-    );
+    let at = format!("mitsubishi-fx5.yaml:{line}: cross_vendor.lowerings[2].operands.d");
+    assert_reported(&errors, &at, "W200 does not exist");
 }
 
 #[test]
 fn written_on_error_must_name_one_of_the_section_s_errors() {
-    let s7 = vendor_profile("siemens-s7-1200.yaml");
     let declared = "  written_on_error: [0007H]\n";
-    assert!(s7.contains(declared), "the S7-1200 profile changed");
-    let line = s7[..s7.find(declared).expect("found")].lines().count() + 1;
+    let (s7, line) = vendor_profile_at("siemens-s7-1200.yaml", declared, "S7-1200");
     for (listed, message) in [
         ("[0008H]", "`0008H` is not one of this section's `errors`"),
         ("[M8004]", "`M8004` is not one of this section's `errors`"),
@@ -599,12 +617,8 @@ fn written_on_error_must_name_one_of_the_section_s_errors() {
         let changed = s7.replacen(declared, &format!("  written_on_error: {listed}\n"), 1);
         let errors =
             load_profile_text("siemens-s7-1200.yaml", &changed).expect_err("the profile loaded");
-        assert!(
-            errors.contains(&format!(
-                "siemens-s7-1200.yaml:{line}: cross_vendor.written_on_error[0]: {message}"
-            )),
-            "{message}\nin:\n{errors}"
-        );
+        let at = format!("siemens-s7-1200.yaml:{line}: cross_vendor.written_on_error[0]");
+        assert_reported(&errors, &at, message);
     }
 }
 

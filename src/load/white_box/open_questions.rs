@@ -7,11 +7,41 @@
 use super::{root, scratch, session};
 use crate::load::{load_open_questions, OPEN_QUESTIONS};
 
+/// The project's open questions, loaded against its profiles and corpus.
+fn questions(s: &crate::session::Session) -> Vec<crate::model::open_questions::OpenQuestion> {
+    load_open_questions(&root().join(OPEN_QUESTIONS), &s.profiles, &s.corpus)
+        .unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// What loading a questions file of `text` reports; `loaded` is the panic if it loads.
+fn load_errors(text: &str, loaded: &str) -> String {
+    let s = session();
+    let dir = scratch();
+    let file = dir.path().join("q.yaml");
+    std::fs::write(&file, text).expect("write");
+    load_open_questions(&file, &s.profiles, &s.corpus)
+        .expect_err(loaded)
+        .to_string()
+}
+
+/// `cases`, each changed by `change` (each a copy: the cases are shared).
+fn changed<T: Clone>(
+    cases: &[std::sync::Arc<T>],
+    change: impl Fn(&mut T),
+) -> Vec<std::sync::Arc<T>> {
+    cases
+        .iter()
+        .map(|c| {
+            let mut c = (**c).clone();
+            change(&mut c);
+            std::sync::Arc::new(c)
+        })
+        .collect()
+}
+
 #[test]
 fn every_open_question_has_probes_in_the_corpus() {
-    let s = session();
-    let questions = load_open_questions(&root().join(OPEN_QUESTIONS), &s.profiles, &s.corpus)
-        .unwrap_or_else(|e| panic!("{e}"));
+    let questions = questions(&session());
     assert!(questions.len() >= 10, "{} questions", questions.len());
     for q in &questions {
         assert!(!q.probes.is_empty(), "{} has no probe", q.id);
@@ -21,19 +51,12 @@ fn every_open_question_has_probes_in_the_corpus() {
 
 #[test]
 fn a_probe_that_is_not_a_case_is_a_load_error() {
-    let s = session();
-    let dir = scratch();
-    let file = dir.path().join("q.yaml");
-    std::fs::write(
-        &file,
+    let errors = load_errors(
         "questions:\n  - id: q\n    title: t\n    profile: mitsubishi-iqr\n    instructions: [HABIN]\n    \
          readings: [{id: a, text: a}, {id: b, text: b}]\n    model_takes: a\n    evidence: [x]\n    \
          probes: [habin-fixed-4-digits-example, no-such-case]\n",
-    )
-    .expect("write");
-    let errors = load_open_questions(&file, &s.profiles, &s.corpus)
-        .expect_err("an unknown probe loaded")
-        .to_string();
+        "an unknown probe loaded",
+    );
     assert!(
         errors.contains(":9: questions[0].probes[1]: `no-such-case` is not a case id"),
         "{errors}"
@@ -49,34 +72,17 @@ fn every_question_has_a_probe_that_decides_and_the_model_answers_its_reading() {
     use crate::plan::Check;
     use crate::Basis;
     use crate::Verdict;
-    use std::sync::Arc;
 
     let mut s = session();
-    let questions = load_open_questions(&root().join(OPEN_QUESTIONS), &s.profiles, &s.corpus)
-        .unwrap_or_else(|e| panic!("{e}"));
+    let questions = questions(&s);
     // Every case recorded rather than judged, so that the verdict says what the model did.
-    s.project.corpus.cases = s
-        .corpus
-        .cases
-        .iter()
-        .map(|c| {
-            Arc::new(crate::Case {
-                basis: Basis::Unspecified,
-                ..(**c).clone()
-            })
-        })
-        .collect();
-    s.project.corpus.cross_vendor = s
-        .corpus
-        .cross_vendor
-        .iter()
-        .map(|c| {
-            Arc::new(crate::CrossVendorCase {
-                basis: Basis::Unspecified,
-                ..(**c).clone()
-            })
-        })
-        .collect();
+    s.project.corpus.cases = changed(&s.corpus.cases, |c: &mut crate::Case| {
+        c.basis = Basis::Unspecified
+    });
+    s.project.corpus.cross_vendor =
+        changed(&s.corpus.cross_vendor, |c: &mut crate::CrossVendorCase| {
+            c.basis = Basis::Unspecified
+        });
     let mut problems = Vec::new();
     for q in &questions {
         let Some(decides) = &q.decides else {
@@ -139,20 +145,13 @@ fn every_question_has_a_probe_that_decides_and_the_model_answers_its_reading() {
 /// is refused at load: it could not tell them apart.
 #[test]
 fn a_deciding_probe_that_cannot_tell_two_readings_apart_is_a_load_error() {
-    let s = session();
-    let dir = scratch();
-    let file = dir.path().join("q.yaml");
-    std::fs::write(
-        &file,
+    let errors = load_errors(
         "questions:\n  - id: q\n    title: t\n    profile: mitsubishi-iqr\n    instructions: [HABIN]\n    \
          readings: [{id: a, text: a}, {id: b, text: b}, {id: c, text: c}]\n    model_takes: a\n    \
          evidence: [x]\n    probes: [habin-fixed-4-digits-example]\n    decides:\n      \
          probe: habin-fixed-4-digits-example\n      outcomes: {a: \"D200=5A8DH\", b: \"D200=5A8DH\"}\n",
-    )
-    .expect("write");
-    let errors = load_open_questions(&file, &s.profiles, &s.corpus)
-        .expect_err("a probe that decides nothing loaded")
-        .to_string();
+        "a probe that decides nothing loaded",
+    );
     assert!(
         errors.contains("readings `a` and `b` predict the same outcome `D200=5A8DH`"),
         "{errors}"

@@ -5,8 +5,6 @@
 //! the other link.
 
 #[cfg(test)]
-use std::collections::BTreeMap;
-use std::net::TcpListener;
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -17,12 +15,17 @@ use crate::backend::bench::BenchBackend;
 use crate::backend::modbus::sim::{ModbusSimSettings, ModbusSimulator};
 use crate::backend::modbus::{Map, ModbusBench};
 use crate::error_chain::chain;
-use crate::hil::{dry_run, generate, GenerateOptions};
+use crate::hil::{generate, GenerateOptions};
 use crate::plan::Check;
-use crate::session::{BackendSource, Session};
-use crate::{verdicts, Trial, Verdict};
+use crate::session::Session;
+use crate::{verdicts, Trial};
 
-use super::{execute_once, first_trial, key, reference, rule, session};
+use super::{
+    assert_dry_run_opens_no_socket, assert_fault_reported, assert_interlock_refuses,
+    assert_refused_by_the_fence, assert_unreachable, bench, connected, execute_once, first_trial,
+    free_address, live, model_verdicts, ran_as_the_model, reference, refused_at_build, rule,
+    session,
+};
 
 const PROFILE: &str = "idec-fc4a";
 /// The variant the simulated CPU is: D0-D1299 and the expansion D2000-D7999.
@@ -88,14 +91,16 @@ fn settings(address: String) -> ModbusBench {
     s
 }
 
-fn idec_backend(
+/// A simulated FC4A set up by `change_sim`, and a backend on it set up by `change`.
+fn idec_bench(
     project: &Session,
-    sim: &ModbusSimulator,
+    change_sim: impl FnOnce(&mut ModbusSimSettings),
     change: impl FnOnce(&mut ModbusBench),
-) -> Arc<BenchBackend> {
+) -> (ModbusSimulator, Arc<BenchBackend>) {
+    let sim = idec_sim(project, change_sim);
     let mut s = settings(sim.address().to_string());
     change(&mut s);
-    Arc::new(BenchBackend::new(s, &project.profiles).expect("backend"))
+    (sim, bench(project, s))
 }
 
 fn writes_sent(sim: &ModbusSimulator) -> usize {
@@ -123,45 +128,13 @@ fn fc4a_through_the_simulated_idec_cpu_judges_like_the_model() {
     let mut project = session();
     let sim = idec_sim(&project, |_| {});
     let model = reference(&project, PROFILE);
-    let backend = project
-        .add(
-            BackendSource::Bench(Box::new(settings(sim.address().to_string()).erased())),
-            true,
-        )
-        .unwrap_or_else(|e| panic!("interlocks: {}", chain(&e)))[0]
-        .clone();
-    let expected: BTreeMap<_, _> = {
-        let trials: Vec<Trial> = project
-            .plan(std::slice::from_ref(&model))
-            .into_iter()
-            .filter(|t| t.variant == VARIANT)
-            .collect();
-        let v = verdicts(&trials);
-        trials.iter().map(key).zip(v).collect()
-    };
+    let backend = live(&mut project, settings(sim.address().to_string()));
+    let expected = model_verdicts(&project, &model, VARIANT);
     let trials = project.plan(std::slice::from_ref(&backend));
     let got = verdicts(&trials);
-    let (mut ran, mut errors) = (0, 0);
-    for (t, v) in trials.iter().zip(&got) {
-        if t.variant != VARIANT {
-            assert!(t.skip.is_some(), "{}: run on another variant", t.name());
-            continue;
-        }
-        let want = expected.get(&key(t));
-        match (&t.skip, want) {
-            (_, None) => panic!("{}: no such trial on the built-in model", t.name()),
-            (Some(why), Some(w)) => assert!(
-                matches!(w, Verdict::Skipped { .. }) || why.contains("no program can hold"),
-                "{}: skipped ({why}) where the model ran it",
-                t.name()
-            ),
-            (None, Some(w)) => {
-                ran += 1;
-                assert_eq!(v, w, "{}", t.name());
-                errors += usize::from(expects_an_error(t));
-            }
-        }
-    }
+    let ran = ran_as_the_model(&trials, &got, &expected, VARIANT, &["no program can hold"]);
+    let errors = ran.iter().filter(|t| expects_an_error(t)).count();
+    let ran = ran.len();
     let audit = sim.audit();
     assert!(audit.stray_writes.is_empty(), "{:?}", audit.stray_writes);
     assert!(audit.anomalies.is_empty(), "{:?}", audit.anomalies);
@@ -214,34 +187,21 @@ fn a_port_fault_is_reported_as_its_kind(
     #[case] kind: &str,
     #[case] expected: &str,
 ) {
-    let project = session();
-    let sim = idec_sim(&project, |_| {});
-    let backend = idec_backend(&project, &sim, |_| {});
-    backend.connect().expect("interlocks");
-    let trial = first_trial(&project, &backend, "ATOH");
-    execute_once(&backend, &trial).expect("a case before the fault runs");
-    sim.add_fault(fault);
-    let e = execute_once(&backend, &trial).expect_err("the fault shows");
-    assert_eq!(e.kind(), kind, "{e}");
-    assert!(e.to_string().contains(expected), "{e}");
+    assert_fault_reported(
+        |p| idec_bench(p, |_| {}, |_| {}),
+        "ATOH",
+        fault,
+        kind,
+        expected,
+    );
 }
 
 #[test]
 fn no_connection_is_unreachable() {
     let project = session();
-    let address = {
-        let l = TcpListener::bind("127.0.0.1:0").expect("bind");
-        l.local_addr().expect("addr").to_string()
-    };
-    let mut s = settings(address);
+    let mut s = settings(free_address());
     s.link.client.read_retries = 0;
-    let backend = Arc::new(BenchBackend::new(s, &project.profiles).expect("backend"));
-    assert!(chain(&backend.connect().expect_err("refused")).contains("no connection to"));
-    let trial = first_trial(&project, &backend, "ATOH");
-    assert_eq!(
-        execute_once(&backend, &trial).expect_err("down").kind(),
-        "unreachable"
-    );
+    assert_unreachable(&project, &bench(&project, s), "ATOH");
 }
 
 /// Nothing is written before the type code, the start control relay and the program's
@@ -254,14 +214,12 @@ fn an_interlock_refuses_before_any_write(
     #[case] change: fn(&mut ModbusSimSettings),
     #[case] expected: &str,
 ) {
-    let project = session();
-    let sim = idec_sim(&project, change);
-    let backend = idec_backend(&project, &sim, |_| {});
-    let e = chain(&backend.connect().expect_err("refused"));
-    assert!(e.contains(expected), "{e}");
-    let trial = first_trial(&project, &backend, "ATOH");
-    assert!(execute_once(&backend, &trial).is_err());
-    assert_eq!(writes_sent(&sim), 0, "a write went out");
+    assert_interlock_refuses(
+        |p| idec_bench(p, change, |_| {}),
+        "ATOH",
+        expected,
+        writes_sent,
+    );
 }
 
 /// A case whose window lies outside the sandbox is refused while it is still a plan: nothing
@@ -269,19 +227,13 @@ fn an_interlock_refuses_before_any_write(
 #[test]
 fn a_write_outside_the_sandbox_is_refused_before_any_byte_is_sent() {
     let project = session();
-    let sim = idec_sim(&project, |_| {});
-    let backend = idec_backend(&project, &sim, |s| {
-        s.sandbox = vec![WordRange::new("D", 0, 5)]
-    });
-    backend.connect().expect("interlocks");
+    let (sim, backend) = connected(idec_bench(
+        &project,
+        |_| {},
+        |s| s.sandbox = vec![WordRange::new("D", 0, 5)],
+    ));
     let trial = first_trial(&project, &backend, "ATOH");
-    match execute_once(&backend, &trial) {
-        Ok(crate::Response::Unsupported(why)) => assert!(
-            why.contains("is refused: it lies outside the words the harness may write"),
-            "{why}"
-        ),
-        other => panic!("not refused: {other:?}"),
-    }
+    assert_refused_by_the_fence(&backend, &trial);
     assert_eq!(writes_sent(&sim), 0);
 }
 
@@ -291,27 +243,13 @@ fn a_sandbox_of_relays_is_refused() {
     let project = session();
     let mut s = settings("127.0.0.1:9".into());
     s.sandbox = vec![WordRange::new("M", 0, 17)];
-    let e = chain(
-        &BenchBackend::new(s, &project.profiles)
-            .err()
-            .expect("refused"),
-    );
+    let e = refused_at_build(&project, s);
     assert!(e.contains("word devices only"), "{e}");
 }
 
 #[test]
 fn a_dry_run_opens_no_socket() {
-    let project = session();
-    let listener = TcpListener::bind("127.0.0.1:0").expect("bind");
-    listener.set_nonblocking(true).expect("nonblocking");
-    let s = settings(listener.local_addr().expect("addr").to_string());
-    let backend = Arc::new(BenchBackend::new(s, &project.profiles).expect("backend"));
-    let found = dry_run(&project, &backend);
-    assert!(found.trials > 20, "{found:?}");
-    assert_eq!(found.executions, 2 * found.trials);
-    assert!(found.refused.is_empty(), "{:?}", found.refused);
-    assert!(listener.accept().is_err(), "the dry run connected");
-    assert_eq!(backend.requests(), 0);
+    assert_dry_run_opens_no_socket(20, settings);
 }
 
 /// The program resets M8004 itself before each case; on a CPU where the flag stays on, the case
@@ -319,9 +257,7 @@ fn a_dry_run_opens_no_socket() {
 #[test]
 fn an_error_flag_that_stays_on_fails_the_case_as_not_executed() {
     let project = session();
-    let sim = idec_sim(&project, |_| {});
-    let backend = idec_backend(&project, &sim, |_| {});
-    backend.connect().expect("interlocks");
+    let (sim, backend) = connected(idec_bench(&project, |_| {}, |_| {}));
     let trial = first_trial(&project, &backend, "ATOH");
     sim.hold_error_flag(true);
     let e = execute_once(&backend, &trial).expect_err("not executed");

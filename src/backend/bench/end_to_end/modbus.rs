@@ -22,7 +22,7 @@ use crate::backend::modbus::{Map, ModbusLinkSettings};
 use crate::hil::{generate, GenerateOptions};
 use crate::Device;
 
-use super::{reference, root, session};
+use super::{reference, root, session, succeeded};
 
 /// The Python of `.venv-adapters` with pymodbus, or `None` (with a note).
 fn venv_python() -> Option<PathBuf> {
@@ -60,6 +60,19 @@ impl Pymodbus {
     }
 }
 
+/// pymodbus's server with the registers of `init` (its JSON) and `args`, and the scratch folder
+/// that holds `init` (keep it as long as the server); `None` (with a note) without pymodbus.
+fn pymodbus_with(init: &str, args: &[&str]) -> Option<(tempfile::TempDir, Pymodbus)> {
+    let python = venv_python()?;
+    let dir = super::scratch();
+    let file = dir.path().join("init.json");
+    std::fs::write(&file, init).expect("write");
+    let mut all = vec!["--init", file.to_str().expect("utf-8")];
+    all.extend_from_slice(args);
+    let server = Pymodbus::start(&python, &all);
+    Some((dir, server))
+}
+
 impl Drop for Pymodbus {
     fn drop(&mut self) {
         drop(self.child.stdin.take());
@@ -72,23 +85,12 @@ impl Drop for Pymodbus {
 /// coils, and an exception is a protocol fault that keeps the connection.
 #[test]
 fn the_client_reads_and_writes_pymodbus_at_the_limits() {
-    let Some(python) = venv_python() else {
+    let Some((_dir, server)) = pymodbus_with(
+        r#"{"holding": {"100": 4660, "8002": 6}}"#,
+        &["--coils-on", "9000,9004", "--holding", "10000"],
+    ) else {
         return;
     };
-    let dir = super::scratch();
-    let init = dir.path().join("init.json");
-    std::fs::write(&init, r#"{"holding": {"100": 4660, "8002": 6}}"#).expect("write");
-    let server = Pymodbus::start(
-        &python,
-        &[
-            "--init",
-            init.to_str().expect("utf-8"),
-            "--coils-on",
-            "9000,9004",
-            "--holding",
-            "10000",
-        ],
-    );
     let mut c = ModbusClient::new(ModbusSettings::new(server.address.clone()));
     assert_eq!(c.read_holding(100, 1).expect("read"), [4660]);
     let words: Vec<u16> = (0..300u16).map(|i| i.wrapping_mul(257) ^ 0x5A00).collect();
@@ -138,21 +140,11 @@ fn the_client_reads_and_writes_pymodbus_at_the_limits() {
 /// and a fenced write landing where the map puts D words.
 #[test]
 fn the_idec_link_names_the_cpu_and_writes_through_the_fence_on_pymodbus() {
-    let Some(python) = venv_python() else {
+    let Some((_dir, server)) =
+        pymodbus_with(r#"{"holding": {"8002": 6}}"#, &["--coils-on", "9000"])
+    else {
         return;
     };
-    let dir = super::scratch();
-    let init = dir.path().join("init.json");
-    std::fs::write(&init, r#"{"holding": {"8002": 6}}"#).expect("write");
-    let server = Pymodbus::start(
-        &python,
-        &[
-            "--init",
-            init.to_str().expect("utf-8"),
-            "--coils-on",
-            "9000",
-        ],
-    );
     let project = session();
     let map = Map::of(project.profiles.get("idec-fc4a").expect("profile")).expect("map");
     let settings = ModbusLinkSettings {
@@ -234,12 +226,7 @@ fn pymodbus_reads_and_writes_the_simulated_idec_cpu() {
         .args(&ops)
         .output()
         .expect("pymodbus client runs");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{stdout}{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let stdout = succeeded(&out, "");
     let lines: Vec<&str> = stdout.lines().collect();
     assert_eq!(
         lines,

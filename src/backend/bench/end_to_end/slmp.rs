@@ -5,7 +5,6 @@
 
 #[cfg(test)]
 use std::collections::BTreeMap;
-use std::net::TcpListener;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -20,10 +19,15 @@ use crate::backend::slmp::{SlmpBench, ADDRESSING};
 use crate::error_chain::chain;
 use crate::execute::{images, requests};
 use crate::hil::{dry_run, generate, GenerateOptions};
-use crate::session::{BackendSource, Session};
+use crate::session::Session;
 use crate::{verdicts, Backend, Device, Trial, Verdict};
 
-use super::{execute_once, first_trial, key, reference, rule, session};
+use super::{
+    assert_dry_run_opens_no_socket, assert_fault_reported, assert_interlock_refuses,
+    assert_refused_by_the_fence, assert_unreachable, bench, connected, execute_once, first_trial,
+    free_address, idle_listener, live, model_verdicts, ran_as_the_model, reference,
+    refused_at_build, rule, session, slmp_simulator,
+};
 
 fn manifest(project: &Session, profile: &str) -> Manifest {
     generate(
@@ -51,16 +55,8 @@ fn simulator(
     variant: &str,
     faults: Vec<FaultRule>,
 ) -> SlmpSimulator {
-    let profile = project
-        .profiles
-        .get(&manifest.profile)
-        .cloned()
-        .expect("profile");
-    let mut settings =
-        SlmpSimSettings::new(manifest.clone(), variant, type_name(&manifest.profile));
-    settings.faults = faults;
-    SlmpSimulator::start(settings, profile, reference(project, &manifest.profile))
-        .unwrap_or_else(|e| panic!("simulator: {e}"))
+    let name = type_name(&manifest.profile);
+    slmp_simulator(project, manifest, variant, name, |s| s.faults = faults)
 }
 
 fn settings(manifest: &Manifest, variant: &str, sim: &SlmpSimulator) -> SlmpBench {
@@ -80,13 +76,6 @@ fn settings(manifest: &Manifest, variant: &str, sim: &SlmpSimulator) -> SlmpBenc
     s
 }
 
-fn live(project: &mut Session, settings: SlmpBench) -> Arc<dyn Backend> {
-    project
-        .add(BackendSource::Bench(Box::new(settings.erased())), true)
-        .unwrap_or_else(|e| panic!("interlocks: {}", chain(&e)))[0]
-        .clone()
-}
-
 /// Runs every trial of one variant through the live backend and compares each verdict with the
 /// built-in model's; returns how many ran.
 fn same_verdicts(profile: &str, variant: &str) -> usize {
@@ -95,43 +84,13 @@ fn same_verdicts(profile: &str, variant: &str) -> usize {
     let sim = simulator(&project, &manifest, variant, vec![]);
     let model = reference(&project, profile);
     let backend = live(&mut project, settings(&manifest, variant, &sim));
-    let expected: BTreeMap<_, _> = {
-        let trials: Vec<Trial> = project
-            .plan(std::slice::from_ref(&model))
-            .into_iter()
-            .filter(|t| t.variant == variant)
-            .collect();
-        let v = verdicts(&trials);
-        trials.iter().map(key).zip(v).collect()
-    };
+    let expected = model_verdicts(&project, &model, variant);
     let trials = project.plan(std::slice::from_ref(&backend));
     let started = Instant::now();
     let got = verdicts(&trials);
     let elapsed = started.elapsed();
-    let mut ran = 0;
-    for (t, v) in trials.iter().zip(&got) {
-        if t.variant != variant {
-            assert!(t.skip.is_some(), "{}: run on another variant", t.name());
-            continue;
-        }
-        let want = expected.get(&key(t));
-        match (&t.skip, want) {
-            (_, None) => panic!("{}: no such trial on the built-in model", t.name()),
-            (Some(why), Some(w)) => {
-                assert!(
-                    matches!(w, Verdict::Skipped { .. })
-                        || why.contains("no program can hold")
-                        || why.contains("program cannot hold the case"),
-                    "{}: skipped ({why}) where the model ran it",
-                    t.name()
-                );
-            }
-            (None, Some(w)) => {
-                ran += 1;
-                assert_eq!(v, w, "{}", t.name());
-            }
-        }
-    }
+    let skip_reasons = ["no program can hold", "program cannot hold the case"];
+    let ran = ran_as_the_model(&trials, &got, &expected, variant, &skip_reasons).len();
     let audit = sim.audit();
     assert!(
         audit.stray_writes.is_empty(),
@@ -246,7 +205,34 @@ fn iqr_backend(
 ) -> Arc<BenchBackend> {
     let mut s = settings(iqr_manifest(), "rcpu", sim);
     change(&mut s);
-    Arc::new(BenchBackend::new(s, &project.profiles).expect("backend"))
+    bench(project, s)
+}
+
+/// A simulated iQ-R CPU set up by `change`, and a backend on it.
+fn iqr_bench(
+    project: &Session,
+    change: impl FnOnce(&mut SlmpSimSettings),
+) -> (SlmpSimulator, Arc<BenchBackend>) {
+    let sim = iqr_sim(project, change);
+    let backend = iqr_backend(project, &sim, |_| {});
+    (sim, backend)
+}
+
+/// Settings for the iQ-R program at `address`, with the default timings, writing `sandbox`.
+fn iqr_settings_at(address: impl Into<String>, sandbox: Vec<WordRange>) -> SlmpBench {
+    SlmpBench::new(
+        "live",
+        address,
+        iqr_manifest().clone(),
+        "rcpu",
+        "R04CPU",
+        sandbox,
+    )
+}
+
+/// The words of the iQ-R manifest's windows.
+fn iqr_sandbox() -> Vec<WordRange> {
+    parse_ranges(&iqr_manifest().writes.join(","), &ADDRESSING).expect("writes")
 }
 
 fn writes_sent(sim: &SlmpSimulator) -> usize {
@@ -295,25 +281,13 @@ fn a_port_fault_is_reported_as_its_kind(
     #[case] kind: &str,
     #[case] expected: &str,
 ) {
-    let project = session();
-    let sim = iqr_sim(&project, |_| {});
-    let backend = iqr_backend(&project, &sim, |_| {});
-    backend.connect().expect("interlocks");
-    let trial = first_trial(&project, &backend, "BINHA");
-    execute_once(&backend, &trial).expect("a case before the fault runs");
-    // A rule counts the requests from when it is added: 1 is the next one.
-    sim.add_fault(fault);
-    let e = execute_once(&backend, &trial).expect_err("the fault shows");
-    assert_eq!(e.kind(), kind, "{e}");
-    assert!(e.to_string().contains(expected), "{e}");
+    assert_fault_reported(|p| iqr_bench(p, |_| {}), "BINHA", fault, kind, expected);
 }
 
 #[test]
 fn a_read_past_the_timeout_is_sent_again_and_the_case_completes() {
     let project = session();
-    let sim = iqr_sim(&project, |_| {});
-    let backend = iqr_backend(&project, &sim, |_| {});
-    backend.connect().expect("interlocks");
+    let (sim, backend) = connected(iqr_bench(&project, |_| {}));
     sim.add_fault(rule(
         command::RANDOM_READ,
         1,
@@ -359,27 +333,9 @@ fn the_circuit_breaker_stops_asking_after_max_faults_in_a_row() {
 #[test]
 fn no_connection_is_unreachable() {
     let project = session();
-    // A port that was free a moment ago: nothing listens there.
-    let address = {
-        let l = TcpListener::bind("127.0.0.1:0").expect("bind");
-        l.local_addr().expect("addr").to_string()
-    };
-    let mut s = SlmpBench::new(
-        "live",
-        address,
-        iqr_manifest().clone(),
-        "rcpu",
-        "R04CPU",
-        parse_ranges(&iqr_manifest().writes.join(","), &ADDRESSING).expect("writes"),
-    );
+    let mut s = iqr_settings_at(free_address(), iqr_sandbox());
     s.link.read_retries = 0;
-    let backend = Arc::new(BenchBackend::new(s, &project.profiles).expect("backend"));
-    assert!(chain(&backend.connect().expect_err("refused")).contains("no connection to"));
-    let trial = first_trial(&project, &backend, "BINHA");
-    assert_eq!(
-        execute_once(&backend, &trial).expect_err("down").kind(),
-        "unreachable"
-    );
+    assert_unreachable(&project, &bench(&project, s), "BINHA");
 }
 
 /// Nothing is written before the type name, the operating status and the program's signature
@@ -393,14 +349,7 @@ fn an_interlock_refuses_before_any_write(
     #[case] change: fn(&mut SlmpSimSettings),
     #[case] expected: &str,
 ) {
-    let project = session();
-    let sim = iqr_sim(&project, change);
-    let backend = iqr_backend(&project, &sim, |_| {});
-    let e = chain(&backend.connect().expect_err("refused"));
-    assert!(e.contains(expected), "{e}");
-    let trial = first_trial(&project, &backend, "BINHA");
-    assert!(execute_once(&backend, &trial).is_err());
-    assert_eq!(writes_sent(&sim), 0, "a write went out");
+    assert_interlock_refuses(|p| iqr_bench(p, change), "BINHA", expected, writes_sent);
 }
 
 /// A manifest generated for a part of the corpus only: another program.
@@ -423,27 +372,14 @@ fn manifest_for(filter: &str) -> Manifest {
 #[test]
 fn a_write_outside_the_sandbox_is_refused_before_any_byte_is_sent() {
     let project = session();
-    let listener = TcpListener::bind("127.0.0.1:0").expect("bind");
-    listener.set_nonblocking(true).expect("nonblocking");
-    let s = SlmpBench::new(
-        "live",
+    let listener = idle_listener();
+    let s = iqr_settings_at(
         listener.local_addr().expect("addr").to_string(),
-        iqr_manifest().clone(),
-        "rcpu",
-        "R04CPU",
         vec![WordRange::new("D", 0, 150)],
     );
-    let backend = Arc::new(BenchBackend::new(s, &project.profiles).expect("backend"));
+    let backend = bench(&project, s);
     let trial = first_trial(&project, &backend, "BINHA");
-    match execute_once(&backend, &trial) {
-        Ok(crate::Response::Unsupported(why)) => {
-            assert!(
-                why.contains("is refused: it lies outside the words the harness may write"),
-                "{why}"
-            );
-        }
-        other => panic!("not refused: {other:?}"),
-    }
+    assert_refused_by_the_fence(&backend, &trial);
     assert!(listener.accept().is_err(), "the backend connected");
     // The same with a simulated CPU that audits every byte it receives.
     let sim = iqr_sim(&project, |_| {});
@@ -463,11 +399,8 @@ fn a_write_outside_the_sandbox_is_refused_before_any_byte_is_sent() {
 fn fx5u_live(project: &Session) -> (SlmpSimulator, Arc<BenchBackend>) {
     let m = manifest(project, "mitsubishi-fx5");
     let sim = simulator(project, &m, "fx5u", vec![]);
-    let backend = Arc::new(
-        BenchBackend::new(settings(&m, "fx5u", &sim), &project.profiles).expect("backend"),
-    );
-    backend.connect().expect("interlocks");
-    (sim, backend)
+    let backend = bench(project, settings(&m, "fx5u", &sim));
+    connected((sim, backend))
 }
 
 /// A case that sets a word the client cannot address (16 points of M, as `K4M0`) is not run,
@@ -561,9 +494,7 @@ fn a_mailbox_in_link_registers_is_numbered_in_hexadecimal() {
     assert_eq!(m.mailbox_head(&ADDRESSING).expect("head").index, 0x100);
     assert!(generated.program.contains("W108"), "the trigger is W108");
     let sim = simulator(&project, &m, "fx5u", vec![]);
-    let backend = Arc::new(
-        BenchBackend::new(settings(&m, "fx5u", &sim), &project.profiles).expect("backend"),
-    );
+    let backend = bench(&project, settings(&m, "fx5u", &sim));
     backend.connect().expect("the signature is found at W100");
     let trial = first_trial(&project, &backend, "ASCI");
     let verdict = verdicts(std::slice::from_ref(&trial)).remove(0);
@@ -578,43 +509,14 @@ fn a_mailbox_in_link_registers_is_numbered_in_hexadecimal() {
 #[test]
 fn a_sandbox_over_the_mailbox_is_refused() {
     let project = session();
-    let s = SlmpBench::new(
-        "live",
-        "127.0.0.1:1",
-        iqr_manifest().clone(),
-        "rcpu",
-        "R04CPU",
-        vec![WordRange::new("D", 0, 18431)],
-    );
-    let e = chain(
-        &BenchBackend::new(s, &project.profiles)
-            .err()
-            .expect("refused"),
-    );
+    let s = iqr_settings_at("127.0.0.1:1", vec![WordRange::new("D", 0, 18431)]);
+    let e = refused_at_build(&project, s);
     assert!(e.contains("overlaps the mailbox"), "{e}");
 }
 
 #[test]
 fn a_dry_run_opens_no_socket() {
-    let project = session();
-    let listener = TcpListener::bind("127.0.0.1:0").expect("bind");
-    listener.set_nonblocking(true).expect("nonblocking");
-    let m = iqr_manifest();
-    let s = SlmpBench::new(
-        "live",
-        listener.local_addr().expect("addr").to_string(),
-        m.clone(),
-        "rcpu",
-        "R04CPU",
-        parse_ranges(&m.writes.join(","), &ADDRESSING).expect("writes"),
-    );
-    let backend = Arc::new(BenchBackend::new(s, &project.profiles).expect("backend"));
-    let found = dry_run(&project, &backend);
-    assert!(found.trials > 300, "{found:?}");
-    assert_eq!(found.executions, 2 * found.trials);
-    assert!(found.refused.is_empty(), "{:?}", found.refused);
-    assert!(listener.accept().is_err(), "the dry run connected");
-    assert_eq!(backend.requests(), 0);
+    assert_dry_run_opens_no_socket(300, |address| iqr_settings_at(address, iqr_sandbox()));
 }
 
 /// A pulse form executes on each case, not only the first: its enable falls between two cases
@@ -622,9 +524,7 @@ fn a_dry_run_opens_no_socket() {
 #[test]
 fn a_pulse_rung_fires_on_every_case() {
     let project = session();
-    let sim = iqr_sim(&project, |_| {});
-    let backend = iqr_backend(&project, &sim, |_| {});
-    backend.connect().expect("interlocks");
+    let (sim, backend) = connected(iqr_bench(&project, |_| {}));
     let trial = first_trial(&project, &backend, "BINHAP");
     let first = execute_once(&backend, &trial).expect("first");
     let before = sim.audit().executions;
@@ -744,9 +644,7 @@ fn the_long_device_form_on_an_fx5_is_refused_before_any_write() {
 #[case::rungs_in_a_case(true, false)]
 fn the_pulse_self_test(#[case] rungs_in_case: bool, #[case] passes: bool) {
     let project = session();
-    let sim = iqr_sim(&project, |s| s.rungs_in_case = rungs_in_case);
-    let backend = iqr_backend(&project, &sim, |_| {});
-    backend.connect().expect("interlocks");
+    let (sim, backend) = connected(iqr_bench(&project, |s| s.rungs_in_case = rungs_in_case));
     let check = crate::hil::pulse_self_test(&project, &backend).expect("ran");
     assert_eq!(check.fired_twice, passes, "{check:?}");
     assert!(check.trial.contains("p::"), "{check:?}");
@@ -758,8 +656,7 @@ fn rung_trials(
     project: &Session,
     change: impl FnOnce(&mut SlmpSimSettings, u16),
 ) -> (SlmpSimulator, Arc<BenchBackend>, Trial, u16) {
-    let probe = iqr_sim(project, |_| {});
-    let probe_backend = iqr_backend(project, &probe, |_| {});
+    let (probe, probe_backend) = iqr_bench(project, |_| {});
     let trial = first_trial(project, &probe_backend, "HABIN");
     let imgs = images(&trial);
     let rung = probe_backend
@@ -767,9 +664,7 @@ fn rung_trials(
         .expect("plan")
         .rung;
     drop(probe);
-    let sim = iqr_sim(project, |s| change(s, rung));
-    let backend = iqr_backend(project, &sim, |_| {});
-    backend.connect().expect("interlocks");
+    let (sim, backend) = connected(iqr_bench(project, |s| change(s, rung)));
     (sim, backend, trial, rung)
 }
 
@@ -947,8 +842,7 @@ fn special_registers_are_written_only_when_named() {
             .expect("parses")
             .expect("a live backend")
     };
-    let backend =
-        Arc::new(BenchBackend::new(parsed("manifest"), &project.profiles).expect("backend"));
+    let backend = bench(&project, parsed("manifest"));
     assert!(backend
         .fence()
         .allowed()
@@ -971,17 +865,13 @@ fn special_registers_are_written_only_when_named() {
             .collect::<Vec<_>>()
             .join(",")
     );
-    let backend = Arc::new(BenchBackend::new(parsed(&named), &project.profiles).expect("backend"));
+    let backend = bench(&project, parsed(&named));
     let found = dry_run(&project, &backend);
     assert_eq!(found.refused, Vec::<(String, String)>::new());
     let bits = SlmpBench::parse(&spec("manifest,Y0-Y17"), std::path::Path::new("."))
         .expect("parses")
         .expect("a live backend");
-    let e = chain(
-        &BenchBackend::new(bits, &project.profiles)
-            .err()
-            .expect("refused"),
-    );
+    let e = refused_at_build(&project, bits);
     assert!(e.contains("word devices only"), "{e}");
 }
 

@@ -6,7 +6,7 @@
 //! PLC_CONFORMANCE_REQUIRE_BACKENDS is set. All traffic stays on 127.0.0.1.
 
 #[cfg(test)]
-use std::io::{BufRead, BufReader};
+use std::io::{BufRead, BufReader, Lines, Read};
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
@@ -17,12 +17,11 @@ use crate::backend::bench::tcp::TransportError;
 use crate::backend::slmp::client::{Client, ClientError, ClientSettings, Code};
 use crate::backend::slmp::frame::{DeviceForm, FrameKind};
 use crate::backend::slmp::limits::{self, Family};
-use crate::backend::slmp::sim::{SlmpSimSettings, SlmpSimulator};
 use crate::backend::slmp::{fault_of, ADDRESSING};
 use crate::hil::{generate, GenerateOptions};
 use crate::Device;
 
-use super::{reference, session};
+use super::{session, slmp_simulator, succeeded};
 
 /// The Python of `.venv-adapters` with virtual-plc, pymcprotocol, aslmp and plc-comm-slmp, or `None` (with a note).
 fn venv_python() -> Option<PathBuf> {
@@ -40,16 +39,14 @@ struct VirtualPlc {
 
 impl VirtualPlc {
     fn start(python: &PathBuf, profile: &str, extra: &[&str]) -> VirtualPlc {
-        let mut child = Command::new(python)
-            .args(["-m", "virtual_plc", "--host", "127.0.0.1", "--port", "0"])
-            .args(["--profile", profile, "--text-pad", "32"])
-            .args(extra)
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("virtual-plc starts");
-        let stderr = child.stderr.take().expect("stderr");
-        let mut lines = BufReader::new(stderr).lines();
+        let (child, mut lines) = spawn_reading(
+            Command::new(python)
+                .args(["-m", "virtual_plc", "--host", "127.0.0.1", "--port", "0"])
+                .args(["--profile", profile, "--text-pad", "32"])
+                .args(extra),
+            true,
+            "virtual-plc starts",
+        );
         let address = loop {
             let line = lines
                 .next()
@@ -67,6 +64,28 @@ impl VirtualPlc {
         std::thread::spawn(move || for _ in lines {});
         VirtualPlc { child, address }
     }
+}
+
+/// Starts a Python tool (`what` in the message if it cannot start): its process, and the lines
+/// of the stream it reports on, its stderr when `on_stderr` and else its stdout; the other
+/// stream is discarded.
+fn spawn_reading(
+    command: &mut Command,
+    on_stderr: bool,
+    what: &str,
+) -> (Child, Lines<BufReader<Box<dyn Read + Send>>>) {
+    let (stdout, stderr) = if on_stderr {
+        (Stdio::null(), Stdio::piped())
+    } else {
+        (Stdio::piped(), Stdio::null())
+    };
+    let mut child = command.stdout(stdout).stderr(stderr).spawn().expect(what);
+    let stream: Box<dyn Read + Send> = if on_stderr {
+        Box::new(child.stderr.take().expect("stderr"))
+    } else {
+        Box::new(child.stdout.take().expect("stdout"))
+    };
+    (child, BufReader::new(stream).lines())
 }
 
 impl Drop for VirtualPlc {
@@ -88,6 +107,17 @@ fn generated(project: &crate::Project, profile: &str, variant: &str) -> Manifest
     )
     .expect("generate")
     .manifest
+}
+
+/// The program generated for one variant of a profile, and the head of its mailbox.
+fn generated_with_head(
+    project: &crate::Project,
+    profile: &str,
+    variant: &str,
+) -> (Manifest, Device) {
+    let manifest = generated(project, profile, variant);
+    let head = manifest.mailbox_head(&ADDRESSING).expect("mailbox");
+    (manifest, head)
 }
 
 fn client(address: &str, frame: FrameKind, form: DeviceForm) -> Client {
@@ -211,18 +241,11 @@ fn virtual_plc_faults_map_to_their_kinds() {
 fn pymcprotocol_talks_to_the_simulated_cpu() {
     let Some(python) = venv_python() else { return };
     let project = session();
-    let manifest = generated(&project, "mitsubishi-iqr", "rcpu");
-    let head = manifest.mailbox_head(&ADDRESSING).expect("mailbox");
-    let profile = project
-        .profiles
-        .get("mitsubishi-iqr")
-        .cloned()
-        .expect("profile");
+    let (manifest, head) = generated_with_head(&project, "mitsubishi-iqr", "rcpu");
     for (plctype, long_form) in [("iQ-R", true), ("Q", false)] {
-        let mut s = SlmpSimSettings::new(manifest.clone(), "rcpu", "R04CPU");
-        s.link.long_form = long_form;
-        let sim = SlmpSimulator::start(s, profile.clone(), reference(&project, "mitsubishi-iqr"))
-            .expect("simulator");
+        let sim = slmp_simulator(&project, &manifest, "rcpu", "R04CPU", |s| {
+            s.link.long_form = long_form
+        });
         let script = format!(
             "import sys\n\
              from pymcprotocol import Type3E\n\
@@ -240,12 +263,7 @@ fn pymcprotocol_talks_to_the_simulated_cpu() {
             .args(["-c", &script])
             .output()
             .expect("python runs");
-        let stdout = String::from_utf8_lossy(&out.stdout);
-        assert!(
-            out.status.success(),
-            "{plctype}: {stdout}{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let stdout = succeeded(&out, &format!("{plctype}: "));
         let hash = manifest.hash32();
         let signed = |w: u32| i32::from(w as u16 as i16);
         let expected = format!(
@@ -269,15 +287,13 @@ struct Aslmp {
 
 impl Aslmp {
     fn start(python: &PathBuf, target: &str) -> Aslmp {
-        let mut child = Command::new(python)
-            .args(["-m", "aslmp.tools", "serve", "--target", target])
-            .args(["--host", "127.0.0.1"])
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("aslmp serve starts");
-        let stdout = child.stdout.take().expect("stdout");
-        let mut lines = BufReader::new(stdout).lines();
+        let (child, mut lines) = spawn_reading(
+            Command::new(python)
+                .args(["-m", "aslmp.tools", "serve", "--target", target])
+                .args(["--host", "127.0.0.1"]),
+            false,
+            "aslmp serve starts",
+        );
         let mut entries = std::collections::BTreeMap::new();
         for line in lines.by_ref() {
             let line = line.expect("a line");
@@ -386,16 +402,8 @@ fn the_client_keeps_to_the_limits_of_aslmps_simulated_fx5u() {
 fn plc_comm_slmp_talks_to_the_simulated_cpu() {
     let Some(python) = venv_python() else { return };
     let project = session();
-    let manifest = generated(&project, "mitsubishi-fx5", "fx5u");
-    let head = manifest.mailbox_head(&ADDRESSING).expect("mailbox");
-    let profile = project
-        .profiles
-        .get("mitsubishi-fx5")
-        .cloned()
-        .expect("profile");
-    let s = SlmpSimSettings::new(manifest.clone(), "fx5u", "FX5U-32MT/DS");
-    let sim =
-        SlmpSimulator::start(s, profile, reference(&project, "mitsubishi-fx5")).expect("simulator");
+    let (manifest, head) = generated_with_head(&project, "mitsubishi-fx5", "fx5u");
+    let sim = slmp_simulator(&project, &manifest, "fx5u", "FX5U-32MT/DS", |_| {});
     let script = format!(
         "from slmp.client import SlmpClient\n\
          from slmp import SlmpTarget\n\
@@ -412,12 +420,7 @@ fn plc_comm_slmp_talks_to_the_simulated_cpu() {
         .args(["-c", &script])
         .output()
         .expect("python runs");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{stdout}{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let stdout = succeeded(&out, "");
     assert_eq!(
         stdout, "FX5U-32MT/DS 0x4a49\n[17232, 18760, 2]\n[1, 2, 65535]\n",
         "the signature reads as the program writes it"
