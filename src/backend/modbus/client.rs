@@ -115,51 +115,24 @@ impl fmt::Display for ModbusError {
 
 impl std::error::Error for ModbusError {}
 
-/// One connection to a server (made on first use, dropped after a fault).
-pub(crate) struct ModbusClient {
-    settings: ModbusSettings,
-    connection: tcp::Connection,
-    tid: u16,
-}
-
-impl ModbusClient {
-    /// A client that has not connected yet: nothing is opened until the first request.
-    pub(crate) fn new(settings: ModbusSettings) -> Self {
-        ModbusClient {
-            settings,
-            connection: tcp::Connection::default(),
-            tid: 0,
+impl tcp::ProtocolError for ModbusError {
+    fn transport(&self) -> Option<&TransportError> {
+        match self {
+            ModbusError::Transport(e) => Some(e),
+            ModbusError::Exception { .. } => None,
         }
     }
+}
 
-    pub(crate) fn settings(&self) -> &ModbusSettings {
-        &self.settings
-    }
+/// One connection to a server (made on first use, dropped after a fault); the transaction id
+/// is the client's request number.
+pub(crate) type ModbusClient = tcp::Client<ModbusSettings>;
 
-    pub(crate) fn is_connected(&self) -> bool {
-        self.connection.is_connected()
-    }
-
-    /// Drops the connection; the next request makes a new one.
-    pub(crate) fn disconnect(&mut self) {
-        self.connection.disconnect();
-    }
-
-    /// Requests sent, for a run's figures.
-    pub(crate) fn requests(&self) -> u64 {
-        self.connection.requests
-    }
-
-    /// Connections made, for a run's figures.
-    pub(crate) fn connections(&self) -> u64 {
-        self.connection.connections
-    }
-
+impl ModbusClient {
     /// Sends one request and reads its reply; drops the connection on any fault but an
     /// exception.
     fn exchange(&mut self, what: &str, request: &Request) -> Result<Response, ModbusError> {
-        self.tid = self.tid.wrapping_add(1);
-        let (tid, unit) = (self.tid, self.settings.unit);
+        let (tid, unit) = (self.next_sequence(), self.settings.unit);
         let exchange = tcp::Exchange {
             what,
             timeout: self.settings.reply_timeout,
@@ -195,18 +168,8 @@ impl ModbusClient {
 
     /// A read, sent again on a new connection after a timeout or a lost connection.
     fn read_exchange(&mut self, what: &str, request: &Request) -> Result<Response, ModbusError> {
-        let mut attempt = 0;
-        loop {
-            match self.exchange(what, request) {
-                Err(ModbusError::Transport(e))
-                    if e.worth_retrying() && attempt < self.settings.read_retries =>
-                {
-                    attempt += 1;
-                    std::thread::sleep(Duration::from_millis(20 * u64::from(attempt)));
-                }
-                other => return other,
-            }
-        }
+        let retries = self.settings.read_retries;
+        tcp::retry_read(retries, || self.exchange(what, request))
     }
 
     /// FC03: `count` holding registers from wire address `address`, in batches of at most the
