@@ -179,20 +179,16 @@ impl ModbusClient {
         address: u16,
         count: usize,
     ) -> Result<Vec<u16>, ModbusError> {
-        let mut out = Vec::with_capacity(count);
-        let batch = self.settings.limits.read_registers.max(1);
-        for (at, n) in batches(address, count, batch, "FC03 read", "registers")? {
-            let what = describe("FC03 read", n, "registers", at);
-            let request = Request::ReadHolding {
-                address: at,
-                count: n as u16,
-            };
-            match self.read_exchange(&what, &request)? {
-                Response::Registers(values) => out.extend(values),
-                other => return Err(unexpected(what, &other)),
-            }
-        }
-        Ok(out)
+        self.read_batched(
+            (address, count),
+            self.settings.limits.read_registers,
+            ("FC03 read", "registers"),
+            |address, count| Request::ReadHolding { address, count },
+            |response| match response {
+                Response::Registers(values) => Ok(values),
+                other => Err(other),
+            },
+        )
     }
 
     /// FC01: `count` coils from wire address `address`, in batches of at most the link's limit.
@@ -201,18 +197,35 @@ impl ModbusClient {
         address: u16,
         count: usize,
     ) -> Result<Vec<bool>, ModbusError> {
+        self.read_batched(
+            (address, count),
+            self.settings.limits.read_coils,
+            ("FC01 read", "coils"),
+            |address, count| Request::ReadCoils { address, count },
+            |response| match response {
+                Response::Coils(values) => Ok(values),
+                other => Err(other),
+            },
+        )
+    }
+
+    /// `count` points from `address` (`span`), in requests of at most `batch` points (each
+    /// `request(at, n)`, named `action` of n `unit` for errors), all checked before the first is
+    /// sent; `values` takes each reply's points out, and a reply of another kind is a frame
+    /// error. What FC03 and FC01 differ in is only which request and which reply.
+    fn read_batched<T>(
+        &mut self,
+        (address, count): (u16, usize),
+        batch: usize,
+        (action, unit): (&str, &str),
+        request: impl Fn(u16, u16) -> Request,
+        values: impl Fn(Response) -> Result<Vec<T>, Response>,
+    ) -> Result<Vec<T>, ModbusError> {
         let mut out = Vec::with_capacity(count);
-        let batch = self.settings.limits.read_coils.max(1);
-        for (at, n) in batches(address, count, batch, "FC01 read", "coils")? {
-            let what = describe("FC01 read", n, "coils", at);
-            let request = Request::ReadCoils {
-                address: at,
-                count: n as u16,
-            };
-            match self.read_exchange(&what, &request)? {
-                Response::Coils(values) => out.extend(values),
-                other => return Err(unexpected(what, &other)),
-            }
+        for (at, n) in batches(address, count, batch.max(1), action, unit)? {
+            let what = describe(action, n, unit, at);
+            let response = self.read_exchange(&what, &request(at, n as u16))?;
+            out.extend(values(response).map_err(|other| unexpected(what, &other))?);
         }
         Ok(out)
     }
