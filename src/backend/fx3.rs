@@ -12,7 +12,7 @@
 
 use std::marker::PhantomData;
 
-use super::fx5::{asci_with, hex_with, Packing, Rules};
+use super::fx5::{asci_with, hex_with, Op, Packing, Rules};
 use super::reference::{Model, Stop};
 use super::{Outcome, Request, Unsupported};
 
@@ -51,30 +51,19 @@ const OPERATION_ERROR: u16 = 6706;
 /// The ASCI/HEX reference model of an FX3-style family.
 pub(crate) struct AsciHex<D>(PhantomData<D>);
 
-#[derive(Debug, Clone, Copy)]
-enum Op {
-    Asci,
-    Hex,
-}
-
-fn op(instruction: &str) -> Option<Op> {
-    match instruction {
-        "ASCI" | "ASCIP" => Some(Op::Asci),
-        "HEX" | "HEXP" => Some(Op::Hex),
-        _ => None,
-    }
-}
+/// The FX3's HEX (FNC 83), and its pulse form; the Delta DVP names it alike.
+const HEX: [&str; 2] = ["HEX", "HEXP"];
 
 impl<D: Dialect> Model for AsciHex<D> {
     const PROFILE: &'static str = D::PROFILE;
 
     fn models(instruction: &str) -> bool {
-        op(instruction).is_some()
+        Op::of(instruction, HEX).is_some()
     }
 
     fn run(req: &Request<'_>) -> Result<Outcome, Stop> {
         let packing = Packing::from_sm8161(req.flag(D::MODE_FLAG));
-        match op(req.instruction) {
+        match Op::of(req.instruction, HEX) {
             Some(Op::Asci) => asci(req, packing),
             Some(Op::Hex) => hex(req, packing),
             None => Err(Unsupported(format!("{} is not modelled", req.instruction)).into()),

@@ -175,29 +175,38 @@ pub(crate) fn hex_words(chars: &[u8]) -> Result<Vec<u16>, InvalidChar> {
 /// The FX5 reference backend.
 pub(crate) struct Fx5;
 
+/// The two conversions an FX-style family models.
 #[derive(Debug, Clone, Copy)]
-enum Op {
+pub(super) enum Op {
     Asci,
     Hex,
 }
 
-fn op(instruction: &str) -> Option<Op> {
-    match instruction {
-        "ASCI" | "ASCIP" => Some(Op::Asci),
-        "HEXA" | "HEXAP" => Some(Op::Hex),
-        _ => None,
+impl Op {
+    /// The conversion `instruction` names, in a family whose HEX(A) and its pulse form are
+    /// `hex`: every FX-style family says ASCI, but the FX5 says HEXA where the FX3 and the Delta
+    /// DVP say HEX.
+    pub(super) fn of(instruction: &str, hex: [&str; 2]) -> Option<Op> {
+        match instruction {
+            "ASCI" | "ASCIP" => Some(Op::Asci),
+            _ if hex.iter().any(|&name| name == instruction) => Some(Op::Hex),
+            _ => None,
+        }
     }
 }
+
+/// The FX5's HEX, and its pulse form.
+const HEXA: [&str; 2] = ["HEXA", "HEXAP"];
 
 impl Model for Fx5 {
     const PROFILE: &'static str = PROFILE;
 
     fn models(instruction: &str) -> bool {
-        op(instruction).is_some()
+        Op::of(instruction, HEXA).is_some()
     }
 
     fn run(req: &Request<'_>) -> Result<Outcome, Stop> {
-        match op(req.instruction) {
+        match Op::of(req.instruction, HEXA) {
             Some(Op::Asci) => asci(req),
             Some(Op::Hex) => hex(req),
             None => Err(Unsupported(format!("{} is not modelled", req.instruction)).into()),

@@ -567,31 +567,7 @@ fn ladder_setup(
     t.push_str(
         "Nothing else is written: no output, timer or counter, and no word outside these.\n\n",
     );
-    if !manifest.unrealisable.is_empty() {
-        t.push_str(
-            "## Cases no program can hold\n\nTheir trials are skipped with this reason:\n\n",
-        );
-        for u in &manifest.unrealisable {
-            let _ = writeln!(
-                t,
-                "- {} {}: {}",
-                u.instruction,
-                operands_text(&u.operands),
-                u.reason
-            );
-        }
-        t.push('\n');
-    }
-    t.push_str("## Rungs\n\n| rung | instruction | operands |\n|---|---|---|\n");
-    for r in &manifest.rungs {
-        let _ = writeln!(
-            t,
-            "| {} | {} | {} |",
-            r.id,
-            r.instruction,
-            operands_text(&r.operands)
-        );
-    }
+    super::setup::cases_and_rungs(&mut t, manifest, |operands, _| operands_text(operands));
     t
 }
 

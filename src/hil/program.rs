@@ -359,20 +359,6 @@ pub(crate) fn setup_text(manifest: &Manifest, profile: &Profile, trials: usize) 
     t.push_str(
         "Nothing else is written: no bit device, output or timer, and no word outside these.\n\n",
     );
-    if !manifest.unrealisable.is_empty() {
-        t.push_str(
-            "## Cases no program can hold\n\nTheir trials are skipped with this reason:\n\n",
-        );
-        for u in &manifest.unrealisable {
-            let call = call_text(&u.operands, &u.addresses);
-            let _ = writeln!(t, "- {} {call}: {}", u.instruction, u.reason);
-        }
-        t.push('\n');
-    }
-    t.push_str("## Rungs\n\n| rung | instruction | operands |\n|---|---|---|\n");
-    for r in &manifest.rungs {
-        let call = call_text(&r.operands, &r.addresses);
-        let _ = writeln!(t, "| {} | {} | {call} |", r.id, r.instruction);
-    }
+    super::setup::cases_and_rungs(&mut t, manifest, call_text);
     t
 }

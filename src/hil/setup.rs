@@ -1,5 +1,7 @@
-//! What every setup checklist says the same way, whatever the link: the words a run writes.
+//! What every setup checklist says the same way, whatever the link: the words a run writes,
+//! the cases no program can hold and the rung table.
 
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use crate::backend::bench::fence::{self, Kind};
@@ -49,5 +51,30 @@ pub(super) fn run_writes(
             mailbox::range(&head),
             pc.iter().map(ToString::to_string).collect::<Vec<_>>().join(", ")
         );
+    }
+}
+
+/// The checklist's last sections: the cases no program can hold, with the reason their trials
+/// are skipped, and the rung table. `call` writes an instruction's operands (and what each
+/// pointer addresses) as the link's program shows them, so that a rung reads as it does there.
+pub(super) fn cases_and_rungs(
+    t: &mut String,
+    manifest: &Manifest,
+    call: impl Fn(&BTreeMap<String, String>, &BTreeMap<String, String>) -> String,
+) {
+    if !manifest.unrealisable.is_empty() {
+        t.push_str(
+            "## Cases no program can hold\n\nTheir trials are skipped with this reason:\n\n",
+        );
+        for u in &manifest.unrealisable {
+            let operands = call(&u.operands, &u.addresses);
+            let _ = writeln!(t, "- {} {operands}: {}", u.instruction, u.reason);
+        }
+        t.push('\n');
+    }
+    t.push_str("## Rungs\n\n| rung | instruction | operands |\n|---|---|---|\n");
+    for r in &manifest.rungs {
+        let operands = call(&r.operands, &r.addresses);
+        let _ = writeln!(t, "| {} | {} | {operands} |", r.id, r.instruction);
     }
 }

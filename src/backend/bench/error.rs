@@ -6,6 +6,7 @@ use std::fmt;
 
 use super::fence::Refused;
 use super::link::LinkError;
+use super::tcp::ProtocolError;
 
 /// An error underneath another: a device that does not parse, a file that cannot be read, the
 /// link's error, or a nested [`LiveError`].
@@ -34,6 +35,13 @@ impl From<Refused> for LiveError {
 impl From<LinkError> for LiveError {
     fn from(e: LinkError) -> Self {
         LiveError::Link(e)
+    }
+}
+
+/// A link client's error, as its link's error ([`LinkError`]'s `From`).
+impl<E: ProtocolError> From<E> for LiveError {
+    fn from(e: E) -> Self {
+        LiveError::Link(e.into())
     }
 }
 

@@ -8,6 +8,7 @@ use std::fmt;
 
 use super::addressing::Addressing;
 use super::fence::FencedWrite;
+use super::tcp::{ProtocolError, TransportError};
 use crate::backend::Fault;
 use crate::device::Device;
 
@@ -48,6 +49,17 @@ impl LinkError {
             Failure::Lost => Fault::Crashed(text),
             Failure::Protocol => Fault::Protocol(text),
         }
+    }
+}
+
+/// Every link's client error becomes a link error the same way: the transport's failure, or a
+/// protocol fault where the CPU refused the request in a whole reply.
+impl<E: ProtocolError> From<E> for LinkError {
+    fn from(e: E) -> Self {
+        let failure = e
+            .transport()
+            .map_or(Failure::Protocol, TransportError::failure);
+        LinkError::new(failure, e)
     }
 }
 

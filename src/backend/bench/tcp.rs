@@ -229,6 +229,86 @@ impl Connection {
     }
 }
 
+/// A link's client, as every link keeps one: its settings, its one connection, and the number
+/// of its last request (Modbus's transaction id, SLMP's serial), so that a reply answering
+/// another request is caught. Each link adds its requests in an `impl` of its own settings'
+/// client; what all links keep the same way is here once.
+pub(crate) struct Client<S> {
+    pub(in crate::backend) settings: S,
+    pub(in crate::backend) connection: Connection,
+    sequence: u16,
+}
+
+impl<S> Client<S> {
+    /// A client that has not connected yet: nothing is opened until the first request.
+    pub(crate) fn new(settings: S) -> Self {
+        Client {
+            settings,
+            connection: Connection::default(),
+            sequence: 0,
+        }
+    }
+
+    pub(crate) fn settings(&self) -> &S {
+        &self.settings
+    }
+
+    pub(crate) fn is_connected(&self) -> bool {
+        self.connection.is_connected()
+    }
+
+    /// Drops the connection; the next request makes a new one.
+    pub(crate) fn disconnect(&mut self) {
+        self.connection.disconnect();
+    }
+
+    /// Requests sent, for a run's figures.
+    pub(crate) fn requests(&self) -> u64 {
+        self.connection.requests
+    }
+
+    /// Connections made, for a run's figures.
+    pub(crate) fn connections(&self) -> u64 {
+        self.connection.connections
+    }
+
+    /// The next request's number: one past the last, wrapping, the first being 1.
+    pub(in crate::backend) fn next_sequence(&mut self) -> u16 {
+        self.sequence = self.sequence.wrapping_add(1);
+        self.sequence
+    }
+}
+
+/// A link's own error: the transport's failure, in the ways every link shares, or the
+/// protocol's refusal in a whole reply (an SLMP end code, a Modbus exception), which is an
+/// answer: it keeps the connection and is never sent again.
+pub(crate) trait ProtocolError: std::error::Error + Send + Sync + 'static {
+    /// The transport's failure, where the transport failed.
+    fn transport(&self) -> Option<&TransportError>;
+}
+
+/// Sends a read (`send`) again, on a new connection, after a timeout or a lost connection, up to
+/// `retries` times with a growing pause, since reading twice changes nothing. Writes must not
+/// come here: a write sent twice could land twice, or late.
+pub(crate) fn retry_read<T, E: ProtocolError>(
+    retries: u32,
+    mut send: impl FnMut() -> Result<T, E>,
+) -> Result<T, E> {
+    let mut attempt = 0;
+    loop {
+        match send() {
+            Err(e)
+                if e.transport().is_some_and(TransportError::worth_retrying)
+                    && attempt < retries =>
+            {
+                attempt += 1;
+                std::thread::sleep(Duration::from_millis(20 * u64::from(attempt)));
+            }
+            other => return other,
+        }
+    }
+}
+
 /// Why a buffer was not filled.
 #[derive(Debug)]
 pub(crate) enum Short {

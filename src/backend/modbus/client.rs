@@ -115,51 +115,24 @@ impl fmt::Display for ModbusError {
 
 impl std::error::Error for ModbusError {}
 
-/// One connection to a server (made on first use, dropped after a fault).
-pub(crate) struct ModbusClient {
-    settings: ModbusSettings,
-    connection: tcp::Connection,
-    tid: u16,
-}
-
-impl ModbusClient {
-    /// A client that has not connected yet: nothing is opened until the first request.
-    pub(crate) fn new(settings: ModbusSettings) -> Self {
-        ModbusClient {
-            settings,
-            connection: tcp::Connection::default(),
-            tid: 0,
+impl tcp::ProtocolError for ModbusError {
+    fn transport(&self) -> Option<&TransportError> {
+        match self {
+            ModbusError::Transport(e) => Some(e),
+            ModbusError::Exception { .. } => None,
         }
     }
+}
 
-    pub(crate) fn settings(&self) -> &ModbusSettings {
-        &self.settings
-    }
+/// One connection to a server (made on first use, dropped after a fault); the transaction id
+/// is the client's request number.
+pub(crate) type ModbusClient = tcp::Client<ModbusSettings>;
 
-    pub(crate) fn is_connected(&self) -> bool {
-        self.connection.is_connected()
-    }
-
-    /// Drops the connection; the next request makes a new one.
-    pub(crate) fn disconnect(&mut self) {
-        self.connection.disconnect();
-    }
-
-    /// Requests sent, for a run's figures.
-    pub(crate) fn requests(&self) -> u64 {
-        self.connection.requests
-    }
-
-    /// Connections made, for a run's figures.
-    pub(crate) fn connections(&self) -> u64 {
-        self.connection.connections
-    }
-
+impl ModbusClient {
     /// Sends one request and reads its reply; drops the connection on any fault but an
     /// exception.
     fn exchange(&mut self, what: &str, request: &Request) -> Result<Response, ModbusError> {
-        self.tid = self.tid.wrapping_add(1);
-        let (tid, unit) = (self.tid, self.settings.unit);
+        let (tid, unit) = (self.next_sequence(), self.settings.unit);
         let exchange = tcp::Exchange {
             what,
             timeout: self.settings.reply_timeout,
@@ -195,18 +168,8 @@ impl ModbusClient {
 
     /// A read, sent again on a new connection after a timeout or a lost connection.
     fn read_exchange(&mut self, what: &str, request: &Request) -> Result<Response, ModbusError> {
-        let mut attempt = 0;
-        loop {
-            match self.exchange(what, request) {
-                Err(ModbusError::Transport(e))
-                    if e.worth_retrying() && attempt < self.settings.read_retries =>
-                {
-                    attempt += 1;
-                    std::thread::sleep(Duration::from_millis(20 * u64::from(attempt)));
-                }
-                other => return other,
-            }
-        }
+        let retries = self.settings.read_retries;
+        tcp::retry_read(retries, || self.exchange(what, request))
     }
 
     /// FC03: `count` holding registers from wire address `address`, in batches of at most the
@@ -216,20 +179,16 @@ impl ModbusClient {
         address: u16,
         count: usize,
     ) -> Result<Vec<u16>, ModbusError> {
-        let mut out = Vec::with_capacity(count);
-        let batch = self.settings.limits.read_registers.max(1);
-        for (at, n) in batches(address, count, batch, "FC03 read", "registers")? {
-            let what = describe("FC03 read", n, "registers", at);
-            let request = Request::ReadHolding {
-                address: at,
-                count: n as u16,
-            };
-            match self.read_exchange(&what, &request)? {
-                Response::Registers(values) => out.extend(values),
-                other => return Err(unexpected(what, &other)),
-            }
-        }
-        Ok(out)
+        self.read_batched(
+            (address, count),
+            self.settings.limits.read_registers,
+            ("FC03 read", "registers"),
+            |address, count| Request::ReadHolding { address, count },
+            |response| match response {
+                Response::Registers(values) => Ok(values),
+                other => Err(other),
+            },
+        )
     }
 
     /// FC01: `count` coils from wire address `address`, in batches of at most the link's limit.
@@ -238,18 +197,35 @@ impl ModbusClient {
         address: u16,
         count: usize,
     ) -> Result<Vec<bool>, ModbusError> {
+        self.read_batched(
+            (address, count),
+            self.settings.limits.read_coils,
+            ("FC01 read", "coils"),
+            |address, count| Request::ReadCoils { address, count },
+            |response| match response {
+                Response::Coils(values) => Ok(values),
+                other => Err(other),
+            },
+        )
+    }
+
+    /// `count` points from `address` (`span`), in requests of at most `batch` points (each
+    /// `request(at, n)`, named `action` of n `unit` for errors), all checked before the first is
+    /// sent; `values` takes each reply's points out, and a reply of another kind is a frame
+    /// error. What FC03 and FC01 differ in is only which request and which reply.
+    fn read_batched<T>(
+        &mut self,
+        (address, count): (u16, usize),
+        batch: usize,
+        (action, unit): (&str, &str),
+        request: impl Fn(u16, u16) -> Request,
+        values: impl Fn(Response) -> Result<Vec<T>, Response>,
+    ) -> Result<Vec<T>, ModbusError> {
         let mut out = Vec::with_capacity(count);
-        let batch = self.settings.limits.read_coils.max(1);
-        for (at, n) in batches(address, count, batch, "FC01 read", "coils")? {
-            let what = describe("FC01 read", n, "coils", at);
-            let request = Request::ReadCoils {
-                address: at,
-                count: n as u16,
-            };
-            match self.read_exchange(&what, &request)? {
-                Response::Coils(values) => out.extend(values),
-                other => return Err(unexpected(what, &other)),
-            }
+        for (at, n) in batches(address, count, batch.max(1), action, unit)? {
+            let what = describe(action, n, unit, at);
+            let response = self.read_exchange(&what, &request(at, n as u16))?;
+            out.extend(values(response).map_err(|other| unexpected(what, &other))?);
         }
         Ok(out)
     }

@@ -184,22 +184,6 @@ impl Addressing for Map {
     }
 }
 
-impl From<ModbusError> for LinkError {
-    fn from(e: ModbusError) -> Self {
-        let failure = match &e {
-            ModbusError::Transport(t) => t.failure(),
-            ModbusError::Exception { .. } => Failure::Protocol,
-        };
-        LinkError::new(failure, e)
-    }
-}
-
-impl From<ModbusError> for LiveError {
-    fn from(e: ModbusError) -> Self {
-        LiveError::Link(e.into())
-    }
-}
-
 /// The Modbus client as a bench's link, over a profile's map.
 struct ModbusLink {
     client: ModbusClient,

@@ -140,52 +140,26 @@ pub(crate) fn device_ref(device: &Device, what: &str) -> Result<DeviceRef, Clien
     })
 }
 
-/// One connection to a CPU (made on first use, dropped after a fault).
-pub(crate) struct Client {
-    settings: ClientSettings,
-    connection: tcp::Connection,
-    serial: u16,
-}
-
-impl Client {
-    /// A client that has not connected yet: nothing is opened until the first request.
-    pub(crate) fn new(settings: ClientSettings) -> Self {
-        Client {
-            settings,
-            connection: tcp::Connection::default(),
-            serial: 0,
+impl tcp::ProtocolError for ClientError {
+    fn transport(&self) -> Option<&TransportError> {
+        match self {
+            ClientError::Transport(e) => Some(e),
+            ClientError::EndCode { .. } => None,
         }
     }
+}
 
-    pub(crate) fn settings(&self) -> &ClientSettings {
-        &self.settings
-    }
+/// One connection to a CPU (made on first use, dropped after a fault); a 4E frame carries the
+/// client's request number as its serial.
+pub(crate) type Client = tcp::Client<ClientSettings>;
 
-    pub(crate) fn is_connected(&self) -> bool {
-        self.connection.is_connected()
-    }
-
-    /// Drops the connection; the next request makes a new one.
-    pub(crate) fn disconnect(&mut self) {
-        self.connection.disconnect();
-    }
-
-    /// Requests sent, for a run's figures.
-    pub(crate) fn requests(&self) -> u64 {
-        self.connection.requests
-    }
-
-    /// Connections made, for a run's figures.
-    pub(crate) fn connections(&self) -> u64 {
-        self.connection.connections
-    }
-
+impl Client {
     /// Sends one request and reads its reply; drops the connection on any fault.
     fn exchange(&mut self, what: &str, body: &frame::Body) -> Result<Vec<u8>, ClientError> {
         let frame_kind = self.settings.frame;
-        self.serial = self.serial.wrapping_add(1);
+        let sequence = self.next_sequence();
         let serial = if frame_kind == FrameKind::E4 {
-            self.serial
+            sequence
         } else {
             0
         };
@@ -250,18 +224,8 @@ impl Client {
 
     /// A read, sent again on a new connection after a timeout or a lost connection.
     fn read_exchange(&mut self, what: &str, body: &frame::Body) -> Result<Vec<u8>, ClientError> {
-        let mut attempt = 0;
-        loop {
-            match self.exchange(what, body) {
-                Err(ClientError::Transport(e))
-                    if e.worth_retrying() && attempt < self.settings.read_retries =>
-                {
-                    attempt += 1;
-                    std::thread::sleep(Duration::from_millis(20 * u64::from(attempt)));
-                }
-                other => return other,
-            }
-        }
+        let retries = self.settings.read_retries;
+        tcp::retry_read(retries, || self.exchange(what, body))
     }
 
     /// 0101: the CPU's type name.

@@ -273,7 +273,17 @@ pub(crate) struct Response {
     pub data: Vec<u8>,
 }
 
-fn put_head(out: &mut Vec<u8>, subheader: [u8; 2], frame: FrameKind, serial: u16, route: Route) {
+/// One whole binary message, either way: the head, the data length, then the fixed words (a
+/// request's timer, command and subcommand; a response's end code) and the data. Both ways
+/// declare the same length, of the fixed words and the data together.
+fn encode_message(
+    subheader: [u8; 2],
+    (frame, serial, route): (FrameKind, u16, Route),
+    words: &[u16],
+    data: &[u8],
+) -> Vec<u8> {
+    let length = 2 * words.len() + data.len();
+    let mut out = Vec::with_capacity(frame.header_len() + length);
     out.extend_from_slice(&subheader);
     if frame == FrameKind::E4 {
         out.extend_from_slice(&serial.to_le_bytes());
@@ -283,6 +293,12 @@ fn put_head(out: &mut Vec<u8>, subheader: [u8; 2], frame: FrameKind, serial: u16
     out.push(route.station);
     out.extend_from_slice(&route.module_io.to_le_bytes());
     out.push(route.multidrop);
+    out.extend_from_slice(&(length as u16).to_le_bytes());
+    for word in words {
+        out.extend_from_slice(&word.to_le_bytes());
+    }
+    out.extend_from_slice(data);
+    out
 }
 
 fn u16_at(bytes: &[u8], at: usize) -> u16 {
@@ -353,21 +369,12 @@ pub(crate) fn message_len(frame: FrameKind, header: &[u8]) -> Result<usize, Fram
 
 impl Request {
     pub(crate) fn encode(&self) -> Vec<u8> {
-        let mut out = Vec::with_capacity(self.frame.header_len() + 6 + self.data.len());
-        put_head(
-            &mut out,
+        encode_message(
             self.frame.request_subheader(),
-            self.frame,
-            self.serial,
-            self.route,
-        );
-        let length = (6 + self.data.len()) as u16;
-        out.extend_from_slice(&length.to_le_bytes());
-        out.extend_from_slice(&self.timer.to_le_bytes());
-        out.extend_from_slice(&self.command.to_le_bytes());
-        out.extend_from_slice(&self.subcommand.to_le_bytes());
-        out.extend_from_slice(&self.data);
-        out
+            (self.frame, self.serial, self.route),
+            &[self.timer, self.command, self.subcommand],
+            &self.data,
+        )
     }
 
     /// Decodes one whole request; the frame is read from its subheader.
@@ -402,19 +409,12 @@ impl Request {
 
 impl Response {
     pub(crate) fn encode(&self) -> Vec<u8> {
-        let mut out = Vec::with_capacity(self.frame.header_len() + 2 + self.data.len());
-        put_head(
-            &mut out,
+        encode_message(
             self.frame.response_subheader(),
-            self.frame,
-            self.serial,
-            self.route,
-        );
-        let length = (2 + self.data.len()) as u16;
-        out.extend_from_slice(&length.to_le_bytes());
-        out.extend_from_slice(&self.end_code.to_le_bytes());
-        out.extend_from_slice(&self.data);
-        out
+            (self.frame, self.serial, self.route),
+            &[self.end_code],
+            &self.data,
+        )
     }
 
     /// Decodes one whole response of the expected frame.

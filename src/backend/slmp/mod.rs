@@ -23,9 +23,7 @@ use super::bench::error::{refused, LiveError};
 use super::bench::fence::{FencedWrite, Kind, WordRange};
 use super::bench::manifest::Manifest;
 use super::bench::settings::Spec;
-use super::bench::{
-    Addressing, BenchSettings, Failure, Identity, Link, LinkError, LinkSettings, RunState,
-};
+use super::bench::{Addressing, BenchSettings, Identity, Link, LinkError, LinkSettings, RunState};
 use crate::device::Device;
 
 /// How SLMP reaches a MELSEC CPU's devices.
@@ -104,22 +102,6 @@ fn run_state(sd203: u16) -> RunState {
     RunState {
         running: is_run(sd203),
         text: status_text(sd203),
-    }
-}
-
-impl From<ClientError> for LinkError {
-    fn from(e: ClientError) -> Self {
-        let failure = match &e {
-            ClientError::Transport(t) => t.failure(),
-            ClientError::EndCode { .. } => Failure::Protocol,
-        };
-        LinkError::new(failure, e)
-    }
-}
-
-impl From<ClientError> for LiveError {
-    fn from(e: ClientError) -> Self {
-        LiveError::Link(e.into())
     }
 }
 
