@@ -289,3 +289,30 @@ pub(crate) fn adapters_python(modules: &str, packages: &str) -> Option<std::path
     }
     ok.then_some(python)
 }
+
+/// A HABIN case of profile `p` with nothing set: the fields a test does not care about filled
+/// once (a citation and a location that name nothing).
+pub(crate) fn habin_case(id: &str, basis: crate::Basis) -> crate::model::Case {
+    crate::model::Case {
+        id: id.into(),
+        basis,
+        citation: crate::model::Citation {
+            manual: "m".into(),
+            page: "1".into(),
+            text: None,
+        },
+        location: crate::model::Location {
+            file: std::path::PathBuf::from("v.yaml"),
+            line: 1,
+        },
+        instructions: Arc::from(vec!["HABIN".to_string()]),
+        profiles: Arc::from(vec!["p".to_string()]),
+        variants: None,
+        flags: Default::default(),
+        operands: Default::default(),
+        indirect: Default::default(),
+        before: Default::default(),
+        expect: None,
+        note: None,
+    }
+}

@@ -189,7 +189,7 @@ impl Op {
     pub(super) fn of(instruction: &str, hex: [&str; 2]) -> Option<Op> {
         match instruction {
             "ASCI" | "ASCIP" => Some(Op::Asci),
-            _ if hex.iter().any(|&name| name == instruction) => Some(Op::Hex),
+            _ if hex.contains(&instruction) => Some(Op::Hex),
             _ => None,
         }
     }

@@ -367,14 +367,14 @@ pub(crate) fn apply_known(entry: Option<&Entry>, verdict: Verdict) -> Verdict {
 #[cfg(test)]
 mod tests {
     use std::collections::BTreeMap;
-    use std::path::{Path, PathBuf};
+    use std::path::Path;
     use std::sync::Arc;
 
     use super::*;
     use crate::backend::{Backend, Outcome, Request};
     use crate::device::Device;
     use crate::memory::Value;
-    use crate::model::{Case, Citation, ErrorSignal, Expectation, Location};
+    use crate::model::{Case, ErrorSignal, Expectation};
     use crate::plan::Input;
 
     /// A backend that is never asked anything: these tests judge given observations.
@@ -434,26 +434,9 @@ mod tests {
 
     fn case(basis: Basis, expect: Option<Expectation>) -> Case {
         Case {
-            id: "c".into(),
-            basis,
-            citation: Citation {
-                manual: "m".into(),
-                page: "1".into(),
-                text: None,
-            },
-            location: Location {
-                file: PathBuf::from("f.yaml"),
-                line: 1,
-            },
-            instructions: Arc::from(vec!["HABIN".to_string()]),
-            profiles: Arc::from(vec!["p".to_string()]),
-            variants: None,
-            flags: BTreeMap::new(),
-            operands: BTreeMap::new(),
-            indirect: Default::default(),
             before: BTreeMap::from([(d(100), 0x4135)]),
             expect,
-            note: None,
+            ..crate::test_support::habin_case("c", basis)
         }
     }
 

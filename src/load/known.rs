@@ -468,35 +468,17 @@ fn check_cross_vendor_entry(
 
 #[cfg(test)]
 mod tests {
-    use std::collections::{BTreeMap, BTreeSet};
-    use std::path::PathBuf;
+    use std::collections::BTreeSet;
     use std::sync::Arc;
 
     use super::*;
-    use crate::model::{Case, Citation, Location};
+    use crate::model::Case;
 
     fn case(id: &str, basis: Basis, variants: Option<&[&str]>) -> Arc<Case> {
         Arc::new(Case {
-            id: id.into(),
-            basis,
-            citation: Citation {
-                manual: "m".into(),
-                page: "1".into(),
-                text: None,
-            },
-            location: Location {
-                file: PathBuf::from("v.yaml"),
-                line: 1,
-            },
             instructions: Arc::from(vec!["HABIN".to_string(), "HABINP".to_string()]),
-            profiles: Arc::from(vec!["p".to_string()]),
             variants: variants.map(|v| v.iter().map(|s| s.to_string()).collect::<BTreeSet<_>>()),
-            flags: BTreeMap::new(),
-            operands: BTreeMap::new(),
-            indirect: BTreeMap::new(),
-            before: BTreeMap::new(),
-            expect: None,
-            note: None,
+            ..crate::test_support::habin_case(id, basis)
         })
     }
 

@@ -207,34 +207,43 @@ mod tests {
 
     #[test]
     fn each_class_holds_for_its_characters_only() {
-        assert!(InputClass::Lowercase.holds(b"5a8D"));
-        assert!(!InputClass::Lowercase.holds(b"5A8D"));
-        // A reader's classes: the x of a prefix is no lowercase digit, nor another letter.
-        assert!(!InputClass::Lowercase.holds(b"0x5A"));
-        assert!(!InputClass::OtherLowercase.holds(b"0x5A"));
-        assert!(InputClass::OtherLowercase.holds(b"5A8g"));
-        assert!(InputClass::OtherLowercase.holds(b"x5A8"));
-        assert!(!InputClass::OtherLowercase.holds(b"5a8f"));
-        assert!(InputClass::Blank.holds(b"5A\t8"));
-        assert!(InputClass::Sign.holds(b"-5A8"));
-        assert!(InputClass::HexPrefix.holds(b"0X5A"));
-        assert!(!InputClass::HexPrefix.holds(b"05A8"));
-        assert!(InputClass::Underscore.holds(b"5_A8"));
-        assert!(InputClass::Above7fh.holds(b"5A\x80D"));
-        assert!(InputClass::Nul.holds(b"1\x0034"));
-        assert!(InputClass::Control.holds(b"1\x1F34"));
-        assert!(!InputClass::Control.holds(b"1\t34"));
-        assert!(InputClass::Empty.holds(b""));
-        assert!(InputClass::OtherUppercase.holds(b"5AG8"));
-        assert!(!InputClass::OtherUppercase.holds(b"5A8F"));
-        assert!(InputClass::Punctuation.holds(b"5A:8"));
-        assert!(InputClass::Punctuation.holds(b"5A8."));
-        assert!(!InputClass::Punctuation.holds(b"-5A_8"));
-        assert!(InputClass::BlankLeading.holds(b" 5A8"));
-        assert!(!InputClass::BlankLeading.holds(b"5A8 "));
-        assert!(InputClass::BlankTrailing.holds(b"5A8\t"));
-        assert!(InputClass::BlankInside.holds(b" 5A 8 "));
-        assert!(!InputClass::BlankInside.holds(b" 5A8 "));
-        assert!(!InputClass::BlankInside.holds(b"   "));
+        for (class, text, holds) in [
+            (InputClass::Lowercase, &b"5a8D"[..], true),
+            (InputClass::Lowercase, &b"5A8D"[..], false),
+            // A reader's classes: the x of a prefix is no lowercase digit, nor another letter.
+            (InputClass::Lowercase, &b"0x5A"[..], false),
+            (InputClass::OtherLowercase, &b"0x5A"[..], false),
+            (InputClass::OtherLowercase, &b"5A8g"[..], true),
+            (InputClass::OtherLowercase, &b"x5A8"[..], true),
+            (InputClass::OtherLowercase, &b"5a8f"[..], false),
+            (InputClass::Blank, &b"5A\t8"[..], true),
+            (InputClass::Sign, &b"-5A8"[..], true),
+            (InputClass::HexPrefix, &b"0X5A"[..], true),
+            (InputClass::HexPrefix, &b"05A8"[..], false),
+            (InputClass::Underscore, &b"5_A8"[..], true),
+            (InputClass::Above7fh, &b"5A\x80D"[..], true),
+            (InputClass::Nul, &b"1\x0034"[..], true),
+            (InputClass::Control, &b"1\x1F34"[..], true),
+            (InputClass::Control, &b"1\t34"[..], false),
+            (InputClass::Empty, &b""[..], true),
+            (InputClass::OtherUppercase, &b"5AG8"[..], true),
+            (InputClass::OtherUppercase, &b"5A8F"[..], false),
+            (InputClass::Punctuation, &b"5A:8"[..], true),
+            (InputClass::Punctuation, &b"5A8."[..], true),
+            (InputClass::Punctuation, &b"-5A_8"[..], false),
+            (InputClass::BlankLeading, &b" 5A8"[..], true),
+            (InputClass::BlankLeading, &b"5A8 "[..], false),
+            (InputClass::BlankTrailing, &b"5A8\t"[..], true),
+            (InputClass::BlankInside, &b" 5A 8 "[..], true),
+            (InputClass::BlankInside, &b" 5A8 "[..], false),
+            (InputClass::BlankInside, &b"   "[..], false),
+        ] {
+            assert_eq!(
+                class.holds(text),
+                holds,
+                "{class:?} {:?}",
+                text.escape_ascii().to_string()
+            );
+        }
     }
 }

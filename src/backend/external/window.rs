@@ -196,21 +196,16 @@ mod tests {
     #[test]
     fn a_count_operand_widens_the_span() {
         let p = profile();
-        let r = request_ranges(
-            &p,
-            "v",
-            &[("s", dev(0)), ("n", Operand::Constant(100))],
-            &[],
-        );
-        assert_eq!(r, vec![("D".into(), 0, 163)]);
         // A value (HTOA's S1 = K65535) is no length: the span stays the operand's.
-        let r = request_ranges(
-            &p,
-            "v",
-            &[("s", dev(0)), ("v", Operand::Constant(65535))],
-            &[],
-        );
-        assert_eq!(r, vec![("D".into(), 0, 63)]);
+        for (operand, constant, last) in [("n", 100, 163), ("v", 65535, 63)] {
+            let r = request_ranges(
+                &p,
+                "v",
+                &[("s", dev(0)), (operand, Operand::Constant(constant))],
+                &[],
+            );
+            assert_eq!(r, vec![("D".into(), 0, last)], "{operand} = {constant}");
+        }
     }
 
     #[test]

@@ -15,7 +15,7 @@ pub(crate) mod sim;
 use std::path::Path;
 use std::time::Duration;
 
-use client::{Client, ClientError, ClientSettings, Code};
+use client::{Client, ClientSettings, Code};
 use frame::{DeviceForm, FrameKind};
 use limits::Family;
 
@@ -275,7 +275,7 @@ impl BenchSettings<ClientSettings> {
 
 /// The fault kind of a client error.
 #[cfg(test)]
-pub(crate) fn fault_of(e: &ClientError) -> super::Fault {
+pub(crate) fn fault_of(e: &client::ClientError) -> super::Fault {
     LinkError::from(e.clone()).fault()
 }
 

@@ -4,7 +4,7 @@
 #[cfg(test)]
 use std::path::Path;
 
-use super::profiles;
+use super::{load_probe, profiles};
 use crate::load::{parse_profile, CorpusBuilder};
 use crate::Device;
 use rstest::rstest;
@@ -27,9 +27,7 @@ cases:
       after: {{{d1}: 1234H}}
 "#
     );
-    let mut builder = CorpusBuilder::default();
-    builder.add_file(Path::new("probe.yaml"), &text, &profiles());
-    builder.finish().map(|_| ()).map_err(|e| e.to_string())
+    load_probe(&text)
 }
 
 #[rstest]

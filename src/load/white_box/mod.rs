@@ -21,3 +21,10 @@ pub(super) fn profiles() -> Profiles {
     let dir = root().join("vendors");
     load_profiles(&dir).unwrap_or_else(|e| panic!("vendor profiles do not load:\n{e}"))
 }
+
+/// Loads one vector file's text against the real profiles: `Ok` or the load errors as shown.
+pub(super) fn load_probe(text: &str) -> Result<(), String> {
+    let mut builder = crate::load::CorpusBuilder::default();
+    builder.add_file(std::path::Path::new("probe.yaml"), text, &profiles());
+    builder.finish().map(|_| ()).map_err(|e| e.to_string())
+}

@@ -85,34 +85,37 @@ fn failing_on_error_only(session: &Project, backend: &Arc<dyn Backend>) -> Vec<S
     failing
 }
 
-#[test]
-fn a_code_does_not_satisfy_m8004() {
-    let session = session();
-    let base = reference(&session, PROFILE);
-    let coded = signalling("fc4a-reports-3401h", Some(ErrorSignal::Code(0x3401)), &base);
-    let failing = failing_on_error_only(&session, &coded);
-    for name in [
+/// A code in place of M8004, or no error at all: every case that expects M8004 fails.
+#[rstest::rstest]
+#[case::a_code(
+    "fc4a-reports-3401h",
+    Some(ErrorSignal::Code(0x3401)),
+    &[
         "fc4a-reports-3401h::atoh::atoh-invalid-2fh::c10r2",
         "fc4a-reports-3401h::atoh::atoh-s2-zero::d40k3",
         "fc4a-reports-3401h::atoh::atoh-s1-past-d399-small::c16r2",
         "fc4a-reports-3401h::htoa::htoa-s2-five::c24r2",
-    ] {
-        assert!(failing.iter().any(|t| t == name), "{name} does not fail");
-    }
-    assert!(failing.len() >= 100, "only {} trials fail", failing.len());
-}
-
-#[test]
-fn no_error_does_not_satisfy_m8004() {
-    let session = session();
-    let base = reference(&session, PROFILE);
-    let silent = signalling("fc4a-reports-nothing", None, &base);
-    let failing = failing_on_error_only(&session, &silent);
-    for name in [
+    ]
+)]
+#[case::no_error(
+    "fc4a-reports-nothing",
+    None,
+    &[
         "fc4a-reports-nothing::atoh::atoh-lowercase-a-61h::d20rk1",
         "fc4a-reports-nothing::atoh::atoh-s2-from-data-register-zero::c24r2",
         "fc4a-reports-nothing::htoa::htoa-d1-across-slim-gap::d20k3",
-    ] {
+    ]
+)]
+fn only_m8004_satisfies_m8004(
+    #[case] name: &'static str,
+    #[case] signal: Option<ErrorSignal>,
+    #[case] must_fail: &[&str],
+) {
+    let session = session();
+    let base = reference(&session, PROFILE);
+    let wrong = signalling(name, signal, &base);
+    let failing = failing_on_error_only(&session, &wrong);
+    for name in must_fail {
         assert!(failing.iter().any(|t| t == name), "{name} does not fail");
     }
     assert!(failing.len() >= 100, "only {} trials fail", failing.len());

@@ -15,7 +15,6 @@ use crate::execute::{images, requests};
 use crate::session::Session;
 use crate::{Backend, Fault, Response, Trial};
 
-mod aslmp;
 mod idec;
 mod modbus;
 mod slmp;
