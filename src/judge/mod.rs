@@ -467,35 +467,25 @@ mod tests {
         })
     }
 
-    #[test]
-    fn the_expected_change_conforms() {
-        let c = case(Basis::Manual, expect(&[(200, 0x5A8D)], None));
-        assert_eq!(
-            judge(&trial(c.clone()), &done(&[(200, 0x5A8D)], None)),
-            Verdict::Conforms
-        );
-    }
-
-    #[test]
-    fn a_stray_write_differs() {
-        let c = case(Basis::Manual, expect(&[(200, 0x5A8D)], None));
-        let v = judge(&trial(c.clone()), &done(&[(200, 0x5A8D), (201, 0)], None));
-        assert!(v.is_failure(), "{v:?}");
-    }
-
-    #[test]
-    fn rewriting_a_word_with_its_value_is_no_change() {
-        let c = case(Basis::Manual, expect(&[], None));
-        assert_eq!(
-            judge(&trial(c.clone()), &done(&[(100, 0x4135)], None)),
-            Verdict::Conforms
-        );
-    }
-
-    #[test]
-    fn a_missing_change_differs() {
-        let c = case(Basis::Manual, expect(&[(200, 0x5A8D)], None));
-        assert!(judge(&trial(c.clone()), &done(&[], None)).is_failure());
+    /// Judged on the change: what was expected, a stray write, a word rewritten with its own
+    /// value (no change), a change missing.
+    #[rstest::rstest]
+    #[case::the_expected_change_conforms(&[(200, 0x5A8D)], &[(200, 0x5A8D)], true)]
+    #[case::a_stray_write_differs(&[(200, 0x5A8D)], &[(200, 0x5A8D), (201, 0)], false)]
+    #[case::rewriting_a_word_with_its_value_is_no_change(&[], &[(100, 0x4135)], true)]
+    #[case::a_missing_change_differs(&[(200, 0x5A8D)], &[], false)]
+    fn the_change_is_judged(
+        #[case] expected: &[(u32, u16)],
+        #[case] written: &[(u32, u16)],
+        #[case] conforms: bool,
+    ) {
+        let c = case(Basis::Manual, expect(expected, None));
+        let v = judge(&trial(c), &done(written, None));
+        if conforms {
+            assert_eq!(v, Verdict::Conforms);
+        } else {
+            assert!(v.is_failure(), "{v:?}");
+        }
     }
 
     #[test]

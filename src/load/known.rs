@@ -512,7 +512,7 @@ mod tests {
 
     #[test]
     fn entries_are_checked_against_the_corpus_and_profile() {
-        let errors = load(
+        assert_load_errors(
             "differences:\n\
              - {case: c1, instruction: DHABIN, reason: r}\n\
              - {case: only-a, variant: b, reason: r}\n\
@@ -520,20 +520,15 @@ mod tests {
              - {case: c1, reason: \"  \"}\n\
              - {case: c1, reason: again}\n\
              - {case: typo, reason: r}\n",
-            true,
-        )
-        .expect_err("invalid")
-        .to_string();
-        for expected in [
-            ":2: differences[0].instruction: unknown instruction of this case `DHABIN`; expected one of: HABIN, HABINP",
-            ":3: differences[1].variant: unknown variant of this case `b`; expected one of: a",
-            ":4: differences[2].case: case `open` is unspecified",
-            ":5: differences[3].reason: a known difference needs its reason",
-            ":6: differences[4].case: the same trials are already listed at",
-            ":7: differences[5].case: unknown case id `typo`",
-        ] {
-            assert!(errors.contains(expected), "{expected}\nin:\n{errors}");
-        }
+            &[
+                ":2: differences[0].instruction: unknown instruction of this case `DHABIN`; expected one of: HABIN, HABINP",
+                ":3: differences[1].variant: unknown variant of this case `b`; expected one of: a",
+                ":4: differences[2].case: case `open` is unspecified",
+                ":5: differences[3].reason: a known difference needs its reason",
+                ":6: differences[4].case: the same trials are already listed at",
+                ":7: differences[5].case: unknown case id `typo`",
+            ],
+        );
     }
 
     #[test]
@@ -555,7 +550,7 @@ mod tests {
         assert!(e.matches(&subject("c1")));
         assert!(e.matches(&subject("only-a")));
         assert!(!e.matches(&subject("open")));
-        let errors = load(
+        assert_load_errors(
             "differences:\n\
              - {cause: c, kind: bug, cases: [nothing-*]}\n\
              - {cases: [c1], kind: bug}\n\
@@ -563,18 +558,21 @@ mod tests {
              - {case: c1, cases: [c1], reason: r}\n\
              - {reason: r}\n\
              - {cause: c, kind: by-design, cases: [c1], variant: z}\n",
-            true,
-        )
-        .expect_err("invalid")
-        .to_string();
-        for expected in [
-            ":2: differences[0].cases[0]: `nothing-*` matches no case this backend runs",
-            ":3: differences[1].cause: an entry by cause needs its `cause`",
-            ":4: differences[2].kind: an entry by cause needs its `kind`: `bug` or `by-design`",
-            ":5: differences[3].case: an entry lists one `case`, or one cause's `cases`/`input`, not both",
-            ":6: differences[4].case: an entry needs the `case` it lists",
-            ":7: differences[5].variant: unknown variant `z`",
-        ] {
+            &[
+                ":2: differences[0].cases[0]: `nothing-*` matches no case this backend runs",
+                ":3: differences[1].cause: an entry by cause needs its `cause`",
+                ":4: differences[2].kind: an entry by cause needs its `kind`: `bug` or `by-design`",
+                ":5: differences[3].case: an entry lists one `case`, or one cause's `cases`/`input`, not both",
+                ":6: differences[4].case: an entry needs the `case` it lists",
+                ":7: differences[5].variant: unknown variant `z`",
+            ],
+        );
+    }
+
+    /// The file's errors, each expected one among them.
+    fn assert_load_errors(file: &str, expected: &[&str]) {
+        let errors = load(file, true).expect_err("invalid").to_string();
+        for expected in expected {
             assert!(errors.contains(expected), "{expected}\nin:\n{errors}");
         }
     }

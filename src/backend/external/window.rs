@@ -145,6 +145,26 @@ mod tests {
         .expect("profile")
     }
 
+    /// A request of instruction X of case `c` on the variant.
+    fn request<'a>(
+        profile: &'a Profile,
+        variant: &str,
+        flags: &'a BTreeMap<String, bool>,
+        operands: &'a BTreeMap<String, Operand>,
+        memory: &'a Image,
+    ) -> Request<'a> {
+        Request {
+            profile,
+            variant: profile.variant(variant).expect("variant"),
+            instruction: "X",
+            case_id: "c",
+            flags,
+            operands,
+            indirect: crate::model::DIRECT,
+            memory,
+        }
+    }
+
     fn request_ranges(
         profile: &Profile,
         variant: &str,
@@ -160,17 +180,7 @@ mod tests {
             Fill::A,
         );
         let flags = BTreeMap::new();
-        let req = Request {
-            profile,
-            variant: profile.variant(variant).expect("variant"),
-            instruction: "X",
-            case_id: "c",
-            flags: &flags,
-            operands: &operands,
-            indirect: crate::model::DIRECT,
-            memory: &image,
-        };
-        ranges(&req)
+        ranges(&request(profile, variant, &flags, &operands, &image))
             .into_iter()
             .map(|(head, last)| (head.code().to_string(), head.index, last))
             .collect()
@@ -223,16 +233,7 @@ mod tests {
         let operands = BTreeMap::from([("s".to_string(), Operand::Device(head.clone()))]);
         let image = Image::new(BTreeMap::from([(Device::new("K4M", 116), 0x1234)]), Fill::B);
         let flags = BTreeMap::new();
-        let req = Request {
-            profile: &p,
-            variant: p.variant("v").expect("variant"),
-            instruction: "X",
-            case_id: "c",
-            flags: &flags,
-            operands: &operands,
-            indirect: crate::model::DIRECT,
-            memory: &image,
-        };
+        let req = request(&p, "v", &flags, &operands, &image);
         // K4M100 .. K4M996: the last whole 16 points end at M1011, before M1023.
         assert_eq!(ranges(&req), vec![(head.clone(), 996)]);
         let window = memory(&req);

@@ -20,13 +20,17 @@ mod modbus;
 mod slmp;
 mod slmp_cross;
 
+/// The trials the backend would run (not skipped), in plan order.
+fn runnable(project: &Session, backend: &Arc<dyn Backend>) -> impl Iterator<Item = Trial> {
+    let planned = project.plan(std::slice::from_ref(backend));
+    planned.into_iter().filter(|t| t.skip.is_none())
+}
+
 /// The first trial the live backend would run whose instruction is `instruction`.
 fn first_trial(project: &Session, backend: &Arc<BenchBackend>, instruction: &str) -> Trial {
     let b: Arc<dyn Backend> = backend.clone();
-    project
-        .plan(&[b])
-        .into_iter()
-        .find(|t| t.skip.is_none() && t.input.instruction == instruction)
+    runnable(project, &b)
+        .find(|t| t.input.instruction == instruction)
         .unwrap_or_else(|| panic!("no {instruction} trial"))
 }
 

@@ -26,7 +26,7 @@ use super::{
     assert_dry_run_opens_no_socket, assert_fault_reported, assert_interlock_refuses,
     assert_refused_by_the_fence, assert_unreachable, bench, connected, execute_once, first_trial,
     free_address, idle_listener, live, model_verdicts, ran_as_the_model, reference,
-    refused_at_build, rule, session, slmp_simulator,
+    refused_at_build, rule, runnable, session, slmp_simulator,
 };
 
 fn manifest(project: &Session, profile: &str) -> Manifest {
@@ -156,10 +156,8 @@ fn an_fx5_that_leaves_sd8067_alone_differs_on_every_error() {
     let sim = SlmpSimulator::start(sim_settings, profile, reference(&project, "mitsubishi-fx5"))
         .expect("simulator");
     let backend = live(&mut project, settings(&manifest, "fx5u", &sim));
-    let trials: Vec<Trial> = project
-        .plan(std::slice::from_ref(&backend))
-        .into_iter()
-        .filter(|t| t.variant == "fx5u" && t.skip.is_none())
+    let trials: Vec<Trial> = runnable(&project, &backend)
+        .filter(|t| t.variant == "fx5u")
         .collect();
     let mut errors = 0;
     for (t, v) in trials.iter().zip(verdicts(&trials)) {
@@ -598,11 +596,7 @@ fn a_program_with_its_rungs_in_a_case_is_caught() {
         "the rung's proof says it did not execute: {second}"
     );
     let b: Arc<dyn Backend> = backend.clone();
-    let trials: Vec<Trial> = project
-        .plan(&[b])
-        .into_iter()
-        .filter(|t| t.skip.is_none())
-        .collect();
+    let trials: Vec<Trial> = runnable(&project, &b).collect();
     let failed: Vec<(String, String)> = trials
         .iter()
         .zip(verdicts(&trials))
@@ -706,12 +700,7 @@ fn an_acknowledgement_without_the_program_done_is_a_fault() {
     let mut s = settings(m, "rcpu", &sim);
     s.max_consecutive_faults = usize::MAX;
     let backend = live(&mut project, s);
-    let trials: Vec<Trial> = project
-        .plan(std::slice::from_ref(&backend))
-        .into_iter()
-        .filter(|t| t.skip.is_none())
-        .take(6)
-        .collect();
+    let trials: Vec<Trial> = runnable(&project, &backend).take(6).collect();
     assert_eq!(trials.len(), 6);
     let verdicts = verdicts(&trials);
     let passed = verdicts
