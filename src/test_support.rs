@@ -316,3 +316,48 @@ pub(crate) fn habin_case(id: &str, basis: crate::Basis) -> crate::model::Case {
         note: None,
     }
 }
+
+/// A bench program's rung calling `instruction` with `operands` (name, operand text).
+pub(crate) fn rung(
+    id: u16,
+    instruction: &str,
+    operands: &[(&str, &str)],
+) -> crate::backend::bench::manifest::Rung {
+    crate::backend::bench::manifest::Rung {
+        id,
+        instruction: instruction.into(),
+        operands: operands
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect(),
+        addresses: Default::default(),
+    }
+}
+
+/// A bench program's manifest for one variant, its hash computed; the rest a test sets.
+pub(crate) fn manifest(
+    profile: &str,
+    variant: &str,
+    mailbox: &str,
+    error: crate::backend::bench::manifest::ErrorDevices,
+    rungs: Vec<crate::backend::bench::manifest::Rung>,
+    writes: &[&str],
+    flags: &[&str],
+) -> crate::backend::bench::manifest::Manifest {
+    let mut m = crate::backend::bench::manifest::Manifest {
+        format: crate::backend::bench::manifest::FORMAT,
+        generator: "test".into(),
+        profile: profile.into(),
+        variants: vec![variant.into()],
+        mailbox: mailbox.into(),
+        layout: crate::backend::bench::mailbox::LAYOUT,
+        flags: flags.iter().map(|f| f.to_string()).collect(),
+        error,
+        rungs,
+        unrealisable: vec![],
+        writes: writes.iter().map(|w| w.to_string()).collect(),
+        hash: String::new(),
+    };
+    m.hash = m.compute_hash();
+    m
+}

@@ -16,7 +16,7 @@
 
 use std::path::Path;
 
-use super::{read_file, FileContext, LoadErrorKind, LoadErrors};
+use super::{FileContext, LoadErrorKind, LoadErrors};
 use crate::model::cross_vendor::CrossVendorCase;
 use crate::model::known::{id_matches, Covers, Entry, KnownDifferences};
 use crate::model::profile::Profile;
@@ -42,235 +42,228 @@ pub fn load_known(
     corpus: &Corpus,
     strict: bool,
 ) -> Result<KnownDifferences, LoadErrors> {
-    let text = read_file(file).map_err(|e| LoadErrors(vec![e]))?;
-    let mut errors = Vec::new();
-    let mut cx = FileContext::new(file, &text, &mut errors);
-    let Some(spec) = super::parse_document::<KnownFileSpec>(&text, &mut cx) else {
-        return Err(LoadErrors(errors));
-    };
-    let mut known = KnownDifferences {
-        file: file.to_path_buf(),
-        ..KnownDifferences::default()
-    };
-    // What each entry so far covers, for the duplicate check.
-    let mut seen = Seen::default();
-    for (i, e) in spec.differences.into_iter().enumerate() {
-        let key = |k: &str| format!("differences[{i}].{k}");
-        let location = cx.location(&format!("differences[{i}]")).to_string();
-        let by_cause = !e.cases.is_empty() || !e.input.is_empty();
-        let reason = e.reason.as_deref().map(str::trim).unwrap_or_default();
-        let covers = match (&e.case, by_cause) {
-            (Some(_), true) => {
-                cx.error(
-                    key("case"),
-                    LoadErrorKind::Invalid(
-                        "an entry lists one `case`, or one cause's `cases`/`input`, not both"
-                            .into(),
-                    ),
-                );
-                continue;
-            }
-            (None, false) => {
-                cx.error(
-                    key("case"),
-                    LoadErrorKind::Invalid(
-                        "an entry needs the `case` it lists, or the `cases` (id patterns) or \
-                         `input` (classes of text) of its cause"
-                            .into(),
-                    ),
-                );
-                continue;
-            }
-            (Some(_), false) if e.cause.is_some() => {
-                cx.error(
-                    key("cause"),
-                    LoadErrorKind::Invalid(
-                        "an entry of one `case` gives its `reason`; a `cause` (with its `kind`) \
-                         covers `cases` (id patterns) or `input` (classes of text): for a cause \
-                         seen on one case, write `cases: [ID]`"
-                            .into(),
-                    ),
-                );
-                continue;
-            }
-            (Some(c), false) => Covers::Case(c.clone()),
-            (None, true) => Covers::Cause {
-                patterns: e.cases.clone(),
-                inputs: e.input.clone(),
-            },
+    super::load_document(file, |spec: KnownFileSpec, cx| {
+        let mut known = KnownDifferences {
+            file: file.to_path_buf(),
+            ..KnownDifferences::default()
         };
-        let shown = match (&covers, e.cause.as_deref().map(str::trim)) {
-            (Covers::Cause { .. }, None | Some("")) => {
-                cx.error(
-                    key("cause"),
-                    LoadErrorKind::Invalid(
-                        "an entry by cause needs its `cause`: what the implementation does".into(),
-                    ),
-                );
-                continue;
-            }
-            (Covers::Cause { .. }, Some(cause)) => {
-                if e.kind.is_none() {
+        // What each entry so far covers, for the duplicate check.
+        let mut seen = Seen::default();
+        for (i, e) in spec.differences.into_iter().enumerate() {
+            let key = |k: &str| format!("differences[{i}].{k}");
+            let location = cx.location(&format!("differences[{i}]")).to_string();
+            let by_cause = !e.cases.is_empty() || !e.input.is_empty();
+            let reason = e.reason.as_deref().map(str::trim).unwrap_or_default();
+            let covers = match (&e.case, by_cause) {
+                (Some(_), true) => {
                     cx.error(
-                        key("kind"),
+                        key("case"),
                         LoadErrorKind::Invalid(
-                            "an entry by cause needs its `kind`: `bug` or `by-design`".into(),
+                            "an entry lists one `case`, or one cause's `cases`/`input`, not both"
+                                .into(),
                         ),
                     );
+                    continue;
                 }
-                let kind = e.kind.map(|k| format!(" ({k})")).unwrap_or_default();
-                if reason.is_empty() {
-                    format!("{cause}{kind}")
-                } else {
-                    format!("{cause}{kind}: {reason}")
+                (None, false) => {
+                    cx.error(
+                        key("case"),
+                        LoadErrorKind::Invalid(
+                            "an entry needs the `case` it lists, or the `cases` (id patterns) or \
+                             `input` (classes of text) of its cause"
+                                .into(),
+                        ),
+                    );
+                    continue;
                 }
-            }
-            (Covers::Case(_), _) => match (e.kind, reason.is_empty()) {
-                (_, true) => String::new(),
-                (None, false) => reason.to_string(),
-                (Some(kind), false) => format!("{reason} ({kind})"),
-            },
-        };
-        let shown = match &e.rule {
-            Some(rule) => format!("{shown} [{rule}]"),
-            None => shown,
-        };
-        let entry = Entry {
-            covers,
-            instruction: e.instruction,
-            variant: e.variant,
-            kind: e.kind,
-            rule: e.rule,
-            reason: shown,
-            location,
-            also: Vec::new(),
-        };
-        check_rule(&entry, corpus, strict, &mut cx, &key);
-        if entry.reason.is_empty() {
-            cx.error(
-                key("reason"),
-                LoadErrorKind::Invalid("a known difference needs its reason".into()),
-            );
-        }
-        // Two entries for the same trials, or two naming one cause for the same instruction
-        // and variant, would say the same thing twice, or two things about one trial.
-        let cause = e.cause.as_deref().map(str::trim).map(str::to_string);
-        let (instruction, variant) = (entry.instruction.clone(), entry.variant.clone());
-        let covers_key = (entry.covers.clone(), instruction.clone(), variant.clone());
-        let cause_key = cause.map(|c| (c, instruction, variant));
-        let twin = (seen.by_covers.get(&covers_key))
-            .or_else(|| cause_key.as_ref().and_then(|k| seen.by_cause.get(k)));
-        if let Some(first) = twin {
-            cx.error(
-                key(if entry.case().is_some() {
-                    "case"
-                } else {
-                    "cause"
-                }),
-                LoadErrorKind::Invalid(format!(
-                    "the same {} already listed at {first}: one entry says it once",
-                    match entry.covers {
-                        Covers::Case(_) => "trials are",
-                        Covers::Cause { .. } => "cause is",
-                    },
-                )),
-            );
-            continue;
-        }
-        seen.by_covers.insert(covers_key, entry.location.clone());
-        if let Some(k) = cause_key {
-            seen.by_cause.insert(k, entry.location.clone());
-        }
-        if let Covers::Cause { patterns, .. } = &entry.covers {
-            check_cause(&entry, patterns, profile, corpus, strict, &mut cx, &key);
-            known.entries.push(entry);
-            continue;
-        }
-        let case_id = entry.case().unwrap_or_default().to_string();
-        let cross_vendor = (corpus.cross_vendor.iter())
-            .chain(&corpus.protocol_fields)
-            .find(|c| c.id == case_id);
-        let Some(profile) = profile else {
-            // A codec has neither instructions nor variants, and answers cross-vendor cases only.
-            codec_has_no_instruction(&entry, &mut cx, &key);
-            match cross_vendor {
-                Some(cv) => {
-                    check_not_unspecified(&entry, cv.basis, &mut cx, &key);
-                    known.entries.push(entry);
+                (Some(_), false) if e.cause.is_some() => {
+                    cx.error(
+                        key("cause"),
+                        LoadErrorKind::Invalid(
+                            "an entry of one `case` gives its `reason`; a `cause` (with its `kind`) \
+                             covers `cases` (id patterns) or `input` (classes of text): for a cause \
+                             seen on one case, write `cases: [ID]`"
+                                .into(),
+                        ),
+                    );
+                    continue;
                 }
-                None if strict => cx.error(
-                    key("case"),
-                    LoadErrorKind::Invalid(format!(
-                        "unknown cross-vendor case id `{}`: a codec-level backend runs only the \
-                         cross-vendor cases",
-                        case_id
-                    )),
-                ),
-                None => known.ignored.push(entry),
-            }
-            continue;
-        };
-        if let Some(cv) = cross_vendor {
-            check_cross_vendor_entry(&entry, cv, profile, &mut cx, &key);
-            known.entries.push(entry);
-            continue;
-        }
-        let Some(case) = corpus
-            .cases
-            .iter()
-            .find(|c| c.id == case_id && c.profiles.contains(&profile.id))
-        else {
-            if strict {
+                (Some(c), false) => Covers::Case(c.clone()),
+                (None, true) => Covers::Cause {
+                    patterns: e.cases.clone(),
+                    inputs: e.input.clone(),
+                },
+            };
+            let shown = match (&covers, e.cause.as_deref().map(str::trim)) {
+                (Covers::Cause { .. }, None | Some("")) => {
+                    cx.error(
+                        key("cause"),
+                        LoadErrorKind::Invalid(
+                            "an entry by cause needs its `cause`: what the implementation does"
+                                .into(),
+                        ),
+                    );
+                    continue;
+                }
+                (Covers::Cause { .. }, Some(cause)) => {
+                    if e.kind.is_none() {
+                        cx.error(
+                            key("kind"),
+                            LoadErrorKind::Invalid(
+                                "an entry by cause needs its `kind`: `bug` or `by-design`".into(),
+                            ),
+                        );
+                    }
+                    let kind = e.kind.map(|k| format!(" ({k})")).unwrap_or_default();
+                    if reason.is_empty() {
+                        format!("{cause}{kind}")
+                    } else {
+                        format!("{cause}{kind}: {reason}")
+                    }
+                }
+                (Covers::Case(_), _) => match (e.kind, reason.is_empty()) {
+                    (_, true) => String::new(),
+                    (None, false) => reason.to_string(),
+                    (Some(kind), false) => format!("{reason} ({kind})"),
+                },
+            };
+            let shown = match &e.rule {
+                Some(rule) => format!("{shown} [{rule}]"),
+                None => shown,
+            };
+            let entry = Entry {
+                covers,
+                instruction: e.instruction,
+                variant: e.variant,
+                kind: e.kind,
+                rule: e.rule,
+                reason: shown,
+                location,
+                also: Vec::new(),
+            };
+            check_rule(&entry, corpus, strict, cx, &key);
+            if entry.reason.is_empty() {
                 cx.error(
-                    key("case"),
-                    LoadErrorKind::Invalid(format!(
-                        "unknown case id `{}`: no case of profile {} has it",
-                        case_id, profile.id
-                    )),
-                );
-            } else {
-                known.ignored.push(entry);
-            }
-            continue;
-        };
-        check_not_unspecified(&entry, case.basis, &mut cx, &key);
-        if let Some(i) = &entry.instruction {
-            if !case.instructions.contains(i) {
-                cx.error(
-                    key("instruction"),
-                    LoadErrorKind::Unknown {
-                        what: "instruction of this case",
-                        name: i.clone(),
-                        expected: case.instructions.to_vec(),
-                    },
+                    key("reason"),
+                    LoadErrorKind::Invalid("a known difference needs its reason".into()),
                 );
             }
-        }
-        if let Some(v) = &entry.variant {
-            let runs: Vec<String> = profile
-                .variants
+            // Two entries for the same trials, or two naming one cause for the same instruction
+            // and variant, would say the same thing twice, or two things about one trial.
+            let cause = e.cause.as_deref().map(str::trim).map(str::to_string);
+            let (instruction, variant) = (entry.instruction.clone(), entry.variant.clone());
+            let covers_key = (entry.covers.clone(), instruction.clone(), variant.clone());
+            let cause_key = cause.map(|c| (c, instruction, variant));
+            let twin = (seen.by_covers.get(&covers_key))
+                .or_else(|| cause_key.as_ref().and_then(|k| seen.by_cause.get(k)));
+            if let Some(first) = twin {
+                cx.error(
+                    key(if entry.case().is_some() {
+                        "case"
+                    } else {
+                        "cause"
+                    }),
+                    LoadErrorKind::Invalid(format!(
+                        "the same {} already listed at {first}: one entry says it once",
+                        match entry.covers {
+                            Covers::Case(_) => "trials are",
+                            Covers::Cause { .. } => "cause is",
+                        },
+                    )),
+                );
+                continue;
+            }
+            seen.by_covers.insert(covers_key, entry.location.clone());
+            if let Some(k) = cause_key {
+                seen.by_cause.insert(k, entry.location.clone());
+            }
+            if let Covers::Cause { patterns, .. } = &entry.covers {
+                check_cause(&entry, patterns, profile, corpus, strict, cx, &key);
+                known.entries.push(entry);
+                continue;
+            }
+            let case_id = entry.case().unwrap_or_default().to_string();
+            let cross_vendor = (corpus.cross_vendor.iter())
+                .chain(&corpus.protocol_fields)
+                .find(|c| c.id == case_id);
+            let Some(profile) = profile else {
+                // A codec has neither instructions nor variants, and answers cross-vendor cases only.
+                codec_has_no_instruction(&entry, cx, &key);
+                match cross_vendor {
+                    Some(cv) => {
+                        check_not_unspecified(&entry, cv.basis, cx, &key);
+                        known.entries.push(entry);
+                    }
+                    None if strict => cx.error(
+                        key("case"),
+                        LoadErrorKind::Invalid(format!(
+                            "unknown cross-vendor case id `{}`: a codec-level backend runs only the \
+                             cross-vendor cases",
+                            case_id
+                        )),
+                    ),
+                    None => known.ignored.push(entry),
+                }
+                continue;
+            };
+            if let Some(cv) = cross_vendor {
+                check_cross_vendor_entry(&entry, cv, profile, cx, &key);
+                known.entries.push(entry);
+                continue;
+            }
+            let Some(case) = corpus
+                .cases
                 .iter()
-                .filter(|pv| case.runs_on(&pv.id))
-                .map(|pv| pv.id.clone())
-                .collect();
-            if !runs.contains(v) {
-                cx.error(
-                    key("variant"),
-                    LoadErrorKind::Unknown {
-                        what: "variant of this case",
-                        name: v.clone(),
-                        expected: runs,
-                    },
-                );
+                .find(|c| c.id == case_id && c.profiles.contains(&profile.id))
+            else {
+                if strict {
+                    cx.error(
+                        key("case"),
+                        LoadErrorKind::Invalid(format!(
+                            "unknown case id `{}`: no case of profile {} has it",
+                            case_id, profile.id
+                        )),
+                    );
+                } else {
+                    known.ignored.push(entry);
+                }
+                continue;
+            };
+            check_not_unspecified(&entry, case.basis, cx, &key);
+            if let Some(i) = &entry.instruction {
+                if !case.instructions.contains(i) {
+                    cx.error(
+                        key("instruction"),
+                        LoadErrorKind::Unknown {
+                            what: "instruction of this case",
+                            name: i.clone(),
+                            expected: case.instructions.to_vec(),
+                        },
+                    );
+                }
             }
+            if let Some(v) = &entry.variant {
+                let runs: Vec<String> = profile
+                    .variants
+                    .iter()
+                    .filter(|pv| case.runs_on(&pv.id))
+                    .map(|pv| pv.id.clone())
+                    .collect();
+                if !runs.contains(v) {
+                    cx.error(
+                        key("variant"),
+                        LoadErrorKind::Unknown {
+                            what: "variant of this case",
+                            name: v.clone(),
+                            expected: runs,
+                        },
+                    );
+                }
+            }
+            known.entries.push(entry);
         }
-        known.entries.push(entry);
-    }
-    if errors.is_empty() {
-        Ok(known)
-    } else {
-        Err(LoadErrors(errors))
-    }
+        known
+    })
 }
 
 /// An entry by cause: each id pattern must cover a case the backend can run (against the

@@ -3,7 +3,7 @@
 use std::collections::BTreeSet;
 use std::path::Path;
 
-use super::{read_file, FileContext, LoadErrorKind, LoadErrors};
+use super::{LoadErrorKind, LoadErrors};
 use crate::model::library::Library;
 use crate::model::protocol::Protocols;
 use crate::spec::libraries::LibrariesFileSpec;
@@ -14,43 +14,35 @@ pub(crate) fn load_libraries(
     file: &Path,
     protocols: &Protocols,
 ) -> Result<Vec<Library>, LoadErrors> {
-    let text = read_file(file).map_err(|e| LoadErrors(vec![e]))?;
-    let mut errors = Vec::new();
-    let mut cx = FileContext::new(file, &text, &mut errors);
-    let Some(spec) = super::parse_document::<LibrariesFileSpec>(&text, &mut cx) else {
-        return Err(LoadErrors(errors));
-    };
-    let mut seen = BTreeSet::new();
-    let mut libraries = Vec::new();
-    for (i, l) in spec.libraries.into_iter().enumerate() {
-        if !seen.insert(l.backend.clone()) {
-            cx.error(
-                format!("libraries[{i}].backend"),
-                LoadErrorKind::Invalid(format!("backend `{}` is listed twice", l.backend)),
-            );
+    super::load_document(file, |spec: LibrariesFileSpec, cx| {
+        let mut seen = BTreeSet::new();
+        let mut libraries = Vec::new();
+        for (i, l) in spec.libraries.into_iter().enumerate() {
+            if !seen.insert(l.backend.clone()) {
+                cx.error(
+                    format!("libraries[{i}].backend"),
+                    LoadErrorKind::Invalid(format!("backend `{}` is listed twice", l.backend)),
+                );
+            }
+            if let Some(p) = l.protocol.as_deref().filter(|p| protocols.get(p).is_none()) {
+                cx.error(
+                    format!("libraries[{i}].protocol"),
+                    LoadErrorKind::Invalid(format!(
+                        "no protocol `{p}`; the protocols are: {}",
+                        protocols.ids().join(", ")
+                    )),
+                );
+            }
+            libraries.push(Library {
+                backend: l.backend,
+                package: l.package,
+                language: l.language,
+                licence: l.licence,
+                protocol: l.protocol,
+                wired: l.wired,
+                also: l.also,
+            });
         }
-        if let Some(p) = l.protocol.as_deref().filter(|p| protocols.get(p).is_none()) {
-            cx.error(
-                format!("libraries[{i}].protocol"),
-                LoadErrorKind::Invalid(format!(
-                    "no protocol `{p}`; the protocols are: {}",
-                    protocols.ids().join(", ")
-                )),
-            );
-        }
-        libraries.push(Library {
-            backend: l.backend,
-            package: l.package,
-            language: l.language,
-            licence: l.licence,
-            protocol: l.protocol,
-            wired: l.wired,
-            also: l.also,
-        });
-    }
-    if errors.is_empty() {
-        Ok(libraries)
-    } else {
-        Err(LoadErrors(errors))
-    }
+        libraries
+    })
 }

@@ -211,6 +211,26 @@ fn schema_once<T: schemars::JsonSchema + 'static>() -> std::sync::Arc<serde_json
         .clone()
 }
 
+/// Reads a file of one document and builds what it describes: `build` gets the on-disk value
+/// and the file's context to report problems to; every problem found, in the reading or the
+/// building, is an error of the load.
+pub(crate) fn load_document<T, R>(
+    file: &Path,
+    build: impl FnOnce(T, &mut FileContext<'_>) -> R,
+) -> Result<R, LoadErrors>
+where
+    T: DeserializeOwned + schemars::JsonSchema + 'static,
+{
+    let text = read_file(file).map_err(|e| LoadErrors(vec![e]))?;
+    let mut errors = Vec::new();
+    let mut cx = FileContext::new(file, &text, &mut errors);
+    let built = parse_document::<T>(&text, &mut cx).map(|spec| build(spec, &mut cx));
+    match built {
+        Some(built) if errors.is_empty() => Ok(built),
+        _ => Err(LoadErrors(errors)),
+    }
+}
+
 /// Reads one document as its on-disk type: first its shape against the type's schema, which
 /// reports every unknown, missing or misplaced key at once (see [`shape`]); then, when the shape
 /// is right, the deserializer, which stops at its first error. A document that is not YAML at

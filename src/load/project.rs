@@ -18,7 +18,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use super::{read_file, FileContext, LoadError, LoadErrorKind, LoadErrors};
+use super::{LoadError, LoadErrorKind, LoadErrors};
 use crate::model::project::{
     Configured, ExternalSettings, Launch, ProjectBackends, DEFAULT_BATCH,
     DEFAULT_MAX_CONSECUTIVE_FAULTS, DEFAULT_STARTUP_TIMEOUT, DEFAULT_TIMEOUT,
@@ -89,140 +89,133 @@ pub fn load_project(
 }
 
 fn read_project(file: &Path, plc_conformance: &Path) -> Result<Vec<Configured>, LoadErrors> {
-    let text = read_file(file).map_err(|e| LoadErrors(vec![e]))?;
-    let mut errors = Vec::new();
-    let mut cx = FileContext::new(file, &text, &mut errors);
-    let Some(spec) = super::parse_document::<ProjectFileSpec>(&text, &mut cx) else {
-        return Err(LoadErrors(errors));
-    };
-    let dir = file
-        .parent()
-        .map(Path::to_path_buf)
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or_else(|| PathBuf::from("."));
-    let mut out: Vec<Configured> = Vec::new();
-    let mut seen: Vec<(String, Location)> = Vec::new();
-    for (i, b) in spec.backends.into_iter().enumerate() {
-        let key = |k: &str| format!("backends[{i}].{k}");
-        if !valid_name(&b.name) {
-            cx.error(
-                key("name"),
-                LoadErrorKind::Invalid(format!(
-                    "`{}` is not a backend name: use lowercase letters, digits, `-` and `_`",
-                    b.name
-                )),
-            );
-        }
-        let location = cx.location(&format!("backends[{i}]"));
-        if let Some((_, first)) = seen.iter().find(|(n, _)| *n == b.name) {
-            cx.error(
-                key("name"),
-                LoadErrorKind::Invalid(format!(
-                    "backend name `{}` is already used at {first}",
-                    b.name
-                )),
-            );
-        }
-        seen.push((b.name.clone(), location.clone()));
-        let launch = match b.command {
-            CommandSpec::Shell(s) if !s.trim().is_empty() => Launch::Shell(s),
-            CommandSpec::Exec(v) if !v.is_empty() => Launch::Exec(v),
-            _ => {
+    super::load_document(file, |spec: ProjectFileSpec, cx| {
+        let dir = file
+            .parent()
+            .map(Path::to_path_buf)
+            .filter(|d| !d.as_os_str().is_empty())
+            .unwrap_or_else(|| PathBuf::from("."));
+        let mut out: Vec<Configured> = Vec::new();
+        let mut seen: Vec<(String, Location)> = Vec::new();
+        for (i, b) in spec.backends.into_iter().enumerate() {
+            let key = |k: &str| format!("backends[{i}].{k}");
+            if !valid_name(&b.name) {
                 cx.error(
-                    key("command"),
-                    LoadErrorKind::Invalid("empty command".into()),
-                );
-                continue;
-            }
-        };
-        let mut seconds = |k: &str, value: Option<f64>, default: Duration| match value {
-            None => default,
-            Some(s) if s.is_finite() && s > 0.0 && s <= 86_400.0 => Duration::from_secs_f64(s),
-            Some(s) => {
-                cx.error(
-                    key(k),
+                    key("name"),
                     LoadErrorKind::Invalid(format!(
-                        "{s} is not a time limit: give seconds above 0 and at most a day"
+                        "`{}` is not a backend name: use lowercase letters, digits, `-` and `_`",
+                        b.name
                     )),
                 );
-                default
             }
-        };
-        let timeout = seconds("timeout", b.timeout, DEFAULT_TIMEOUT);
-        let startup_timeout = seconds(
-            "startup_timeout",
-            b.startup_timeout,
-            DEFAULT_STARTUP_TIMEOUT,
-        );
-        if b.max_consecutive_faults == Some(0) {
-            cx.error(
-                key("max_consecutive_faults"),
-                LoadErrorKind::Invalid(
-                    "give at least 1: the number of faults in a row after which the \
-                     backend's remaining trials are not run"
-                        .into(),
-                ),
+            let location = cx.location(&format!("backends[{i}]"));
+            if let Some((_, first)) = seen.iter().find(|(n, _)| *n == b.name) {
+                cx.error(
+                    key("name"),
+                    LoadErrorKind::Invalid(format!(
+                        "backend name `{}` is already used at {first}",
+                        b.name
+                    )),
+                );
+            }
+            seen.push((b.name.clone(), location.clone()));
+            let launch = match b.command {
+                CommandSpec::Shell(s) if !s.trim().is_empty() => Launch::Shell(s),
+                CommandSpec::Exec(v) if !v.is_empty() => Launch::Exec(v),
+                _ => {
+                    cx.error(
+                        key("command"),
+                        LoadErrorKind::Invalid("empty command".into()),
+                    );
+                    continue;
+                }
+            };
+            let mut seconds = |k: &str, value: Option<f64>, default: Duration| match value {
+                None => default,
+                Some(s) if s.is_finite() && s > 0.0 && s <= 86_400.0 => Duration::from_secs_f64(s),
+                Some(s) => {
+                    cx.error(
+                        key(k),
+                        LoadErrorKind::Invalid(format!(
+                            "{s} is not a time limit: give seconds above 0 and at most a day"
+                        )),
+                    );
+                    default
+                }
+            };
+            let timeout = seconds("timeout", b.timeout, DEFAULT_TIMEOUT);
+            let startup_timeout = seconds(
+                "startup_timeout",
+                b.startup_timeout,
+                DEFAULT_STARTUP_TIMEOUT,
             );
+            if b.max_consecutive_faults == Some(0) {
+                cx.error(
+                    key("max_consecutive_faults"),
+                    LoadErrorKind::Invalid(
+                        "give at least 1: the number of faults in a row after which the \
+                         backend's remaining trials are not run"
+                            .into(),
+                    ),
+                );
+            }
+            if b.batch == Some(0) {
+                cx.error(
+                    key("batch"),
+                    LoadErrorKind::Invalid("a batch holds at least one case".into()),
+                );
+            }
+            let mut settings = ExternalSettings::new(b.name, launch);
+            if b.codec && b.profile.is_some() {
+                cx.error(
+                    key("codec"),
+                    LoadErrorKind::Invalid(
+                        "a codec-level backend has no profile: give `codec: true` or `profile`"
+                            .into(),
+                    ),
+                );
+            }
+            if b.protocol.is_some() && b.profile.is_some() {
+                cx.error(
+                    key("protocol"),
+                    LoadErrorKind::Invalid(
+                        "a protocol's codec has no profile: give `protocol` or `profile`".into(),
+                    ),
+                );
+            }
+            if b.cross_vendor && b.protocol.is_none() {
+                cx.error(
+                    key("cross_vendor"),
+                    LoadErrorKind::Invalid(
+                        "`cross_vendor` adds the cross-vendor view to a protocol's codec: give \
+                         `protocol` too (a codec of no protocol runs that corpus already)"
+                            .into(),
+                    ),
+                );
+            }
+            settings.profile = b.profile;
+            settings.codec = b.codec || b.protocol.is_some();
+            settings.protocol = b.protocol;
+            settings.cross_vendor = b.cross_vendor;
+            settings.timeout = timeout;
+            settings.startup_timeout = startup_timeout;
+            settings.known_differences = b.known_differences.map(|p| dir.join(p));
+            settings.cwd = Some(dir.clone());
+            settings.env = vec![(ENV_SELF.into(), plc_conformance.display().to_string())];
+            settings.batch = b.batch.unwrap_or(DEFAULT_BATCH).max(1);
+            settings.max_consecutive_faults = b
+                .max_consecutive_faults
+                .unwrap_or(DEFAULT_MAX_CONSECUTIVE_FAULTS)
+                .max(1);
+            out.push(Configured {
+                on_request: b.on_request,
+                settings,
+                requires: b.requires.into_iter().map(|p| dir.join(p)).collect(),
+                location,
+            });
         }
-        if b.batch == Some(0) {
-            cx.error(
-                key("batch"),
-                LoadErrorKind::Invalid("a batch holds at least one case".into()),
-            );
-        }
-        let mut settings = ExternalSettings::new(b.name, launch);
-        if b.codec && b.profile.is_some() {
-            cx.error(
-                key("codec"),
-                LoadErrorKind::Invalid(
-                    "a codec-level backend has no profile: give `codec: true` or `profile`".into(),
-                ),
-            );
-        }
-        if b.protocol.is_some() && b.profile.is_some() {
-            cx.error(
-                key("protocol"),
-                LoadErrorKind::Invalid(
-                    "a protocol's codec has no profile: give `protocol` or `profile`".into(),
-                ),
-            );
-        }
-        if b.cross_vendor && b.protocol.is_none() {
-            cx.error(
-                key("cross_vendor"),
-                LoadErrorKind::Invalid(
-                    "`cross_vendor` adds the cross-vendor view to a protocol's codec: give \
-                     `protocol` too (a codec of no protocol runs that corpus already)"
-                        .into(),
-                ),
-            );
-        }
-        settings.profile = b.profile;
-        settings.codec = b.codec || b.protocol.is_some();
-        settings.protocol = b.protocol;
-        settings.cross_vendor = b.cross_vendor;
-        settings.timeout = timeout;
-        settings.startup_timeout = startup_timeout;
-        settings.known_differences = b.known_differences.map(|p| dir.join(p));
-        settings.cwd = Some(dir.clone());
-        settings.env = vec![(ENV_SELF.into(), plc_conformance.display().to_string())];
-        settings.batch = b.batch.unwrap_or(DEFAULT_BATCH).max(1);
-        settings.max_consecutive_faults = b
-            .max_consecutive_faults
-            .unwrap_or(DEFAULT_MAX_CONSECUTIVE_FAULTS)
-            .max(1);
-        out.push(Configured {
-            on_request: b.on_request,
-            settings,
-            requires: b.requires.into_iter().map(|p| dir.join(p)).collect(),
-            location,
-        });
-    }
-    if errors.is_empty() {
-        Ok(out)
-    } else {
-        Err(LoadErrors(errors))
-    }
+        out
+    })
 }
 
 /// Backend names end up in trial names and on command lines.

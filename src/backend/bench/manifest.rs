@@ -428,46 +428,24 @@ mod tests {
     }
 
     pub(super) fn sample() -> Manifest {
-        let mut m = Manifest {
-            format: FORMAT,
-            generator: "test".into(),
-            profile: "mitsubishi-iqr".into(),
-            variants: vec!["rcpu".into()],
-            mailbox: "D12000".into(),
-            layout: mailbox::LAYOUT,
-            flags: vec!["SM701".into(), "SM705".into()],
-            error: ErrorDevices {
+        use crate::test_support::{manifest, rung};
+        manifest(
+            "mitsubishi-iqr",
+            "rcpu",
+            "D12000",
+            ErrorDevices {
                 flag: "SM0".into(),
                 register: Some("SD0".into()),
                 extra: None,
                 reset: "SM50".into(),
             },
-            rungs: vec![
-                Rung {
-                    id: 1,
-                    instruction: "HABIN".into(),
-                    operands: BTreeMap::from([
-                        ("s".into(), "D100".into()),
-                        ("d".into(), "D200".into()),
-                    ]),
-                    addresses: BTreeMap::new(),
-                },
-                Rung {
-                    id: 2,
-                    instruction: "BINHA".into(),
-                    operands: BTreeMap::from([
-                        ("s".into(), "K-1".into()),
-                        ("d".into(), "D200".into()),
-                    ]),
-                    addresses: BTreeMap::new(),
-                },
+            vec![
+                rung(1, "HABIN", &[("s", "D100"), ("d", "D200")]),
+                rung(2, "BINHA", &[("s", "K-1"), ("d", "D200")]),
             ],
-            unrealisable: vec![],
-            writes: vec!["D100-D263".into()],
-            hash: String::new(),
-        };
-        m.hash = m.compute_hash();
-        m
+            &["D100-D263"],
+            &["SM701", "SM705"],
+        )
     }
 
     #[test]
