@@ -71,7 +71,7 @@ pub mod model {
     }
 }
 pub mod plan {
-    pub use crate::plan::{Check, Input};
+    pub use crate::plan::Input;
 }
 pub mod report {
     pub use crate::report::{Event, Reporter};

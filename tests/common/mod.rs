@@ -1,5 +1,8 @@
-//! Shared by the mutant tests: deliberately wrong backends built around a reference model, and
-//! a check that the corpus tells each of them apart from the manual.
+//! What the integration tests share: the binary run on this project, a scratch folder, the
+//! session and a reference model, a mutant of a model, the Python of the pinned adapters, and
+//! the readers of XML reports. (The crate's white-box tests have their own, in
+//! `src/test_support.rs`: an integration test cannot reach a `#[cfg(test)]` item.)
+// Each test file compiles this module anew and uses only part of it.
 #![allow(dead_code)]
 
 use std::path::Path;
@@ -102,17 +105,6 @@ impl Backend for Mutant {
     }
 }
 
-/// Changes a finished outcome (a mutant's one change to what the reference did).
-pub fn map_done(
-    result: Result<Response, Fault>,
-    f: impl FnOnce(plc_conformance::Outcome) -> plc_conformance::Outcome,
-) -> Result<Response, Fault> {
-    result.map(|r| match r {
-        Response::Done(o) => Response::Done(f(o)),
-        other => other,
-    })
-}
-
 /// Runs the base with every word (or byte) the case sets rewritten by `f` (the families the
 /// mutants break are 16-bit or byte families).
 pub fn with_memory(
@@ -133,25 +125,6 @@ pub fn with_memory(
     })
 }
 
-/// Runs the base with the constant operand `name` replaced by `f(k)` (as is when it is a
-/// device).
-pub fn with_constant(
-    req: &Request<'_>,
-    base: &dyn Backend,
-    name: &str,
-    f: impl Fn(i64) -> i64,
-) -> Result<Response, Fault> {
-    let Some(plc_conformance::Operand::Constant(k)) = req.operands.get(name) else {
-        return base.execute(req);
-    };
-    let mut operands = req.operands.clone();
-    operands.insert(name.into(), plc_conformance::Operand::Constant(f(*k)));
-    base.execute(&Request {
-        operands: &operands,
-        ..*req
-    })
-}
-
 /// The trials of the corpus that fail on a backend (recorded `unspecified` cases never do).
 pub fn failing_trials(session: &Project, backend: &Arc<dyn Backend>) -> Vec<String> {
     session
@@ -161,28 +134,6 @@ pub fn failing_trials(session: &Project, backend: &Arc<dyn Backend>) -> Vec<Stri
         .filter(|t| plc_conformance::run_one(t).is_failure())
         .map(|t| t.name())
         .collect()
-}
-
-/// Asserts that the reference passes and that every mutant fails at least one trial.
-pub fn assert_corpus_kills(
-    session: &Project,
-    reference: &Arc<dyn Backend>,
-    mutants: &[Arc<dyn Backend>],
-) {
-    let failing = failing_trials(session, reference);
-    assert!(
-        failing.is_empty(),
-        "the reference model itself fails: {failing:?}"
-    );
-    let survivors: Vec<&str> = mutants
-        .iter()
-        .filter(|m| failing_trials(session, m).is_empty())
-        .map(|m| m.name())
-        .collect();
-    assert!(
-        survivors.is_empty(),
-        "the corpus lets these wrong backends through (a vector is missing): {survivors:?}"
-    );
 }
 
 /// The Python interpreter itself (not a launcher script in front of it, which would add a
@@ -268,40 +219,6 @@ cases:
       after: {{D200: {expected}}}
 "
     )
-}
-
-/// Whether a trial's case expects an operation error with a code, and is judged on it (not
-/// `unspecified`).
-pub fn expects_a_code(t: &plc_conformance::Trial) -> bool {
-    use plc_conformance::{Basis, ErrorSignal};
-    match &t.check {
-        plc_conformance::testing::plan::Check::Native { case, .. } => {
-            case.basis != Basis::Unspecified
-                && case
-                    .expect
-                    .as_ref()
-                    .is_some_and(|e| matches!(e.error, Some(ErrorSignal::Code(_))))
-        }
-        _ => false,
-    }
-}
-
-/// The error registers that do not hold the code, with what they held, when a verdict differs
-/// on them alone (the words and the error signal as expected); `None` for any other verdict.
-pub fn registers_alone(v: &plc_conformance::Verdict) -> Option<Vec<(String, Option<Value>)>> {
-    use plc_conformance::{Difference, Verdict};
-    let Verdict::Differs {
-        difference: Difference::Words { mismatches },
-    } = v
-    else {
-        return None;
-    };
-    let m = mismatches.first()?;
-    (!m.words_differ() && !m.error_differs()).then(|| {
-        m.wrong_registers()
-            .map(|r| (r.device.to_string(), r.actual))
-            .collect()
-    })
 }
 
 /// A folder and everything in it, copied: a fixture to change in a scratch folder.
