@@ -74,7 +74,7 @@ pub(crate) fn install_panic_hook(kill: bool) {
 /// process group; a test harness, which turns a panic into one failed test, keeps them.
 pub(crate) fn install(on_signal: OnSignal) -> std::io::Result<()> {
     install_panic_hook(on_signal == OnSignal::Finish);
-    #[cfg(unix)]
+    #[cfg(all(unix, feature = "signals"))]
     {
         use signal_hook::consts::{SIGINT, SIGTERM};
         let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM])?;
@@ -90,7 +90,15 @@ pub(crate) fn install(on_signal: OnSignal) -> std::io::Result<()> {
                 }
             })?;
     }
+    #[cfg(all(unix, not(feature = "signals")))]
+    {
+        let _ = on_signal;
+        return Err(std::io::Error::other(
+            "the crate is built without its `signals` feature",
+        ));
+    }
     #[cfg(not(unix))]
     let _ = on_signal;
+    #[allow(unreachable_code)]
     Ok(())
 }

@@ -115,8 +115,16 @@
 //! maps trials onto `cargo test`, and `cli` is the command line (docs/architecture.md).
 
 #![warn(unreachable_pub)]
+// Without the command line, the operations only its commands call (sweeps, bench programs,
+// records, the results table) are compiled but unused, and what only `testing` re-exports is
+// reached by nothing public.
+#![cfg_attr(
+    not(feature = "cli"),
+    allow(dead_code, unused_imports, unreachable_pub)
+)]
 
 mod backend;
+#[cfg(feature = "cli")]
 mod cli;
 mod clock;
 mod corpus_yaml;
@@ -166,10 +174,12 @@ pub use session::{run_one, verdicts};
 /// What this repository's own tests reach inside the crate, with no stability promise: hidden
 /// from the documentation, which shows the interface above.
 #[doc(hidden)]
+#[cfg(feature = "cli")]
 pub mod testing;
 
 /// The command line, for the `plc-conformance` binary: not part of the library's interface.
 #[doc(hidden)]
+#[cfg(feature = "cli")]
 pub fn main() -> std::process::ExitCode {
     cli::main()
 }
@@ -194,6 +204,9 @@ pub fn main() -> std::process::ExitCode {
 ///     plc_conformance::command_line(vec![plc_conformance::codec_backend(Mine)])
 /// }
 /// ```
+///
+/// Needs the `cli` feature (on by default).
+#[cfg(feature = "cli")]
 pub fn command_line(backends: Vec<std::sync::Arc<dyn Backend>>) -> std::process::ExitCode {
     cli::main_with(backends)
 }

@@ -140,13 +140,26 @@ impl Harness {
         self
     }
 
-    /// Parses libtest's arguments, plans, runs and reports; the exit code libtest gives.
+    /// Whether a backend may run in a process of its own (a `--backend` text, the project
+    /// file's backends): only then does the harness handle SIGINT and SIGTERM.
+    pub(crate) fn may_start_processes(&self) -> bool {
+        self.project_file.is_some() || !self.asked.is_empty()
+    }
+
+    /// Parses libtest's arguments, plans, runs and reports; the exit code libtest gives. A
+    /// harness given a `--backend` text or the project file handles SIGINT and SIGTERM (its
+    /// backend processes, in process groups of their own, are killed before it exits; with
+    /// the `signals` feature, on by default); one whose backends all run in process leaves the
+    /// test process's signals alone.
     pub fn run(self) -> ExitCode {
         let args = Arguments::from_args();
-        // Ctrl-C reaches this process but not the backends, which run in process groups of
-        // their own: a signal kills them all before the harness exits.
-        if let Err(e) = crate::interrupt::install(crate::interrupt::OnSignal::Exit) {
-            console::warning(&format!("SIGINT and SIGTERM are not handled: {e}"));
+        // Ctrl-C reaches this process but not the backends in process groups of their own.
+        if self.may_start_processes() {
+            if let Err(e) = crate::interrupt::install(crate::interrupt::OnSignal::Exit) {
+                console::warning(&format!("SIGINT and SIGTERM are not handled: {e}"));
+            }
+        } else {
+            crate::interrupt::install_panic_hook(false);
         }
         match self.conclude(&args) {
             Ok(conclusion) => conclusion.exit_code(),
@@ -502,5 +515,23 @@ mod tests {
         );
         let all = Arguments::from_iter(["test", "habin-fixed-4-digits-example"]);
         assert_eq!(exact_files(&all, &Paths::embedded()), None, "not --exact");
+    }
+
+    /// An emulator's or codec's own `cargo test` keeps its signals: only a harness that may
+    /// start a backend process (a `--backend` text, the project file) handles them.
+    #[test]
+    fn only_a_harness_that_may_start_processes_handles_signals() {
+        let model =
+            crate::test_support::reference(&crate::test_support::session(), "mitsubishi-fx5");
+        let in_process = Harness::embedded().without_builtin().backend(model, None);
+        assert!(!in_process.may_start_processes());
+        assert!(
+            !Harness::embedded().may_start_processes(),
+            "the built-in models"
+        );
+        let asked = Harness::embedded().backend_spec("external:emu=./emu");
+        assert!(asked.may_start_processes());
+        let configured = Harness::embedded().project_file(Path::new("plc-conformance"));
+        assert!(configured.may_start_processes());
     }
 }

@@ -8,7 +8,8 @@ use super::{Event, Reporter, Stopped, Summary};
 
 /// The report formats, as `--format` names them: text is written as the run goes, the others
 /// as one document at its end.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub(crate) enum Format {
     /// For `run`: failures as they happen, then counts. For `diff`: the grouped matrices.
     Text,
@@ -71,6 +72,7 @@ impl Reporter for Collector {
 
 /// Renders records in a document format; `coloured` and `width` (columns of text) apply to the
 /// matrix text only.
+#[cfg(feature = "cli")]
 pub(crate) fn render(
     format: Format,
     records: &[Record],

@@ -10,9 +10,11 @@ pub(crate) mod console;
 pub(crate) mod document;
 pub(crate) mod html;
 pub(crate) mod json;
+#[cfg(feature = "cli")]
 pub(crate) mod junit;
 pub(crate) mod matrix;
 pub(crate) mod matrix_text;
+#[cfg(feature = "cli")]
 pub(crate) mod progress;
 pub(crate) mod record;
 pub(crate) mod results;

@@ -20,7 +20,8 @@ pub(crate) use vectors::ScalarSpec;
 
 /// The formats that have a JSON Schema: the on-disk files, the external-backend protocol's
 /// messages and the JSON report (the command line's `schema --kind` takes these names).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub(crate) enum SchemaKind {
     /// Vector files (`vectors/<family>/*.yaml`).
     Vectors,

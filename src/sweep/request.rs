@@ -23,7 +23,8 @@ pub(crate) enum Swept {
 }
 
 /// Which generator, when one is named (the command line's `--generator` takes these names).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub(crate) enum GeneratorChoice {
     /// Every 16-bit value.
     Values,

@@ -4,7 +4,8 @@
 //! Written by `plc-conformance init codec --rust`. In Cargo.toml:
 //!
 //!     [dev-dependencies]
-//!     plc-conformance = { path = "../plc-conformance" }   # or { git = "...", rev = "..." }
+//!     # or { git = "...", rev = "..." }; the harness without the command line
+//!     plc-conformance = { path = "../plc-conformance", default-features = false }
 //!
 //!     [[test]]
 //!     name = "conformance"
