@@ -2,7 +2,6 @@
 //! HABIN case and per cross-vendor case lowered onto HABIN, with diffs; the instructions it
 //! does not claim are listed as skipped with the reason.
 
-use std::path::Path;
 use std::process::ExitCode;
 use std::sync::Arc;
 
@@ -10,8 +9,8 @@ use habin_emulator::HabinEmulator;
 use plc_conformance::Harness;
 
 fn main() -> ExitCode {
-    let here = Path::new(env!("CARGO_MANIFEST_DIR"));
-    Harness::new(here.join("../.."))
+    // The corpus and profiles built into the crate: what a dependent has.
+    Harness::embedded()
         .without_builtin()
         .backend(Arc::new(HabinEmulator), None)
         .run()

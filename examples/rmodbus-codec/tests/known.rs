@@ -9,8 +9,7 @@ use rmodbus_codec::Rmodbus;
 #[test]
 fn rmodbus_fails_exactly_its_known_differences() {
     let here = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let project =
-        Project::load(&Paths::under(&here.join("../.."))).unwrap_or_else(|e| panic!("{e}"));
+    let project = Project::load(&Paths::embedded()).unwrap_or_else(|e| panic!("{e}"));
     let backend = codec_backend(Rmodbus);
     let trials = project.plan(std::slice::from_ref(&backend));
     assert!(trials.iter().any(|t| t.skip.is_none()), "no trial runs");
