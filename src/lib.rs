@@ -139,6 +139,7 @@ mod libtest;
 mod load;
 mod memory;
 mod model;
+mod nearest;
 mod plan;
 mod project;
 mod record;

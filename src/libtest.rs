@@ -7,7 +7,9 @@
 //! Trials whose outcome is known when planning — skipped, `unspecified` (recorded only), listed
 //! known differences — are marked ignored, so that `cargo test` and nextest count them as
 //! skipped; `-- --include-ignored` runs them too (a recorded trial then shows what the backend
-//! did, and a known difference that now conforms fails as a stale entry).
+//! did, and a known difference that now conforms fails as a stale entry). A known difference run
+//! alone by name, as `nextest --run-ignored all` runs it, fails with its difference: nextest
+//! would show a trial that reports itself ignored as passed.
 //!
 //! The external backends of the project file run as extra trials, each started only when a
 //! trial of it runs: `--list` starts none, and a process running one trial (as nextest does)
@@ -466,6 +468,16 @@ fn outcome(
             "not run: {}; the listing marks this trial ignored",
             ignored_text(&verdict)
         ))),
+        // Nor does a known difference pass when run alone (`nextest --run-ignored all` runs it
+        // by name): it is the difference it is, shown with its entry.
+        Status::Ignored if exact => match &verdict {
+            Verdict::KnownDifference { difference, .. } => Err(Failed::from(format!(
+                "{}; run alone it still differs:\n{}",
+                ignored_text(&verdict),
+                render(&trial, difference, Palette::plain())
+            ))),
+            _ => Ok(Completion::ignored_with(ignored_text(&verdict))),
+        },
         Status::Skipped | Status::Ignored => Ok(Completion::ignored_with(ignored_text(&verdict))),
     }
 }

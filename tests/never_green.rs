@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use common::root;
 use plc_conformance::testing::libtest::conclude;
-use plc_conformance::{Backend, Fault, Harness, Request, Response};
+use plc_conformance::{Backend, Fault, Harness, Outcome, Request, Response};
 
 /// An emulator of `profile` that claims `instruction` and answers nothing useful.
 struct Emulator {
@@ -41,6 +41,14 @@ fn harness(profile: &'static str, instruction: &'static str) -> Harness {
         instruction,
     });
     Harness::new(root()).without_builtin().backend(emu, None)
+}
+
+/// A scratch folder and the path of a log file in it, where a harness run by a test writes what
+/// it would print (its own failures are what the test expects, not the suite's).
+fn logfile() -> (tempfile::TempDir, String) {
+    let dir = common::scratch();
+    let log = dir.path().join("log").to_string_lossy().into_owned();
+    (dir, log)
 }
 
 fn refused(result: Result<libtest_mimic::Conclusion, Vec<String>>) -> String {
@@ -123,7 +131,102 @@ fn a_backend_spec_is_read_as_the_command_line_reads_it() {
         "external:served=\"{}\" serve --profile mitsubishi-iqr",
         env!("CARGO_BIN_EXE_plc-conformance")
     );
-    let c = conclude(spec(&served), &["served::habin::"]).expect("runs");
+    let (_dir, log) = logfile();
+    let c = conclude(spec(&served), &["served::habin::", "--logfile", &log]).expect("runs");
     assert!(c.num_passed > 0, "no trial ran: {c:?}");
     assert_eq!(c.num_failed, 0, "{c:?}");
+}
+
+/// An emulator that reads a flag the profile does not have (a typo: `SM7O1`).
+struct Misspelt;
+
+impl Backend for Misspelt {
+    fn name(&self) -> &str {
+        "misspelt"
+    }
+    fn profile(&self) -> &str {
+        "mitsubishi-fx5"
+    }
+    fn describe(&self) -> String {
+        "reads SM7O1".into()
+    }
+    fn claims(&self, instruction: &str, _variant: &str) -> bool {
+        instruction == "HEXA"
+    }
+    fn execute(&self, request: &Request<'_>) -> Result<Response, Fault> {
+        let _ = request.flag("SM7O1");
+        Ok(Response::Unsupported("unreachable".into()))
+    }
+}
+
+/// A misspelt flag is never read as off: every trial of the emulator that reads it fails.
+#[test]
+fn a_misspelt_flag_fails_every_trial_that_reads_it() {
+    let emu: Arc<dyn Backend> = Arc::new(Misspelt);
+    let h = Harness::new(root()).without_builtin().backend(emu, None);
+    let (dir, log) = logfile();
+    let c = conclude(h, &["misspelt::hexa::hexa-16bit-k1::", "--logfile", &log]).expect("runs");
+    assert!(c.num_failed > 0, "{c:?}");
+    assert_eq!(c.num_passed, 0, "{c:?}");
+    let shown = std::fs::read_to_string(dir.path().join("log")).expect("the log");
+    assert!(shown.contains("(did you mean `SM701`?)"), "{shown}");
+}
+
+/// An emulator of FX5 HEXA that writes nothing.
+struct Lazy;
+
+impl Backend for Lazy {
+    fn name(&self) -> &str {
+        "lazy"
+    }
+    fn profile(&self) -> &str {
+        "mitsubishi-fx5"
+    }
+    fn describe(&self) -> String {
+        "writes nothing".into()
+    }
+    fn claims(&self, instruction: &str, _variant: &str) -> bool {
+        instruction == "HEXA"
+    }
+    fn execute(&self, _request: &Request<'_>) -> Result<Response, Fault> {
+        Ok(Response::Done(Outcome::default()))
+    }
+}
+
+/// A known difference is ignored with its entry when the trials run together, and fails with
+/// its difference when run alone by name, as `nextest --run-ignored all` runs it: nextest would
+/// show a trial that reports itself ignored as passed.
+#[test]
+fn a_known_difference_run_alone_is_no_pass() {
+    let dir = common::scratch();
+    let known = dir.path().join("lazy.known.yaml");
+    std::fs::write(
+        &known,
+        "differences:\n  - {case: hexa-16bit-k1, reason: writes nothing}\n",
+    )
+    .expect("write");
+    let harness = || {
+        let lazy: Arc<dyn Backend> = Arc::new(Lazy);
+        Harness::new(root())
+            .without_builtin()
+            .backend(lazy, Some(known.clone()))
+    };
+    let (log_dir, log) = logfile();
+    let together = conclude(
+        harness(),
+        &["lazy::hexa::hexa-16bit-k1::", "--logfile", &log],
+    )
+    .expect("runs");
+    assert_eq!(together.num_failed, 0, "{together:?}");
+    assert!(together.num_ignored > 0, "{together:?}");
+    let name = "lazy::hexa::hexa-16bit-k1::fx5u";
+    let args = ["--exact", name, "--include-ignored", "--logfile", &log];
+    let alone = conclude(harness(), &args).expect("runs");
+    assert_eq!((alone.num_failed, alone.num_passed), (1, 0), "{alone:?}");
+    let shown = std::fs::read_to_string(log_dir.path().join("log")).expect("the log");
+    assert!(shown.contains("known difference ("), "{shown}");
+    assert!(
+        shown.contains("writes nothing; run alone it still differs"),
+        "{shown}"
+    );
 }

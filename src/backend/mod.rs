@@ -55,7 +55,16 @@ pub struct Request<'a> {
 impl Request<'_> {
     /// A flag as the CPU sees it: the case's setting, or the profile default, except that a
     /// variant which does not implement the flag always sees the default.
+    ///
+    /// # Panics
+    ///
+    /// When the profile has no flag `name`: a misspelt flag would otherwise read as off, and an
+    /// emulator would pass every case that leaves it off. The message names the flag nearest
+    /// it and the profile's flags; the trial fails with it.
     pub fn flag(&self, name: &str) -> bool {
+        if !self.profile.flags.contains_key(name) {
+            panic!("{}", self.profile.unknown_flag(name));
+        }
         self.profile.flag_seen(self.variant, self.flags, name)
     }
 
@@ -166,6 +175,7 @@ pub struct Question<'a> {
 /// A backend's answer to a request it understood.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase", tag = "kind", content = "value")]
+#[non_exhaustive]
 pub enum Response {
     Done(Outcome),
     /// A codec-level backend's answer to a [`Question`].
@@ -189,6 +199,7 @@ impl From<Unsupported> for Response {
 /// never a pass.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case", tag = "kind", content = "detail")]
+#[non_exhaustive]
 pub enum Fault {
     /// The process exited or was killed.
     Crashed(String),

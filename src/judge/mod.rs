@@ -23,6 +23,7 @@ pub(crate) use words::{Effect, Mismatch, WordRow};
 /// The verdict of one trial.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case", tag = "verdict")]
+#[non_exhaustive]
 pub enum Verdict {
     Conforms,
     Differs {
@@ -80,6 +81,7 @@ impl Verdict {
 /// How a trial differed.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case", tag = "kind")]
+#[non_exhaustive]
 pub enum Difference {
     /// Native: the words or the error under one or more fills.
     Words { mismatches: Vec<Mismatch> },
@@ -122,6 +124,7 @@ pub struct KnownEntry {
 /// What a verdict means for a run: the one place where verdicts become pass or fail.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
+#[non_exhaustive]
 pub enum Status {
     Pass,
     Fail,

@@ -176,48 +176,16 @@ fn yaml_key(k: &Yaml) -> std::borrow::Cow<'_, str> {
 
 /// An unknown key, with the nearest known one when it is a likely typo.
 fn unknown_key(key: &str, known: &[&str]) -> LoadErrorKind {
-    let nearest = known
-        .iter()
-        .map(|k| (distance(key, k), *k))
-        .filter(|(d, k)| *d <= 2.max(k.len() / 4))
-        .min();
+    let nearest = crate::nearest::nearest(key, known.iter().copied());
     let listed = known
         .iter()
         .map(|k| format!("`{k}`"))
         .collect::<Vec<_>>()
         .join(", ");
     LoadErrorKind::Shape(match nearest {
-        Some((_, k)) => {
+        Some(k) => {
             format!("unknown field `{key}`: did you mean `{k}`? (expected one of {listed})")
         }
         None => format!("unknown field `{key}`, expected one of {listed}"),
     })
-}
-
-/// Levenshtein distance, for "did you mean".
-fn distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut prev = row[0];
-        row[0] = i + 1;
-        for (j, cb) in b.iter().enumerate() {
-            let cur = row[j + 1];
-            row[j + 1] = (prev + usize::from(ca != *cb)).min(row[j] + 1).min(cur + 1);
-            prev = cur;
-        }
-    }
-    row[b.len()]
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn distance_counts_edits() {
-        assert_eq!(distance("oprands", "operands"), 1);
-        assert_eq!(distance("basis", "basis"), 0);
-        assert_eq!(distance("", "abc"), 3);
-    }
 }

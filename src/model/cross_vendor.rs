@@ -86,6 +86,7 @@ impl TextLayout {
 /// What a vendor answered to a cross-vendor question.
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
+#[non_exhaustive]
 pub enum Answer {
     Value(u64),
     /// Characters as bytes, up to the first 00H.

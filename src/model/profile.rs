@@ -259,6 +259,24 @@ impl Profile {
         self.flags.get(flag).is_some_and(|f| f.default)
     }
 
+    /// Why `name` is no flag of this profile, with the nearest one and the profile's flags.
+    pub(crate) fn unknown_flag(&self, name: &str) -> String {
+        let known = self.flags.keys().map(String::as_str);
+        let hint = crate::nearest::nearest(name, known.clone())
+            .map(|k| format!(" (did you mean `{k}`?)"))
+            .unwrap_or_default();
+        let listed: Vec<&str> = known.collect();
+        format!(
+            "`{name}` is no flag of profile {}{hint}; its flags are: {}",
+            self.id,
+            if listed.is_empty() {
+                "none".to_string()
+            } else {
+                listed.join(", ")
+            }
+        )
+    }
+
     /// A flag as the CPU of a variant sees it: the setting, or the profile default, except that
     /// a variant which does not implement the flag always sees the default. The one place this
     /// rule lives: the reference models, the external-backend capabilities and the reports all
@@ -362,5 +380,21 @@ impl Profiles {
     }
     pub fn ids(&self) -> Vec<String> {
         self.by_id.keys().cloned().collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn an_unknown_flag_is_named_with_the_nearest_one_and_the_profile_s_flags() {
+        let session = crate::test_support::session();
+        let fx5 = session.profiles.get("mitsubishi-fx5").expect("fx5");
+        let why = fx5.unknown_flag("SM7O1");
+        assert!(
+            why.contains("`SM7O1` is no flag of profile mitsubishi-fx5"),
+            "{why}"
+        );
+        assert!(why.contains("did you mean `SM701`?"), "{why}");
+        assert!(why.contains("its flags are: "), "{why}");
     }
 }
