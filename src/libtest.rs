@@ -26,6 +26,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
+use std::time::Duration;
 
 use libtest_mimic::{Arguments, Completion, Failed, Trial as Test};
 
@@ -69,7 +70,13 @@ pub struct Harness {
     /// Backends as the command line's `--backend` names them.
     asked: Vec<String>,
     hello_cache: Option<PathBuf>,
+    /// How long one trial may take before it fails as hung.
+    time_limit: Duration,
 }
+
+/// A trial's time limit unless [`Harness::time_limit`] says otherwise: a reference model takes
+/// microseconds, a process backend has its own limit per case (5 s).
+const TIME_LIMIT: Duration = Duration::from_secs(30);
 
 impl Harness {
     /// The corpus and profiles under `root` (`vendors/`, `vectors/`), with the built-in
@@ -82,7 +89,16 @@ impl Harness {
             extra: Vec::new(),
             asked: Vec::new(),
             hello_cache: None,
+            time_limit: TIME_LIMIT,
         }
+    }
+
+    /// How long one trial (both fills) may take before it fails as hung (30 s unless set): an
+    /// in-process backend that never answers fails its trial, and the run goes on without
+    /// waiting for it.
+    pub fn time_limit(mut self, limit: Duration) -> Self {
+        self.time_limit = limit;
+        self
     }
 
     /// The corpus and profiles built into this crate, with the built-in reference models: what
@@ -332,7 +348,7 @@ impl Harness {
                 return Test::test(t.name(), move || Err(Failed::from(why)));
             }
             let lazy = by_name.get(t.backend.name()).cloned();
-            test(t, lazy, args)
+            test(t, lazy, args, self.time_limit)
         }));
         let conclusion = libtest_mimic::run(args, tests);
         // Started processes get their shutdown message before the harness exits.
@@ -438,12 +454,44 @@ fn exact_files(args: &Arguments, paths: &Paths) -> Option<Vec<std::path::PathBuf
 /// runner sees — listing (nextest lists, then runs each trial by name), a trial run by exact
 /// name, `--ignored` — and otherwise runs and reports itself ignored with its reason (what the
 /// backend did, or the entry), which a flagged trial, never run, could not give.
-fn test(trial: Trial, lazy: Option<Arc<LazyStart>>, args: &Arguments) -> Test {
+fn test(trial: Trial, lazy: Option<Arc<LazyStart>>, args: &Arguments, limit: Duration) -> Test {
     let name = trial.name();
     let flagged = args.list || args.exact || args.ignored || args.include_ignored;
     let ignored = flagged && trial.ignored_because().is_some();
     let exact = args.exact;
-    Test::ignorable_test(name, move || outcome(trial, lazy, exact)).with_ignored_flag(ignored)
+    Test::ignorable_test(name, move || outcome(trial, lazy, exact, limit))
+        .with_ignored_flag(ignored)
+}
+
+/// Runs a trial on a thread of its own and waits at most `limit` for its verdict: a backend
+/// that never answers cannot be stopped in process, so its trial fails and its thread is left
+/// behind; one that panics fails with the panic's message.
+fn run_within(trial: Trial, limit: Duration) -> Result<(Trial, Verdict), Failed> {
+    let (sender, receiver) = std::sync::mpsc::channel();
+    let worker = std::thread::Builder::new()
+        .name(trial.name())
+        .spawn(move || {
+            let verdict = run_one(&trial);
+            let _ = sender.send((trial, verdict));
+        })
+        .map_err(|e| Failed::from(format!("no thread for the trial: {e}")))?;
+    match receiver.recv_timeout(limit) {
+        Ok(done) => Ok(done),
+        Err(std::sync::mpsc::RecvTimeoutError::Timeout) => Err(Failed::from(format!(
+            "the backend did not answer within {} s (Harness::time_limit): the trial is taken \
+             as hung and left behind",
+            limit.as_secs_f64()
+        ))),
+        Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+            let why = match worker.join() {
+                Err(panic) => (panic.downcast_ref::<String>().cloned())
+                    .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                    .unwrap_or_else(|| "a panic without a message".into()),
+                Ok(()) => "the trial's thread ended without a verdict".into(),
+            };
+            Err(Failed::from(format!("the backend panicked: {why}")))
+        }
+    }
 }
 
 /// Runs a trial and maps its verdict onto libtest: a pass, an ignored trial with its reason, or
@@ -452,12 +500,13 @@ fn outcome(
     mut trial: Trial,
     lazy: Option<Arc<LazyStart>>,
     exact: bool,
+    limit: Duration,
 ) -> Result<Completion, Failed> {
     if let Some(lazy) = lazy {
         lazy.bind(&mut trial)
             .map_err(|e| Failed::from(e.to_string()))?;
     }
-    let verdict = run_one(&trial);
+    let (trial, verdict) = run_within(trial, limit)?;
     match verdict.status() {
         Status::Pass => Ok(Completion::Completed),
         Status::Fail => Err(Failed::from(render(&trial, &verdict, Palette::plain()))),

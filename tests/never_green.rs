@@ -230,3 +230,42 @@ fn a_known_difference_run_alone_is_no_pass() {
         "{shown}"
     );
 }
+
+/// An emulator of FX5 HEXA that never answers.
+struct Hung;
+
+impl Backend for Hung {
+    fn name(&self) -> &str {
+        "hung"
+    }
+    fn profile(&self) -> &str {
+        "mitsubishi-fx5"
+    }
+    fn describe(&self) -> String {
+        "never answers".into()
+    }
+    fn claims(&self, instruction: &str, _variant: &str) -> bool {
+        instruction == "HEXA"
+    }
+    fn execute(&self, _request: &Request<'_>) -> Result<Response, Fault> {
+        loop {
+            std::thread::sleep(std::time::Duration::from_secs(1));
+        }
+    }
+}
+
+/// A hung in-process backend fails its trial at the harness's time limit, and the run ends.
+#[test]
+fn a_hung_backend_fails_its_trial_at_the_time_limit() {
+    let hung: Arc<dyn Backend> = Arc::new(Hung);
+    let h = Harness::new(root())
+        .without_builtin()
+        .backend(hung, None)
+        .time_limit(std::time::Duration::from_millis(300));
+    let (dir, log) = logfile();
+    let name = "hung::hexa::hexa-16bit-k1::fx5u";
+    let c = conclude(h, &["--exact", name, "--logfile", &log]).expect("runs");
+    assert_eq!((c.num_failed, c.num_passed), (1, 0), "{c:?}");
+    let shown = std::fs::read_to_string(dir.path().join("log")).expect("the log");
+    assert!(shown.contains("did not answer within 0.3 s"), "{shown}");
+}
