@@ -22,6 +22,11 @@ reason (a digit count the codec does not take), or an expected failure where the
 known-differences file names the case. A harness that cannot run the codec at all (the command
 missing, a bad known-differences file, a codec that does not start) is a collection error with
 the harness's message, never a pass.
+
+The same test module gives the codec every other command, with no second entry point:
+`python -m plc_conformance.codec test_mylib.py sweep --operation hex-to-value --generator full`
+(also `record`, `list`, `diff`, `run`), with the codec's name, timeout and known differences as
+codec_cases was given them.
 """
 
 import json
@@ -38,6 +43,9 @@ __all__ = ["codec_cases"]
 # Set in the process that serves the codec: the test module is imported there to find the
 # functions, and its codec_cases() must not run the harness again.
 SERVING = "PLC_CONFORMANCE_SERVING_CODEC"
+# Set by `python -m plc_conformance.codec`: the test module is imported for its codec only, and
+# codec_cases() returns what the command needs instead of running the corpus.
+DESCRIBING = "PLC_CONFORMANCE_DESCRIBING_CODEC"
 
 
 def _where(function):
@@ -75,11 +83,13 @@ def codec_cases(decode=None, encode=None, *, name="codec", version=None, digits=
     protocol's corpus, one test per protocol-field case (docs/protocol.md, "A protocol's
     fields"); check(span) and verify(frame) are module-level functions too.
     """
-    import pytest
-
     if os.environ.get(SERVING):
-        # The serving process imports the test module only for the functions.
-        return pytest.mark.skip(reason="the codec's own process")(lambda: None)
+        # The serving process imports the test module only for the functions (pytest need not
+        # be there: `python -m plc_conformance.codec` starts it too).
+        def serving():
+            """The codec's own process."""
+
+        return serving
     if decode is None and encode is None and check is None and verify is None:
         raise TypeError("codec_cases: give decode, encode, check or verify")
     first = decode or encode or check or verify
@@ -108,13 +118,27 @@ def codec_cases(decode=None, encode=None, *, name="codec", version=None, digits=
         "verify": _where(verify)[1] if verify else None,
     }
     serve = [sys.executable, "-m", "plc_conformance.serve", file, json.dumps(spec)]
+    codec = {
+        "name": name,
+        "backend": "external:%s=%s" % (name, shlex.join(serve)),
+        "timeout": timeout,
+        "known_differences": (os.path.join(os.path.dirname(file), known_differences)
+                              if known_differences is not None else None),
+    }
+    if os.environ.get(DESCRIBING):
+        def described():
+            """The codec as `python -m plc_conformance.codec` runs it."""
+
+        described.plc_conformance_codec = codec
+        return described
+    import pytest
+
     with tempfile.TemporaryDirectory(prefix="plc-conformance-") as folder:
         output = os.path.join(folder, "results.json")
-        command = [binary(), "run", "--backend", "external:%s=%s" % (name, shlex.join(serve)),
+        command = [binary(), "run", "--backend", codec["backend"],
                    "--timeout", str(timeout), "--format", "json", "--output", output]
-        if known_differences is not None:
-            path = os.path.join(os.path.dirname(file), known_differences)
-            command += ["--known-differences", "%s=%s" % (name, path)]
+        if codec["known_differences"] is not None:
+            command += ["--known-differences", "%s=%s" % (name, codec["known_differences"])]
         # Run where the test module is, away from any project folder above the current one: the
         # corpus is the one built into the command.
         done = subprocess.run(command, cwd=folder, capture_output=True, text=True)
@@ -139,4 +163,5 @@ def codec_cases(decode=None, encode=None, *, name="codec", version=None, digits=
         if status == "ignored":
             pytest.skip("not judged (the manuals leave it open): " + record["shown"])
 
+    test_case.plc_conformance_codec = codec
     return test_case
