@@ -11,3 +11,14 @@ export function codecCases(options: {
   /** Seconds the adapter may take to answer one case [default 5]. */
   timeout?: number;
 }): Array<{ row: string; status: string; label: string; detail: string; shown: string }>;
+
+/**
+ * The plc-conformance command line that runs `subcommand` on the codec a test file declares with
+ * codecCases (what `npx plc-conformance-codec` runs).
+ */
+export function codecCommand(
+  testFile: string,
+  subcommand: string,
+  args: string[],
+  name?: string,
+): string[];

@@ -3,7 +3,6 @@
 //
 //   // test/conformance.test.js
 //   const path = require('node:path');
-const { findBinary } = require('./binary');
 //   const { codecCases } = require('plc-conformance-adapter/testing');
 //   codecCases({ name: 'mylib', adapter: path.join(__dirname, '../mylib_codec.js'),
 //                knownDifferences: path.join(__dirname, '../mylib.known.yaml') });
@@ -15,11 +14,24 @@ const { findBinary } = require('./binary');
 // passing, failing with the harness's diff, skipped with the reason, or a todo where the
 // known-differences file names the case. A harness that cannot run the adapter at all is an
 // error when the file loads, never a pass.
+//
+// The same test file gives the codec every other command, with no second entry point:
+// `npx plc-conformance-codec test/conformance.test.js sweep --operation hex-to-value ...` (also
+// `record`, `list`, `diff`, `run`), with the name, timeout and known differences codecCases got.
 const assert = require('node:assert');
 const { spawnSync } = require('node:child_process');
 const fs = require('node:fs');
 const os = require('node:os');
 const path = require('node:path');
+const { findBinary } = require('./binary');
+
+// Set by plc-conformance-codec: the test file is loaded for its codecs only, and codecCases
+// records each instead of running the corpus.
+const DESCRIBING = 'PLC_CONFORMANCE_DESCRIBING_CODEC';
+const described = [];
+// The commands that take each option, as `plc-conformance COMMAND --help` lists them.
+const TAKES_TIMEOUT = new Set(['run', 'diff', 'sweep', 'record']);
+const TAKES_KNOWN_DIFFERENCES = new Set(['run', 'diff', 'sweep']);
 
 /** A word for `sh -c`, whatever it holds. */
 function quote(word) {
@@ -31,9 +43,18 @@ function quote(word) {
  *          timeout?: number}} options
  */
 function codecCases({ name, adapter, knownDifferences, binary, timeout = 5 }) {
-  const { test } = require('node:test');
   if (!name || !adapter) throw new TypeError('codecCases: give name and adapter (a script path)');
   const command = [process.execPath, path.resolve(adapter)].map(quote).join(' ');
+  if (process.env[DESCRIBING]) {
+    described.push({
+      name,
+      backend: `external:${name}=${command}`,
+      timeout,
+      knownDifferences: knownDifferences ? path.resolve(knownDifferences) : null,
+    });
+    return [];
+  }
+  const { test } = require('node:test');
   const bin = binary || findBinary();
   if (!bin) {
     throw new Error('codecCases: no plc-conformance command: this package carries none for '
@@ -70,4 +91,35 @@ function codecCases({ name, adapter, knownDifferences, binary, timeout = 5 }) {
   return records;
 }
 
-module.exports = { codecCases };
+/**
+ * The plc-conformance command line that runs `subcommand` (with its own `args`) on the codec the
+ * test file declares with codecCases (`name` picks one when it declares several); throws an
+ * Error saying what is wrong otherwise.
+ */
+function codecCommand(testFile, subcommand, args, name) {
+  if (!fs.existsSync(testFile)) throw new Error(`no test file ${testFile}`);
+  process.env[DESCRIBING] = '1';
+  described.length = 0;
+  const file = path.resolve(testFile);
+  delete require.cache[file];
+  require(file);
+  const codecs = [...described];
+  if (codecs.length === 0) throw new Error(`${testFile} declares no codec: call codecCases(...)`);
+  let codec;
+  if (name) {
+    codec = codecs.find((c) => c.name === name);
+    if (!codec) throw new Error(`${testFile} has no codec ${name}; its codecs: ${codecs.map((c) => c.name).join(', ')}`);
+  } else if (codecs.length === 1) {
+    [codec] = codecs;
+  } else {
+    throw new Error(`${testFile} declares ${codecs.length} codecs: name one with --codec NAME (${codecs.map((c) => c.name).join(', ')})`);
+  }
+  const line = [subcommand, ...args, '--backend', codec.backend];
+  if (TAKES_TIMEOUT.has(subcommand)) line.push('--timeout', String(codec.timeout));
+  if (TAKES_KNOWN_DIFFERENCES.has(subcommand) && codec.knownDifferences) {
+    line.push('--known-differences', `${codec.name}=${codec.knownDifferences}`);
+  }
+  return line;
+}
+
+module.exports = { codecCases, codecCommand };
