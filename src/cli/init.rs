@@ -1,7 +1,7 @@
-//! `init codec`: the files a library maintainer starts from — a commented adapter that runs as
-//! it is (a stand-in conversion stands where the library's calls go), an empty
-//! known-differences file and a CI job — for Python, JavaScript or Rust
-//! (`docs/check-your-library.md` walks from them).
+//! `init codec`: the files a library maintainer starts from — a commented pytest file (Python),
+//! adapter (JavaScript) or test (Rust) that runs as it is (a stand-in conversion that reads as
+//! the manuals do stands where the library's calls go), an empty known-differences file and a
+//! CI job (`docs/check-your-library.md` walks from them).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -19,7 +19,7 @@ pub(crate) enum InitCommand {
 #[derive(Debug, clap::Args)]
 #[command(group(clap::ArgGroup::new("language").required(true).args(["python", "js", "rust"])))]
 pub(crate) struct CodecArgs {
-    /// An adapter in Python, through the plc_adapter helper.
+    /// A pytest file, through the plc-conformance wheel's pytest entry (codec_cases).
     #[arg(long)]
     pub python: bool,
     /// An adapter in JavaScript, through the plc-conformance-adapter helper.
@@ -48,7 +48,7 @@ struct Template {
     text: &'static str,
 }
 
-const PYTHON: &str = include_str!("../../templates/init/codec.py");
+const PYTHON: &str = include_str!("../../templates/init/test_codec.py");
 const JS: &str = include_str!("../../templates/init/codec.js");
 const RUST: &str = include_str!("../../templates/init/conformance.rs");
 const KNOWN: &str = include_str!("../../templates/init/known.yaml");
@@ -95,7 +95,7 @@ pub(super) fn init(command: &InitCommand) -> Outcome {
     }
     let _ = write!(
         said,
-        "next: put your library's calls where the adapter's stand-in is, then\n  {run}\n\
+        "next: put your library's calls where the stand-in is, then\n  {run}\n\
          the guide: docs/check-your-library.md"
     );
     output::write(None, &said)?;
@@ -138,7 +138,9 @@ fn scaffold(args: &CodecArgs) -> ([Template; 3], String) {
         (Template { path, text }, run)
     };
     let ((adapter, run), ci) = if args.python {
-        (script("py", "python3", PYTHON), CI_PYTHON)
+        let path = format!("test_{}_conformance.py", python_name(name));
+        let run = format!("pytest -q {path}");
+        ((Template { path, text: PYTHON }, run), CI_PYTHON)
     } else if args.js {
         (script("js", "node", JS), CI_JS)
     } else {
@@ -198,9 +200,17 @@ fn create_parent(path: &Path) -> Result<(), CliError> {
     }
 }
 
-/// A template with the backend's name (`{{name}}`), its Rust type (`{{type}}`: `my-lib` is
-/// `MyLibCodec`) and its protocol (`{{protocol_py}}`, `_js`, `_rs`: the line that names it, or
-/// the same line commented out) filled in.
+/// The backend's name as a Python identifier (`my-lib` is `my_lib`).
+fn python_name(name: &str) -> String {
+    name.replace('-', "_")
+}
+
+/// A template with the backend's name (`{{name}}`), its Python name (`{{ident}}`), its Rust type
+/// (`{{type}}`: `my-lib` is `MyLibCodec`), the version of plc-conformance to install
+/// (`{{version}}`), its protocol (`{{protocol_py}}`, `_js`, `_rs`: the line that names it, or the
+/// same line commented out) and how the stand-ins take their field (`{{field_py}}`,
+/// `{{field_js}}`: a protocol's field is exactly its digits; an instruction reads the first
+/// digits of a longer text) filled in.
 fn fill(template: &str, name: &str, protocol: Option<&str>) -> String {
     let type_name: String = name
         .split(['-', '_'])
@@ -233,8 +243,20 @@ fn fill(template: &str, name: &str, protocol: Option<&str>) -> String {
                 .to_string(),
         ),
     };
+    let field_js = match protocol {
+        Some(_) => "const field = text.toString('latin1');\n    if (field.length !== digits) throw new CodecError('invalid-count', `${field.length} characters`);",
+        None => "const field = text.subarray(0, digits).toString('latin1');\n    if (field.length < digits) throw new CodecError('invalid-digit', `${digits} digits asked`);",
+    };
+    let field_py = match protocol {
+        Some(_) => "field = text\n    if len(field) != digits:\n        raise IndexError(\"a field of %d characters, not %d\" % (digits, len(field)))",
+        None => "field = text[:digits]\n    if len(field) < digits:\n        raise ValueError(\"%d digits asked of %r\" % (digits, text))",
+    };
     template
         .replace("{{name}}", name)
+        .replace("{{ident}}", &python_name(name))
+        .replace("{{version}}", env!("CARGO_PKG_VERSION"))
+        .replace("{{field_py}}", field_py)
+        .replace("{{field_js}}", field_js)
         .replace("{{type}}", &type_name)
         .replace("{{protocol_py}}", &py)
         .replace("{{protocol_js}}", &js)
