@@ -8,6 +8,16 @@ use std::path::Path;
 
 use common::{bin, root, scratch};
 
+/// A process's exit status and what it said, its output then its errors.
+fn said(out: &std::process::Output) -> (Option<i32>, String) {
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    (out.status.code(), text)
+}
+
 /// `init codec` with `args` in `dir`: the exit status and what it said.
 fn init(dir: &Path, args: &[&str]) -> (Option<i32>, String) {
     let out = bin()
@@ -16,12 +26,7 @@ fn init(dir: &Path, args: &[&str]) -> (Option<i32>, String) {
         .args(args)
         .output()
         .expect("runs");
-    let said = format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    (out.status.code(), said)
+    said(&out)
 }
 
 /// Runs the scaffold's own command (`command` starts its adapter) in `dir`.
@@ -38,12 +43,7 @@ fn run_adapter(dir: &Path, command: &str, env: &[(&str, &Path)]) -> (Option<i32>
         run.env(k, v);
     }
     let out = run.output().expect("runs");
-    let said = format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    (out.status.code(), said)
+    said(&out)
 }
 
 /// Runs the Python scaffold's pytest file in `dir` with the Python of `.venv-adapters` (pytest
@@ -65,12 +65,7 @@ fn pytest(python: &Path, dir: &Path, file: &str) -> (Option<i32>, String) {
         .env("PYTHONPATH", package)
         .output()
         .expect("pytest runs");
-    let said = format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    (out.status.code(), said)
+    said(&out)
 }
 
 /// The scaffold's stand-in replaced by Python's int(text, 16), a common choice.

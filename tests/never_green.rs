@@ -11,15 +11,17 @@ use common::root;
 use plc_conformance::testing::libtest::conclude;
 use plc_conformance::{Backend, Fault, Harness, Outcome, Request, Response};
 
-/// An emulator of `profile` that claims `instruction` and answers nothing useful.
+/// An emulator of `profile` named `name` that claims `instruction` and answers with `answer`.
 struct Emulator {
+    name: &'static str,
     profile: &'static str,
     instruction: &'static str,
+    answer: fn(&Request<'_>) -> Result<Response, Fault>,
 }
 
 impl Backend for Emulator {
     fn name(&self) -> &str {
-        "emu"
+        self.name
     }
     fn profile(&self) -> &str {
         self.profile
@@ -30,15 +32,35 @@ impl Backend for Emulator {
     fn claims(&self, instruction: &str, _variant: &str) -> bool {
         instruction == self.instruction
     }
-    fn execute(&self, _request: &Request<'_>) -> Result<Response, Fault> {
-        Ok(Response::Unsupported("nothing".into()))
+    fn execute(&self, request: &Request<'_>) -> Result<Response, Fault> {
+        (self.answer)(request)
     }
+}
+
+/// An emulator of FX5 HEXA named `name` that answers with `answer`.
+fn hexa(
+    name: &'static str,
+    answer: fn(&Request<'_>) -> Result<Response, Fault>,
+) -> Arc<dyn Backend> {
+    Arc::new(Emulator {
+        name,
+        profile: "mitsubishi-fx5",
+        instruction: "HEXA",
+        answer,
+    })
+}
+
+/// Answers nothing useful.
+fn nothing(_: &Request<'_>) -> Result<Response, Fault> {
+    Ok(Response::Unsupported("nothing".into()))
 }
 
 fn harness(profile: &'static str, instruction: &'static str) -> Harness {
     let emu: Arc<dyn Backend> = Arc::new(Emulator {
+        name: "emu",
         profile,
         instruction,
+        answer: nothing,
     });
     Harness::new(root()).without_builtin().backend(emu, None)
 }
@@ -83,10 +105,7 @@ fn a_known_differences_file_that_does_not_load_is_refused_whatever_the_filter() 
     let dir = common::scratch();
     let known = dir.path().join("broken.known.yaml");
     std::fs::write(&known, "differences: [{case: no-such-case}]\n").expect("write");
-    let emu: Arc<dyn Backend> = Arc::new(Emulator {
-        profile: "mitsubishi-fx5",
-        instruction: "HEXA",
-    });
+    let emu = hexa("emu", nothing);
     for args in [&["hexa"][..], &["--exact", "emu::hexa::no-such::fx5u"], &[]] {
         let h = Harness::new(root())
             .without_builtin()
@@ -137,32 +156,14 @@ fn a_backend_spec_is_read_as_the_command_line_reads_it() {
     assert_eq!(c.num_failed, 0, "{c:?}");
 }
 
-/// An emulator that reads a flag the profile does not have (a typo: `SM7O1`).
-struct Misspelt;
-
-impl Backend for Misspelt {
-    fn name(&self) -> &str {
-        "misspelt"
-    }
-    fn profile(&self) -> &str {
-        "mitsubishi-fx5"
-    }
-    fn describe(&self) -> String {
-        "reads SM7O1".into()
-    }
-    fn claims(&self, instruction: &str, _variant: &str) -> bool {
-        instruction == "HEXA"
-    }
-    fn execute(&self, request: &Request<'_>) -> Result<Response, Fault> {
-        let _ = request.flag("SM7O1");
-        Ok(Response::Unsupported("unreachable".into()))
-    }
-}
-
 /// A misspelt flag is never read as off: every trial of the emulator that reads it fails.
 #[test]
 fn a_misspelt_flag_fails_every_trial_that_reads_it() {
-    let emu: Arc<dyn Backend> = Arc::new(Misspelt);
+    // It reads a flag the profile does not have (a typo: `SM7O1`).
+    let emu = hexa("misspelt", |request| {
+        let _ = request.flag("SM7O1");
+        Ok(Response::Unsupported("unreachable".into()))
+    });
     let h = Harness::new(root()).without_builtin().backend(emu, None);
     let (dir, log) = logfile();
     let c = conclude(h, &["misspelt::hexa::hexa-16bit-k1::", "--logfile", &log]).expect("runs");
@@ -170,27 +171,6 @@ fn a_misspelt_flag_fails_every_trial_that_reads_it() {
     assert_eq!(c.num_passed, 0, "{c:?}");
     let shown = std::fs::read_to_string(dir.path().join("log")).expect("the log");
     assert!(shown.contains("(did you mean `SM701`?)"), "{shown}");
-}
-
-/// An emulator of FX5 HEXA that writes nothing.
-struct Lazy;
-
-impl Backend for Lazy {
-    fn name(&self) -> &str {
-        "lazy"
-    }
-    fn profile(&self) -> &str {
-        "mitsubishi-fx5"
-    }
-    fn describe(&self) -> String {
-        "writes nothing".into()
-    }
-    fn claims(&self, instruction: &str, _variant: &str) -> bool {
-        instruction == "HEXA"
-    }
-    fn execute(&self, _request: &Request<'_>) -> Result<Response, Fault> {
-        Ok(Response::Done(Outcome::default()))
-    }
 }
 
 /// A known difference is ignored with its entry when the trials run together, and fails with
@@ -206,7 +186,8 @@ fn a_known_difference_run_alone_is_no_pass() {
     )
     .expect("write");
     let harness = || {
-        let lazy: Arc<dyn Backend> = Arc::new(Lazy);
+        // It writes nothing.
+        let lazy = hexa("lazy", |_| Ok(Response::Done(Outcome::default())));
         Harness::new(root())
             .without_builtin()
             .backend(lazy, Some(known.clone()))
@@ -231,33 +212,13 @@ fn a_known_difference_run_alone_is_no_pass() {
     );
 }
 
-/// An emulator of FX5 HEXA that never answers.
-struct Hung;
-
-impl Backend for Hung {
-    fn name(&self) -> &str {
-        "hung"
-    }
-    fn profile(&self) -> &str {
-        "mitsubishi-fx5"
-    }
-    fn describe(&self) -> String {
-        "never answers".into()
-    }
-    fn claims(&self, instruction: &str, _variant: &str) -> bool {
-        instruction == "HEXA"
-    }
-    fn execute(&self, _request: &Request<'_>) -> Result<Response, Fault> {
-        loop {
-            std::thread::sleep(std::time::Duration::from_secs(1));
-        }
-    }
-}
-
 /// A hung in-process backend fails its trial at the harness's time limit, and the run ends.
 #[test]
 fn a_hung_backend_fails_its_trial_at_the_time_limit() {
-    let hung: Arc<dyn Backend> = Arc::new(Hung);
+    // It never answers.
+    let hung = hexa("hung", |_| loop {
+        std::thread::sleep(std::time::Duration::from_secs(1));
+    });
     let h = Harness::new(root())
         .without_builtin()
         .backend(hung, None)
