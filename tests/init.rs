@@ -258,7 +258,10 @@ fn a_scaffold_is_written_whole_or_not_at_all() {
         said.contains(".github is a file where init needs a folder"),
         "{said}"
     );
-    assert!(!dir.path().join("mylib_adapter.py").exists(), "{said}");
+    assert!(
+        !dir.path().join("test_mylib_conformance.py").exists(),
+        "{said}"
+    );
     assert!(!dir.path().join("mylib.known.yaml").exists(), "{said}");
     #[cfg(unix)]
     {
@@ -268,7 +271,10 @@ fn a_scaffold_is_written_whole_or_not_at_all() {
         let (code, said) = init(other.path(), &["--python", "--name", "mylib"]);
         assert_eq!(code, Some(2), "{said}");
         assert!(said.contains("is a link"), "{said}");
-        assert!(!other.path().join("mylib_adapter.py").exists(), "{said}");
+        assert!(
+            !other.path().join("test_mylib_conformance.py").exists(),
+            "{said}"
+        );
         assert!(
             std::fs::read_dir(outside.path())
                 .expect("dir")

@@ -242,7 +242,7 @@ fn a_link_planted_at_any_output_leaves_its_decoy_unchanged() {
         plant("emitted.yaml"),
     );
     plant("bench/manifest.json");
-    plant("scaffold/mylib_adapter.py");
+    plant("scaffold/test_mylib_conformance.py");
     let (bench, scaffold) = (dir.join("bench"), dir.join("scaffold"));
     // An emulator that is no built-in model (which `record` refuses for another reason).
     let emulator = format!(
