@@ -74,31 +74,36 @@ pub(crate) fn install_panic_hook(kill: bool) {
 /// process group; a test harness, which turns a panic into one failed test, keeps them.
 pub(crate) fn install(on_signal: OnSignal) -> std::io::Result<()> {
     install_panic_hook(on_signal == OnSignal::Finish);
-    #[cfg(all(unix, feature = "signals"))]
-    {
-        use signal_hook::consts::{SIGINT, SIGTERM};
-        let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM])?;
-        std::thread::Builder::new()
-            .name("signals".into())
-            .spawn(move || {
-                for signal in signals.forever() {
-                    let again = external::closing();
-                    interrupt(signal);
-                    if again || on_signal == OnSignal::Exit {
-                        std::process::exit(128 + signal);
-                    }
+    handle_signals(on_signal)
+}
+
+#[cfg(all(unix, feature = "signals"))]
+fn handle_signals(on_signal: OnSignal) -> std::io::Result<()> {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM])?;
+    std::thread::Builder::new()
+        .name("signals".into())
+        .spawn(move || {
+            for signal in signals.forever() {
+                let again = external::closing();
+                interrupt(signal);
+                if again || on_signal == OnSignal::Exit {
+                    std::process::exit(128 + signal);
                 }
-            })?;
-    }
-    #[cfg(all(unix, not(feature = "signals")))]
-    {
-        let _ = on_signal;
-        return Err(std::io::Error::other(
-            "the crate is built without its `signals` feature",
-        ));
-    }
-    #[cfg(not(unix))]
-    let _ = on_signal;
-    #[allow(unreachable_code)]
+            }
+        })?;
+    Ok(())
+}
+
+#[cfg(all(unix, not(feature = "signals")))]
+fn handle_signals(_: OnSignal) -> std::io::Result<()> {
+    Err(std::io::Error::other(
+        "the crate is built without its `signals` feature",
+    ))
+}
+
+/// No process group to kill where there are no Unix signals.
+#[cfg(not(unix))]
+fn handle_signals(_: OnSignal) -> std::io::Result<()> {
     Ok(())
 }

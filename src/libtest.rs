@@ -484,8 +484,7 @@ fn run_within(trial: Trial, limit: Duration) -> Result<(Trial, Verdict), Failed>
         ))),
         Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
             let why = match worker.join() {
-                Err(panic) => (panic.downcast_ref::<String>().cloned())
-                    .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                Err(panic) => crate::backend::panic_message(panic.as_ref())
                     .unwrap_or_else(|| "a panic without a message".into()),
                 Ok(()) => "the trial's thread ended without a verdict".into(),
             };

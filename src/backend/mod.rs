@@ -423,6 +423,12 @@ pub(crate) fn codec_panicked_at(location: String) {
     CODEC_PANICKED_AT.with(|at| *at.borrow_mut() = Some(location));
 }
 
+/// What a panic said, when it said it with `panic!`'s text (a `&str` or a `String`).
+pub(crate) fn panic_message(panic: &(dyn std::any::Any + Send)) -> Option<String> {
+    (panic.downcast_ref::<&str>().map(|s| s.to_string()))
+        .or_else(|| panic.downcast_ref::<String>().cloned())
+}
+
 /// A codec's answer, or what it panicked with: a codec in process that panics on a question has
 /// crashed on that case, as a process that exits would have, and the run goes on.
 pub(crate) fn convert_or_panic(
@@ -433,9 +439,7 @@ pub(crate) fn convert_or_panic(
     let answer = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| codec.convert(question)));
     ASKING_CODEC.with(|a| a.set(false));
     answer.map_err(|panic| {
-        let message = (panic.downcast_ref::<&str>().map(|s| s.to_string()))
-            .or_else(|| panic.downcast_ref::<String>().cloned())
-            .unwrap_or_else(|| "a panic".into());
+        let message = panic_message(panic.as_ref()).unwrap_or_else(|| "a panic".into());
         let at = CODEC_PANICKED_AT
             .with(|at| at.borrow_mut().take())
             .map(|at| format!(" (at {at})"))
