@@ -45,13 +45,14 @@ function quote(word) {
 function codecCases({ name, adapter, knownDifferences, binary, timeout = 5 }) {
   if (!name || !adapter) throw new TypeError('codecCases: give name and adapter (a script path)');
   const command = [process.execPath, path.resolve(adapter)].map(quote).join(' ');
+  const codec = {
+    name,
+    backend: `external:${name}=${command}`,
+    timeout,
+    knownDifferences: knownDifferences ? path.resolve(knownDifferences) : null,
+  };
   if (process.env[DESCRIBING]) {
-    described.push({
-      name,
-      backend: `external:${name}=${command}`,
-      timeout,
-      knownDifferences: knownDifferences ? path.resolve(knownDifferences) : null,
-    });
+    described.push(codec);
     return [];
   }
   const { test } = require('node:test');
@@ -64,9 +65,7 @@ function codecCases({ name, adapter, knownDifferences, binary, timeout = 5 }) {
   let records;
   try {
     const output = path.join(folder, 'results.json');
-    const args = ['run', '--backend', `external:${name}=${command}`, '--timeout', String(timeout),
-      '--format', 'json', '--output', output];
-    if (knownDifferences) args.push('--known-differences', `${name}=${path.resolve(knownDifferences)}`);
+    const args = commandLine(codec, 'run', ['--format', 'json', '--output', output]);
     // Away from any project folder: the corpus is the one built into the command.
     const done = spawnSync(bin, args, { cwd: folder, encoding: 'utf8' });
     if (done.error || ![0, 1].includes(done.status) || !fs.existsSync(output)) {
@@ -114,6 +113,12 @@ function codecCommand(testFile, subcommand, args, name) {
   } else {
     throw new Error(`${testFile} declares ${codecs.length} codecs: name one with --codec NAME (${codecs.map((c) => c.name).join(', ')})`);
   }
+  return commandLine(codec, subcommand, args);
+}
+
+/** The arguments that run `subcommand` (with its own `args`) on `codec` as codecCases describes
+ * it: the codec as the backend, its timeout and known differences where the command takes them. */
+function commandLine(codec, subcommand, args) {
   const line = [subcommand, ...args, '--backend', codec.backend];
   if (TAKES_TIMEOUT.has(subcommand)) line.push('--timeout', String(codec.timeout));
   if (TAKES_KNOWN_DIFFERENCES.has(subcommand) && codec.knownDifferences) {

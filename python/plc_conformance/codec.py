@@ -12,18 +12,12 @@ when the module declares more than one codec. The command gets the codec as its 
     python -m plc_conformance.codec tests/test_mylib.py list --filter xv-h2v
 """
 
-import importlib.util
 import os
 import sys
 
-from plc_conformance import binary
-from plc_conformance.pytest_cases import DESCRIBING
+from plc_conformance.pytest_cases import DESCRIBING, command_line, import_file
 
 __all__ = ["command"]
-
-# The commands that take each option, as `plc-conformance COMMAND --help` lists them.
-TAKES_TIMEOUT = {"run", "diff", "sweep", "record"}
-TAKES_KNOWN_DIFFERENCES = {"run", "diff", "sweep"}
 
 
 class UsageError(Exception):
@@ -35,13 +29,7 @@ def _codecs(path):
     if not os.path.isfile(path):
         raise UsageError("no test file %s" % path)
     os.environ[DESCRIBING] = "1"
-    folder = os.path.dirname(os.path.abspath(path))
-    sys.path[:0] = [folder, os.getcwd()]
-    name = os.path.splitext(os.path.basename(path))[0]
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
+    module = import_file(path, os.path.splitext(os.path.basename(path))[0])
     return {k: v.plc_conformance_codec for k, v in vars(module).items()
             if hasattr(v, "plc_conformance_codec")}
 
@@ -64,12 +52,7 @@ def command(target, subcommand, args):
     else:
         raise UsageError("%s declares %d codecs: name one as %s:NAME (%s)"
                          % (path, len(codecs), path, ", ".join(sorted(codecs))))
-    line = [binary(), subcommand, *args, "--backend", codec["backend"]]
-    if subcommand in TAKES_TIMEOUT:
-        line += ["--timeout", str(codec["timeout"])]
-    if subcommand in TAKES_KNOWN_DIFFERENCES and codec["known_differences"] is not None:
-        line += ["--known-differences", "%s=%s" % (codec["name"], codec["known_differences"])]
-    return line
+    return command_line(codec, subcommand, args)
 
 
 def main(argv=None):

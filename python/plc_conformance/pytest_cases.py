@@ -48,6 +48,37 @@ SERVING = "PLC_CONFORMANCE_SERVING_CODEC"
 DESCRIBING = "PLC_CONFORMANCE_DESCRIBING_CODEC"
 
 
+# The commands that take each option, as `plc-conformance COMMAND --help` lists them.
+TAKES_TIMEOUT = {"run", "diff", "sweep", "record"}
+TAKES_KNOWN_DIFFERENCES = {"run", "diff", "sweep"}
+
+
+def command_line(codec, subcommand, args):
+    """The plc-conformance command line running `subcommand` (with its own `args`) on `codec`
+    as codec_cases describes it: the codec as the backend, its timeout and known differences
+    where the command takes them."""
+    line = [binary(), subcommand, *args, "--backend", codec["backend"]]
+    if subcommand in TAKES_TIMEOUT:
+        line += ["--timeout", str(codec["timeout"])]
+    if subcommand in TAKES_KNOWN_DIFFERENCES and codec["known_differences"] is not None:
+        line += ["--known-differences", "%s=%s" % (codec["name"], codec["known_differences"])]
+    return line
+
+
+def import_file(path, name):
+    """The module in the file `path`, imported as `name` with its folder and the current folder
+    on the path, as pytest's own imports see them (the serving process and the codec command
+    import the test module this way)."""
+    import importlib.util
+
+    sys.path[:0] = [os.path.dirname(os.path.abspath(path)), os.getcwd()]
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
 def _where(function):
     """(file, qualified name) of a module-level function, for the serving process."""
     module = sys.modules.get(getattr(function, "__module__", None))
@@ -135,10 +166,7 @@ def codec_cases(decode=None, encode=None, *, name="codec", version=None, digits=
 
     with tempfile.TemporaryDirectory(prefix="plc-conformance-") as folder:
         output = os.path.join(folder, "results.json")
-        command = [binary(), "run", "--backend", codec["backend"],
-                   "--timeout", str(timeout), "--format", "json", "--output", output]
-        if codec["known_differences"] is not None:
-            command += ["--known-differences", "%s=%s" % (name, codec["known_differences"])]
+        command = command_line(codec, "run", ["--format", "json", "--output", output])
         # Run where the test module is, away from any project folder above the current one: the
         # corpus is the one built into the command.
         done = subprocess.run(command, cwd=folder, capture_output=True, text=True)

@@ -3,13 +3,12 @@ imports the module FILE, finds its decode, encode, check and verify functions an
 plc_adapter.serve_codec as SPEC (JSON) says."""
 
 import importlib
-import importlib.util
 import json
 import os
 import sys
 
 import plc_adapter
-from plc_conformance.pytest_cases import SERVING
+from plc_conformance.pytest_cases import SERVING, import_file
 
 
 def _resolve(dotted):
@@ -38,12 +37,7 @@ def _field(field):
 def main():
     file, spec = sys.argv[1], json.loads(sys.argv[2])
     os.environ[SERVING] = "1"
-    # The module's folder and the folder pytest ran in, as pytest's own imports see them.
-    sys.path[:0] = [os.path.dirname(file), os.getcwd()]
-    loaded = importlib.util.spec_from_file_location(spec["module"], file)
-    module = importlib.util.module_from_spec(loaded)
-    sys.modules[spec["module"]] = module
-    loaded.loader.exec_module(module)
+    module = import_file(file, spec["module"])
     plc_adapter.serve_codec(
         decode=_attribute(module, spec["decode"]) if spec["decode"] else None,
         encode=_attribute(module, spec["encode"]) if spec["encode"] else None,

@@ -10,6 +10,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "..", "..", "python"))
 
 from plc_conformance import codec as entry  # noqa: E402
+from plc_conformance import pytest_cases  # noqa: E402
 
 MODULE = '''
 from plc_conformance.pytest_cases import codec_cases
@@ -36,7 +37,7 @@ class CodecEntry(unittest.TestCase):
         self.tests = os.path.join(self.folder.name, "test_strict.py")
         with open(self.tests, "w") as f:
             f.write(MODULE)
-        entry.binary = lambda: "plc-conformance"
+        pytest_cases.binary = lambda: "plc-conformance"
 
     def test_a_sweep_gets_the_codec_its_timeout_and_known_differences(self):
         line = entry.command(self.tests, "sweep", ["--generator", "full"])
