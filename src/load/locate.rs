@@ -10,6 +10,8 @@ use std::collections::HashMap;
 
 use saphyr_parser::{Event, Parser};
 
+use super::document::Builder;
+
 /// The deepest nesting of mappings and sequences a file may have. The formats need five; a
 /// pathological file of 100,000 levels would otherwise hold the deserializer for a minute.
 pub(super) const MAX_DEPTH: usize = 64;
@@ -52,23 +54,39 @@ pub(crate) struct LineIndex {
 }
 
 enum Frame {
-    Map { path: String, key: Option<String> },
-    Seq { path: String, next: usize },
+    /// `key`: the path of the value its last key starts, until that value is read.
+    Map {
+        path: String,
+        key: Option<String>,
+    },
+    Seq {
+        path: String,
+        next: usize,
+    },
 }
 
 impl LineIndex {
-    /// Indexes a document whose text [`LineIndex::checked`] would refuse as far as it goes.
+    /// Indexes a document whose text [`LineIndex::read`] would refuse as far as it goes.
+    #[cfg(test)]
     pub(crate) fn new(text: &str) -> Self {
         Self::checked(text).unwrap_or_default()
+    }
+
+    /// [`LineIndex::read`] without the document.
+    #[cfg(test)]
+    pub(crate) fn checked(text: &str) -> Result<Self, (usize, String)> {
+        Self::read(text).map(|(index, _)| index)
     }
 
     /// Checks what the deserializer must never see and indexes the document in the same pass,
     /// stopping at the first problem: a character YAML forbids, a second document, or nesting
     /// deeper than [`MAX_DEPTH`] (which the deserializer takes quadratic time over). Returns the
     /// line and the message of the problem. A syntax error ends the index where it is: the
-    /// deserializer reports it, with its own line.
-    pub(crate) fn checked(text: &str) -> Result<Self, (usize, String)> {
+    /// deserializer reports it, with its own line. The same parse builds the document's value
+    /// when [`super::document`] can build it as the deserializer would.
+    pub(crate) fn read(text: &str) -> Result<(Self, Option<serde_yaml::Value>), (usize, String)> {
         forbidden_character(text)?;
+        let mut document = Builder::default();
         let mut lines = HashMap::new();
         let mut duplicates = Vec::new();
         let mut stack: Vec<Frame> = Vec::new();
@@ -80,8 +98,12 @@ impl LineIndex {
                 Err(e) if e.info().contains("recursion limit") => {
                     return Err((e.marker().line(), too_deep()))
                 }
-                Err(_) => break,
+                Err(_) => {
+                    document.give_up();
+                    break;
+                }
             };
+            document.event(&event);
             let line = span.start.line();
             // The path of the node this event starts, and whether it is a mapping key.
             let (path, is_key) = match stack.last_mut() {
@@ -93,9 +115,10 @@ impl LineIndex {
                     }
                     (p, false)
                 }
-                Some(Frame::Map { path, key }) => match key.take() {
-                    Some(k) => (join(path, &k), false),
-                    None => (path.clone(), true),
+                // A key's own path is made below, once it is read.
+                Some(Frame::Map { key, .. }) => match key.take() {
+                    Some(full) => (full, false),
+                    None => (String::new(), true),
                 },
             };
             match event {
@@ -115,14 +138,14 @@ impl LineIndex {
                         Some(Frame::Map { path, .. }) => join(path, &value),
                         _ => value.to_string(),
                     };
-                    match lines.entry(full) {
+                    match lines.entry(full.clone()) {
                         Entry::Occupied(e) => duplicates.push((e.key().clone(), line)),
                         Entry::Vacant(e) => {
                             e.insert(line);
                         }
                     }
                     if let Some(Frame::Map { key, .. }) = stack.last_mut() {
-                        *key = Some(value.to_string());
+                        *key = Some(full);
                     }
                 }
                 Event::Scalar(..) | Event::Alias(..) => {
@@ -144,7 +167,7 @@ impl LineIndex {
                 _ => {}
             }
         }
-        Ok(LineIndex { lines, duplicates })
+        Ok((LineIndex { lines, duplicates }, document.finish()))
     }
 
     /// Keys that appear twice in one mapping, with the line of the repeat. The deserializer

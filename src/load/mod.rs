@@ -7,6 +7,7 @@
 
 mod checks;
 mod cross_vendor;
+mod document;
 mod error;
 mod known;
 mod libraries;
@@ -127,19 +128,21 @@ pub(crate) struct FileContext<'a> {
     pub file: PathBuf,
     pub index: LineIndex,
     pub errors: &'a mut Vec<LoadError>,
-    /// The text holds what no parser may see (see [`LineIndex::checked`]): nothing more is
+    /// The text holds what no parser may see (see [`LineIndex::read`]): nothing more is
     /// read.
     refused: bool,
+    /// The document, built by the parse that indexed it, for [`parse_document`] to take.
+    document: Option<serde_yaml::Value>,
 }
 
 impl<'a> FileContext<'a> {
-    /// Starts reading a file: first what no parser may see ([`LineIndex::checked`]: a
+    /// Starts reading a file: first what no parser may see ([`LineIndex::read`]: a
     /// forbidden character, a second document, nesting past [`locate::MAX_DEPTH`]), before
     /// anything builds the document, since a pathological nesting holds the deserializer for
     /// minutes; then the keys repeated within a mapping.
     pub(crate) fn new(file: &Path, text: &str, errors: &'a mut Vec<LoadError>) -> Self {
-        let index = match LineIndex::checked(text) {
-            Ok(index) => index,
+        let (index, document) = match LineIndex::read(text) {
+            Ok(read) => read,
             Err((line, message)) => {
                 errors.push(LoadError {
                     file: file.to_path_buf(),
@@ -152,6 +155,7 @@ impl<'a> FileContext<'a> {
                     index: LineIndex::default(),
                     errors,
                     refused: true,
+                    document: None,
                 };
             }
         };
@@ -160,6 +164,7 @@ impl<'a> FileContext<'a> {
             index,
             errors,
             refused: false,
+            document,
         };
         let repeated: Vec<(String, usize)> = cx.index.duplicates().to_vec();
         for (key, line) in repeated {
@@ -231,11 +236,11 @@ where
     }
 }
 
-/// Reads one document as its on-disk type: first its shape against the type's schema, which
-/// reports every unknown, missing or misplaced key at once (see [`shape`]); then, when the shape
-/// is right, the deserializer, which stops at its first error. A document that is not YAML at
-/// all goes straight to the deserializer, which says where the syntax breaks. Problems go to
-/// the file's errors.
+/// Reads one document as its on-disk type. A document the type refuses is checked for its
+/// shape against the type's schema, which reports every unknown, missing or misplaced key at
+/// once (see [`shape`]); when the shape is right, the deserializer's first error is the one
+/// reported. A document that is not YAML at all goes straight to the deserializer, which says
+/// where the syntax breaks. Problems go to the file's errors.
 pub(crate) fn parse_document<T: DeserializeOwned + schemars::JsonSchema + 'static>(
     text: &str,
     cx: &mut FileContext<'_>,
@@ -243,22 +248,28 @@ pub(crate) fn parse_document<T: DeserializeOwned + schemars::JsonSchema + 'stati
     if cx.refused {
         return None;
     }
-    if let Ok(doc) = serde_yaml::from_str::<serde_yaml::Value>(text) {
+    let document = match cx.document.take() {
+        Some(doc) => Ok(doc),
+        None => serde_yaml::from_str::<serde_yaml::Value>(text),
+    };
+    if let Ok(doc) = document {
+        // Whatever the walk of the schema reports, the type refuses too (its structs deny
+        // unknown fields, and the schema is generated from them): a document it reads needs no
+        // walk, which with the schema's making was a third of a start-up.
+        if let Ok(value) = T::deserialize(&doc) {
+            return Some(value);
+        }
         if !shape::check(&doc, &schema_once::<T>(), cx) {
             return None;
         }
-        // The document parsed once builds the type; only one it refuses is parsed again, for
-        // the line the deserializer reports.
-        if let Ok(value) = serde_yaml::from_value(doc) {
-            return Some(value);
-        }
     }
+    // Only a document the type refuses is parsed again, for the line the deserializer reports.
     deserialize(&cx.file.clone(), text)
         .map_err(|e| cx.errors.push(e))
         .ok()
 }
 
-/// Deserializes one YAML document already checked ([`LineIndex::checked`]), turning the
+/// Deserializes one YAML document already checked ([`LineIndex::read`]), turning the
 /// deserializer's error into a [`LoadError`] with the line and key path it reports.
 fn deserialize<T: DeserializeOwned>(file: &Path, text: &str) -> Result<T, LoadError> {
     serde_yaml::from_str(text).map_err(|e| {
@@ -390,6 +401,7 @@ fn special_kind(_: &std::fs::FileType) -> &'static str {
 }
 
 // Only tests parse a profile's text alone; the loader reaches it inside `profiles`.
+#[cfg(test)]
 #[cfg(test)]
 pub(crate) use profiles::parse_profile;
 

@@ -4,7 +4,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 use super::checks::unknown;
-use super::{read_file, yaml_files, FileContext, LineIndex, LoadError, LoadErrorKind, LoadErrors};
+use super::{read_file, yaml_files, FileContext, LoadError, LoadErrorKind, LoadErrors};
 use crate::model::profile::{CallForm, DeviceTable, ErrorSignalling, Profile, Profiles};
 use crate::spec::profile::{CallBasis, DeviceDef, DeviceRanges, ProfileSpec, SignalKind};
 
@@ -22,36 +22,32 @@ pub fn load_profiles(dir: &Path) -> Result<Profiles, LoadErrors> {
                 continue;
             }
         };
-        if super::protocols::is_protocol_profile(&text) {
-            if let Some(p) = super::protocols::parse_protocol(&file, &text, &mut errors) {
+        // One context per file: its text checked, indexed and parsed once, whichever kind it is.
+        let mut cx = FileContext::new(&file, &text, &mut errors);
+        if super::protocols::is_protocol_profile(&cx.index) {
+            if let Some(p) = super::protocols::parse_protocol(&text, &mut cx) {
                 if protocols.iter().any(|q| q.id == p.id) {
-                    errors.push(LoadError {
-                        file: file.clone(),
-                        line: LineIndex::new(&text).line("protocol"),
-                        key: Some("protocol".into()),
-                        kind: LoadErrorKind::Invalid(format!(
+                    cx.error(
+                        "protocol",
+                        LoadErrorKind::Invalid(format!(
                             "protocol id `{}` is also used by another protocol profile",
                             p.id
-                        ))
-                        .into(),
-                    });
+                        )),
+                    );
                 }
                 protocols.push(p);
             }
             continue;
         }
-        if let Some(profile) = parse_profile(&file, &text, &mut errors) {
+        if let Some(profile) = read_profile(&text, &mut cx) {
             if let Some(other) = profiles.iter().find(|p| p.id == profile.id) {
-                errors.push(LoadError {
-                    file: file.clone(),
-                    line: LineIndex::new(&text).line("id"),
-                    key: Some("id".into()),
-                    kind: LoadErrorKind::Invalid(format!(
+                cx.error(
+                    "id",
+                    LoadErrorKind::Invalid(format!(
                         "profile id `{}` is also used by another profile ({})",
                         profile.id, other.name
-                    ))
-                    .into(),
-                });
+                    )),
+                );
             }
             profiles.push(profile);
         }
@@ -74,21 +70,26 @@ pub fn load_profiles(dir: &Path) -> Result<Profiles, LoadErrors> {
 }
 
 /// Parses and checks one profile; problems go to `errors`.
+#[cfg(test)]
 pub(crate) fn parse_profile(
     file: &Path,
     text: &str,
     errors: &mut Vec<LoadError>,
 ) -> Option<Profile> {
-    let before = errors.len();
-    let mut cx = FileContext::new(file, text, errors);
-    let spec = super::parse_document::<ProfileSpec>(text, &mut cx)?;
+    read_profile(text, &mut FileContext::new(file, text, errors))
+}
+
+/// Reads and checks one profile in its file's context.
+fn read_profile(text: &str, cx: &mut FileContext<'_>) -> Option<Profile> {
+    let before = cx.errors.len();
+    let spec = super::parse_document::<ProfileSpec>(text, cx)?;
     // One table serves the checks and the profile, so every device name of the profile is
     // read with the same numbering.
     let devices = DeviceTable::new(spec.devices.clone());
-    check_profile(&spec, &devices, &mut cx);
-    let cross_vendor = super::cross_vendor::read_section(&spec, &devices, &mut cx);
-    let calls = read_calls(&spec, &mut cx);
-    check_bench(&spec, &devices, &mut cx);
+    check_profile(&spec, &devices, cx);
+    let cross_vendor = super::cross_vendor::read_section(&spec, &devices, cx);
+    let calls = read_calls(&spec, cx);
+    check_bench(&spec, &devices, cx);
     if cx.errors.len() != before {
         return None;
     }

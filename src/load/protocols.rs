@@ -2,12 +2,11 @@
 //! (`vectors/protocols/`).
 
 use std::collections::BTreeMap;
-use std::path::Path;
 use std::sync::Arc;
 
 use super::checks::{check_cite, check_expect_optional, check_id, text_bytes, unknown};
 use super::cross_vendor::number;
-use super::{FileContext, LineIndex, LoadError, LoadErrorKind};
+use super::{FileContext, LineIndex, LoadErrorKind};
 use crate::model::cross_vendor::{Answer, CrossVendorCase, Operation};
 use crate::model::profile::Profiles;
 use crate::model::protocol::{Field, FieldRule, Protocol, Rule};
@@ -15,8 +14,7 @@ use crate::model::{Basis, Citation};
 use crate::spec::protocol::{FieldOrder, ProtocolCaseSpec, ProtocolFileSpec, ProtocolSpec};
 
 /// Whether a file of `vendors/` is a protocol profile: it names a `protocol` and its `rules`.
-pub(super) fn is_protocol_profile(text: &str) -> bool {
-    let index = LineIndex::new(text);
+pub(super) fn is_protocol_profile(index: &LineIndex) -> bool {
     index.line("protocol").is_some() && index.line("rules").is_some()
 }
 
@@ -33,14 +31,9 @@ fn manual_cite(cite: &str) -> Option<(String, String)> {
 }
 
 /// Parses and checks one protocol profile; problems go to `errors`.
-pub(super) fn parse_protocol(
-    file: &Path,
-    text: &str,
-    errors: &mut Vec<LoadError>,
-) -> Option<Protocol> {
-    let before = errors.len();
-    let mut cx = FileContext::new(file, text, errors);
-    let spec = super::parse_document::<ProtocolSpec>(text, &mut cx)?;
+pub(super) fn parse_protocol(text: &str, cx: &mut FileContext<'_>) -> Option<Protocol> {
+    let before = cx.errors.len();
+    let spec = super::parse_document::<ProtocolSpec>(text, cx)?;
     let manuals: Vec<String> = spec.manuals.keys().cloned().collect();
     let mut rules = BTreeMap::new();
     for (i, r) in spec.rules.iter().enumerate() {
