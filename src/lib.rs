@@ -1,28 +1,27 @@
 //! plc-conformance: a differential conformance harness for PLC instructions.
 //!
 //! The crate root is the interface an emulator or codec author depends on: implement
-//! [`Backend`] for an emulator (one instruction on one memory image) or [`Codec`] for a hex
-//! codec (one cross-vendor question), and run the corpus against it from your own `cargo test`
-//! with [`Harness`] (one libtest trial per case), or plan and judge it yourself with
-//! [`Project`], [`verdicts`] and [`Verdict`]. Everything else is the command-line tool's and
-//! may change between releases; [`testing`] lists what this repository's own tests reach.
+//! [`Emulator`] for an emulator (one instruction on one memory image) or [`Codec`] for a hex
+//! codec (one cross-vendor or protocol-field question), and run the corpus against it from your
+//! own `cargo test` with [`Harness`] (one libtest trial per case), or plan and judge it yourself
+//! with [`Project`], [`verdicts`] and [`Verdict`]. [`Backend`] is what both become, and what a
+//! backend in another process implements. Everything else is the command-line tool's and may
+//! change between releases; [`testing`] lists what this repository's own tests reach.
 //!
 //! An emulator answers a [`Request`] — the profile and variant, the instruction, its operands
 //! and flags, the memory before — with the words it wrote and the error it signalled:
 //!
 //! ```
-//! use std::sync::Arc;
-//! use plc_conformance::{Backend, Fault, Outcome, Paths, Project, Request, Response, Setting,
+//! use plc_conformance::{Emulator, Outcome, Paths, Project, Request, Setting, Unsupported,
 //!     Value};
 //!
 //! /// Knows MELSEC iQ-R HABIN with SM705 off (a fixed 4 digits) and nothing else.
 //! struct MyEmulator;
 //!
-//! impl Backend for MyEmulator {
+//! impl Emulator for MyEmulator {
 //!     fn name(&self) -> &str { "my-emulator" }
 //!     // The profile's id (`plc-conformance list` shows them); an unknown one is refused.
 //!     fn profile(&self) -> &str { "mitsubishi-iqr" }
-//!     fn describe(&self) -> String { "my emulator, HABIN only".into() }
 //!     fn claims(&self, instruction: &str, _variant: &str) -> bool { instruction == "HABIN" }
 //!     // What it does not implement of what it claims is declined: skipped with the reason.
 //!     fn declines(&self, s: &Setting<'_>) -> Option<String> {
@@ -30,11 +29,8 @@
 //!     }
 //!     // It keeps no device ranges: the cases about them are skipped, not failed.
 //!     fn checks_device_ranges(&self) -> bool { false }
-//!     fn execute(&self, r: &Request<'_>) -> Result<Response, Fault> {
-//!         let (s, d) = match (r.device("s"), r.device("d")) {
-//!             (Ok(s), Ok(d)) => (s, d),
-//!             (Err(u), _) | (_, Err(u)) => return Ok(Response::from(u)),
-//!         };
+//!     fn execute(&self, r: &Request<'_>) -> Result<Outcome, Unsupported> {
+//!         let (s, d) = (r.device("s")?, r.device("d")?);
 //!         // 4135H 4438H reads "5A8D", low byte first (`iqr-instructions-ja p.478`).
 //!         let mut value: Value = 0;
 //!         for i in 0..2 {
@@ -42,19 +38,20 @@
 //!             for byte in [word as u8, (word >> 8) as u8] {
 //!                 let Some(digit) = (byte as char).to_digit(16).filter(|_| !byte.is_ascii_lowercase())
 //!                 else {
-//!                     return Ok(Response::Done(Outcome::error(r.error(0x3401))));
+//!                     return Ok(Outcome::error(r.error(0x3401)));
 //!                 };
 //!                 value = value << 4 | digit;
 //!             }
 //!         }
-//!         Ok(Response::Done(Outcome::written([(d.clone(), value)].into())))
+//!         Ok(Outcome::written([(d.clone(), value)].into()))
 //!     }
 //! }
 //!
 //! // The corpus built into the crate, planned and judged for it: every trial it runs conforms.
+//! // (In a `harness = false` test, `Harness::embedded().emulator(MyEmulator, None).run()`
+//! // makes each a libtest trial.)
 //! let project = Project::load(&Paths::embedded()).expect("the shipped corpus loads");
-//! let emulator: Arc<dyn Backend> = Arc::new(MyEmulator);
-//! let trials = project.plan(&[emulator]);
+//! let trials = project.plan(&[plc_conformance::emulator_backend(MyEmulator)]);
 //! let verdicts = plc_conformance::verdicts(&trials);
 //! let failing: Vec<String> = (trials.iter().zip(&verdicts))
 //!     .filter(|(_, v)| v.is_failure())
@@ -153,8 +150,8 @@ mod text;
 mod value;
 
 pub use backend::{
-    codec_backend, Backend, Codec, Fault, Outcome, Question, Request, Response, Setting,
-    Unsupported,
+    codec_backend, emulator_backend, Backend, Codec, Emulator, Fault, Outcome, Question, Request,
+    Response, Setting, Unsupported,
 };
 pub use device::Device;
 pub use judge::{Difference, Status, Verdict};

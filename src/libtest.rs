@@ -31,7 +31,7 @@ use std::time::Duration;
 use libtest_mimic::{Arguments, Completion, Failed, Trial as Test};
 
 use crate::backend::external::ExternalBackend;
-use crate::backend::Backend;
+use crate::backend::{Backend, Codec, Emulator};
 use crate::judge::{Status, Verdict};
 use crate::load::{load_project, locate_project};
 use crate::model::project::{ExternalSettings, ProjectBackends};
@@ -44,20 +44,26 @@ use crate::session::{run_one, Asked, BackendSource, HelloCache, LazyStart, Sessi
 /// Names the file of [`Harness::hello_cache`] instead of the one the harness gives; empty, none.
 const ENV_HELLO_CACHE: &str = "PLC_CONFORMANCE_HELLO_CACHE";
 
-/// The corpus as libtest trials for a `harness = false` test of your own: an emulator or a
-/// library written in Rust implements [`Backend`] (or [`crate::Codec`], wrapped by
-/// [`crate::codec_backend`]) and gets one trial per case it implements, with diffs and
-/// known differences, in process.
+/// The corpus as libtest trials for a `harness = false` test of your own: an emulator written
+/// in Rust implements [`crate::Emulator`], a library [`crate::Codec`], and gets one trial per
+/// case it implements, with diffs and known differences, in process. Only the backends given
+/// run: the built-in reference models too with [`Harness::with_builtin`].
 ///
 /// ```no_run
 /// # use std::sync::Arc;
-/// # fn my_backend() -> Arc<dyn plc_conformance::Backend> { unimplemented!() }
+/// # struct MyEmulator;
+/// # impl plc_conformance::Emulator for MyEmulator {
+/// #     fn name(&self) -> &str { "mine" }
+/// #     fn profile(&self) -> &str { "mitsubishi-iqr" }
+/// #     fn claims(&self, _: &str, _: &str) -> bool { true }
+/// #     fn execute(&self, _: &plc_conformance::Request<'_>)
+/// #         -> Result<plc_conformance::Outcome, plc_conformance::Unsupported> { unimplemented!() }
+/// # }
 /// use plc_conformance::Harness;
 ///
 /// fn main() -> std::process::ExitCode {
 ///     Harness::embedded()                        // the corpus built into the crate
-///         .without_builtin()                     // only your backend's trials
-///         .backend(my_backend(), Some("my.known.yaml".into()))
+///         .emulator(MyEmulator, Some("my.known.yaml".into()))
 ///         .run()
 /// }
 /// ```
@@ -79,13 +85,12 @@ pub struct Harness {
 const TIME_LIMIT: Duration = Duration::from_secs(30);
 
 impl Harness {
-    /// The corpus and profiles under `root` (`vendors/`, `vectors/`), with the built-in
-    /// reference models.
+    /// The corpus and profiles under `root` (`vendors/`, `vectors/`).
     pub fn new(root: impl Into<PathBuf>) -> Self {
         Harness {
             root: root.into(),
             project_file: None,
-            builtin: true,
+            builtin: false,
             extra: Vec::new(),
             asked: Vec::new(),
             hello_cache: None,
@@ -101,16 +106,15 @@ impl Harness {
         self
     }
 
-    /// The corpus and profiles built into this crate, with the built-in reference models: what
-    /// a dependent checks an emulator or a codec against without a checkout of this repository
-    /// (`--exact` narrows it to the file of the one trial named, as for a folder).
+    /// The corpus and profiles built into this crate: what a dependent checks an emulator or a
+    /// codec against without a checkout of this repository (`--exact` narrows it to the file of
+    /// the one trial named, as for a folder).
     ///
     /// ```no_run
     /// # use std::sync::Arc;
     /// # fn my_backend() -> Arc<dyn plc_conformance::Backend> { unimplemented!() }
     /// fn main() -> std::process::ExitCode {
     ///     plc_conformance::Harness::embedded()
-    ///         .without_builtin()
     ///         .backend(my_backend(), Some("my.known.yaml".into()))
     ///         .run()
     /// }
@@ -136,9 +140,10 @@ impl Harness {
         self
     }
 
-    /// Leaves out the built-in reference models.
-    pub fn without_builtin(mut self) -> Self {
-        self.builtin = false;
+    /// Also runs the ten built-in reference models (this repository's own test does): each
+    /// vendor profile's cases against the model of its manual.
+    pub fn with_builtin(mut self) -> Self {
+        self.builtin = true;
         self
     }
 
@@ -146,6 +151,16 @@ impl Harness {
     pub fn backend(mut self, backend: Arc<dyn Backend>, known: Option<PathBuf>) -> Self {
         self.extra.push((backend, known));
         self
+    }
+
+    /// Adds an emulator written in Rust, run in process, with its known-differences file.
+    pub fn emulator(self, emulator: impl Emulator + 'static, known: Option<PathBuf>) -> Self {
+        self.backend(crate::emulator_backend(emulator), known)
+    }
+
+    /// Adds a codec written in Rust, run in process, with its known-differences file.
+    pub fn codec(self, codec: impl Codec + 'static, known: Option<PathBuf>) -> Self {
+        self.backend(crate::codec_backend(codec), known)
     }
 
     /// Adds a backend as the command line's `--backend` names it: `external:NAME=COMMAND` (a
@@ -307,6 +322,14 @@ impl Harness {
                 .collect();
             lines.push("no trial runs while a backend is not set up".into());
             return Err(Refused(lines));
+        }
+        // The built-in models are opt-in: a harness given no backend checks nothing.
+        if session.backends.is_empty() && session.on_first_use.is_empty() {
+            return Err(Refused::one(
+                "no backend to check: give the harness one (`.emulator`, `.codec`, `.backend`, \
+                 `.backend_spec`), or `.with_builtin()` for the reference models"
+                    .into(),
+            ));
         }
         let changed = match &mut cache {
             Some(cache) => remember(cache, &session, &by_settings, args.exact),
@@ -583,7 +606,7 @@ mod tests {
     fn only_a_harness_that_may_start_processes_handles_signals() {
         let model =
             crate::test_support::reference(&crate::test_support::session(), "mitsubishi-fx5");
-        let in_process = Harness::embedded().without_builtin().backend(model, None);
+        let in_process = Harness::embedded().backend(model, None);
         assert!(!in_process.may_start_processes());
         assert!(
             !Harness::embedded().may_start_processes(),

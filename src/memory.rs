@@ -200,6 +200,33 @@ impl Image {
     pub fn explicit(&self) -> &BTreeMap<Device, Value> {
         &self.words
     }
+
+    /// Copies the units from `head` on into an emulator's own memory, `ram[i]` from `head + i`,
+    /// so that it can run the instruction on its RAM and report with [`crate::Outcome::changes`].
+    /// Returns how many were copied: fewer than `ram` holds when the device numbers end first.
+    ///
+    /// ```
+    /// use plc_conformance::{Device, Fill, Image};
+    ///
+    /// let d100: Device = "D100".parse().unwrap();
+    /// let image = Image::new([(d100.clone(), 0x4135)].into(), Fill::B);
+    /// let mut ram = [0; 3];
+    /// assert_eq!(image.copy_into(&d100, &mut ram), 3);
+    /// assert_eq!(ram[0], 0x4135);
+    /// // A unit the case does not set reads as the fill.
+    /// assert_eq!(ram[2], image.read(&"D102".parse().unwrap()));
+    /// ```
+    pub fn copy_into(&self, head: &Device, ram: &mut [Value]) -> usize {
+        let mut copied = 0;
+        for (i, unit) in ram.iter_mut().enumerate() {
+            let Some(device) = u32::try_from(i).ok().and_then(|i| head.offset(i)) else {
+                break;
+            };
+            *unit = self.read(&device);
+            copied += 1;
+        }
+        copied
+    }
 }
 
 /// A backend's working view: reads see earlier writes; the writes are the result.

@@ -12,6 +12,7 @@ static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn main() -> ExitCode {
     plc_conformance::Harness::new(env!("CARGO_MANIFEST_DIR"))
+        .with_builtin()
         .project_file(Path::new(env!("CARGO_BIN_EXE_plc-conformance")))
         // Listing (nextest lists before every run) plans the external backends from their
         // answers to hello kept here instead of starting each.

@@ -62,7 +62,7 @@ fn harness(profile: &'static str, instruction: &'static str) -> Harness {
         instruction,
         answer: nothing,
     });
-    Harness::new(root()).without_builtin().backend(emu, None)
+    Harness::new(root()).backend(emu, None)
 }
 
 /// A scratch folder and the path of a log file in it, where a harness run by a test writes what
@@ -107,9 +107,7 @@ fn a_known_differences_file_that_does_not_load_is_refused_whatever_the_filter() 
     std::fs::write(&known, "differences: [{case: no-such-case}]\n").expect("write");
     let emu = hexa("emu", nothing);
     for args in [&["hexa"][..], &["--exact", "emu::hexa::no-such::fx5u"], &[]] {
-        let h = Harness::new(root())
-            .without_builtin()
-            .backend(emu.clone(), Some(known.clone()));
+        let h = Harness::new(root()).backend(emu.clone(), Some(known.clone()));
         let why = refused(conclude(h, args));
         assert!(why.contains("broken.known.yaml"), "{args:?}: {why}");
         assert!(
@@ -125,6 +123,14 @@ fn a_backend_with_no_trial_is_refused() {
     assert!(why.contains("backend `emu` gets no trial to run"), "{why}");
 }
 
+/// The built-in models are opt-in: a harness given no backend has nothing to check, and says so
+/// instead of reporting 0 tests, ok.
+#[test]
+fn a_harness_with_no_backend_is_refused() {
+    let why = refused(conclude(Harness::new(root()), &[]));
+    assert!(why.contains("no backend"), "{why}");
+}
+
 /// And a backend set up right runs: the same harness with a known instruction plans trials
 /// (listed, not run).
 #[test]
@@ -137,7 +143,7 @@ fn a_backend_set_up_right_runs() {
 /// text is refused before any trial with the command line's words, a right one runs.
 #[test]
 fn a_backend_spec_is_read_as_the_command_line_reads_it() {
-    let spec = |text: &str| Harness::new(root()).without_builtin().backend_spec(text);
+    let spec = |text: &str| Harness::new(root()).backend_spec(text);
     let why = refused(conclude(spec("external:Bad=./emu"), &["--list"]));
     assert!(why.contains("`Bad` is not a backend name"), "{why}");
     let why = refused(conclude(spec("no-such"), &["--list"]));
@@ -164,7 +170,7 @@ fn a_misspelt_flag_fails_every_trial_that_reads_it() {
         let _ = request.flag("SM7O1");
         Ok(Response::Unsupported("unreachable".into()))
     });
-    let h = Harness::new(root()).without_builtin().backend(emu, None);
+    let h = Harness::new(root()).backend(emu, None);
     let (dir, log) = logfile();
     let c = conclude(h, &["misspelt::hexa::hexa-16bit-k1::", "--logfile", &log]).expect("runs");
     assert!(c.num_failed > 0, "{c:?}");
@@ -188,9 +194,7 @@ fn a_known_difference_run_alone_is_no_pass() {
     let harness = || {
         // It writes nothing.
         let lazy = hexa("lazy", |_| Ok(Response::Done(Outcome::default())));
-        Harness::new(root())
-            .without_builtin()
-            .backend(lazy, Some(known.clone()))
+        Harness::new(root()).backend(lazy, Some(known.clone()))
     };
     let (log_dir, log) = logfile();
     let together = conclude(
@@ -220,7 +224,6 @@ fn a_hung_backend_fails_its_trial_at_the_time_limit() {
         std::thread::sleep(std::time::Duration::from_secs(1));
     });
     let h = Harness::new(root())
-        .without_builtin()
         .backend(hung, None)
         .time_limit(std::time::Duration::from_millis(300));
     let (dir, log) = logfile();

@@ -7,6 +7,7 @@
 
 pub(crate) mod bench;
 mod breaker;
+mod emulator;
 pub(crate) mod external;
 pub(crate) mod fc4a;
 pub(crate) mod fp;
@@ -27,6 +28,8 @@ use std::fmt;
 use std::sync::Arc;
 
 use serde::Serialize;
+
+pub use emulator::{emulator_backend, Emulator};
 
 use crate::device::Device;
 use crate::memory::{Image, Value};
@@ -142,6 +145,27 @@ impl Outcome {
             writes,
             ..Outcome::default()
         }
+    }
+
+    /// The units of an emulator's own memory from `head` on that differ between `before` (as
+    /// [`Image::copy_into`] filled it) and `after` (once the instruction ran), as writes,
+    /// without an error. A unit of `after` past the end of `before` counts as written.
+    ///
+    /// ```
+    /// use plc_conformance::{Device, Outcome};
+    ///
+    /// let d0: Device = "D0".parse().unwrap();
+    /// let outcome = Outcome::changes(&d0, &[1, 2, 3], &[1, 7, 3]);
+    /// assert_eq!(outcome, Outcome::written([("D1".parse().unwrap(), 7)].into()));
+    /// ```
+    pub fn changes(head: &Device, before: &[Value], after: &[Value]) -> Self {
+        let writes = after
+            .iter()
+            .enumerate()
+            .filter(|(i, unit)| before.get(*i) != Some(unit))
+            .filter_map(|(i, unit)| Some((head.offset(u32::try_from(i).ok()?)?, *unit)))
+            .collect();
+        Outcome::written(writes)
     }
 
     /// Moves what was reported as writes to the error registers into `registers`: a backend

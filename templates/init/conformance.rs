@@ -15,7 +15,7 @@
 //! examples/rmodbus-codec.
 
 use plc_conformance::{
-    codec_backend, Answer, Codec, CodecAbilities, ErrorClass, Harness, Operation,
+    Answer, Codec, CodecAbilities, ErrorClass, Harness, Operation,
     OperationAbilities, Question, Unsupported,
 };
 
@@ -72,7 +72,6 @@ fn main() -> std::process::ExitCode {
     // 3. The corpus and profiles built into the plc-conformance crate (`Harness::new(DIR)` for
     //    a folder with vendors/ and vectors/ of your own).
     Harness::embedded()
-        .without_builtin()
-        .backend(codec_backend({{type}}), Some("{{name}}.known.yaml".into()))
+        .codec({{type}}, Some("{{name}}.known.yaml".into()))
         .run()
 }

@@ -6,17 +6,17 @@
 //! characters, with SM705 on up to four ended by 00H. A character outside 0-9/A-F is error
 //! 3401H; an operand past its device range is 2820H.
 
-use plc_conformance::{Backend, Device, Fault, Outcome, Request, Response, Unsupported, Value};
+use plc_conformance::{Device, Emulator, Outcome, Request, Unsupported, Value};
 
 /// Data that does not convert.
 const INVALID_DATA: u16 = 0x3401;
 /// An operand past the end of its device range.
 const DEVICE_RANGE: u16 = 0x2820;
 
-/// The emulator as a backend of the iQ-R profile.
+/// The emulator, of the iQ-R profile.
 pub struct HabinEmulator;
 
-impl Backend for HabinEmulator {
+impl Emulator for HabinEmulator {
     fn name(&self) -> &str {
         "habin-emulator"
     }
@@ -25,19 +25,12 @@ impl Backend for HabinEmulator {
         "mitsubishi-iqr"
     }
 
-    fn describe(&self) -> String {
-        "example emulator of iQ-R HABIN(P), in process".into()
-    }
-
     fn claims(&self, instruction: &str, _variant: &str) -> bool {
         matches!(instruction, "HABIN" | "HABINP")
     }
 
-    fn execute(&self, r: &Request<'_>) -> Result<Response, Fault> {
-        Ok(match habin(r) {
-            Ok(outcome) => Response::Done(outcome),
-            Err(unsupported) => unsupported.into(),
-        })
+    fn execute(&self, r: &Request<'_>) -> Result<Outcome, Unsupported> {
+        habin(r)
     }
 }
 

@@ -3,15 +3,11 @@
 //! does not claim are listed as skipped with the reason.
 
 use std::process::ExitCode;
-use std::sync::Arc;
 
 use habin_emulator::HabinEmulator;
 use plc_conformance::Harness;
 
 fn main() -> ExitCode {
     // The corpus and profiles built into the crate: what a dependent has.
-    Harness::embedded()
-        .without_builtin()
-        .backend(Arc::new(HabinEmulator), None)
-        .run()
+    Harness::embedded().emulator(HabinEmulator, None).run()
 }

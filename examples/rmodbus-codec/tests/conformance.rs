@@ -4,7 +4,6 @@
 use std::path::Path;
 use std::process::ExitCode;
 
-use plc_conformance::codec_backend;
 use plc_conformance::Harness;
 use rmodbus_codec::Rmodbus;
 
@@ -12,10 +11,6 @@ fn main() -> ExitCode {
     let here = Path::new(env!("CARGO_MANIFEST_DIR"));
     // The corpus and profiles built into the crate: what a dependent has.
     Harness::embedded()
-        .without_builtin()
-        .backend(
-            codec_backend(Rmodbus),
-            Some(here.join("rmodbus.known.yaml")),
-        )
+        .codec(Rmodbus, Some(here.join("rmodbus.known.yaml")))
         .run()
 }

@@ -5,16 +5,11 @@ use std::path::Path;
 use std::process::ExitCode;
 
 use oms_modbus_codec::OmsModbus;
-use plc_conformance::codec_backend;
 use plc_conformance::Harness;
 
 fn main() -> ExitCode {
     let here = Path::new(env!("CARGO_MANIFEST_DIR"));
     Harness::new(here.join("../../.."))
-        .without_builtin()
-        .backend(
-            codec_backend(OmsModbus::new()),
-            Some(here.join("oms-modbus.known.yaml")),
-        )
+        .codec(OmsModbus::new(), Some(here.join("oms-modbus.known.yaml")))
         .run()
 }

@@ -4,17 +4,12 @@
 use std::path::Path;
 use std::process::ExitCode;
 
-use plc_conformance::codec_backend;
 use plc_conformance::Harness;
 use rs_melsec_codec::RsMelsec;
 
 fn main() -> ExitCode {
     let here = Path::new(env!("CARGO_MANIFEST_DIR"));
     Harness::new(here.join("../../.."))
-        .without_builtin()
-        .backend(
-            codec_backend(RsMelsec),
-            Some(here.join("rs-melsec.known.yaml")),
-        )
+        .codec(RsMelsec, Some(here.join("rs-melsec.known.yaml")))
         .run()
 }
