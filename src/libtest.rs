@@ -365,13 +365,14 @@ impl Harness {
                     .collect(),
             ));
         }
+        let shown = Shown::default();
         tests.extend(trials.into_iter().map(|t| {
             if let Some(why) = changed.get(t.backend.name()) {
                 let why = why.clone();
                 return Test::test(t.name(), move || Err(Failed::from(why)));
             }
             let lazy = by_name.get(t.backend.name()).cloned();
-            test(t, lazy, args, self.time_limit)
+            test(t, lazy, args, self.time_limit, shown.clone())
         }));
         let conclusion = libtest_mimic::run(args, tests);
         // Started processes get their shutdown message before the harness exits.
@@ -477,13 +478,53 @@ fn exact_files(args: &Arguments, paths: &Paths) -> Option<Vec<std::path::PathBuf
 /// runner sees — listing (nextest lists, then runs each trial by name), a trial run by exact
 /// name, `--ignored` — and otherwise runs and reports itself ignored with its reason (what the
 /// backend did, or the entry), which a flagged trial, never run, could not give.
-fn test(trial: Trial, lazy: Option<Arc<LazyStart>>, args: &Arguments, limit: Duration) -> Test {
+fn test(
+    trial: Trial,
+    lazy: Option<Arc<LazyStart>>,
+    args: &Arguments,
+    limit: Duration,
+    shown: Shown,
+) -> Test {
     let name = trial.name();
     let flagged = args.list || args.exact || args.ignored || args.include_ignored;
     let ignored = flagged && trial.ignored_because().is_some();
     let exact = args.exact;
-    Test::ignorable_test(name, move || outcome(trial, lazy, exact, limit))
+    Test::ignorable_test(name, move || outcome(trial, lazy, exact, limit, &shown))
         .with_ignored_flag(ignored)
+}
+
+/// The differences already reported in full, each with the trial that reported it. A case runs
+/// on every variant of its profile and in every call form (HABIN, HABINP), and a backend that
+/// gets it wrong usually gets it wrong the same way in each: its report is shown once, and each
+/// other trial with the same difference says which trial shows it (its own verdict stays a
+/// failure).
+#[derive(Clone, Default)]
+struct Shown(Arc<std::sync::Mutex<BTreeMap<String, String>>>);
+
+impl Shown {
+    /// The trial that already shows this trial's difference, or `None` (and this trial is
+    /// recorded as showing it) when it is the first.
+    fn first_with(&self, trial: &Trial, verdict: &Verdict) -> Option<String> {
+        let Verdict::Differs { difference } = verdict else {
+            return None;
+        };
+        let key = format!(
+            "{}\u{0}{}\u{0}{difference:?}",
+            trial.backend.name(),
+            trial.case_id()
+        );
+        let mut shown = match self.0.lock() {
+            Ok(shown) => shown,
+            Err(poisoned) => poisoned.into_inner(),
+        };
+        match shown.get(&key) {
+            Some(first) => Some(first.clone()),
+            None => {
+                shown.insert(key, trial.name());
+                None
+            }
+        }
+    }
 }
 
 /// Runs a trial on a thread of its own and waits at most `limit` for its verdict: a backend
@@ -523,6 +564,7 @@ fn outcome(
     lazy: Option<Arc<LazyStart>>,
     exact: bool,
     limit: Duration,
+    shown: &Shown,
 ) -> Result<Completion, Failed> {
     if let Some(lazy) = lazy {
         lazy.bind(&mut trial)
@@ -531,7 +573,14 @@ fn outcome(
     let (trial, verdict) = run_within(trial, limit)?;
     match verdict.status() {
         Status::Pass => Ok(Completion::Completed),
-        Status::Fail => Err(Failed::from(render(&trial, &verdict, Palette::plain()))),
+        Status::Fail => Err(Failed::from(match shown.first_with(&trial, &verdict) {
+            Some(first) => format!(
+                "the same difference as {first}, whose report shows it in full (case {}, {})",
+                trial.case_id(),
+                trial.location()
+            ),
+            None => render(&trial, &verdict, Palette::plain()),
+        })),
         // Run alone (`--exact`, as nextest runs a trial), a trial skipped only now would show as
         // passed: listing marks such trials ignored, so reaching one here means it was asked for
         // by name, and it fails rather than pass without running.

@@ -179,6 +179,29 @@ fn a_misspelt_flag_fails_every_trial_that_reads_it() {
     assert!(shown.contains("(did you mean `SM701`?)"), "{shown}");
 }
 
+/// A difference the same on every variant is reported in full once; each other trial with it
+/// fails too, naming the trial that shows it.
+#[test]
+fn the_same_difference_is_shown_once() {
+    // It writes nothing, on every FX5 variant alike.
+    let lazy = hexa("lazy", |_| Ok(Response::Done(Outcome::default())));
+    let (dir, log) = logfile();
+    let c = conclude(
+        Harness::new(root()).backend(lazy, None),
+        &["lazy::hexa::hexa-16bit-k1::", "--logfile", &log],
+    )
+    .expect("runs");
+    assert!(c.num_failed > 1, "one variant only: {c:?}");
+    assert_eq!(c.num_passed, 0, "{c:?}");
+    let shown = std::fs::read_to_string(dir.path().join("log")).expect("the log");
+    let full = shown.matches("with fill A").count();
+    let same = shown
+        .matches("the same difference as lazy::hexa::hexa-16bit-k1::")
+        .count();
+    assert_eq!(full, 1, "{shown}");
+    assert_eq!(same as u64, c.num_failed - 1, "{shown}");
+}
+
 /// A known difference is ignored with its entry when the trials run together, and fails with
 /// its difference when run alone by name, as `nextest --run-ignored all` runs it: nextest would
 /// show a trial that reports itself ignored as passed.
