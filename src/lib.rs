@@ -112,6 +112,9 @@
 //! maps trials onto `cargo test`, and `cli` is the command line (docs/architecture.md).
 
 #![warn(unreachable_pub)]
+// Every type a public signature of the interface uses can be named from the root (so `cargo doc`
+// links it). Checked without the command line, whose `testing` module reaches far more.
+#![cfg_attr(not(feature = "cli"), warn(unnameable_types))]
 // Without the command line, the operations only its commands call (sweeps, bench programs,
 // records, the results table) are compiled but unused, and what only `testing` re-exports is
 // reached by nothing public.
@@ -153,18 +156,22 @@ pub use backend::{
     codec_backend, emulator_backend, Backend, Codec, Emulator, Fault, Outcome, Question, Request,
     Response, Setting, Unsupported,
 };
-pub use device::Device;
-pub use judge::{Difference, Status, Verdict};
+pub use device::{Device, DeviceSyntaxError};
+pub use judge::{
+    Difference, Effect, KnownEntry, Mismatch, Observed, RegisterRow, Status, Verdict, WordRow,
+};
 pub use libtest::Harness;
 pub use load::LoadErrors;
 pub use memory::{Fill, Image, Unit, Value};
 pub use model::cross_vendor::CrossVendorCase;
 pub use model::cross_vendor::{
-    Answer, CodecAbilities, ErrorClass, Operation, OperationAbilities, ProtocolClaim,
+    Answer, CodecAbilities, ErrorClass, FieldShape, Operation, OperationAbilities, ProtocolClaim,
 };
 pub use model::known::{KnownDifferences, Subject};
 pub use model::profile::{Profile, Variant};
-pub use model::{Basis, Case, Corpus, ErrorSignal, Indirect, Operand};
+pub use model::{
+    Basis, Case, Citation, Corpus, ErrorSignal, Expectation, Indirect, Location, Operand,
+};
 pub use plan::Trial;
 pub use project::{Paths, Project};
 pub use session::{run_one, verdicts};

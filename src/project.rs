@@ -11,7 +11,7 @@ use crate::load::{
     embedded_vectors, embedded_vendors, load_corpus, load_known, load_profiles, LoadErrors,
 };
 use crate::model::known::KnownDifferences;
-use crate::model::profile::Profiles;
+use crate::model::profile::{Profile, Profiles};
 use crate::model::Corpus;
 use crate::plan::{plan, Trial};
 
@@ -60,13 +60,37 @@ impl Paths {
 
 /// A loaded project: what a run plans from.
 pub struct Project {
-    pub profiles: Profiles,
+    pub(crate) profiles: Profiles,
     pub corpus: Corpus,
     /// Known differences by backend name.
     pub known: BTreeMap<String, KnownDifferences>,
 }
 
 impl Project {
+    /// The vendor profile of an id (`mitsubishi-iqr`).
+    pub fn profile(&self, id: &str) -> Option<&Arc<Profile>> {
+        self.profiles.get(id)
+    }
+
+    /// Every profile loaded, for this repository's tests and benchmarks.
+    #[cfg(feature = "cli")]
+    #[doc(hidden)]
+    pub fn profiles(&self) -> &Profiles {
+        &self.profiles
+    }
+
+    /// A project of profiles and a corpus loaded apart, with no known differences, for this
+    /// repository's tests.
+    #[cfg(feature = "cli")]
+    #[doc(hidden)]
+    pub fn from_parts(profiles: Profiles, corpus: Corpus) -> Project {
+        Project {
+            profiles,
+            corpus,
+            known: BTreeMap::new(),
+        }
+    }
+
     /// Loads profiles and corpus.
     pub fn load(paths: &Paths) -> Result<Project, LoadErrors> {
         let profiles = load_profiles(&paths.vendors)?;

@@ -8,7 +8,7 @@ use std::fmt;
 
 /// Why a value could not be read.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum ValueError {
+pub(crate) enum ValueError {
     Syntax(String),
     TooWide { text: String, bits: u32 },
 }

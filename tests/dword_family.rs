@@ -42,7 +42,10 @@ fn the_toy_family_loads_in_32_bit_units() {
         Ok(p) => Session::with_references(p),
         Err(e) => panic!("the fixture does not load:\n{e}"),
     };
-    let profile = project.profiles.get("toy-dwords").expect("the toy profile");
+    let profile = project
+        .profiles()
+        .get("toy-dwords")
+        .expect("the toy profile");
     assert_eq!(profile.unit, Unit::Dword);
     let eight = (project.corpus.cases.iter())
         .find(|c| c.id == "hex8-eight-characters")

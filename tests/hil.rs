@@ -43,8 +43,7 @@ fn simulator(
     faults: Vec<FaultRule>,
 ) -> SlmpSimulator {
     let profile = project
-        .profiles
-        .get(&manifest.profile)
+        .profile(&manifest.profile)
         .cloned()
         .expect("profile");
     let mut settings =
@@ -63,7 +62,7 @@ fn iqr_manifest() -> &'static Manifest {
 /// A simulated iQ-R CPU (4E frames, long device form) set up by `change`.
 fn iqr_sim(project: &Session, change: impl FnOnce(&mut SlmpSimSettings)) -> SlmpSimulator {
     let m = iqr_manifest();
-    let profile = project.profiles.get(&m.profile).cloned().expect("profile");
+    let profile = project.profile(&m.profile).cloned().expect("profile");
     let mut s = SlmpSimSettings::new(m.clone(), "rcpu", "R04CPU");
     change(&mut s);
     SlmpSimulator::start(s, profile, reference(project, &m.profile)).expect("simulator")

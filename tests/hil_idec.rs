@@ -43,7 +43,11 @@ fn idec_manifest() -> &'static Manifest {
 /// A simulated FC4A set up by `change`.
 fn idec_sim(project: &Session, change: impl FnOnce(&mut ModbusSimSettings)) -> ModbusSimulator {
     let m = idec_manifest();
-    let profile = project.profiles.get(&m.profile).cloned().expect("profile");
+    let profile = project
+        .profiles()
+        .get(&m.profile)
+        .cloned()
+        .expect("profile");
     let mut s = ModbusSimSettings::idec(m.clone(), VARIANT, TYPE_CODE);
     change(&mut s);
     ModbusSimulator::start(s, profile, reference(project, PROFILE)).expect("simulator")
@@ -52,7 +56,7 @@ fn idec_sim(project: &Session, change: impl FnOnce(&mut ModbusSimSettings)) -> M
 /// The FC4A profile's Modbus map.
 fn map() -> Arc<Map> {
     let project = session();
-    Arc::new(Map::of(project.profiles.get(PROFILE).expect("profile")).expect("a Modbus map"))
+    Arc::new(Map::of(project.profiles().get(PROFILE).expect("profile")).expect("a Modbus map"))
 }
 
 fn scratch_copy() -> (tempfile::TempDir, std::path::PathBuf, std::path::PathBuf) {

@@ -238,7 +238,7 @@ fn the_known_draft_loads_and_covers_exactly_the_differences() {
     let file = dir.path().join("high-bytes-as-zero.known.yaml");
     std::fs::write(&file, &draft.text).expect("write");
     let profile = project
-        .profiles
+        .profiles()
         .get("mitsubishi-iqr")
         .expect("profile")
         .clone();

@@ -39,7 +39,7 @@ fn instruction(profile: &str, name: &str) -> Target {
 }
 
 fn run(project: &Session, backends: &[Arc<dyn Backend>], settings: Settings) -> (Sweep, Results) {
-    let sweep = Sweep::new(settings, &project.profiles, backends).expect("sweep sets up");
+    let sweep = Sweep::new(settings, &project.profiles(), backends).expect("sweep sets up");
     let results = sweep.run(&no_stop(), &mut |_, _| {});
     (sweep, results)
 }
@@ -173,11 +173,7 @@ fn a_mutant_shrinks_to_a_minimal_input_that_still_differs_and_emits_a_failing_ve
         .cases
         .iter()
         .all(|c| c.basis != plc_conformance::Basis::Manual));
-    let emitted_project = Project {
-        profiles,
-        corpus,
-        known: Default::default(),
-    };
+    let emitted_project = Project::from_parts(profiles, corpus);
     assert!(failing_trials(&emitted_project, &iqr).is_empty());
     assert!(!failing_trials(&emitted_project, &mutant).is_empty());
 }
@@ -247,14 +243,11 @@ fn a_sweep_finds_every_known_difference_of_pymcprotocol() {
         .iter()
         .filter(|c| c.instructions.iter().any(|i| i == "HABIN" || i == "DHABIN"))
         .filter(|c| {
-            known.entries.iter().any(|e| {
-                e.instruction.is_none()
-                    && e.matches(&plc_conformance::Subject {
-                        case: &c.id,
-                        text: None,
-                        instruction: &c.instructions[0],
-                        variant: "rcpu",
-                    })
+            known.covers(&plc_conformance::Subject {
+                case: &c.id,
+                text: None,
+                instruction: &c.instructions[0],
+                variant: "rcpu",
             })
         })
         .collect();

@@ -18,7 +18,7 @@ use crate::model::cross_vendor::Answer;
 use crate::model::known::Entry;
 use crate::model::Basis;
 use crate::plan::{Check, Trial};
-pub(crate) use words::{Effect, Mismatch, WordRow};
+pub use words::{Effect, Mismatch, RegisterRow, WordRow};
 
 /// The verdict of one trial.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]

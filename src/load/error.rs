@@ -10,7 +10,7 @@ use crate::value::ValueError;
 /// One problem in one file. Rendered as `file:line: key: message`, the shape editors and
 /// terminals turn into a link.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct LoadError {
+pub(crate) struct LoadError {
     pub file: PathBuf,
     pub line: Option<usize>,
     /// The key path, e.g. `cases[3].operands.s`.
@@ -19,7 +19,7 @@ pub struct LoadError {
 }
 
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum LoadErrorKind {
+pub(crate) enum LoadErrorKind {
     /// The file or folder could not be read.
     Io(String),
     /// The YAML does not have the format's shape (syntax, unknown key, wrong type).
@@ -101,7 +101,7 @@ impl std::error::Error for LoadError {
 /// All the problems found in a corpus or a set of profiles; loading reports every one rather
 /// than stopping at the first.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
-pub struct LoadErrors(pub Vec<LoadError>);
+pub struct LoadErrors(pub(crate) Vec<LoadError>);
 
 impl fmt::Display for LoadErrors {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {

@@ -126,7 +126,7 @@ impl fmt::Display for Answer {
 
 /// How a profile answers the cross-vendor operations, validated.
 #[derive(Debug, Clone, Default)]
-pub struct CrossVendorSection {
+pub(crate) struct CrossVendorSection {
     /// How the profile's error signals read as shared classes.
     pub errors: Vec<(ErrorSignal, ErrorClass)>,
     /// The signals after which the destination still holds the conversion.
@@ -136,7 +136,7 @@ pub struct CrossVendorSection {
 
 impl CrossVendorSection {
     /// A vendor's error signal as a shared class, by the profile's table.
-    pub fn classify(&self, signal: &ErrorSignal) -> Answer {
+    pub(crate) fn classify(&self, signal: &ErrorSignal) -> Answer {
         match self.errors.iter().find(|(s, _)| s == signal) {
             Some((_, class)) => Answer::Error(class.clone()),
             None => Answer::OtherError(signal.to_string()),
@@ -144,7 +144,7 @@ impl CrossVendorSection {
     }
 
     /// Whether the destination still holds the conversion after this signal.
-    pub fn writes_on(&self, signal: &ErrorSignal) -> bool {
+    pub(crate) fn writes_on(&self, signal: &ErrorSignal) -> bool {
         self.written_on_error.contains(signal)
     }
 }
@@ -204,7 +204,7 @@ pub struct CrossVendorCase {
     pub note: Option<String>,
     /// The protocol, field and rule of a protocol-field case; `None` for a cross-vendor one.
     #[serde(skip)]
-    pub protocol: Option<FieldRule>,
+    pub(crate) protocol: Option<FieldRule>,
 }
 
 impl CrossVendorCase {

@@ -35,7 +35,7 @@ pub(crate) fn id_matches(pattern: &str, id: &str) -> bool {
 
 /// What an entry covers.
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
-pub enum Covers {
+pub(crate) enum Covers {
     /// One case, by id.
     Case(String),
     /// The cases of one cause: those whose id matches a pattern or whose text has a class.
@@ -47,7 +47,7 @@ pub enum Covers {
 
 /// One validated entry.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Entry {
+pub(crate) struct Entry {
     pub covers: Covers,
     /// Only this instruction of the case (for a cross-vendor case: only this lowering).
     pub instruction: Option<String>,
@@ -76,7 +76,7 @@ pub struct Subject<'a> {
 
 impl Entry {
     /// Whether the entry covers a trial of this case, instruction (or lowering) and variant.
-    pub fn matches(&self, s: &Subject<'_>) -> bool {
+    pub(crate) fn matches(&self, s: &Subject<'_>) -> bool {
         let covered = match &self.covers {
             Covers::Case(c) => c == s.case,
             Covers::Cause { patterns, inputs } => {
@@ -90,7 +90,7 @@ impl Entry {
     }
 
     /// The one case the entry lists, if it lists one.
-    pub fn case(&self) -> Option<&str> {
+    pub(crate) fn case(&self) -> Option<&str> {
         match &self.covers {
             Covers::Case(c) => Some(c),
             Covers::Cause { .. } => None,
@@ -102,16 +102,21 @@ impl Entry {
 #[derive(Debug, Clone, Default)]
 pub struct KnownDifferences {
     pub file: PathBuf,
-    pub entries: Vec<Entry>,
+    pub(crate) entries: Vec<Entry>,
     /// Entries naming cases that are not in the corpus being run, when the corpus is not the
     /// project's own (`--vectors`): they are set aside rather than errors.
-    pub ignored: Vec<Entry>,
+    pub(crate) ignored: Vec<Entry>,
 }
 
 impl KnownDifferences {
+    /// Whether an entry of the file covers a trial: its case listed, or a cause it has.
+    pub fn covers(&self, s: &Subject<'_>) -> bool {
+        self.entries.iter().any(|e| e.matches(s))
+    }
+
     /// The entry covering a trial, if any: the entry of its own case first, else the first cause
     /// that covers it.
-    pub fn entry(&self, s: &Subject<'_>) -> Option<&Entry> {
+    pub(crate) fn entry(&self, s: &Subject<'_>) -> Option<&Entry> {
         self.entries
             .iter()
             .find(|e| e.case().is_some() && e.matches(s))
@@ -120,7 +125,7 @@ impl KnownDifferences {
 
     /// [`KnownDifferences::entry`], with the other entries that cover the trial too: one pass
     /// over the entries (a sweep's file may hold tens of thousands).
-    pub fn covering(&self, s: &Subject<'_>) -> Option<Entry> {
+    pub(crate) fn covering(&self, s: &Subject<'_>) -> Option<Entry> {
         let matching: Vec<&Entry> = self.entries.iter().filter(|e| e.matches(s)).collect();
         let first = (matching.iter().copied())
             .find(|e| e.case().is_some())

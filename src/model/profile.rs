@@ -32,19 +32,19 @@ pub struct Profile {
     pub name: String,
     /// The short name used for its reference backend and cross-vendor columns, e.g. `iqr`.
     pub short: String,
-    pub manuals: BTreeMap<String, Manual>,
-    pub errors: ErrorSignalling,
-    pub flags: BTreeMap<String, FlagDef>,
+    pub(crate) manuals: BTreeMap<String, Manual>,
+    pub(crate) errors: ErrorSignalling,
+    pub(crate) flags: BTreeMap<String, FlagDef>,
     /// What one device holds: a byte or a word.
     pub unit: Unit,
-    pub devices: DeviceTable,
-    pub instructions: BTreeMap<String, InstructionDef>,
+    pub(crate) devices: DeviceTable,
+    pub(crate) instructions: BTreeMap<String, InstructionDef>,
     pub variants: Vec<Variant>,
     /// How the profile answers the cross-vendor operations (empty when it does not).
-    pub cross_vendor: CrossVendorSection,
+    pub(crate) cross_vendor: CrossVendorSection,
     /// The structured-text call of each instruction a program on the CPU writes, by
     /// instruction.
-    pub calls: BTreeMap<String, CallForm>,
+    pub(crate) calls: BTreeMap<String, CallForm>,
     /// How a bench runs the corpus on one of the family's CPUs, if it can.
     pub(crate) bench: Option<Bench>,
 }
@@ -52,7 +52,7 @@ pub struct Profile {
 /// An instruction's structured-text call, read from the form the manual prints
 /// (`ENO:=ASCI(EN,s,n,d);`): the one place the live CPU's program takes its operand order from.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct CallForm {
+pub(crate) struct CallForm {
     pub instruction: String,
     /// The operand names after `EN`, in the manual's order.
     pub operands: Vec<String>,
@@ -64,7 +64,11 @@ pub struct CallForm {
 impl CallForm {
     /// Reads `ENO:=NAME(EN,a,b,...);` (blanks allowed between the parts). `Err` says what is
     /// wrong with the form.
-    pub fn parse(form: &str, basis: CallBasis, source: &str) -> Result<CallForm, CallFormError> {
+    pub(crate) fn parse(
+        form: &str,
+        basis: CallBasis,
+        source: &str,
+    ) -> Result<CallForm, CallFormError> {
         let compact: String = form.chars().filter(|c| !c.is_whitespace()).collect();
         let error = |enable_first| CallFormError {
             form: form.to_string(),
@@ -94,7 +98,7 @@ impl CallForm {
     /// The call with the enable and each operand's text in the form's order, as a statement:
     /// `ENO := ASCI(enable, D100, 4, D200);` with `eno` for ENO. `None` when `operands` does
     /// not name exactly the form's operands.
-    pub fn render(
+    pub(crate) fn render(
         &self,
         eno: &str,
         enable: &str,
@@ -117,7 +121,7 @@ impl CallForm {
 
 /// A call form that is not `ENO:=NAME(EN,s,d);`.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct CallFormError {
+pub(crate) struct CallFormError {
     form: String,
     /// The enable is missing or not first.
     enable_first: bool,
@@ -138,17 +142,17 @@ impl std::error::Error for CallFormError {}
 /// A profile's device codes, looked up by the code a device has: an entry is a code (`D`) or a
 /// pattern with `#` for a block number (`DB#.DBB`, see [`code_matches`]).
 #[derive(Debug, Clone, Default)]
-pub struct DeviceTable {
+pub(crate) struct DeviceTable {
     defs: BTreeMap<String, DeviceDef>,
 }
 
 impl DeviceTable {
-    pub fn new(defs: BTreeMap<String, DeviceDef>) -> Self {
+    pub(crate) fn new(defs: BTreeMap<String, DeviceDef>) -> Self {
         DeviceTable { defs }
     }
 
     /// The entry that names `code`, and its key.
-    pub fn entry(&self, code: &str) -> Option<(&str, &DeviceDef)> {
+    pub(crate) fn entry(&self, code: &str) -> Option<(&str, &DeviceDef)> {
         if let Some((key, def)) = self.defs.get_key_value(code) {
             return Some((key, def));
         }
@@ -158,23 +162,23 @@ impl DeviceTable {
             .map(|(key, def)| (key.as_str(), def))
     }
 
-    pub fn get(&self, code: &str) -> Option<&DeviceDef> {
+    pub(crate) fn get(&self, code: &str) -> Option<&DeviceDef> {
         self.entry(code).map(|(_, def)| def)
     }
 
     /// Whether the code's numbers are hexadecimal (MELSEC W, SW).
-    pub fn is_hexadecimal(&self, code: &str) -> bool {
+    pub(crate) fn is_hexadecimal(&self, code: &str) -> bool {
         self.get(code)
             .is_some_and(|d| d.numbering == Numbering::Hexadecimal)
     }
 
     /// A device name read with this table's numbering (`W1A` is W 26 where W is hexadecimal).
-    pub fn parse(&self, text: &str) -> Result<Device, DeviceSyntaxError> {
+    pub(crate) fn parse(&self, text: &str) -> Result<Device, DeviceSyntaxError> {
         Device::parse_numbered(text, |code| self.is_hexadecimal(code))
     }
 
     /// The codes numbered in hexadecimal, as the protocol tells an external backend.
-    pub fn hexadecimal_codes(&self) -> Vec<String> {
+    pub(crate) fn hexadecimal_codes(&self) -> Vec<String> {
         self.defs
             .iter()
             .filter(|(_, d)| d.numbering == Numbering::Hexadecimal)
@@ -182,23 +186,19 @@ impl DeviceTable {
             .collect()
     }
 
-    pub fn contains_key(&self, code: &str) -> bool {
+    pub(crate) fn contains_key(&self, code: &str) -> bool {
         self.entry(code).is_some()
     }
 
     /// The codes and patterns, for messages.
-    pub fn keys(&self) -> impl Iterator<Item = &String> {
+    pub(crate) fn keys(&self) -> impl Iterator<Item = &String> {
         self.defs.keys()
-    }
-
-    pub fn iter(&self) -> impl Iterator<Item = (&String, &DeviceDef)> {
-        self.defs.iter()
     }
 }
 
 /// How an operation error becomes visible to a program, with its devices parsed.
 #[derive(Debug, Clone)]
-pub struct ErrorSignalling {
+pub(crate) struct ErrorSignalling {
     pub signal: SignalKind,
     /// The flag an error turns on (MELSEC SM0, IDEC M8004); always there with `signal: flag`.
     pub flag: Option<Device>,
@@ -212,7 +212,7 @@ pub struct ErrorSignalling {
 
 impl ErrorSignalling {
     /// Every register an operation error's code lands in: `register`, then `also`.
-    pub fn code_registers(&self) -> Vec<Device> {
+    pub(crate) fn code_registers(&self) -> Vec<Device> {
         self.register.iter().chain(&self.also).cloned().collect()
     }
 }
@@ -223,7 +223,7 @@ impl Profile {
     }
 
     /// The ranges of a device code on a variant.
-    pub fn ranges(&self, variant: &Variant, code: &str) -> Option<DeviceRanges> {
+    pub(crate) fn ranges(&self, variant: &Variant, code: &str) -> Option<DeviceRanges> {
         let (key, def) = self.devices.entry(code)?;
         Some(
             variant

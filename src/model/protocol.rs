@@ -55,7 +55,7 @@ impl std::fmt::Display for Rule {
 /// Where a codec question comes from when a protocol asks it: the protocol, the field and the
 /// rule it tests.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct FieldRule {
+pub(crate) struct FieldRule {
     pub protocol: String,
     pub field: String,
     pub rule: Arc<Rule>,

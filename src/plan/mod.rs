@@ -25,7 +25,7 @@ use crate::model::{Basis, Case, Citation, Corpus, Indirect, Location, Operand};
 
 /// What a trial checks.
 #[derive(Debug, Clone)]
-pub enum Check {
+pub(crate) enum Check {
     /// A case of the corpus, run as one of its file's instructions.
     Native {
         instruction: String,
@@ -61,12 +61,12 @@ pub struct Trial {
     pub profile: Option<Arc<Profile>>,
     /// The profile variant (empty for a codec-level trial).
     pub variant: String,
-    pub check: Check,
-    pub input: Arc<Input>,
+    pub(crate) check: Check,
+    pub(crate) input: Arc<Input>,
     /// Why the trial is not run, when the backend does not claim it.
     pub skip: Option<String>,
     /// The known-differences entry covering the trial, if any.
-    pub known: Option<Entry>,
+    pub(crate) known: Option<Entry>,
 }
 
 impl Trial {
@@ -74,6 +74,13 @@ impl Trial {
     /// variant`, or for a protocol's codec `protocol::backend::protocol::case-id`: filtering on
     /// a prefix selects a backend, an instruction or a case across variants. The basis is not
     /// part of the name, so a name survives a change of basis.
+    /// What the trial asks, for this repository's benchmarks.
+    #[cfg(feature = "cli")]
+    #[doc(hidden)]
+    pub fn input(&self) -> &Input {
+        &self.input
+    }
+
     pub fn name(&self) -> String {
         match &self.check {
             Check::Native { instruction, case } => format!(

@@ -44,7 +44,7 @@ pub(crate) struct EntrySpec {
 /// Whether a listed difference is a bug or a deliberate choice.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "kebab-case")]
-pub enum Kind {
+pub(crate) enum Kind {
     Bug,
     ByDesign,
 }
@@ -64,7 +64,7 @@ impl std::fmt::Display for Kind {
     Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize, JsonSchema,
 )]
 #[serde(rename_all = "kebab-case")]
-pub enum InputClass {
+pub(crate) enum InputClass {
     /// A lowercase hex digit a-f (61H-66H): what "lowercase" means of a hex field.
     Lowercase,
     /// Another lowercase letter g-z (67H-7AH), the `x` of a `0x` prefix aside (that is
@@ -107,7 +107,7 @@ fn is_blank(b: u8) -> bool {
 
 impl InputClass {
     /// Whether a text has a character of the class.
-    pub fn holds(self, text: &[u8]) -> bool {
+    pub(crate) fn holds(self, text: &[u8]) -> bool {
         let any = |f: fn(u8) -> bool| text.iter().any(|&b| f(b));
         match self {
             InputClass::Lowercase => any(|b| (b'a'..=b'f').contains(&b)),

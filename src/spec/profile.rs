@@ -112,6 +112,8 @@ pub(crate) struct ModbusRange {
 /// The link a bench reaches a CPU by.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
 #[serde(rename_all = "kebab-case")]
+// `pub` for the bench's link settings, which only this repository's tests reach (`testing`).
+#[allow(unnameable_types)]
 pub enum LinkKind {
     Slmp,
     ModbusTcp,
@@ -152,14 +154,14 @@ pub(crate) struct CallFormSpec {
 /// What a structured-text call form rests on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
-pub enum CallBasis {
+pub(crate) enum CallBasis {
     Manual,
     Inferred,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct Manual {
+pub(crate) struct Manual {
     pub title: String,
     pub number: Option<String>,
     pub language: Option<String>,
@@ -189,7 +191,7 @@ pub(crate) struct ErrorSignallingSpec {
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
-pub enum SignalKind {
+pub(crate) enum SignalKind {
     /// An error code stored in a register, compared by value.
     Code,
     /// A flag only (IDEC: special internal relay M8004); no code is relied on.
@@ -198,7 +200,7 @@ pub enum SignalKind {
 
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct FlagDef {
+pub(crate) struct FlagDef {
     #[serde(default)]
     pub default: bool,
     pub description: String,
@@ -207,13 +209,13 @@ pub struct FlagDef {
 /// An inclusive range of device numbers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct DeviceRange {
+pub(crate) struct DeviceRange {
     pub first: u32,
     pub last: u32,
 }
 
 impl DeviceRange {
-    pub fn contains(&self, index: u32) -> bool {
+    pub(crate) fn contains(&self, index: u32) -> bool {
         (self.first..=self.last).contains(&index)
     }
 }
@@ -222,7 +224,7 @@ impl DeviceRange {
 /// have a gap (IDEC FC4A slim CPUs: D0-D1299 and D2000-D7999).
 #[derive(Debug, Clone, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct DeviceRanges {
+pub(crate) struct DeviceRanges {
     pub first: u32,
     pub last: u32,
     /// Further ranges of the same code, past a gap.
@@ -232,7 +234,7 @@ pub struct DeviceRanges {
 
 impl DeviceRanges {
     /// Every range, the first one first.
-    pub fn iter(&self) -> impl Iterator<Item = DeviceRange> + '_ {
+    pub(crate) fn iter(&self) -> impl Iterator<Item = DeviceRange> + '_ {
         every_range(self.first, self.last, &self.also)
     }
 }
@@ -249,7 +251,7 @@ fn every_range(
 /// How a device code's numbers are written.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize, JsonSchema)]
 #[serde(rename_all = "kebab-case")]
-pub enum Numbering {
+pub(crate) enum Numbering {
     /// Plain decimal numbers: D0, D1, ... D9, D10.
     #[default]
     Decimal,
@@ -265,7 +267,7 @@ pub enum Numbering {
 
 impl Numbering {
     /// The name profiles use.
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Numbering::Decimal => "decimal",
             Numbering::OctalLastDigit => "octal-last-digit",
@@ -274,7 +276,7 @@ impl Numbering {
     }
 
     /// The rule in words, for messages about a number that breaks it.
-    pub fn rule(self) -> &'static str {
+    pub(crate) fn rule(self) -> &'static str {
         match self {
             Numbering::Decimal => "numbers are decimal",
             Numbering::OctalLastDigit => {
@@ -287,7 +289,7 @@ impl Numbering {
     /// The position of a device number counted in points from 0, or `None` for a number the
     /// numbering does not have. Ranges and spans are compared in points, so that the 16 points
     /// from M1260 end at M1277 and those from M1270 run past it.
-    pub fn point(self, number: u32) -> Option<u64> {
+    pub(crate) fn point(self, number: u32) -> Option<u64> {
         match self {
             Numbering::Decimal | Numbering::Hexadecimal => Some(u64::from(number)),
             Numbering::OctalLastDigit => {
@@ -298,7 +300,7 @@ impl Numbering {
 
     /// The device number at a position counted in points from 0: the inverse of
     /// [`Numbering::point`].
-    pub fn number(self, point: u64) -> Option<u32> {
+    pub(crate) fn number(self, point: u64) -> Option<u32> {
         match self {
             Numbering::Decimal | Numbering::Hexadecimal => u32::try_from(point).ok(),
             Numbering::OctalLastDigit => u32::try_from(point / 8 * 10 + point % 8).ok(),
@@ -317,7 +319,7 @@ fn is_one_point(points: &u32) -> bool {
 /// A device code of a profile: its numbers, and how a word operand of it is made up.
 #[derive(Debug, Clone, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct DeviceDef {
+pub(crate) struct DeviceDef {
     pub first: u32,
     pub last: u32,
     /// Further ranges of the same code, past a gap.
@@ -337,11 +339,11 @@ pub struct DeviceDef {
 
 impl DeviceDef {
     /// Every range of the code, the first one first, as [`DeviceRanges::iter`] gives them.
-    pub fn iter_ranges(&self) -> impl Iterator<Item = DeviceRange> + '_ {
+    pub(crate) fn iter_ranges(&self) -> impl Iterator<Item = DeviceRange> + '_ {
         every_range(self.first, self.last, &self.also)
     }
 
-    pub fn ranges(&self) -> DeviceRanges {
+    pub(crate) fn ranges(&self) -> DeviceRanges {
         DeviceRanges {
             first: self.first,
             last: self.last,
@@ -352,7 +354,7 @@ impl DeviceDef {
 
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct InstructionDef {
+pub(crate) struct InstructionDef {
     /// What the instruction does, in a line.
     pub summary: String,
     /// The operands by the names the manual gives them.
@@ -364,7 +366,7 @@ pub struct InstructionDef {
 
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct OperandDef {
+pub(crate) struct OperandDef {
     /// Device codes allowed for this operand.
     #[serde(default)]
     pub devices: Vec<String>,
@@ -416,7 +418,7 @@ pub struct Variant {
     /// Device ranges that differ from the profile's (numbering and word size stay the
     /// profile's).
     #[serde(default)]
-    pub devices: BTreeMap<String, DeviceRanges>,
+    pub(crate) devices: BTreeMap<String, DeviceRanges>,
     /// Flags this variant does not implement: it behaves as if they held their default.
     #[serde(default)]
     pub ignores_flags: Vec<String>,
