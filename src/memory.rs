@@ -46,6 +46,7 @@ pub enum Unit {
 pub type Value = u32;
 
 impl Unit {
+    /// Bits in one unit: 8, 16 or 32.
     pub fn bits(self) -> u32 {
         match self {
             Unit::Byte => 8,
@@ -86,6 +87,7 @@ impl Unit {
         format!("{value:0width$X}H", width = self.digits() as usize)
     }
 
+    /// The name profiles and reports use (`byte`, `word`, `dword`).
     pub fn name(self) -> &'static str {
         match self {
             Unit::Byte => "byte",
@@ -106,6 +108,7 @@ pub enum Fill {
 }
 
 impl Fill {
+    /// Both fills, in the order each case runs under them: A, then B.
     pub const ALL: [Fill; 2] = [Fill::A, Fill::B];
 
     /// The fill's value of a unit: each byte of a word fill is the byte fill of the same kind,
@@ -137,6 +140,7 @@ impl Fill {
         self.value(device, Unit::Word) as u16
     }
 
+    /// `A` or `B`, as reports name the fill.
     pub fn name(self) -> &'static str {
         match self {
             Fill::A => "A",
@@ -161,6 +165,7 @@ impl Image {
         Image::of_units(words, fill, Unit::Word)
     }
 
+    /// Memory of `unit`-sized devices (bytes for a byte-addressed family): `words` over `fill`.
     pub fn of_units(words: BTreeMap<Device, Value>, fill: Fill, unit: Unit) -> Self {
         Image::sharing(std::sync::Arc::new(words), fill, unit)
     }
@@ -175,6 +180,7 @@ impl Image {
         Image { words, fill, unit }
     }
 
+    /// A unit's value: the one the case set, or the fill's.
     pub fn read(&self, device: &Device) -> Value {
         self.words
             .get(device)
@@ -188,10 +194,12 @@ impl Image {
         self.read(device) as u16
     }
 
+    /// The fill that the units the case does not set hold.
     pub fn fill(&self) -> Fill {
         self.fill
     }
 
+    /// What one device of this memory holds: a byte, a word or a 32-bit word.
     pub fn unit(&self) -> Unit {
         self.unit
     }

@@ -18,7 +18,9 @@ use crate::plan::{plan, Trial};
 /// Where a project keeps its data.
 #[derive(Debug, Clone)]
 pub struct Paths {
+    /// The folder of vendor profiles (`vendors/<id>.yaml`).
     pub vendors: PathBuf,
+    /// The vector folders and files the corpus is read from.
     pub vectors: Vec<PathBuf>,
 }
 
@@ -61,6 +63,7 @@ impl Paths {
 /// A loaded project: what a run plans from.
 pub struct Project {
     pub(crate) profiles: Profiles,
+    /// Every case loaded: native, cross-vendor and protocol-field.
     pub corpus: Corpus,
     /// Known differences by backend name.
     pub known: BTreeMap<String, KnownDifferences>,

@@ -40,18 +40,23 @@ use crate::model::{ErrorSignal, Indirect, Operand};
 /// Everything a backend needs to execute one case.
 #[derive(Debug, Clone, Copy)]
 pub struct Request<'a> {
+    /// The vendor family's profile: its devices, flags, error signalling and manuals.
     pub profile: &'a Profile,
+    /// The CPU model the case runs on: [`Request::flag`] and [`Request::words_exist`] heed it.
     pub variant: &'a Variant,
+    /// The instruction to execute, as the profile names it (`HABIN`).
     pub instruction: &'a str,
     /// The case id, for backends that log or correlate.
     pub case_id: &'a str,
     /// The flags the case sets; [`Request::flag`] applies defaults and the variant.
     pub flags: &'a BTreeMap<String, bool>,
+    /// The case's operands by name (`s`, `d`, `n`); [`Request::operand`] reads one.
     pub operands: &'a BTreeMap<String, Operand>,
     /// The operands given by indirect specification, with their pointers: a reference model
     /// executes on the addressed device in `operands` and needs nothing more; an external
     /// backend is told the pointer and what it addresses.
     pub indirect: &'a Indirect,
+    /// The memory before execution: the units the case sets, over fill A or B.
     pub memory: &'a Image,
 }
 
@@ -77,6 +82,7 @@ impl Request<'_> {
         self.profile.flags_of(self.instruction, self.flags)
     }
 
+    /// An operand by name, or [`Unsupported`] naming it when the case does not give it.
     pub fn operand(&self, name: &str) -> Result<&Operand, Unsupported> {
         self.operands
             .get(name)
@@ -108,11 +114,15 @@ impl Request<'_> {
 /// What a trial asks of a backend, before any memory: for [`Backend::declines`].
 #[derive(Debug, Clone, Copy)]
 pub struct Setting<'a> {
+    /// The instruction the trial runs (for a cross-vendor trial, its lowering's).
     pub instruction: &'a str,
+    /// The CPU model the trial runs on.
     pub variant: &'a Variant,
     /// The flags set (the rest hold the profile default).
     pub flags: &'a BTreeMap<String, bool>,
+    /// The operands by name, as the case or the lowering gives them.
     pub operands: &'a BTreeMap<String, Operand>,
+    /// The operands given by indirect specification, with their pointers.
     pub indirect: &'a Indirect,
 }
 
@@ -122,6 +132,7 @@ pub struct Outcome {
     /// Every word written, with the value written (a word rewritten with its old value is
     /// still listed; the comparer decides what changed).
     pub writes: BTreeMap<Device, Value>,
+    /// The error the instruction signalled; `None` when it completed without one.
     pub error: Option<ErrorSignal>,
     /// The registers where the profile says an error code lands (MELSEC SD0, FX5 SD8067 too),
     /// as the backend holds them after an error: kept apart from `writes` because they are
@@ -132,6 +143,7 @@ pub struct Outcome {
 }
 
 impl Outcome {
+    /// An outcome of an error alone: nothing written, no error registers reported.
     pub fn error(error: ErrorSignal) -> Self {
         Outcome {
             error: Some(error),
@@ -185,6 +197,7 @@ impl Outcome {
 pub struct Question<'a> {
     /// The cross-vendor case id, for backends that log or correlate.
     pub case_id: &'a str,
+    /// What is asked: hex-to-value, value-to-hex, or a protocol's check or verify.
     pub operation: Operation,
     /// hex-to-value: the characters, exactly as the case gives them.
     pub text: &'a [u8],
@@ -201,6 +214,7 @@ pub struct Question<'a> {
 #[serde(rename_all = "lowercase", tag = "kind", content = "value")]
 #[non_exhaustive]
 pub enum Response {
+    /// The instruction ran: what it wrote and the error it signalled, if any.
     Done(Outcome),
     /// A codec-level backend's answer to a [`Question`].
     Answer(Answer),

@@ -25,22 +25,29 @@ pub use words::{Effect, Mismatch, RegisterRow, WordRow};
 #[serde(rename_all = "snake_case", tag = "verdict")]
 #[non_exhaustive]
 pub enum Verdict {
+    /// The backend did what the case expects, under every fill.
     Conforms,
+    /// The backend did something other than the case expects: a failure.
     Differs {
+        /// What differed: the words or the error, or the cross-vendor answer.
         difference: Difference,
     },
     /// A backend that claimed the trial answered that it does not implement it.
     Unsupported {
+        /// The backend's own explanation of what it does not implement.
         reason: String,
     },
     /// The backend gave no usable answer under this fill.
     Fault {
+        /// The fill under which the backend gave no usable answer.
         fill: Fill,
+        /// What went wrong: a crash, a hang, a garbled answer, a panic.
         fault: Fault,
     },
     /// An `unspecified` case (or one without an expectation): what the backend did, recorded,
     /// never a failure.
     Recorded {
+        /// What the backend did (under fill A), as reports and baselines show it.
         observed: Observed,
         /// Whether the two fills gave different outcomes: the backend reads memory the case does
         /// not set.
@@ -48,6 +55,7 @@ pub enum Verdict {
     },
     /// Not run, with why (the backend does not claim it).
     Skipped {
+        /// Why the trial was not run, as reports show it.
         reason: String,
     },
     /// Not run, or cut off, because a signal interrupted the run: counted with the skipped
@@ -55,11 +63,14 @@ pub enum Verdict {
     Cancelled,
     /// A difference the backend's known-differences file lists: reported, not a failure.
     KnownDifference {
+        /// The known-differences entry that lists the trial.
         entry: KnownEntry,
+        /// The verdict without the entry: [`Verdict::Differs`] or [`Verdict::Unsupported`].
         difference: Box<Verdict>,
     },
     /// A known-differences entry for a trial that conforms: a failure until the entry goes.
     StaleEntry {
+        /// The entry that no longer matches a difference: remove it from the file.
         entry: KnownEntry,
     },
 }
@@ -113,6 +124,7 @@ impl std::fmt::Display for Observed {
 /// A known-differences entry as a verdict cites it.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct KnownEntry {
+    /// The entry's reason, or its kind and cause: what a report shows.
     pub reason: String,
     /// `file:line` of the entry.
     pub location: String,
@@ -126,7 +138,9 @@ pub struct KnownEntry {
 #[serde(rename_all = "kebab-case")]
 #[non_exhaustive]
 pub enum Status {
+    /// The trial conforms.
     Pass,
+    /// Differs, unsupported though claimed, faulted, or a stale entry: the run fails.
     Fail,
     /// Ran, but cannot fail: recorded, or a listed known difference.
     Ignored,
@@ -135,12 +149,14 @@ pub enum Status {
 }
 
 impl Status {
+    /// Whether this status fails the run (exit code 1).
     pub fn is_failure(self) -> bool {
         self == Status::Fail
     }
 }
 
 impl Verdict {
+    /// What the verdict means for the run: pass, fail, ignored or skipped.
     pub fn status(&self) -> Status {
         match self {
             Verdict::Conforms => Status::Pass,
@@ -153,6 +169,7 @@ impl Verdict {
         }
     }
 
+    /// Whether the verdict fails the run: its [`Verdict::status`] is [`Status::Fail`].
     pub fn is_failure(&self) -> bool {
         self.status() == Status::Fail
     }

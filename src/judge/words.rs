@@ -17,10 +17,15 @@ use crate::model::{ErrorSignal, Expectation};
 /// One unit in a comparison: its value before, as expected after, and as found after.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct WordRow {
+    /// The device the unit is (`D200`).
     pub device: Device,
+    /// Whether the device holds a byte or a word, which decides how its values are shown.
     pub unit: Unit,
+    /// Its value before the instruction: the case's, or the fill's where the case sets none.
     pub before: Value,
+    /// What the case expects it to hold after; its value before when no change is expected.
     pub expected: Value,
+    /// What it holds after the backend ran; its value before when the backend wrote nothing.
     pub actual: Value,
 }
 
@@ -41,10 +46,13 @@ impl Serialize for WordRow {
 /// How one run (under one fill) differed from the expectation.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct Mismatch {
+    /// The fill (A or B) that the units the case does not set held during this run.
     pub fill: Fill,
     /// Every word the expectation or the backend touched, in device order.
     pub rows: Vec<WordRow>,
+    /// The error the case expects; `None` for a success.
     pub expected_error: Option<ErrorSignal>,
+    /// The error the backend signalled; `None` when it signalled none.
     pub actual_error: Option<ErrorSignal>,
     /// The error registers, when one of them does not hold the code (empty otherwise).
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -52,12 +60,15 @@ pub struct Mismatch {
 }
 
 impl Mismatch {
+    /// Whether any unit holds another value than the case expects.
     pub fn words_differ(&self) -> bool {
         self.rows.iter().any(|r| r.expected != r.actual)
     }
+    /// Whether the error signalled is not the one expected (an error against none counts).
     pub fn error_differs(&self) -> bool {
         self.expected_error != self.actual_error
     }
+    /// Whether an error register does not hold the expected code.
     pub fn registers_differ(&self) -> bool {
         self.wrong_registers().next().is_some()
     }
@@ -75,13 +86,16 @@ impl Mismatch {
 /// One register where the profile says the error code lands, against the code expected.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct RegisterRow {
+    /// The register (`SD0`).
     pub device: Device,
+    /// The error code the case expects, which the register should hold.
     pub expected: Value,
     /// `None`: the backend reported other error registers but not this one.
     pub actual: Option<Value>,
 }
 
 impl RegisterRow {
+    /// Whether the register does not hold the code, or was not reported.
     pub fn differs(&self) -> bool {
         self.actual != Some(self.expected)
     }
@@ -130,7 +144,9 @@ pub(crate) fn register_rows(
 /// What an outcome did to memory: the units it changed (written with a new value) and its error.
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 pub struct Effect {
+    /// The units written with a new value, with that value.
     pub changed: BTreeMap<Device, Value>,
+    /// The error signalled; `None` for a success.
     pub error: Option<ErrorSignal>,
     /// What the changed devices hold (absent in baselines of word-addressed families).
     #[serde(default, skip_serializing_if = "is_word")]
@@ -151,6 +167,7 @@ impl Effect {
         }
     }
 
+    /// What `outcome` did to `before`: a write of a unit's old value is no change.
     pub fn of(before: &Image, outcome: &Outcome) -> Effect {
         Effect {
             unit: before.unit(),

@@ -88,9 +88,11 @@ impl TextLayout {
 #[serde(rename_all = "kebab-case")]
 #[non_exhaustive]
 pub enum Answer {
+    /// A binary value: what a hex-to-value conversion gives.
     Value(u64),
     /// Characters as bytes, up to the first 00H.
     Text(Vec<u8>),
+    /// An error, as the shared class the profile's table maps the vendor's signal to.
     Error(ErrorClass),
     /// An error after which the instruction has still written its destination, so that what it
     /// wrote is part of the answer (Siemens ATH: an invalid character converts as 0 and
@@ -185,10 +187,15 @@ pub struct Lowering {
 /// A validated cross-vendor case.
 #[derive(Debug, Clone, Serialize)]
 pub struct CrossVendorCase {
+    /// The case id: what trial names, filters and known-differences entries use.
     pub id: String,
+    /// What is asked: hex-to-value, value-to-hex, or a protocol's check or verify.
     pub operation: Operation,
+    /// How far the expectation can be trusted: manual, inferred, unspecified or observed.
     pub basis: Basis,
+    /// The manual, page and quoted text the expectation rests on.
     pub citation: Citation,
+    /// Where the case is written, for reports to point at.
     pub location: Location,
     /// The text (hex-to-value) as bytes.
     pub text: Vec<u8>,
@@ -201,6 +208,7 @@ pub struct CrossVendorCase {
     /// Lowerings that answer differently, by `<profile short>/<lowering>`, with the reason;
     /// `None` where no rule fixes the lowering's answer (recorded, never judged).
     pub except: BTreeMap<String, (Option<Answer>, String)>,
+    /// Free text for readers of the case.
     pub note: Option<String>,
     /// The protocol, field and rule of a protocol-field case; `None` for a cross-vendor one.
     #[serde(skip)]
@@ -229,7 +237,9 @@ impl CrossVendorCase {
 /// asked the cross-vendor questions directly, with no memory, devices or fills.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct CodecAbilities {
+    /// Hex ASCII text to a value (decoding a field); `None` when the codec does not decode.
     pub hex_to_value: Option<OperationAbilities>,
+    /// A value to hex ASCII text (encoding a field); `None` when the codec does not encode.
     pub value_to_hex: Option<OperationAbilities>,
     /// A protocol's check characters computed over a span.
     pub check: Option<OperationAbilities>,

@@ -67,10 +67,13 @@ pub(crate) struct Entry {
 /// The case a trial checks, as an entry looks at it.
 #[derive(Debug, Clone, Copy)]
 pub struct Subject<'a> {
+    /// The case id, matched against an entry's case or its cause's id patterns.
     pub case: &'a str,
     /// A cross-vendor case's text; `None` for a case of an instruction's own corpus.
     pub text: Option<&'a [u8]>,
+    /// The instruction of a native case, or the lowering of a cross-vendor one.
     pub instruction: &'a str,
+    /// The variant (CPU model) the trial runs on.
     pub variant: &'a str,
 }
 
@@ -101,6 +104,7 @@ impl Entry {
 /// A backend's validated known differences.
 #[derive(Debug, Clone, Default)]
 pub struct KnownDifferences {
+    /// The known-differences file the entries were read from.
     pub file: PathBuf,
     pub(crate) entries: Vec<Entry>,
     /// Entries naming cases that are not in the corpus being run, when the corpus is not the

@@ -27,7 +27,9 @@ pub use crate::spec::Basis;
 /// A place in a vector file.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct Location {
+    /// The vector file the case is written in.
     pub file: PathBuf,
+    /// The line the case starts on (its `- id:`), counted from 1 as editors do.
     pub line: usize,
 }
 
@@ -41,6 +43,7 @@ impl fmt::Display for Location {
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 #[serde(tag = "kind", content = "value", rename_all = "lowercase")]
 pub enum Operand {
+    /// A device (`D100`, `MB20`): memory the instruction reads or writes.
     Device(Device),
     /// A constant (`K4`, `H0ABC`, `4`), kept wide: 32-bit instructions take 32-bit constants.
     Constant(i64),
@@ -61,7 +64,9 @@ impl fmt::Display for Operand {
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ErrorSignal {
+    /// An error code as the vendor documents it (MELSEC 3401H), in a register or returned.
     Code(u16),
+    /// An error flag turned on (IDEC M8004), for vendors that signal with a relay only.
     Flag(Device),
 }
 
@@ -82,15 +87,20 @@ pub(crate) fn error_text(error: Option<&ErrorSignal>) -> String {
 /// What a case expects: the words that change and the error signalled.
 #[derive(Debug, Clone, PartialEq, Eq, Default, Serialize)]
 pub struct Expectation {
+    /// The units expected to change, with their new values; any other change is a difference.
     pub after: BTreeMap<Device, Value>,
+    /// The error signal expected; `None` expects the instruction to succeed.
     pub error: Option<ErrorSignal>,
 }
 
 /// Where an expectation comes from.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct Citation {
+    /// The manual's id, as the profile lists its manuals (`iqr-instructions-ja`).
     pub manual: String,
+    /// The page cited; empty when the citation names no page.
     pub page: String,
+    /// The manual's words quoted, or what an inferred expectation rests on.
     pub text: Option<String>,
 }
 
@@ -127,9 +137,13 @@ pub(crate) fn pointer_words<'a>(pointers: impl IntoIterator<Item = &'a Device>) 
 /// One validated test vector.
 #[derive(Debug, Clone, Serialize)]
 pub struct Case {
+    /// The case id: what trial names, filters and known-differences entries use.
     pub id: String,
+    /// How far the expectation can be trusted: manual, inferred, unspecified or observed.
     pub basis: Basis,
+    /// The manual, page and quoted text the expectation rests on.
     pub citation: Citation,
+    /// Where the case is written, for reports to point at.
     pub location: Location,
     /// The instructions the case runs as (from its file).
     pub instructions: Arc<[String]>,
@@ -146,13 +160,16 @@ pub struct Case {
     /// emulator over the protocol is given the pointer and the address to store in it.
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub indirect: Indirect,
+    /// The memory the case sets before execution; every other unit holds fill A or B.
     pub before: BTreeMap<Device, Value>,
     /// `None` only for `unspecified` cases that record without a guess.
     pub expect: Option<Expectation>,
+    /// Free text for readers of the case.
     pub note: Option<String>,
 }
 
 impl Case {
+    /// Whether the case applies to a variant: to every one unless it lists some.
     pub fn runs_on(&self, variant: &str) -> bool {
         self.variants.as_ref().is_none_or(|v| v.contains(variant))
     }
@@ -161,6 +178,7 @@ impl Case {
 /// Every case of every vector file, in file order.
 #[derive(Debug, Clone, Default)]
 pub struct Corpus {
+    /// Native cases, each run on the instructions and profiles its file names.
     pub cases: Vec<Arc<Case>>,
     /// Cross-vendor cases (`vectors/cross-vendor/`).
     pub cross_vendor: Vec<Arc<cross_vendor::CrossVendorCase>>,

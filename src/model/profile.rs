@@ -39,6 +39,7 @@ pub struct Profile {
     pub unit: Unit,
     pub(crate) devices: DeviceTable,
     pub(crate) instructions: BTreeMap<String, InstructionDef>,
+    /// The CPU models and firmware the profile describes; each runs its own trials.
     pub variants: Vec<Variant>,
     /// How the profile answers the cross-vendor operations (empty when it does not).
     pub(crate) cross_vendor: CrossVendorSection,
@@ -218,6 +219,7 @@ impl ErrorSignalling {
 }
 
 impl Profile {
+    /// A variant of this family by id (`rcpu`), if the profile has it.
     pub fn variant(&self, id: &str) -> Option<&Variant> {
         self.variants.iter().find(|v| v.id == id)
     }

@@ -56,6 +56,7 @@ pub struct Input {
 /// One check on one backend and variant.
 #[derive(Clone)]
 pub struct Trial {
+    /// The backend the trial runs on.
     pub backend: Arc<dyn Backend>,
     /// The profile the trial runs on; a codec-level trial has none.
     pub profile: Option<Arc<Profile>>,
@@ -81,6 +82,7 @@ impl Trial {
         &self.input
     }
 
+    /// The trial's unique name (`iqr::habin::<case-id>::rcpu`): what test filters select on.
     pub fn name(&self) -> String {
         match &self.check {
             Check::Native { instruction, case } => format!(
@@ -115,6 +117,7 @@ impl Trial {
         Image::of_units(self.input.before.clone(), fill, unit)
     }
 
+    /// The id of the case the trial checks.
     pub fn case_id(&self) -> &str {
         match &self.check {
             Check::Native { case, .. } => &case.id,
@@ -122,6 +125,7 @@ impl Trial {
         }
     }
 
+    /// The case's basis for this trial (a lowering's `except` entry can make it unspecified).
     pub fn basis(&self) -> Basis {
         match &self.check {
             Check::Native { case, .. } => case.basis,
@@ -130,6 +134,7 @@ impl Trial {
         }
     }
 
+    /// Where the trial's case is written.
     pub fn location(&self) -> &Location {
         match &self.check {
             Check::Native { case, .. } => &case.location,
@@ -137,6 +142,7 @@ impl Trial {
         }
     }
 
+    /// What the trial's case cites for its expectation.
     pub fn citation(&self) -> &Citation {
         match &self.check {
             Check::Native { case, .. } => &case.citation,

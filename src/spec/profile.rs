@@ -413,7 +413,9 @@ impl ConstantRange {
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Variant {
+    /// The id cases and trial names use (`rcpu`, `fx5u`).
     pub id: String,
+    /// What the variant is, for readers: the CPU models or firmware it stands for.
     pub description: String,
     /// Device ranges that differ from the profile's (numbering and word size stay the
     /// profile's).
