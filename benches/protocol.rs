@@ -154,7 +154,7 @@ fn main() {
         spec.batch = setup.batch;
         spec.persistent = setup.persistent;
         spec.timeout = Duration::from_secs(30);
-        let backend = match ExternalBackend::start(spec, &session.profiles()) {
+        let backend = match ExternalBackend::start(spec, session.profiles()) {
             Ok(b) => b,
             Err(e) => {
                 println!("| {} | - | - | not run: {e} |", setup.name);

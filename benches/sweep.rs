@@ -92,7 +92,7 @@ fn overhead(project: &Session, count: u64) {
     );
     settings.jobs = 1;
     settings.shrink = 0;
-    let sweep = Sweep::new(settings, &project.profiles(), &project.backends).expect("sweep");
+    let sweep = Sweep::new(settings, project.profiles(), &project.backends).expect("sweep");
     let points: Vec<(u64, Point)> = (0..count).map(|i| (i, sweep.space.point(i))).collect();
     // The bare loop's inputs, made before timing: per point and column, the profile, variant,
     // instruction, flags, operands and memory the plan gives.
@@ -171,8 +171,7 @@ fn values(project: &Session, cores: usize) {
         );
         settings.jobs = cores;
         settings.shrink = 0;
-        let mut sweep =
-            Sweep::new(settings, &project.profiles(), &project.backends).expect("sweep");
+        let mut sweep = Sweep::new(settings, project.profiles(), &project.backends).expect("sweep");
         let flags = std::mem::take(&mut sweep.space.flags);
         let (t, r) = best(3, || sweep.run(&AtomicBool::new(false), &mut |_, _| {}));
         total += t;
@@ -224,7 +223,7 @@ fn protocol(project: &mut Session, root: &Path, count: u64) {
         1,
     );
     s.shrink = 0;
-    let sweep = Sweep::new(s, &project.profiles(), &[native]).expect("sweep");
+    let sweep = Sweep::new(s, project.profiles(), &[native]).expect("sweep");
     let (t, r) = best(3, || sweep.run(&AtomicBool::new(false), &mut |_, _| {}));
     let trials = r.swept * sweep.columns.len() as u64;
     println!(
@@ -249,8 +248,7 @@ fn full(project: &Session, cores: usize, texts: u64) {
     );
     settings.jobs = cores;
     settings.shrink = 0;
-    let sweep =
-        Sweep::new(settings.clone(), &project.profiles(), &project.backends).expect("sweep");
+    let sweep = Sweep::new(settings.clone(), project.profiles(), &project.backends).expect("sweep");
     let (t, r) = best(3, || sweep.run(&AtomicBool::new(false), &mut |_, _| {}));
     let c = r.classes.as_ref().expect("by class");
     println!(
@@ -274,7 +272,7 @@ fn full(project: &Session, cores: usize, texts: u64) {
         settings.shard = (1, shards);
         settings.exhaustive = exhaustive;
         let sweep =
-            Sweep::new(settings.clone(), &project.profiles(), &project.backends).expect("sweep");
+            Sweep::new(settings.clone(), project.profiles(), &project.backends).expect("sweep");
         let (t, r) = best(1, || sweep.run(&AtomicBool::new(false), &mut |_, _| {}));
         println!(
             "full: each text through the {}, shard 1/{shards} ({} texts) x {} lowerings: {t:.2} s, \
@@ -303,7 +301,7 @@ fn codecs(project: &mut Session, root: &Path, count: u64) {
     );
     settings.shrink = 0;
     let references: Vec<_> = project.backends.clone();
-    let base = Sweep::new(settings.clone(), &project.profiles(), &references).expect("sweep");
+    let base = Sweep::new(settings.clone(), project.profiles(), &references).expect("sweep");
     // Best of 5: the column's cost is the difference of two times that vary from run to run.
     let (alone, _) = best(5, || base.run(&AtomicBool::new(false), &mut |_, _| {}));
     // The texts a codec of 1 to 8 digits is asked, for the bare loops.
@@ -354,7 +352,7 @@ fn codecs(project: &mut Session, root: &Path, count: u64) {
             .clone();
         let mut backends = references.clone();
         backends.push(codec);
-        let sweep = Sweep::new(settings.clone(), &project.profiles(), &backends).expect("sweep");
+        let sweep = Sweep::new(settings.clone(), project.profiles(), &backends).expect("sweep");
         let (with, r) = best(5, || sweep.run(&AtomicBool::new(false), &mut |_, _| {}));
         let added = with - alone;
         println!(

@@ -6,7 +6,7 @@
 //! own `cargo test` with [`Harness`] (one libtest trial per case), or plan and judge it yourself
 //! with [`Project`], [`verdicts`] and [`Verdict`]. [`Backend`] is what both become, and what a
 //! backend in another process implements. Everything else is the command-line tool's and may
-//! change between releases; [`testing`] lists what this repository's own tests reach.
+//! change between releases; `testing` lists what this repository's own tests reach.
 //!
 //! An emulator answers a [`Request`] — the profile and variant, the instruction, its operands
 //! and flags, the memory before — with the words it wrote and the error it signalled:
@@ -113,8 +113,9 @@
 
 #![warn(unreachable_pub)]
 // Every type a public signature of the interface uses can be named from the root (so `cargo doc`
-// links it). Checked without the command line, whose `testing` module reaches far more.
-#![cfg_attr(not(feature = "cli"), warn(unnameable_types))]
+// links it), and every public item is documented. Checked without the command line, whose
+// `testing` module reaches far more.
+#![cfg_attr(not(feature = "cli"), warn(unnameable_types, missing_docs))]
 // Without the command line, the operations only its commands call (sweeps, bench programs,
 // records, the results table) are compiled but unused, and what only `testing` re-exports is
 // reached by nothing public.

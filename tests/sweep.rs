@@ -39,7 +39,7 @@ fn instruction(profile: &str, name: &str) -> Target {
 }
 
 fn run(project: &Session, backends: &[Arc<dyn Backend>], settings: Settings) -> (Sweep, Results) {
-    let sweep = Sweep::new(settings, &project.profiles(), backends).expect("sweep sets up");
+    let sweep = Sweep::new(settings, project.profiles(), backends).expect("sweep sets up");
     let results = sweep.run(&no_stop(), &mut |_, _| {});
     (sweep, results)
 }

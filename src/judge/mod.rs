@@ -95,11 +95,24 @@ impl Verdict {
 #[non_exhaustive]
 pub enum Difference {
     /// Native: the words or the error under one or more fills.
-    Words { mismatches: Vec<Mismatch> },
+    Words {
+        /// One per fill whose words, error or error registers differ.
+        mismatches: Vec<Mismatch>,
+    },
     /// Cross-vendor: another answer than the case expects of this lowering.
-    Answer { expected: Answer, actual: Answer },
+    Answer {
+        /// The answer the case expects of this lowering.
+        expected: Answer,
+        /// The answer the backend gave.
+        actual: Answer,
+    },
     /// Cross-vendor: the answer depends on memory the case does not set.
-    FillDependent { fill_a: Answer, fill_b: Answer },
+    FillDependent {
+        /// The answer under fill A.
+        fill_a: Answer,
+        /// The answer under fill B.
+        fill_b: Answer,
+    },
 }
 
 /// What a backend did on a recorded trial.

@@ -71,10 +71,6 @@ pub struct Trial {
 }
 
 impl Trial {
-    /// `backend::instruction::case-id::variant`, `cross-vendor::backend::lowering::case-id::
-    /// variant`, or for a protocol's codec `protocol::backend::protocol::case-id`: filtering on
-    /// a prefix selects a backend, an instruction or a case across variants. The basis is not
-    /// part of the name, so a name survives a change of basis.
     /// What the trial asks, for this repository's benchmarks.
     #[cfg(feature = "cli")]
     #[doc(hidden)]
@@ -82,7 +78,10 @@ impl Trial {
         &self.input
     }
 
-    /// The trial's unique name (`iqr::habin::<case-id>::rcpu`): what test filters select on.
+    /// `backend::instruction::case-id::variant`, `cross-vendor::backend::lowering::case-id::
+    /// variant`, or for a protocol's codec `protocol::backend::protocol::case-id`: filtering on
+    /// a prefix selects a backend, an instruction or a case across variants. The basis is not
+    /// part of the name, so a name survives a change of basis.
     pub fn name(&self) -> String {
         match &self.check {
             Check::Native { instruction, case } => format!(
