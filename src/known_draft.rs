@@ -145,6 +145,10 @@ pub fn draft(project: &Project, backend: &Arc<dyn Backend>, filter: Option<&str>
             continue;
         }
         let _ = writeln!(out, "  - case: {}", s.trial.case_id());
+        // A protocol's case is judged by one of its manual's rules, which the entry names.
+        if let Some(rule) = rule_of(s.trial) {
+            let _ = writeln!(out, "    rule: {rule}");
+        }
         if !whole {
             let _ = write!(
                 out,
@@ -165,6 +169,16 @@ pub fn draft(project: &Project, backend: &Arc<dyn Backend>, filter: Option<&str>
         causes,
         cases,
         faults,
+    }
+}
+
+/// The protocol rule a trial's case rests on (`mc-ascii/M4`), for a protocol-field case.
+fn rule_of(trial: &Trial) -> Option<&str> {
+    match &trial.check {
+        Check::Codec { case } | Check::CrossVendor { case, .. } => {
+            case.protocol.as_ref().map(|p| p.rule.key.as_str())
+        }
+        Check::Native { .. } => None,
     }
 }
 

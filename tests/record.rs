@@ -263,23 +263,37 @@ fn the_known_draft_loads_and_covers_exactly_the_differences() {
         .any(|v| matches!(v, plc_conformance::Verdict::KnownDifference { .. })));
 }
 
-/// `record --known` never replaces a file: a known-differences file is edited by hand.
+/// `record --known` never replaces a file that lists differences (a known-differences file is
+/// edited by hand), but takes the place of one that lists nothing, as `init` writes it.
 #[test]
-fn record_known_refuses_an_existing_file() {
+fn record_known_replaces_only_a_file_that_lists_nothing() {
     let dir = scratch();
-    let file = dir.path().join("k.yaml");
-    std::fs::write(&file, "differences: []\n").expect("write");
-    let out = cli(&[
-        "record",
-        "--backend",
-        "iqr",
-        "--known",
-        file.to_str().expect("utf-8"),
-    ]);
+    let record = |file: &std::path::Path| {
+        cli(&[
+            "record",
+            "--backend",
+            "iqr",
+            "--known",
+            file.to_str().expect("utf-8"),
+        ])
+    };
+    let listed = dir.path().join("listed.yaml");
+    let entries = "differences:\n  - {case: habin-fixed-4-digits-example, reason: by hand}\n";
+    std::fs::write(&listed, entries).expect("write");
+    let out = record(&listed);
     assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("the file exists"));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("the file exists and lists differences"));
+    assert_eq!(std::fs::read_to_string(&listed).expect("read"), entries);
+
+    let empty = dir.path().join("empty.yaml");
+    std::fs::write(&empty, "# written by init\ndifferences: []\n").expect("write");
+    let out = record(&empty);
     assert_eq!(
-        std::fs::read_to_string(&file).expect("read"),
-        "differences: []\n"
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
     );
+    let drafted = std::fs::read_to_string(&empty).expect("read");
+    assert!(!drafted.contains("written by init"), "{drafted}");
 }

@@ -187,6 +187,25 @@ fn listing(recording: &Recording, backend: &str) -> (String, [usize; 5]) {
     (out, [filled, replaced, kept, skipped, faulted])
 }
 
+/// Whether a known-differences file lists no difference (`differences: []`, as `init` writes
+/// it): a draft may take its place, since nothing written by hand is lost.
+fn lists_nothing(path: &std::path::Path) -> bool {
+    let Ok(text) = std::fs::read_to_string(path) else {
+        return false;
+    };
+    match serde_yaml::from_str::<serde_yaml::Value>(&text) {
+        Ok(serde_yaml::Value::Mapping(file)) => {
+            file.len() == 1
+                && match file.get("differences") {
+                    Some(serde_yaml::Value::Sequence(entries)) => entries.is_empty(),
+                    Some(serde_yaml::Value::Null) => true,
+                    _ => false,
+                }
+        }
+        _ => false,
+    }
+}
+
 /// `record --known FILE`: the starting known-differences file (`crate::known_draft`).
 fn known_file(
     backend: &std::sync::Arc<dyn crate::backend::Backend>,
@@ -195,10 +214,11 @@ fn known_file(
     path: &std::path::Path,
 ) -> Outcome {
     output::check(path)?;
-    if path.exists() {
+    if path.exists() && !lists_nothing(path) {
         return Err(CliError::input(format!(
-            "--known {}: the file exists; a starting file is written only where none is (a \
-             known-differences file is edited by hand): remove it or give another path",
+            "--known {}: the file exists and lists differences; a starting file is written only \
+             where none is, or over one that lists nothing (as `init` writes it): a \
+             known-differences file is edited by hand, so remove it or give another path",
             path.display()
         )));
     }
