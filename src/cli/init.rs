@@ -209,7 +209,7 @@ fn python_name(name: &str) -> String {
 /// (`{{type}}`: `my-lib` is `MyLibCodec`), the version of plc-conformance to install
 /// (`{{version}}`), its protocol (`{{protocol_py}}`, `_js`, `_rs`: the line that names it, or the
 /// same line commented out) and how the stand-ins take their field (`{{field_py}}`,
-/// `{{field_js}}`: a protocol's field is exactly its digits; an instruction reads the first
+/// `{{field_js}}`, `{{field_rs}}`: a protocol's field is exactly its digits; an instruction reads the first
 /// digits of a longer text) filled in.
 fn fill(template: &str, name: &str, protocol: Option<&str>) -> String {
     let type_name: String = name
@@ -251,12 +251,17 @@ fn fill(template: &str, name: &str, protocol: Option<&str>) -> String {
         Some(_) => "field = text\n    if len(field) != digits:\n        raise IndexError(\"a field of %d characters, not %d\" % (digits, len(field)))",
         None => "field = text[:digits]\n    if len(field) < digits:\n        raise ValueError(\"%d digits asked of %r\" % (digits, text))",
     };
+    let field_rs = match protocol {
+        Some(_) => "let field = question.text;\n                if field.len() != question.digits as usize {\n                    return Ok(Answer::Error(ErrorClass::InvalidCount));\n                }",
+        None => "let Some(field) = question.text.get(..question.digits as usize) else {\n                    return Ok(Answer::Error(ErrorClass::InvalidDigit));\n                };",
+    };
     template
         .replace("{{name}}", name)
         .replace("{{ident}}", &python_name(name))
         .replace("{{version}}", env!("CARGO_PKG_VERSION"))
         .replace("{{field_py}}", field_py)
         .replace("{{field_js}}", field_js)
+        .replace("{{field_rs}}", field_rs)
         .replace("{{type}}", &type_name)
         .replace("{{protocol_py}}", &py)
         .replace("{{protocol_js}}", &js)

@@ -5,11 +5,11 @@
 //
 // Written by `plc-conformance init codec --js`; it runs green as written. Run it:
 //
-//     plc-conformance run --backend 'external:{{name}}=node {{name}}_adapter.js' \
+//     npx plc-conformance run --backend 'external:{{name}}=node {{name}}_adapter.js' \
 //         --known-differences {{name}}={{name}}.known.yaml
 //
-// The helper is the plc-conformance JavaScript helper (no dependencies, Node 18+):
-// npm install PATH/TO/plc-conformance/adapters/js
+// The helper and the command come in one npm package, pinned (no dependencies, Node 18+):
+// npm install --save-dev plc-conformance-adapter@{{version}}
 // Guide: docs/check-your-library.md in plc-conformance.
 'use strict';
 const { serveCodec, CodecError } = require('plc-conformance-adapter');

@@ -4,8 +4,8 @@
 //! Written by `plc-conformance init codec --rust`. In Cargo.toml:
 //!
 //!     [dev-dependencies]
-//!     # or { git = "...", rev = "..." }; the harness without the command line
-//!     plc-conformance = { path = "../plc-conformance", default-features = false }
+//!     # pinned: a new version is a new corpus; the harness without the command line
+//!     plc-conformance = { version = "={{version}}", default-features = false }
 //!
 //!     [[test]]
 //!     name = "conformance"
@@ -51,10 +51,18 @@ impl Codec for {{type}} {
         Ok(match question.operation {
             // 2. Replace these stand-ins with your library's calls; map its errors to the
             //    shared classes (InvalidDigit, InvalidCount, DeviceRange, Error).
+            //    The stand-in reads as the manuals do (exactly the digits asked, each 0-9 or
+            //    A-F), which is why the scaffold runs green as written.
             Operation::HexToValue => {
-                let field = &question.text[..question.text.len().min(question.digits as usize)];
-                match std::str::from_utf8(field).ok().and_then(|t| u64::from_str_radix(t, 16).ok()) {
-                    Some(value) => Answer::Value(value),
+                {{field_rs}}
+                let digits: Option<Vec<u32>> = (field.iter())
+                    .map(|&b| match b {
+                        b'0'..=b'9' | b'A'..=b'F' => (b as char).to_digit(16),
+                        _ => None,
+                    })
+                    .collect();
+                match digits {
+                    Some(d) => Answer::Value(d.iter().fold(0, |v, d| v << 4 | u64::from(*d))),
                     None => Answer::Error(ErrorClass::InvalidDigit),
                 }
             }
