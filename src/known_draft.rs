@@ -16,7 +16,7 @@ use crate::backend::Backend;
 use crate::corpus_yaml::{folded, name_of, quote_str};
 use crate::judge::{Difference, Verdict};
 use crate::model::known::InputClass;
-use crate::plan::{Check, Trial};
+use crate::plan::Trial;
 use crate::project::Project;
 use crate::session::verdicts;
 use crate::value::hex_word;
@@ -98,10 +98,7 @@ pub fn draft(project: &Project, backend: &Arc<dyn Backend>, filter: Option<&str>
             }),
         }
     }
-    let text_of = |t: &Trial| match &t.check {
-        Check::CrossVendor { case, .. } | Check::Codec { case } => Some(case.text.clone()),
-        Check::Native { .. } => None,
-    };
+    let text_of = |t: &Trial| t.cross_vendor_case().map(|case| case.text.clone());
     let mut explained: BTreeSet<usize> = BTreeSet::new();
     let mut out = String::from(HEADER);
     let mut causes = 0;
@@ -174,12 +171,8 @@ pub fn draft(project: &Project, backend: &Arc<dyn Backend>, filter: Option<&str>
 
 /// The protocol rule a trial's case rests on (`mc-ascii/M4`), for a protocol-field case.
 fn rule_of(trial: &Trial) -> Option<&str> {
-    match &trial.check {
-        Check::Codec { case } | Check::CrossVendor { case, .. } => {
-            case.protocol.as_ref().map(|p| p.rule.key.as_str())
-        }
-        Check::Native { .. } => None,
-    }
+    let protocol = trial.cross_vendor_case()?.protocol.as_ref()?;
+    Some(protocol.rule.key.as_str())
 }
 
 /// One line on what a trial did.

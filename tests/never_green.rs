@@ -55,6 +55,11 @@ fn nothing(_: &Request<'_>) -> Result<Response, Fault> {
     Ok(Response::Unsupported("nothing".into()))
 }
 
+/// Writes nothing, whatever it is asked.
+fn writes_nothing(_: &Request<'_>) -> Result<Response, Fault> {
+    Ok(Response::Done(Outcome::default()))
+}
+
 fn harness(profile: &'static str, instruction: &'static str) -> Harness {
     let emu: Arc<dyn Backend> = Arc::new(Emulator {
         name: "emu",
@@ -183,8 +188,8 @@ fn a_misspelt_flag_fails_every_trial_that_reads_it() {
 /// fails too, naming the trial that shows it.
 #[test]
 fn the_same_difference_is_shown_once() {
-    // It writes nothing, on every FX5 variant alike.
-    let lazy = hexa("lazy", |_| Ok(Response::Done(Outcome::default())));
+    // On every FX5 variant alike.
+    let lazy = hexa("lazy", writes_nothing);
     let (dir, log) = logfile();
     let c = conclude(
         Harness::new(root()).backend(lazy, None),
@@ -215,8 +220,7 @@ fn a_known_difference_run_alone_is_no_pass() {
     )
     .expect("write");
     let harness = || {
-        // It writes nothing.
-        let lazy = hexa("lazy", |_| Ok(Response::Done(Outcome::default())));
+        let lazy = hexa("lazy", writes_nothing);
         Harness::new(root()).backend(lazy, Some(known.clone()))
     };
     let (log_dir, log) = logfile();

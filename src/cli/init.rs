@@ -243,17 +243,19 @@ fn fill(template: &str, name: &str, protocol: Option<&str>) -> String {
                 .to_string(),
         ),
     };
-    let field_js = match protocol {
-        Some(_) => "const field = text.toString('latin1');\n    if (field.length !== digits) throw new CodecError('invalid-count', `${field.length} characters`);",
-        None => "const field = text.subarray(0, digits).toString('latin1');\n    if (field.length < digits) throw new CodecError('invalid-digit', `${digits} digits asked`);",
-    };
-    let field_py = match protocol {
-        Some(_) => "field = text\n    if len(field) != digits:\n        raise IndexError(\"a field of %d characters, not %d\" % (digits, len(field)))",
-        None => "field = text[:digits]\n    if len(field) < digits:\n        raise ValueError(\"%d digits asked of %r\" % (digits, text))",
-    };
-    let field_rs = match protocol {
-        Some(_) => "let field = question.text;\n                if field.len() != question.digits as usize {\n                    return Ok(Answer::Error(ErrorClass::InvalidCount));\n                }",
-        None => "let Some(field) = question.text.get(..question.digits as usize) else {\n                    return Ok(Answer::Error(ErrorClass::InvalidDigit));\n                };",
+    // A protocol's field is exactly its digits; an instruction reads the first digits of a
+    // longer text.
+    let (field_py, field_js, field_rs) = match protocol {
+        Some(_) => (
+            "field = text\n    if len(field) != digits:\n        raise IndexError(\"a field of %d characters, not %d\" % (digits, len(field)))",
+            "const field = text.toString('latin1');\n    if (field.length !== digits) throw new CodecError('invalid-count', `${field.length} characters`);",
+            "let field = question.text;\n                if field.len() != question.digits as usize {\n                    return Ok(Answer::Error(ErrorClass::InvalidCount));\n                }",
+        ),
+        None => (
+            "field = text[:digits]\n    if len(field) < digits:\n        raise ValueError(\"%d digits asked of %r\" % (digits, text))",
+            "const field = text.subarray(0, digits).toString('latin1');\n    if (field.length < digits) throw new CodecError('invalid-digit', `${digits} digits asked`);",
+            "let Some(field) = question.text.get(..question.digits as usize) else {\n                    return Ok(Answer::Error(ErrorClass::InvalidDigit));\n                };",
+        ),
     };
     template
         .replace("{{name}}", name)

@@ -107,6 +107,7 @@ impl Builder {
     }
 }
 
+/// How many nodes a value holds, itself included: what an alias to it copies.
 fn nodes(value: &Value) -> usize {
     1 + match value {
         Value::Sequence(items) => items.iter().map(nodes).sum(),
